@@ -129,8 +129,9 @@ def test_stamps_going_backwards_are_left_out_and_reported():
     for i, batch in enumerate(items):
         builder.add(batch)
         windows += builder.pop_closed()
-        if i == len(items) // 2:   # replay an old block: it belongs to a closed window
-            builder.add(streams['vibration'][5])
+        if i == len(items) // 2:   # a block 2.5 s old arrives: its window is closed already
+            old = max(0, int((float(batch.stamps[0]) - T0 - 2.5) / 0.1))
+            builder.add(streams['vibration'][old])
             windows += builder.pop_closed()
     windows += builder.finish()
     assert any('stamped before already closed windows' in p for p in builder.take_problems())
