@@ -33,6 +33,7 @@ class Actuator:
     oil_viscosity: float = 0.1
     oil_reference_temperature: float = 40.0
     pressure_viscosity_coefficient: float = 2.0e-8
+    viscosity_temperature_coefficient: float = 0.03
     composite_roughness: float = 4.0e-7
     shaft_root_diameter: float = 0.0215
     shaft_fixed_end_offset: float = 0.03
@@ -42,7 +43,8 @@ class Actuator:
         positive = ('screw_mean_diameter', 'roller_mean_diameter', 'lead',
                     'roller_count', 'threads_per_roller', 'nut_travel',
                     'youngs_modulus', 'oil_viscosity',
-                    'pressure_viscosity_coefficient', 'composite_roughness',
+                    'pressure_viscosity_coefficient', 'viscosity_temperature_coefficient',
+                    'composite_roughness',
                     'shaft_root_diameter')
         for key in positive:
             value = getattr(self, key)
