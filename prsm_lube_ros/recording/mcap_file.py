@@ -1,0 +1,533 @@
+"""A small, defensive reader of the MCAP container format, chunk by chunk.
+
+Only what the recordings need: Schema, Channel, Chunk, MessageIndex, Message,
+Statistics and the Footer (https://mcap.dev/spec).  Chunks are read one at a
+time, decompressed (``''``, ``zstd`` or ``lz4``) and split into their Message
+records with numpy: the MessageIndex records that follow a chunk give every
+message's offset, so no Python loop runs per message; a chunk without a usable
+index is walked record by record instead.  Every length is checked against the
+bytes that are really there, every loop advances, and anything malformed ends
+as a :class:`McapProblem` with one line -- never an unrelated exception, never
+a hang.  No ROS import.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import struct
+from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
+
+import lz4.frame
+import numpy as np
+
+try:  # the zstandard package comes with ``mcap``; rosbags brings backports.zstd
+    import zstandard as _zstandard
+except ImportError:  # pragma: no cover - depends on the installed wheels
+    _zstandard = None
+
+MAGIC = b'\x89MCAP0\r\n'
+OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
+OP_MESSAGE_INDEX, OP_CHUNK_INDEX, OP_STATISTICS, OP_DATA_END = 0x07, 0x08, 0x0B, 0x0F
+#: opcode + uint64 record length
+RECORD_PREFIX = 9
+#: channel_id uint16, sequence uint32, log_time uint64, publish_time uint64
+MESSAGE_HEADER = 22
+#: a chunk claiming more than this many uncompressed bytes is treated as corrupt
+MAX_CHUNK_BYTES = 1 << 31
+
+_RECORD = struct.Struct('<BQ')
+_U16 = struct.Struct('<H')
+_U32 = struct.Struct('<I')
+_U64 = struct.Struct('<Q')
+_MESSAGE = struct.Struct('<HIQQ')
+
+
+class McapProblem(Exception):
+    """The file is not (or no longer) valid MCAP at some point; one line, without the file name."""
+
+
+@dataclass
+class Schema:
+    """An MCAP Schema record: a message type and its embedded definition."""
+
+    id: int
+    name: str
+    encoding: str
+    data: bytes
+
+
+@dataclass
+class Channel:
+    """An MCAP Channel record: a topic with its schema and message encoding."""
+
+    id: int
+    schema_id: int
+    topic: str
+    message_encoding: str
+
+
+@dataclass
+class MessageGroup:
+    """The messages of one channel inside one chunk: views into ``RawChunk.buffer``."""
+
+    data_offsets: np.ndarray   # (n,) int64, start of each serialized message
+    data_lengths: np.ndarray   # (n,) int64
+    log_times: np.ndarray      # (n,) int64 ns
+
+
+@dataclass
+class RawChunk:
+    """Decompressed message records of one chunk (or of a run of unchunked records)."""
+
+    start_time: int                     # ns, earliest log time the chunk claims
+    buffer: np.ndarray                  # uint8
+    groups: Dict[int, MessageGroup]     # by channel id
+    file_offset: int
+
+    def message_count(self) -> int:
+        """Number of messages in the chunk."""
+        return sum(g.data_offsets.size for g in self.groups.values())
+
+
+@dataclass
+class Summary:
+    """What the summary section (or a scan of the data section) says about a file."""
+
+    schemas: Dict[int, Schema] = field(default_factory=dict)
+    channels: Dict[int, Channel] = field(default_factory=dict)
+    message_counts: Dict[int, int] = field(default_factory=dict)
+    start_time: Optional[int] = None
+    end_time: Optional[int] = None
+    complete: bool = False              # True when read from an intact summary section
+
+
+# -- record field parsing ---------------------------------------------------------------------------
+
+class _Fields:
+    """Sequential reads of MCAP primitive fields from one record's content."""
+
+    __slots__ = ('data', 'pos')
+
+    def __init__(self, data: bytes, pos: int = 0):
+        self.data = data
+        self.pos = pos
+
+    def _take(self, size: int) -> int:
+        start = self.pos
+        if size < 0 or start + size > len(self.data):
+            raise McapProblem('record field runs past the end of its record')
+        self.pos = start + size
+        return start
+
+    def u16(self) -> int:
+        return _U16.unpack_from(self.data, self._take(2))[0]
+
+    def u32(self) -> int:
+        return _U32.unpack_from(self.data, self._take(4))[0]
+
+    def u64(self) -> int:
+        return _U64.unpack_from(self.data, self._take(8))[0]
+
+    def raw(self, size: int) -> bytes:
+        start = self._take(size)
+        return bytes(self.data[start:start + size])
+
+    def string(self) -> str:
+        try:
+            return self.raw(self.u32()).decode('utf-8')
+        except UnicodeDecodeError:
+            raise McapProblem('record string is not UTF-8') from None
+
+
+def parse_schema(content) -> Schema:
+    """Schema record content -> :class:`Schema`."""
+    fields = _Fields(content)
+    return Schema(fields.u16(), fields.string(), fields.string(), fields.raw(fields.u32()))
+
+
+def parse_channel(content) -> Channel:
+    """Channel record content -> :class:`Channel` (metadata ignored)."""
+    fields = _Fields(content)
+    return Channel(fields.u16(), fields.u16(), fields.string(), fields.string())
+
+
+# -- decompression ----------------------------------------------------------------------------------
+
+def decompress(data, compression: str, size: int, partial: bool = False) -> bytes:
+    """Chunk records from their compressed form.
+
+    With ``partial`` (the chunk was cut off by truncation), return as much of
+    the beginning as can be recovered instead of failing.
+    """
+    if size > MAX_CHUNK_BYTES:
+        raise McapProblem(f'chunk claims {size} uncompressed bytes')
+    try:
+        if compression == '':
+            out = data
+        elif compression == 'zstd':
+            if _zstandard is None:  # pragma: no cover
+                from rosbags.rosbag2.storage_mcap import zstd
+                out = zstd.decompress(bytes(data))
+            elif partial:
+                out = _zstandard.ZstdDecompressor().decompressobj().decompress(bytes(data))
+            else:
+                out = _zstandard.ZstdDecompressor().decompress(bytes(data), max_output_size=size)
+        elif compression == 'lz4':
+            if partial:
+                out = lz4.frame.LZ4FrameDecompressor().decompress(bytes(data))
+            else:
+                out = lz4.frame.decompress(bytes(data))
+        else:
+            raise McapProblem(f'unsupported chunk compression {compression!r}')
+    except McapProblem:
+        raise
+    except Exception as err:  # zstd/lz4 raise assorted types on corrupt input
+        if partial:
+            return b''
+        raise McapProblem(f'{compression} chunk does not decompress ({type(err).__name__}: {err})') from None
+    if not partial and len(out) != size:
+        raise McapProblem(f'chunk decompressed to {len(out)} bytes, its header says {size}')
+    return out[:size]
+
+
+# -- splitting chunk records ------------------------------------------------------------------------
+
+def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
+    """Yield ``(opcode, content_start, content_end)`` of consecutive records in ``buf[start:stop]``.
+
+    Stops quietly at a record that does not fit (the caller compares the last
+    end with ``stop`` to notice).
+    """
+    stop = len(buf) if stop is None else stop
+    pos = start
+    while pos + RECORD_PREFIX <= stop:
+        opcode, length = _RECORD.unpack_from(buf, pos)
+        end = pos + RECORD_PREFIX + length
+        if end > stop:
+            return
+        yield opcode, pos + RECORD_PREFIX, end
+        pos = end
+
+
+def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+    """Split records by walking them one by one (no message index); return the chunk and bytes used.
+
+    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    """
+    per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
+    used = 0
+    for opcode, begin, end in walk_records(buf):
+        used = end
+        if opcode == OP_MESSAGE:
+            if end - begin < MESSAGE_HEADER:
+                continue
+            channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
+            per_channel.setdefault(channel_id, []).append(
+                (begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, log_time))
+        else:
+            on_record(opcode, memoryview(buf)[begin:end])
+    groups = {}
+    for channel_id, rows in per_channel.items():
+        table = np.array(rows, dtype=np.int64).reshape(-1, 3)
+        groups[channel_id] = MessageGroup(table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
+    return RawChunk(start_time, np.frombuffer(buf, np.uint8), groups, file_offset), used
+
+
+def split_indexed(buf: bytes, start_time: int, file_offset: int,
+                  indexes: Dict[int, bytes], on_record) -> Optional[RawChunk]:
+    """Split a chunk with its MessageIndex records, vectorised; None if the index does not fit.
+
+    The index is trusted only after checking that every entry points at a
+    Message record of its channel inside the chunk and that the bytes between
+    indexed messages hold no other Message record.
+    """
+    data = np.frombuffer(buf, np.uint8)
+    size = data.size
+    ids, tables = [], []
+    for channel_id, content in indexes.items():
+        ids.append(channel_id)
+        tables.append(np.frombuffer(content, '<u8'))
+    counts = [table.size // 2 for table in tables]
+    if not sum(counts) or size < RECORD_PREFIX + MESSAGE_HEADER:
+        return None
+    table = np.concatenate(tables).view(np.int64).reshape(-1, 2)
+    log_times, offsets = table[:, 0], table[:, 1]
+    if offsets.min() < 0 or offsets.max() > size - RECORD_PREFIX - MESSAGE_HEADER:
+        return None
+    # Unaligned views of the buffer at every byte offset: one gather per field.
+    uint64_at = np.ndarray((size - 7,), '<u8', data, 0, (1,))
+    uint16_at = np.ndarray((size - 1,), '<u2', data, 0, (1,))
+    lengths = uint64_at[offsets + 1].view(np.int64)
+    ends = offsets + RECORD_PREFIX + lengths
+    channels = np.repeat(np.array(ids, np.int64), counts)
+    if (np.any(data[offsets] != OP_MESSAGE) or np.any(uint16_at[offsets + 9] != channels)
+            or lengths.min() < MESSAGE_HEADER or ends.max() > size):
+        return None
+    # Sorted separately, starts and ends pair up exactly when no two records overlap.
+    starts_sorted, ends_sorted = np.sort(offsets, kind='stable'), np.sort(ends, kind='stable')
+    if np.any(starts_sorted[1:] < ends_sorted[:-1]):
+        return None
+    # Gaps between indexed messages may hold schemas/channels, never unindexed messages.
+    gap_after = np.nonzero(starts_sorted[1:] != ends_sorted[:-1])[0]
+    gaps = [(0, int(starts_sorted[0]))] + [(int(ends_sorted[i]), int(starts_sorted[i + 1])) for i in gap_after]
+    gaps.append((int(ends_sorted[-1]), size))
+    for gap_start, gap_end in gaps:
+        if gap_start == gap_end:
+            continue
+        last = gap_start
+        for opcode, begin, end in walk_records(buf, gap_start, gap_end):
+            if opcode == OP_MESSAGE:
+                return None
+            on_record(opcode, memoryview(buf)[begin:end])
+            last = end
+        if last != gap_end:
+            return None
+    groups = {}
+    start = 0
+    for channel_id, count in zip(ids, counts):
+        stop = start + count
+        groups[channel_id] = MessageGroup(offsets[start:stop] + RECORD_PREFIX + MESSAGE_HEADER,
+                                          lengths[start:stop] - MESSAGE_HEADER, log_times[start:stop])
+        start = stop
+    return RawChunk(start_time, data, groups, file_offset)
+
+
+# -- the file ---------------------------------------------------------------------------------------
+
+class McapFile:
+    """One MCAP file opened for listing and streaming; problems raise :class:`McapProblem`."""
+
+    def __init__(self, path):
+        self.path = path
+        with open(path, 'rb') as stream:
+            stream.seek(0, 2)
+            self.size = stream.tell()
+            stream.seek(0)
+            if stream.read(len(MAGIC)) != MAGIC:
+                raise McapProblem('not an MCAP file (no MCAP magic at its start)')
+            self.summary = self._read_summary(stream)
+
+    # summary ------------------------------------------------------------------------------------
+    def _read_summary(self, stream: BinaryIO) -> Optional[Summary]:
+        """The summary section, or None when the file has none or it is damaged."""
+        footer_at = self.size - len(MAGIC) - RECORD_PREFIX - 20
+        if footer_at < len(MAGIC):
+            return None
+        stream.seek(footer_at)
+        tail = stream.read(RECORD_PREFIX + 20 + len(MAGIC))
+        if tail[-len(MAGIC):] != MAGIC or tail[0] != OP_FOOTER or _U64.unpack_from(tail, 1)[0] != 20:
+            return None
+        summary_start = _U64.unpack_from(tail, RECORD_PREFIX)[0]
+        if summary_start == 0 or not len(MAGIC) <= summary_start <= footer_at:
+            return None
+        stream.seek(summary_start)
+        section = stream.read(footer_at - summary_start)
+        summary = Summary(complete=True)
+        statistics = False
+        try:
+            last = 0
+            for opcode, begin, end in walk_records(section):
+                last = end
+                content = memoryview(section)[begin:end]
+                if opcode == OP_SCHEMA:
+                    schema = parse_schema(content)
+                    summary.schemas[schema.id] = schema
+                elif opcode == OP_CHANNEL:
+                    channel = parse_channel(content)
+                    summary.channels[channel.id] = channel
+                elif opcode == OP_STATISTICS:
+                    fields = _Fields(content)
+                    fields.u64()
+                    fields.u16()
+                    fields.u32()
+                    fields.u32()
+                    fields.u32()
+                    fields.u32()
+                    summary.start_time, summary.end_time = fields.u64(), fields.u64()
+                    counts_end = fields.u32() + fields.pos
+                    while fields.pos + 10 <= counts_end:
+                        channel_id = fields.u16()
+                        summary.message_counts[channel_id] = fields.u64()
+                    statistics = True
+            if last != len(section):
+                return None
+        except McapProblem:
+            return None
+        return summary if statistics else None
+
+    def scan(self) -> Tuple[Summary, List[str]]:
+        """Rebuild the listing by reading the data section (file without a usable summary)."""
+        summary = Summary()
+        problems: List[str] = []
+        for chunk in self.chunks(problems.append, summary):
+            for channel_id, group in chunk.groups.items():
+                if group.log_times.size == 0:
+                    continue
+                summary.message_counts[channel_id] = (summary.message_counts.get(channel_id, 0)
+                                                      + int(group.log_times.size))
+                low, high = int(group.log_times.min()), int(group.log_times.max())
+                summary.start_time = low if summary.start_time is None else min(summary.start_time, low)
+                summary.end_time = high if summary.end_time is None else max(summary.end_time, high)
+        return summary, problems
+
+    # data section -------------------------------------------------------------------------------
+    def chunks(self, on_problem, summary: Optional[Summary] = None,
+               unchunked_batch: int = 1 << 20) -> Iterator[RawChunk]:
+        """Yield the file's messages chunk by chunk, in file order.
+
+        Schemas and channels met on the way go into ``summary`` (if given).
+        Damage ends or skips with one line to ``on_problem``: a truncated file
+        yields everything before the cut (including the readable start of a cut
+        chunk), a chunk that does not decompress is skipped.
+        """
+        summary = summary if summary is not None else Summary()
+
+        def on_record(opcode, content):
+            try:
+                if opcode == OP_SCHEMA:
+                    schema = parse_schema(content)
+                    summary.schemas.setdefault(schema.id, schema)
+                elif opcode == OP_CHANNEL:
+                    channel = parse_channel(content)
+                    summary.channels.setdefault(channel.id, channel)
+            except McapProblem as problem:
+                on_problem(f'bad schema/channel record ({problem})')
+
+        loose: List[bytes] = []   # top-level (unchunked) records, gathered into pseudo-chunks
+        loose_size = 0
+        loose_at = 0
+        with open(self.path, 'rb') as stream:
+            stream.seek(len(MAGIC))
+            pos = len(MAGIC)
+            pending = None        # chunk waiting for its message index records
+            while True:
+                head = stream.read(RECORD_PREFIX)
+                if len(head) < RECORD_PREFIX:
+                    cut = pos if head else None
+                    break
+                opcode, length = _RECORD.unpack_from(head, 0)
+                if length > self.size - pos - RECORD_PREFIX or not (0 < opcode <= 0x0F or opcode >= 0x80):
+                    cut = pos
+                    break
+                if opcode == OP_MESSAGE_INDEX and pending is not None:
+                    content = stream.read(length)
+                    try:
+                        fields = _Fields(content)
+                        channel_id = fields.u16()
+                        entries = fields.u32()
+                        if entries % 16 or fields.pos + entries > len(content):
+                            raise McapProblem('bad message index')
+                        pending[2][channel_id] = content[fields.pos:fields.pos + entries]
+                    except McapProblem:
+                        pending[2].clear()
+                        pending[2][-1] = b''  # marks the index unusable
+                    pos += RECORD_PREFIX + length
+                    continue
+                if pending is not None:
+                    yield self._finish_chunk(*pending, on_record)
+                    pending = None
+                if opcode == OP_MESSAGE or (loose and opcode in (OP_SCHEMA, OP_CHANNEL)):
+                    if not loose:
+                        loose_at = pos
+                    loose.append(head + stream.read(length))
+                    loose_size += RECORD_PREFIX + length
+                    pos += RECORD_PREFIX + length
+                    if loose_size >= unchunked_batch:
+                        yield self._loose_chunk(loose, loose_at, on_record)
+                        loose, loose_size = [], 0
+                    continue
+                if loose:
+                    yield self._loose_chunk(loose, loose_at, on_record)
+                    loose, loose_size = [], 0
+                if opcode in (OP_DATA_END, OP_FOOTER):
+                    cut = None
+                    break
+                if opcode == OP_CHUNK:
+                    content = stream.read(length)
+                    try:
+                        pending = self._open_chunk(content, pos, on_problem)
+                    except McapProblem as problem:
+                        on_problem(f'chunk at byte {pos} skipped: {problem}')
+                        pending = None
+                elif opcode in (OP_SCHEMA, OP_CHANNEL):
+                    on_record(opcode, stream.read(length))
+                else:
+                    stream.seek(length, 1)
+                pos += RECORD_PREFIX + length
+            if pending is not None:
+                yield self._finish_chunk(*pending, on_record)
+            if loose:
+                yield self._loose_chunk(loose, loose_at, on_record)
+            if cut is not None:
+                salvage = self._salvage(stream, cut, on_record)
+                lost = f'{self.size - cut} bytes'
+                if salvage is not None:
+                    yield salvage
+                    lost += f' (recovered {salvage.message_count()} messages from the cut chunk)'
+                on_problem(f'truncated or corrupt at byte {cut} of {self.size}: '
+                           f'the last {lost} are not readable')
+
+    def _open_chunk(self, content: bytes, pos: int, on_problem):
+        """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
+        fields = _Fields(content)
+        start_time = fields.u64()
+        fields.u64()
+        size = fields.u64()
+        fields.u32()
+        compression = fields.string()
+        compressed_size = fields.u64()
+        if compressed_size > len(content) - fields.pos:
+            raise McapProblem('compressed data runs past its chunk record')
+        compressed = memoryview(content)[fields.pos:fields.pos + compressed_size]
+        return [decompress(compressed, compression, size), start_time, {}, pos]
+
+    def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
+                      on_record) -> RawChunk:
+        if indexes and -1 not in indexes:
+            chunk = split_indexed(records, start_time, pos, indexes, on_record)
+            if chunk is not None:
+                return chunk
+        chunk, _ = split_sequential(records, start_time, pos, on_record)
+        return chunk
+
+    @staticmethod
+    def _loose_chunk(loose: List[bytes], pos: int, on_record) -> RawChunk:
+        buf = b''.join(loose)
+        start_time = min((_MESSAGE.unpack_from(record, RECORD_PREFIX)[2] for record in loose
+                          if record[0] == OP_MESSAGE and len(record) >= RECORD_PREFIX + MESSAGE_HEADER),
+                         default=0)
+        chunk, _ = split_sequential(buf, start_time, pos, on_record)
+        return chunk
+
+    def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
+        """The readable beginning of a chunk cut off by the end of the file, if any."""
+        stream.seek(cut)
+        content = stream.read(min(self.size - cut, MAX_CHUNK_BYTES))
+        if len(content) < RECORD_PREFIX + 28 or content[0] != OP_CHUNK:
+            return None
+        try:
+            fields = _Fields(content, RECORD_PREFIX)
+            start_time = fields.u64()
+            fields.u64()
+            size = fields.u64()
+            fields.u32()
+            compression = fields.string()
+            fields.u64()
+            records = decompress(memoryview(content)[fields.pos:], compression, size, partial=True)
+        except McapProblem:
+            return None
+        chunk, _ = split_sequential(records, start_time, cut, on_record)
+        return chunk if chunk.message_count() else None
+
+
+def bare_read(path) -> Tuple[int, int]:
+    """Read, decompress and split every chunk without decoding; return (messages, message bytes).
+
+    The cheapest pass that touches every message of an MCAP file: the baseline
+    against which decoding is timed.
+    """
+    messages = payload = 0
+    for chunk in McapFile(path).chunks(lambda line: None):
+        for group in chunk.groups.values():
+            messages += group.data_lengths.size
+            payload += int(group.data_lengths.sum())
+    return messages, payload
