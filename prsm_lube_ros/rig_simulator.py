@@ -363,6 +363,15 @@ class DriveProgram:
                 del column[keep:]
             self._arrays = None
 
+    def forget_before(self, time: float) -> None:
+        """Drop phases that ended before ``time`` (keeps a long-running live program small)."""
+        for table in (self._motion, self._load):
+            active = max(sum(1 for begin in table[0] if begin <= time) - 1, 0)
+            if active:
+                for column in table:
+                    del column[:active]
+                self._arrays = None
+
     def command_speed(self, now: float, target: float, acceleration: float) -> None:
         """Ramp the screw speed from ``now`` to ``target`` (rad/s) at ``acceleration`` (rad/s^2)."""
         _, current = (float(v) for v in self.motion(now))
@@ -695,7 +704,7 @@ class RigSignalGenerator:
     """The simulated rig in real time: set speed, load and theta while it runs; take block after block.
 
     Speed changes ramp at ``rig.live_acceleration`` (rad/s^2), load changes over
-    ``rig.load_ramp_time`` per 200 N (at least 400 N/s if the ramp time is 0).
+    ``rig.load_ramp_time`` per 200 N (a step if that time is 0).
     Changes act from the next block on.
     """
 
@@ -716,11 +725,13 @@ class RigSignalGenerator:
 
     def set_speed(self, speed: float) -> None:
         """Command the screw speed in rad/s (signed)."""
+        self._program.forget_before(self.now)
         self._program.command_speed(self.now, _number('speed', speed), self.rig.live_acceleration)
 
     def set_load(self, load: float) -> None:
         """Command the applied axial load in N."""
         rate = 200.0 / self.rig.load_ramp_time if self.rig.load_ramp_time > 0 else 0.0
+        self._program.forget_before(self.now)
         self._program.command_load(self.now, _number('load', load), rate)
 
     def set_theta(self, theta_oil: float) -> None:

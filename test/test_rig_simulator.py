@@ -458,3 +458,21 @@ def test_live_generator_ramps_to_commanded_speed_and_load():
     assert joint.joint_stamps.size == 10 and joint.load_stamps.size == 5
     generator.set_theta(1.0)
     assert rms(np.concatenate([generator.next_block().samples for _ in range(15)])) < 0.8 * rms(steady_samples)
+
+
+def test_live_generator_stays_continuous_through_many_commands():
+    generator = RigSignalGenerator(seed=2)
+    blocks = []
+    for step in range(40):
+        generator.set_speed((-1) ** step * 5.0)               # reverse every 0.2 s: always ramping
+        generator.set_load(50.0 + step)
+        blocks += [generator.next_block(), generator.next_block()]
+    speeds = np.array([b.speed for b in blocks])
+    angles = np.array([b.angle for b in blocks])
+    assert np.all(np.abs(np.diff(speeds)) <= RIG.live_acceleration * 0.1 + 1e-9)
+    # Angle steps are the trapezoidal integral of a speed that is linear within each 0.1 s block.
+    joint = np.concatenate([b.topics.joint_speeds for b in blocks])
+    joint_angles = np.concatenate([b.topics.joint_angles for b in blocks])
+    steps = np.diff(joint_angles)
+    np.testing.assert_allclose(steps, 0.01 * (joint[1:] + joint[:-1]) / 2, atol=1e-9)
+    assert angles[0] == 0.0 and np.all(np.abs(speeds) <= 5.0)
