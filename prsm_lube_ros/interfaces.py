@@ -33,8 +33,9 @@ def interface_dir() -> Path:
     them under ``<prefix>/share/prsm_lube_ros``.
     """
     here = Path(__file__).resolve().parent
-    candidates = [here.parent, here.parents[3] / 'share' / PACKAGE,
-                  Path(sys.prefix) / 'share' / PACKAGE]
+    candidates = [here.parent, Path(sys.prefix) / 'share' / PACKAGE]
+    if len(here.parents) > 3:  # <prefix>/lib/pythonX.Y/site-packages/prsm_lube_ros
+        candidates.insert(1, here.parents[3] / 'share' / PACKAGE)
     for candidate in candidates:
         if (candidate / 'msg' / 'VibrationBlock.msg').is_file():
             return candidate
