@@ -1,7 +1,6 @@
 """prsm-lube end to end on simulated recordings, and its one-line errors."""
 import json
 import math
-from pathlib import Path
 import subprocess
 import sys
 
