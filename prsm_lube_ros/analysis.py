@@ -88,7 +88,11 @@ def assess_recording(recording: RecordingWindows, calibration: Calibration,
 
 
 def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Calibration) -> dict:
-    """The contract's ``assess`` output: ``runs`` with finite theta, plus windows and runs not assessed."""
+    """The contract's ``assess`` output: ``runs`` with a finite theta; runs not assessed apart.
+
+``windows`` lists every window, steady or not, with ``theta_oil`` null and
+the reason in words where it was not assessable.
+"""
     runs, unassessed, windows, problems = [], [], [], []
     for rec in assessments:
         problems.extend(rec.problems)
@@ -96,11 +100,12 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
             (runs if not run.reason else unassessed).append(run.as_json())
         for item in rec.windows:
             w = item.window
-            if not w.steady:
-                continue
             windows.append({'bag': rec.path, 'start': w.start, 'end': w.end, 'run_index': w.run_index,
-                            'screw_speed': w.screw_speed, 'axial_load': w.axial_load,
-                            'vibration_rms': w.vibration_rms, 'nut_position': _finite_or_none(w.nut_position),
+                            'steady': w.steady,
+                            'screw_speed': _finite_or_none(w.screw_speed),
+                            'axial_load': _finite_or_none(w.axial_load),
+                            'vibration_rms': _finite_or_none(w.vibration_rms),
+                            'nut_position': _finite_or_none(w.nut_position),
                             'theta_oil': _finite_or_none(item.theta_oil),
                             'theta_oil_std': _finite_or_none(item.theta_oil_std), 'reason': item.reason})
     for run in unassessed:

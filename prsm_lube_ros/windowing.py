@@ -147,6 +147,7 @@ class WindowBuilder:
         self._problem_counts: dict[str, int] = {}
         self.problems: list[str] = []
         self._closed: list[Window] = []
+        self._block_stamps: set[int] = set()   # vibration block stamps (us) of open windows
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
@@ -186,6 +187,21 @@ class WindowBuilder:
         if acc is None:
             acc = self._open[index] = _OpenWindow()
         return acc
+
+    def _first_sight(self, stamps: np.ndarray, good: np.ndarray) -> np.ndarray:
+        """Mask of blocks whose stamp was not seen before in an open window (repeats are left out)."""
+        keep = np.ones(stamps.size, bool)
+        for i in np.flatnonzero(good).tolist():
+            key = int(round(float(stamps[i]) * 1e6))
+            if key in self._block_stamps:
+                keep[i] = False
+            else:
+                self._block_stamps.add(key)
+        repeats = int((good & ~keep).sum())
+        if repeats:
+            self._report('vibration-repeat', f'vibration: {repeats} block(s) repeating an earlier block\'s stamp '
+                         '(stamps going backwards or repeated) left out', repeats)
+        return keep
 
     def _check_time(self, stamps: np.ndarray, stream: str) -> np.ndarray:
         """Mask of stamps still usable; handles non-finite stamps, back-steps and time resets."""
@@ -247,6 +263,9 @@ class WindowBuilder:
             self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
             values = np.where(finite, values, 0.0)
         length = self.settings.window_length
+        good &= self._first_sight(stamps, good)
+        if not good.any():
+            return
         idx = np.flatnonzero(good)
         b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
         b_off = offsets[idx]
@@ -395,6 +414,10 @@ class WindowBuilder:
             self._closed.append(self._finish_window(k, self._open.pop(k)))
         if math.isfinite(horizon):
             self._closed_before = max(self._closed_before, math.floor(horizon / length) * length)
+            floor = int(round(self._closed_before * 1e6))
+            self._block_stamps = {key for key in self._block_stamps if key >= floor}
+        else:
+            self._block_stamps.clear()
 
     def pop_closed(self) -> list[Window]:
         """Close what every live stream has passed and return the closed windows, in time order.

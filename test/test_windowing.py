@@ -173,3 +173,12 @@ def test_spectrum_is_kept_when_asked_and_peaks_at_the_signal_frequency():
 def test_settings_out_of_range_are_refused_in_one_line(field, value):
     with pytest.raises(InputError, match=field):
         WindowSettings(**{field: value})
+
+
+def test_a_repeated_block_is_counted_once():
+    streams = run_streams()
+    reference, _ = build_sliced(run_streams())
+    streams['vibration'].insert(60, streams['vibration'][55])   # same stamp again, in the same slice
+    windows, builder = build_sliced(streams)
+    assert any('repeating an earlier block' in p for p in builder.take_problems())
+    assert [w.sample_count for w in windows] == [w.sample_count for w in reference]
