@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Assessment throughput on a one-hour 4 kHz recording, beside the bare read, and peak memory.
+
+The recordings are the rig simulator's endurance bags (the six conditions of
+the paper cycled, rewinds included): 4 kHz acceleration in 0.1 s blocks,
+joint states at 100 Hz, load at 50 Hz, temperature at 1 Hz, storage mcap.
+Each measurement runs in a fresh subprocess so its peak resident memory
+(ru_maxrss) is its own:
+
+* ``bare read``: every message read, decompressed and split, nothing decoded
+  (:func:`prsm_lube_ros.bag_reader.bare_read`);
+* ``assess``: what ``prsm-lube assess`` does -- read, decode, window, assess
+  every window and run with a calibration fitted beforehand.
+
+Both are timed best of ``--repeat``.  A 15-minute and a one-hour recording are
+assessed so flat memory shows as equal peaks.  Results go to
+``benchmarks/results/assess_throughput.{json,md}``.
+
+Usage: ``python benchmarks/assess_throughput.py [--repeat 3] [--data DIR]``
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+from pathlib import Path
+import resource
+import subprocess
+import sys
+import time
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / 'benchmarks' / 'results'
+
+
+def child(kind: str, bag: str, calibration: str) -> None:
+    """Run one measurement in this process and print a JSON line."""
+    sys.path.insert(0, str(ROOT))
+    from prsm_lube_ros.actuator import Actuator
+    from prsm_lube_ros.analysis import assess_recording, recording_windows
+    from prsm_lube_ros.bag_reader import bare_read
+    from prsm_lube_ros.calibration_file import load_calibration
+    start = time.perf_counter()
+    if kind == 'bare':
+        messages = bare_read(bag)
+        detail = {'messages': messages}
+    else:
+        calib = load_calibration(calibration)
+        windows = recording_windows(bag, lead=Actuator().lead)
+        result = assess_recording(windows, calib)
+        detail = {'windows': len(result.windows), 'runs': len(result.runs),
+                  'assessed_runs': sum(1 for r in result.runs if not r.reason)}
+    elapsed = time.perf_counter() - start
+    peak_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({'kind': kind, 'seconds': elapsed, 'peak_rss_mib': peak_mib, **detail}))
+
+
+def measure(kind: str, bag: Path, calibration: Path, repeat: int) -> dict:
+    """Best of ``repeat`` fresh subprocesses."""
+    runs = []
+    for _ in range(repeat):
+        out = subprocess.run([sys.executable, __file__, '--child', kind, str(bag), str(calibration)],
+                             check=True, capture_output=True, text=True).stdout
+        runs.append(json.loads(out.strip().splitlines()[-1]))
+    best = min(runs, key=lambda r: r['seconds'])
+    best['peak_rss_mib'] = max(r['peak_rss_mib'] for r in runs)
+    return best
+
+
+def prepare(data: Path) -> tuple[dict, Path]:
+    """Simulate (once) the recordings and a calibration; return {label: (bag, seconds)}, calibration."""
+    sys.path.insert(0, str(ROOT))
+    from prsm_lube_ros.actuator import Actuator
+    from prsm_lube_ros.analysis import calibrate_recordings, recording_windows
+    from prsm_lube_ros.calibration_file import save_calibration
+    from prsm_lube_ros.rig_simulator import ExperimentPlan, simulate_endurance, simulate_experiment
+    data.mkdir(parents=True, exist_ok=True)
+    bags = {}
+    for label, seconds in (('15 min', 900.0), ('1 h', 3600.0)):
+        path = data / f'endurance_{int(seconds)}s'
+        if not path.exists():
+            print(f'simulating {label} at 4 kHz into {path} ...', file=sys.stderr, flush=True)
+            simulate_endurance(path, seconds, seed=1)
+        bags[label] = (path, seconds)
+    calibration = data / 'calibration.yaml'
+    if not calibration.exists():
+        reference = data / 'reference'
+        if not reference.exists():
+            simulate_experiment(reference, seed=2, plan=ExperimentPlan(stage_thetas=(1.0,)))
+        windows = recording_windows(reference / 'stage_1', lead=Actuator().lead)
+        save_calibration(calibrate_recordings([windows]), calibration)
+    return bags, calibration
+
+
+def main() -> int:
+    """Measure, write the results, print the table."""
+    if len(sys.argv) > 1 and sys.argv[1] == '--child':
+        child(*sys.argv[2:5])
+        return 0
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--repeat', type=int, default=3)
+    parser.add_argument('--data', type=Path, default=Path('/tmp/prsm_lube_bench'),
+                        help='where the simulated recordings are cached (default /tmp/prsm_lube_bench)')
+    args = parser.parse_args()
+    bags, calibration = prepare(args.data)
+    rows = []
+    for label, (bag, seconds) in bags.items():
+        size = sum(p.stat().st_size for p in bag.rglob('*') if p.is_file())
+        bare = measure('bare', bag, calibration, args.repeat)
+        assess = measure('assess', bag, calibration, args.repeat)
+        rows.append({'recording': label, 'duration_s': seconds, 'size_mib': size / 2 ** 20,
+                     'bare_read_s': bare['seconds'], 'assess_s': assess['seconds'],
+                     'assess_x_realtime': seconds / assess['seconds'],
+                     'bare_x_realtime': seconds / bare['seconds'],
+                     'assess_over_bare': assess['seconds'] / bare['seconds'],
+                     'bare_peak_rss_mib': bare['peak_rss_mib'], 'assess_peak_rss_mib': assess['peak_rss_mib'],
+                     'messages': bare['messages'], 'windows': assess['windows'],
+                     'assessed_runs': assess['assessed_runs']})
+    hour = next(r for r in rows if r['recording'] == '1 h')
+    document = {'benchmark': 'assess_throughput', 'command': 'python benchmarks/assess_throughput.py',
+                'machine': {'python': platform.python_version(), 'processor': platform.processor() or
+                            platform.machine(), 'cpus': _cpus()},
+                'repeat': args.repeat, 'rows': rows,
+                'goals': {'assess_x_realtime >= 5000': hour['assess_x_realtime'] >= 5000,
+                          'assess_over_bare <= 2': hour['assess_over_bare'] <= 2.0}}
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / 'assess_throughput.json').write_text(json.dumps(document, indent=1))
+    lines = ['# Assessment throughput (`python benchmarks/assess_throughput.py`)', '',
+             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, best of {args.repeat}.',
+             '', '| recording | size MiB | bare read s | assess s | assess x real time | assess / bare '
+             '| peak RSS bare MiB | peak RSS assess MiB |', '|---|---|---|---|---|---|---|---|']
+    for r in rows:
+        lines.append(f'| {r["recording"]} | {r["size_mib"]:.0f} | {r["bare_read_s"]:.3f} | {r["assess_s"]:.3f} | '
+                     f'{r["assess_x_realtime"]:.0f} | {r["assess_over_bare"]:.2f} | {r["bare_peak_rss_mib"]:.0f} | '
+                     f'{r["assess_peak_rss_mib"]:.0f} |')
+    lines += ['', 'Goals on the one-hour recording: ' + ', '.join(
+        f'{goal}: {"met" if ok else "NOT met"}' for goal, ok in document['goals'].items())]
+    (RESULTS / 'assess_throughput.md').write_text('\n'.join(lines) + '\n')
+    print('\n'.join(lines))
+    return 0
+
+
+def _cpus() -> int:
+    import os
+    return len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count()
+
+
+if __name__ == '__main__':
+    sys.exit(main())
