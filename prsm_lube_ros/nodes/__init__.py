@@ -1,0 +1,5 @@
+"""ROS 2 nodes: thin shells around the pure modules of :mod:`prsm_lube_ros`.
+
+Importing this package imports nothing from ROS; the node modules do
+(``rclpy`` and the generated ``prsm_lube_ros.msg`` / ``prsm_lube_ros.srv``).
+"""

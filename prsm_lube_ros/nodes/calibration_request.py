@@ -1,0 +1,111 @@
+"""What the calibration service does with a request, without ROS: check, read, fit.
+
+The estimator node runs :func:`calibrate_from_request` on a worker thread and
+swaps the result in; everything wrong with a request comes out as one
+:class:`~prsm_lube_ros.errors.InputError` line for the response's ``message``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import os
+from pathlib import Path
+from typing import Callable, Sequence
+
+from ..calibration import Calibration
+from ..errors import InputError
+from ..windowing import WindowSettings
+
+
+def recordings_folder(folder: str) -> Path:
+    """The configured recordings folder, ``~`` expanded and resolved."""
+    return Path(os.path.expanduser(folder or '.')).resolve()
+
+
+def resolve_bag_paths(bag_paths: Sequence[str], folder: str | Path) -> list[Path]:
+    """Bag paths of a request, resolved inside ``folder`` (relative paths are taken from it).
+
+    Raises :class:`InputError` for no paths, a path outside the folder (also
+    through ``..`` or symbolic links) or a recording that does not exist.
+    """
+    root = recordings_folder(str(folder))
+    if not bag_paths:
+        raise InputError('calibrate: bag_paths is empty; name at least one recording in '
+                         f'{root} made in the reference lubrication state')
+    resolved = []
+    for raw in bag_paths:
+        if not str(raw).strip():
+            raise InputError('calibrate: an entry of bag_paths is empty')
+        path = Path(os.path.expanduser(str(raw)))
+        path = (path if path.is_absolute() else root / path).resolve()
+        if not path.is_relative_to(root):
+            raise InputError(f'calibrate: {raw} is outside the recordings folder {root} '
+                             '(parameter recordings_dir); only recordings inside it are read')
+        if not path.exists():
+            raise InputError(f'calibrate: {raw}: recording not found (looked at {path})')
+        resolved.append(path)
+    return resolved
+
+
+def reference_theta(value: float) -> float:
+    """The request's ``reference_theta``: 0 means 1.0; must be positive and finite."""
+    value = float(value)
+    if value == 0.0:
+        return 1.0
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f'calibrate: reference_theta {value!r} must be a positive number (0 means 1.0)')
+    return value
+
+
+@dataclass(frozen=True)
+class CalibrationOutcome:
+    """A fitted calibration and the problems met reading the recordings."""
+
+    calibration: Calibration
+    recordings: tuple
+    problems: tuple
+
+
+def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: str | Path, lead: float,
+                           settings: WindowSettings, namespace: str, min_axial_load: float,
+                           on_problem: Callable[[str], None] | None = None) -> CalibrationOutcome:
+    """Check a request, read its recordings and fit C_sys, C_F, C_lambda (seconds per recording).
+
+    Raises :class:`InputError` for anything wrong with the request or the data.
+    """
+    theta = reference_theta(theta)
+    paths = resolve_bag_paths(bag_paths, folder)
+    try:
+        from ..analysis import calibrate_recordings, recording_windows
+    except ImportError as exc:    # the bag reader is not installed with this build
+        raise InputError(f'calibrate: cannot read recordings on this installation ({exc})') from None
+    problems: list[str] = []
+
+    def report(line: str):
+        problems.append(line)
+        if on_problem:
+            on_problem(line)
+
+    recordings = []
+    for path in paths:
+        recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
+                                      on_problem=report)
+        if not any(w.steady for w in recording.windows):
+            raise InputError(f'calibrate: {path}: no steady window under {namespace}: '
+                             f'{_main_reason(recording.windows)}')
+        recordings.append(recording)
+    calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)
+    return CalibrationOutcome(calibration, tuple(str(p) for p in paths), tuple(problems))
+
+
+def _main_reason(windows) -> str:
+    """The most frequent reason why windows of a moving screw were not steady, in words."""
+    reasons: dict[str, int] = {}
+    for window in windows:
+        if window.reason and not window.reason.startswith('screw at rest'):
+            key = window.reason.split(' (')[0]
+            reasons[key] = reasons.get(key, 0) + 1
+    if not reasons:
+        return 'the screw never turned faster than min_speed'
+    reason, count = max(reasons.items(), key=lambda item: item[1])
+    return f'{reason} ({count} of {len(windows)} windows)'

@@ -1,0 +1,530 @@
+"""``lubrication_estimator``: theta_Oil per steady window, live, for one or several actuators.
+
+For each actuator (a namespace or topic prefix in the ``actuators`` parameter)
+the node subscribes ``<ns>/vibration``, ``<ns>/joint_states``,
+``<ns>/axial_load`` and ``<ns>/temperature`` with sensor-data QoS, feeds each
+message to that actuator's :class:`~prsm_lube_ros.windowing.WindowBuilder`
+(which pairs the streams by header stamp), assesses every closed window with
+:class:`~prsm_lube_ros.assessment.Assessor` and publishes a
+``LubricationState`` on ``<ns>/lubrication_state``.  ``/diagnostics`` carries
+one status per actuator, judged by :mod:`prsm_lube_ros.health`.
+
+The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
+the first actuator, ``<ns>/calibrate`` each one.  Fitting runs on a worker
+thread: the service callback is a coroutine that awaits it, so subscriptions
+keep flowing with any executor; the new constants replace the old in one
+reference swap.  Bad input never stops the node: it is left out and reported
+once per kind.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import os
+from pathlib import Path
+import sys
+import threading
+import time
+from typing import Callable
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import WrenchStamped
+import rclpy
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
+    SetParametersResult
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+from sensor_msgs.msg import JointState, Temperature
+
+from . import ros_convert
+from .calibration_request import calibrate_from_request, recordings_folder
+from ..actuator import load_actuator
+from ..assessment import Assessor
+from ..calibration import Calibration
+from ..calibration_file import load_calibration, save_calibration
+from ..errors import InputError
+from ..health import HealthMonitor, HealthThresholds, LEVEL_NAMES
+from ..msg import LubricationState, VibrationBlock
+from ..srv import Calibrate
+from ..windowing import WindowBuilder, WindowSettings
+
+NODE_NAME = 'lubrication_estimator'
+STATUS_PREFIX = 'prsm_lube_ros'
+
+_DOUBLE = ParameterType.PARAMETER_DOUBLE
+_INTEGER = ParameterType.PARAMETER_INTEGER
+_STRING = ParameterType.PARAMETER_STRING
+_STRINGS = ParameterType.PARAMETER_STRING_ARRAY
+
+#: name: (default, type, description, range (low, high) or None, read_only)
+PARAMETERS = {
+    'actuators': (['/prsm'], _STRINGS, 'namespace or topic prefix of each actuator watched; inputs are '
+                  '<ns>/vibration, <ns>/joint_states, <ns>/axial_load, <ns>/temperature', None, True),
+    'hardware_ids': ([''], _STRINGS, 'diagnostic hardware_id of each actuator, in the order of actuators '
+                     '(missing or empty: the actuator name)', None, True),
+    'calibration_file': ('~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
+                         'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name '
+                         'with / as _ (e.g. prsm); empty: none. Loaded at start and when changed; the '
+                         'calibrate service writes it when persist is set', None, False),
+    'recordings_dir': ('~/prsm_recordings', _STRING, 'folder the calibrate service may read bags from; '
+                       'relative bag paths are taken from it, paths outside it are refused', None, False),
+    'actuator_file': ('', _STRING, 'actuator geometry YAML (config/actuator.yaml layout) for the screw lead; '
+                      'empty: the contract\'s default actuator', None, True),
+    'window_length': (1.0, _DOUBLE, 'window length in s of header-stamp time for the vibration RMS',
+                      (0.05, 60.0), False),
+    'min_speed': (1.0, _DOUBLE, 'screw speed in rad/s above which the screw counts as moving',
+                  (0.001, 1000.0), False),
+    'max_speed_spread': (0.03, _DOUBLE, 'largest relative speed variation inside a steady window',
+                         (0.001, 1.0), False),
+    'min_coverage': (0.8, _DOUBLE, 'smallest fraction of a window the vibration samples must cover '
+                     '(less: blocks lost, window not assessed)', (0.05, 1.0), False),
+    'completion_delay': (0.5, _DOUBLE, 's of header-stamp time every input must pass a window\'s end '
+                         'before the window is closed (covers jitter between topics)', (0.0, 30.0), False),
+    'stream_timeout': (3.0, _DOUBLE, 's of header-stamp time after which a silent input stops holding '
+                       'windows open (its windows then close with a reason)', (0.1, 3600.0), False),
+    'min_axial_load': (5.0, _DOUBLE, 'smallest axial load in N at which theta_oil is evaluated',
+                       (0.0, 1.0e7), False),
+    'warn_below': (0.85, _DOUBLE, 'theta_oil below this is WARN', (0.0, 2.0), False),
+    'error_below': (0.70, _DOUBLE, 'theta_oil below this is ERROR', (0.0, 2.0), False),
+    'hysteresis': (0.03, _DOUBLE, 'a level clears only when theta_oil rises above its threshold plus this',
+                   (0.0, 1.0), False),
+    'stale_timeout': (5.0, _DOUBLE, 's of node clock without vibration after which the status is STALE',
+                      (0.1, 3600.0), False),
+    'max_unassessed_windows': (30, _INTEGER, 'consecutive windows without theta_oil while the screw moves '
+                               'after which the status is at least WARN (0: never)', (0, 1000000), False),
+    'diagnostics_period': (1.0, _DOUBLE, 's of node clock between /diagnostics messages', (0.05, 60.0), True),
+    'vibration_topic': ('vibration', _STRING, 'vibration topic below each actuator namespace', None, True),
+    'joint_states_topic': ('joint_states', _STRING, 'joint states topic below each actuator namespace',
+                           None, True),
+    'axial_load_topic': ('axial_load', _STRING, 'axial load topic below each actuator namespace', None, True),
+    'temperature_topic': ('temperature', _STRING, 'temperature topic below each actuator namespace (optional '
+                          'input)', None, True),
+    'state_topic': ('lubrication_state', _STRING, 'output topic below each actuator namespace', None, True),
+    'diagnostics_topic': ('/diagnostics', _STRING, 'diagnostics topic', None, True),
+    'calibrate_service': ('/prsm/calibrate', _STRING, 'calibration service of the first actuator (each '
+                          'actuator also has <ns>/calibrate)', None, True),
+    'screw_joint': ('screw', _STRING, 'name of the screw entry in JointState', None, True),
+    'qos_depth': (200, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data)',
+                  (1, 100000), True),
+}
+
+WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
+                     'stream_timeout')
+HEALTH_PARAMETERS = ('warn_below', 'error_below', 'hysteresis', 'stale_timeout', 'max_unassessed_windows')
+
+
+def actuator_label(actuator: str) -> str:
+    """Actuator name for files and ids: ``/ema_left/prsm`` -> ``ema_left_prsm``."""
+    return actuator.strip('/').replace('/', '_') or 'root'
+
+
+def calibration_path(template: str, actuator: str) -> str:
+    """The calibration file of one actuator ('' when none is configured)."""
+    if not template.strip():
+        return ''
+    return os.path.expanduser(template.replace('{actuator}', actuator_label(actuator)))
+
+
+def join_topic(namespace: str, topic: str) -> str:
+    """``<namespace>/<topic>``; a topic starting with / stays as it is."""
+    if topic.startswith('/'):
+        return topic
+    namespace = namespace.rstrip('/')
+    return f'{namespace}/{topic}' if namespace else topic
+
+
+def window_settings(values: dict) -> WindowSettings:
+    """WindowSettings from parameter values (InputError when out of range)."""
+    return WindowSettings(window_length=values['window_length'], min_speed=values['min_speed'],
+                          max_speed_spread=values['max_speed_spread'], min_coverage=values['min_coverage'],
+                          completion_delay=values['completion_delay'], stale_timeout=values['stream_timeout'])
+
+
+def health_thresholds(values: dict) -> HealthThresholds:
+    """HealthThresholds from parameter values (InputError when inconsistent)."""
+    return HealthThresholds(warn_below=values['warn_below'], error_below=values['error_below'],
+                            hysteresis=values['hysteresis'], stale_timeout=values['stale_timeout'],
+                            max_unassessed_windows=int(values['max_unassessed_windows']))
+
+
+@dataclass
+class ActuatorChannel:
+    """Everything the node keeps for one actuator."""
+
+    name: str
+    hardware_id: str
+    builder: WindowBuilder
+    monitor: HealthMonitor
+    calibration_file: str
+    assessor: Assessor | None = None
+    calibration_note: str = 'no calibration loaded'
+    publisher: object = None
+    last_window: object = None
+    last_theta: float = math.nan
+    last_theta_std: float = math.nan
+    last_level: int | None = None
+    windows: int = 0
+    input_errors: dict = field(default_factory=dict)
+
+    @property
+    def status_name(self) -> str:
+        """diagnostic_updater style status name."""
+        return f'{STATUS_PREFIX}: {self.name} lubrication'
+
+    def problem_count(self) -> int:
+        """Bad messages and samples left out so far."""
+        return sum(self.builder.problem_summary().values()) + sum(self.input_errors.values())
+
+
+class LubricationEstimator(Node):
+    """The estimator node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`."""
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        self._lock = threading.RLock()
+        self._fit_lock = threading.Lock()
+        for name, (default, ptype, description, bounds, read_only) in PARAMETERS.items():
+            descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
+            if bounds and ptype == _DOUBLE:
+                descriptor.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]),
+                                                                      to_value=float(bounds[1]))]
+            elif bounds and ptype == _INTEGER:
+                descriptor.integer_range = [IntegerRange(from_value=int(bounds[0]), to_value=int(bounds[1]),
+                                                         step=1)]
+            self.declare_parameter(name, default, descriptor)
+        values = self._values()
+        self._settings = window_settings(values)
+        self._thresholds = health_thresholds(values)
+        self._min_axial_load = float(values['min_axial_load'])
+        self._recordings_dir = str(values['recordings_dir'])
+        self._lead = load_actuator(values['actuator_file'] or None).lead
+        actuators = [a.strip() for a in values['actuators'] if a.strip()]
+        if not actuators:
+            raise InputError('parameter actuators: empty; name at least one namespace, e.g. [/prsm]')
+        if len(set(actuators)) != len(actuators):
+            raise InputError(f'parameter actuators: {actuators} names an actuator twice')
+        self._input_group = MutuallyExclusiveCallbackGroup()
+        self._service_group = ReentrantCallbackGroup()
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
+                         reliability=ReliabilityPolicy.BEST_EFFORT)
+        hardware_ids = list(values['hardware_ids'])
+        self.channels: list[ActuatorChannel] = []
+        self._services = []
+        for i, name in enumerate(actuators):
+            hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
+            channel = ActuatorChannel(name=name, hardware_id=hw,
+                                      builder=WindowBuilder(self._settings, lead=self._lead),
+                                      monitor=HealthMonitor(self._thresholds),
+                                      calibration_file=calibration_path(values['calibration_file'], name))
+            self._load_initial_calibration(channel)
+            channel.publisher = self.create_publisher(
+                LubricationState, join_topic(name, values['state_topic']), 10)
+            self._subscribe(channel, values, qos)
+            self.channels.append(channel)
+            service_names = [join_topic(name, 'calibrate')]
+            if i == 0 and values['calibrate_service'] not in service_names:
+                service_names.insert(0, values['calibrate_service'])
+            for service_name in service_names:
+                self._services.append(self.create_service(
+                    Calibrate, service_name, self._calibrate_handler(channel),
+                    callback_group=self._service_group))
+        self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
+        self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
+                                        callback_group=self._input_group)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.get_logger().info(
+            f'watching {", ".join(c.name for c in self.channels)}; window {self._settings.window_length:g} s; '
+            f'WARN below {self._thresholds.warn_below:g}, ERROR below {self._thresholds.error_below:g}')
+
+    # -- set-up ------------------------------------------------------------------------------------
+    def _values(self) -> dict:
+        return {name: self.get_parameter(name).value for name in PARAMETERS}
+
+    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
+        joint = values['screw_joint']
+        topics = {key: join_topic(channel.name, values[f'{key}_topic'])
+                  for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
+        converters = {
+            'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),
+            'joint_states': (JointState, lambda m: ros_convert.screw_batch(m, topics['joint_states'], joint)),
+            'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
+            'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
+        }
+        for key, (msg_type, convert) in converters.items():
+            self.create_subscription(msg_type, topics[key], self._input_callback(channel, key, convert), qos,
+                                     callback_group=self._input_group)
+
+    def _load_initial_calibration(self, channel: ActuatorChannel):
+        path = channel.calibration_file
+        if not path:
+            channel.calibration_note = 'no calibration: parameter calibration_file is empty; call the ' \
+                                       'calibrate service'
+        elif not Path(path).exists():
+            channel.calibration_note = f'no calibration yet: {path} does not exist; call the calibrate service'
+        else:
+            try:
+                self._swap_calibration(channel, load_calibration(path))
+            except InputError as exc:
+                channel.calibration_note = f'no calibration: {exc}'
+        if channel.assessor is None:
+            self.get_logger().warning(f'{channel.name}: {channel.calibration_note}')
+        else:
+            self.get_logger().info(f'{channel.name}: calibration {path} loaded')
+
+    def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
+        channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load)
+        channel.calibration_note = ''
+
+    # -- inputs ------------------------------------------------------------------------------------
+    def now(self) -> float:
+        """Node-clock time in s (sim time when use_sim_time is set)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def _input_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+        def callback(msg):
+            with self._lock:
+                if key == 'vibration':
+                    channel.monitor.note_input(self.now())
+                try:
+                    channel.builder.add(convert(msg))
+                    windows = channel.builder.pop_closed()
+                except (InputError, ValueError, TypeError, IndexError) as exc:
+                    self._input_problem(channel, key, exc)
+                    windows = []
+                for line in channel.builder.take_problems():
+                    self.get_logger().warning(f'{channel.name}: {line}')
+                for window in windows:
+                    self._evaluate(channel, window)
+        return callback
+
+    def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception):
+        """Count a message that could not be taken; log the first of each kind."""
+        kind = f'{key}:{type(exc).__name__}'
+        seen = channel.input_errors.get(kind, 0)
+        channel.input_errors[kind] = seen + 1
+        if seen == 0:
+            text = str(exc) if isinstance(exc, InputError) else f'{key}: message left out ({exc})'
+            self.get_logger().warning(f'{channel.name}: {text} (further ones counted, not logged)')
+
+    def _evaluate(self, channel: ActuatorChannel, window):
+        assessor = channel.assessor      # one read: a calibration swapped meanwhile applies to the next window
+        if assessor is None:
+            theta, std, reason = math.nan, math.nan, channel.calibration_note
+        else:
+            assessed = assessor.assess_window(window)
+            theta, std, reason = assessed.theta_oil, assessed.theta_oil_std, assessed.reason
+        speed = window.screw_speed
+        moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
+        channel.monitor.observe(theta, std, reason, moving=moving)
+        status = channel.monitor.status(self.now())
+        channel.last_window = window
+        channel.windows += 1
+        if math.isfinite(theta):
+            channel.last_theta, channel.last_theta_std = theta, std
+        channel.publisher.publish(ros_convert.lubrication_state_msg(
+            channel.name, window, theta, std, status.level, status.message))
+        if status.level != channel.last_level:
+            self._publish_diagnostics()
+
+    # -- diagnostics -------------------------------------------------------------------------------
+    def _status(self, channel: ActuatorChannel, now: float):
+        status = channel.monitor.status(now)
+        w = channel.last_window
+        values = [
+            ('theta_oil', channel.last_theta),
+            ('theta_oil_std', channel.last_theta_std),
+            ('vibration_rms', w.vibration_rms if w else math.nan),
+            ('screw_speed', w.screw_speed if w else math.nan),
+            ('axial_load', w.axial_load if w else math.nan),
+            ('window', f'{w.start:.3f} .. {w.end:.3f}' if w else 'none yet'),
+            ('windows', channel.windows),
+            ('unassessed_windows', status.unassessed_windows),
+            ('calibration_file', channel.calibration_file or 'none'),
+            ('calibration', 'loaded' if channel.assessor else channel.calibration_note),
+            ('problems', channel.problem_count()),
+            ('last_vibration_age', channel.monitor.stale_for(now)),
+        ]
+        if status.level != channel.last_level:
+            line = f'{channel.name}: {LEVEL_NAMES[status.level]}: {status.message}'
+            if status.level == 0:
+                self.get_logger().info(line)
+            else:
+                self.get_logger().warning(line)
+            channel.last_level = status.level
+        return ros_convert.diagnostic_status(channel.status_name, channel.hardware_id, status.level,
+                                             status.message, values)
+
+    def _publish_diagnostics(self):
+        with self._lock:
+            now = self.now()
+            array = DiagnosticArray()
+            array.header.stamp = self.get_clock().now().to_msg()
+            array.status = [self._status(channel, now) for channel in self.channels]
+        self._diagnostics.publish(array)
+
+    # -- calibration service -----------------------------------------------------------------------
+    def _calibrate_handler(self, channel: ActuatorChannel):
+        async def handler(request, response):
+            return await self._calibrate(channel, request, response)
+        return handler
+
+    async def _calibrate(self, channel: ActuatorChannel, request, response):
+        """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
+        done = Future(executor=self.executor)
+        done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
+        request_paths = list(request.bag_paths)
+        theta, persist = float(request.reference_theta), bool(request.persist)
+
+        def work():
+            try:
+                done.set_result(self._run_calibration(channel, request_paths, theta, persist))
+            except BaseException as exc:   # never lose the answer: the request gets success=false
+                done.set_result(exc)
+
+        threading.Thread(target=work, name=f'calibrate {channel.name}', daemon=True).start()
+        outcome = await done
+        if isinstance(outcome, BaseException):
+            response.success = False
+            if isinstance(outcome, (InputError, ValueError, OSError)):
+                response.message = str(outcome)
+            else:
+                response.message = f'calibrate: internal error {type(outcome).__name__}: {outcome}'
+            for name in ('c_sys', 'c_f', 'c_lambda', 'fit_rmse', 'c_sys_std', 'c_f_std', 'c_lambda_std'):
+                setattr(response, name, math.nan)
+            self.get_logger().warning(f'{channel.name}: calibration refused: {response.message}')
+            return response
+        calibration, message = outcome
+        c = calibration.constants
+        response.success = True
+        response.message = message
+        response.c_sys, response.c_f, response.c_lambda = c.c_sys, c.c_f, c.c_lambda
+        response.c_sys_std = calibration.c_sys_std
+        response.c_f_std = calibration.c_f_std
+        response.c_lambda_std = calibration.c_lambda_std
+        response.fit_rmse = calibration.fit_rmse
+        response.windows_used = int(calibration.windows_used)
+        response.calibration_file = channel.calibration_file if persist else ''
+        self.get_logger().info(f'{channel.name}: {message}')
+        return response
+
+    def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool):
+        """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message)."""
+        with self._fit_lock:
+            with self._lock:
+                settings, folder = self._settings, self._recordings_dir
+                min_load = self._min_axial_load
+            logged = set()
+
+            def on_problem(line: str):
+                if line not in logged and len(logged) < 20:
+                    logged.add(line)
+                    self.get_logger().warning(f'{channel.name}: calibrate: {line}')
+
+            started = time.monotonic()
+            outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
+                                             namespace=channel.name, min_axial_load=min_load,
+                                             on_problem=on_problem)
+            calibration = outcome.calibration
+            written = ''
+            if persist:
+                if not channel.calibration_file:
+                    raise InputError('calibrate: persist is set but parameter calibration_file is empty; '
+                                     'constants not swapped in')
+                save_calibration(calibration, channel.calibration_file)
+                written = f'; written to {channel.calibration_file}'
+            with self._lock:
+                self._swap_calibration(channel, calibration)
+            return calibration, (
+                f'fitted on {calibration.windows_used} windows of {len(outcome.recordings)} recording(s) '
+                f'({len(calibration.speed_levels)} speeds x {len(calibration.load_levels)} loads), relative '
+                f'RMS error {100 * calibration.fit_rmse:.2f} %, in {time.monotonic() - started:.1f} s; '
+                f'swapped in{written}' + (f'; {len(outcome.problems)} problem(s) in the recordings'
+                                          if outcome.problems else ''))
+
+    # -- parameters --------------------------------------------------------------------------------
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        """Validate and apply changed parameters; refuse with a reason and change nothing otherwise."""
+        values = self._values()
+        for parameter in parameters:
+            values[parameter.name] = parameter.value
+        names = {p.name for p in parameters}
+        try:
+            settings = window_settings(values) if names & set(WINDOW_PARAMETERS) else None
+            thresholds = health_thresholds(values) if names & set(HEALTH_PARAMETERS) else None
+            calibrations = {}
+            if 'calibration_file' in names:
+                for channel in self.channels:
+                    path = calibration_path(values['calibration_file'], channel.name)
+                    calibrations[channel.name] = (path, load_calibration(path) if path and Path(path).exists()
+                                                  else None)
+            if 'recordings_dir' in names and not recordings_folder(values['recordings_dir']).is_dir():
+                raise InputError(f'parameter recordings_dir: {values["recordings_dir"]} is not a folder')
+        except InputError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        with self._lock:
+            if settings is not None:
+                self._settings = settings
+                for channel in self.channels:
+                    channel.builder = WindowBuilder(settings, lead=self._lead)
+                self.get_logger().info(f'window settings changed ({", ".join(sorted(names))}); open windows '
+                                       'dropped, starting over')
+            if thresholds is not None:
+                self._thresholds = thresholds
+                for channel in self.channels:
+                    channel.monitor.set_thresholds(thresholds)
+            if 'min_axial_load' in names:
+                self._min_axial_load = float(values['min_axial_load'])
+                for channel in self.channels:
+                    if channel.assessor is not None:
+                        self._swap_calibration(channel, channel.assessor.calibration)
+            if 'recordings_dir' in names:
+                self._recordings_dir = str(values['recordings_dir'])
+            for channel in self.channels:
+                if channel.name in calibrations:
+                    path, calibration = calibrations[channel.name]
+                    channel.calibration_file = path
+                    if calibration is not None:
+                        self._swap_calibration(channel, calibration)
+                        self.get_logger().info(f'{channel.name}: calibration {path} loaded')
+        return SetParametersResult(successful=True)
+
+
+def spin_nodes(nodes, executor=None) -> int:
+    """Spin ``nodes`` until Ctrl-C or shutdown; destroy them; return 0.
+
+    One thread is enough and keeps the input topics fair (each ready
+    subscription is served once per wait): the calibration service fits on a
+    worker thread of its own.
+    """
+    executor = executor or SingleThreadedExecutor()
+    for node in nodes:
+        executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+def main(args=None) -> int:
+    """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
+    rclpy.init(args=args)
+    try:
+        node = LubricationEstimator()
+    except InputError as exc:
+        print(f'{NODE_NAME}: error: {exc}', file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    return spin_nodes([node])
+
+
+if __name__ == '__main__':
+    sys.exit(main())
