@@ -21,6 +21,8 @@ EXIT_USER_ERROR = 2
 #: its parser with ``set_defaults(func=handler)``; handlers return the exit status.
 #: They must import nothing heavy (rclpy, scipy) at module level.
 PLUGIN_COMMANDS = (
+    'prsm_lube_ros.diagnosis.cli',
+    'prsm_lube_ros.nodes.run_cli',
 )
 
 

@@ -553,3 +553,58 @@ def test_the_live_inputs_follow_eq_22():
     g = START.c_lambda * float(film_speed_load_term(SPEED, LOAD))
     assert rms_for(0.6) / rms_for(0.9) == pytest.approx(math.exp(0.3 * g))
     assert rms_for(0.9) == pytest.approx(math.sqrt(2))
+
+
+def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
+    """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply."""
+    config = tmp_path / 'estimator.yaml'
+    config.write_text('lubrication_estimator:\n  ros__parameters:\n    hardware_ids: [from-yaml]\n'
+                      '    actuators: [/runtest/prsm]\n    diagnostics_period: 0.2\n')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID), PYTHONUNBUFFERED='1')
+    command = [sys.executable, '-m', 'prsm_lube_ros.cli', 'run', '--no-bridge', '--config', str(config),
+               '-p', f'recordings_dir:={tmp_path}', '-p', f'calibration_file:={tmp_path}/c.yaml',
+               '-p', 'warn_below:=0.9']
+    process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    graph = Graph()
+    try:
+        diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+        wait_for(lambda: any('/runtest/prsm' in s.name for a in diagnostics for s in a.status)
+                 or process.poll() is not None, 20, 'diagnostics from prsm-lube run')
+        assert process.poll() is None
+        status = status_of(diagnostics[-1], '/runtest/prsm')
+        assert status.hardware_id == 'from-yaml'
+        response = call(graph, '/runtest/prsm/calibrate', ['missing_bag'])
+        assert not response.success and 'not found' in response.message
+    finally:
+        graph.close()
+        process.send_signal(signal.SIGINT)
+        try:
+            _, stderr = process.communicate(timeout=15)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            _, stderr = process.communicate()
+    assert process.returncode == 0, stderr
+    assert 'Traceback' not in stderr
+
+
+def test_run_overrides_and_a_missing_parameter_file():
+    from prsm_lube_ros.cli import main
+    from prsm_lube_ros.nodes.run_cli import parse_override
+    assert parse_override('actuators:=[/a/prsm, /b/prsm]') == ('actuators', ['/a/prsm', '/b/prsm'])
+    assert parse_override('warn_below:=0.9') == ('warn_below', 0.9)
+    assert parse_override('calibration_file:=') == ('calibration_file', '')
+    assert main(['run', '--no-bridge', '--config', '/nonexistent/estimator.yaml']) == 2
+
+
+def test_the_launch_file_parses_and_starts_the_installed_executables():
+    import ast
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    tree = ast.parse((root / 'launch' / 'prsm_lube.launch.py').read_text())
+    functions = {node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)}
+    assert 'generate_launch_description' in functions
+    executables = {kw.value.value for node in ast.walk(tree) if isinstance(node, ast.Call)
+                   for kw in node.keywords if kw.arg == 'executable'}
+    installed = (root / 'CMakeLists.txt').read_text()
+    assert executables == {'sensor_bridge', 'lubrication_estimator'}
+    assert all(f'scripts/{name}' in installed for name in executables)
