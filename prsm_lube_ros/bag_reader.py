@@ -298,40 +298,43 @@ def _merge(parts: List[Decoded], kind: str) -> Decoded:
         columns = {name: np.concatenate([p.columns[name] for p in parts]) for name in parts[0].columns}
         merged = Decoded(np.concatenate([p.log_times for p in parts]), columns)
         if kind == VIBRATION:
+            merged.samples = np.concatenate([p.samples[p.offsets[0]:p.offsets[-1]] for p in parts])
             counts = np.concatenate([np.diff(p.offsets) for p in parts])
             merged.offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])
-            merged.samples = np.concatenate([p.samples for p in parts])
     log_times = merged.log_times
-    if log_times.size > 1 and np.any(log_times[1:] < log_times[:-1]):
+    if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
         order = np.argsort(log_times, kind='stable')
         merged = Decoded(log_times[order], {k: v[order] for k, v in merged.columns.items()},
                          merged.offsets, merged.samples)
         if kind == VIBRATION:
-            merged.samples, merged.offsets = ragged_take(merged.samples, merged.offsets, order)
+            merged.samples, merged.offsets = ragged_take(merged.samples, merged.offsets - merged.offsets[0],
+                                                         order)
     return merged
 
 
-def _split(decoded: Decoded, kind: str, count: int):
-    """First ``count`` messages as a batch, and the rest as a Decoded (or None)."""
+def _cut(decoded: Decoded, count: int):
+    """The first ``count`` messages and the rest, as views (vibration offsets stay absolute)."""
+    head = Decoded(decoded.log_times[:count], {k: v[:count] for k, v in decoded.columns.items()})
+    rest = Decoded(decoded.log_times[count:], {k: v[count:] for k, v in decoded.columns.items()})
+    if decoded.offsets is not None:
+        head.offsets, head.samples = decoded.offsets[:count + 1], decoded.samples
+        rest.offsets, rest.samples = decoded.offsets[count:], decoded.samples
+    return head, rest
+
+
+def _batch(kind: str, pieces: List[Decoded]) -> InputBatch:
+    """Pieces of one topic in log time order -> one batch."""
+    decoded = pieces[0] if len(pieces) == 1 else _merge(pieces, kind)
     columns = decoded.columns
     if kind == VIBRATION:
-        cut = int(decoded.offsets[count])
-        batch = VibrationBatch(columns['stamps'][:count], columns['sample_rates'][:count],
-                               decoded.offsets[:count + 1], decoded.samples[:cut])
-    elif kind == JOINT_STATES:
-        batch = ScrewStateBatch(columns['stamps'][:count], columns['angles'][:count],
-                                columns['speeds'][:count])
-    elif kind == AXIAL_LOAD:
-        batch = AxialLoadBatch(columns['stamps'][:count], columns['forces'][:count])
-    else:
-        batch = TemperatureBatch(columns['stamps'][:count], columns['temperatures'][:count])
-    if count == decoded.log_times.size:
-        return batch, None
-    rest = Decoded(decoded.log_times[count:], {k: v[count:] for k, v in columns.items()})
-    if kind == VIBRATION:
-        rest.offsets = decoded.offsets[count:] - cut
-        rest.samples = decoded.samples[cut:]
-    return batch, rest
+        offsets = decoded.offsets
+        return VibrationBatch(columns['stamps'], columns['sample_rates'], offsets - offsets[0],
+                              decoded.samples[offsets[0]:offsets[-1]])
+    if kind == JOINT_STATES:
+        return ScrewStateBatch(columns['stamps'], columns['angles'], columns['speeds'])
+    if kind == AXIAL_LOAD:
+        return AxialLoadBatch(columns['stamps'], columns['forces'])
+    return TemperatureBatch(columns['stamps'], columns['temperatures'])
 
 
 class _Slicer:
@@ -344,36 +347,46 @@ class _Slicer:
         self.pending: Dict[str, List[Decoded]] = {kind: [] for kind in kinds}
 
     def add(self, kind: str, decoded: Decoded):
-        if decoded.log_times.size:
-            self.pending[kind].append(decoded)
+        """Queue decoded messages; parts are kept in log time order."""
+        log_times = decoded.log_times
+        if not log_times.size:
+            return
+        if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
+            decoded = _merge([decoded], kind)
+        parts = self.pending[kind]
+        if parts and decoded.log_times[0] < parts[-1].log_times[-1]:
+            parts[:] = [_merge(parts + [decoded], kind)]     # overlapping chunks: rare
+        else:
+            parts.append(decoded)
 
     def flush(self, safe: Optional[int]) -> Iterator[List[InputBatch]]:
         """Slices that end at or before log time ``safe`` (all when None)."""
-        merged = {kind: _merge(parts, kind) for kind, parts in self.pending.items() if parts}
-        self.pending = {kind: [] for kind in self.kinds}
-        while merged:
-            earliest = min(int(d.log_times[0]) for d in merged.values())
+        pending = self.pending
+        while True:
+            heads = [int(parts[0].log_times[0]) for parts in pending.values() if parts]
+            if not heads:
+                return
+            earliest = min(heads)
             if self.origin is None:
                 self.origin = earliest
             end = self.origin + ((earliest - self.origin) // self.slice_ns + 1) * self.slice_ns
             if safe is not None and end > safe:
-                break
+                return
             batches = []
             for kind in self.kinds:
-                decoded = merged.get(kind)
-                if decoded is None:
-                    continue
-                count = int(np.searchsorted(decoded.log_times, end, 'left'))
-                if count:
-                    batch, rest = _split(decoded, kind, count)
-                    batches.append(batch)
-                    if rest is None:
-                        del merged[kind]
+                parts = pending[kind]
+                pieces = []
+                while parts and parts[0].log_times[0] < end:
+                    count = int(np.searchsorted(parts[0].log_times, end, 'left'))
+                    if count == parts[0].log_times.size:
+                        pieces.append(parts.pop(0))
                     else:
-                        merged[kind] = rest
+                        head, parts[0] = _cut(parts[0], count)
+                        pieces.append(head)
+                        break
+                if pieces:
+                    batches.append(_batch(kind, pieces))
             yield batches
-        for kind, decoded in merged.items():
-            self.pending[kind].append(decoded)
 
 
 # -- the recording -----------------------------------------------------------------------------------

@@ -249,9 +249,15 @@ def _column(rows: np.ndarray, offset: Optional[int], dtype: str) -> np.ndarray:
 
 
 def rows_at(buffer: np.ndarray, offsets: np.ndarray, width: int) -> np.ndarray:
-    """``buffer[o:o + width]`` for every ``o`` in ``offsets``, as one (n, width) uint8 array (one copy)."""
-    windows = np.ndarray((buffer.size - width + 1, width), np.uint8, buffer, 0, (1, 1))
-    return windows[offsets]
+    """``buffer[o:o + width]`` for every ``o`` in ``offsets``, as one (n, width) uint8 array (one copy).
+
+    Gathers whole rows as ``width``-byte void items, which numpy copies with one
+    memcpy each (several times faster than a byte-strided 2-D gather).
+    """
+    if width == 0:
+        return np.zeros((offsets.size, 0), np.uint8)
+    windows = np.ndarray((buffer.size - width + 1,), np.dtype((np.void, width)), buffer, 0, (1,))
+    return windows[offsets].view(np.uint8).reshape(offsets.size, width)
 
 
 class _StructureCheck:
@@ -396,6 +402,13 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
         if kind == VIBRATION:
             decoded.offsets, decoded.samples = np.zeros(1, np.int64), np.empty(0, np.float32)
         return decoded
+    if len(parts) == 1 and not isinstance(parts[0][2], list):      # the usual case: one structure
+        indices, columns, samples = parts[0]
+        offsets = None
+        if kind == VIBRATION:
+            offsets = np.arange(indices.size + 1, dtype=np.int64) * (samples.size // max(indices.size, 1))
+        return Decoded(log_times if indices.size == log_times.size else log_times[indices], columns, offsets,
+                       samples, undecodable, without_screw)
     indices = np.concatenate([p[0] for p in parts])
     columns = {name: np.concatenate([p[1][name] for p in parts]) for name in names}
     order = np.argsort(indices, kind='stable') if len(parts) > 1 else None
