@@ -1,0 +1,34 @@
+"""``prsm-lube diagnose``: find the physics the paper's model leaves out, name it, model it, refit, show it.
+
+Public API::
+
+    table = table_from_windows([rec.windows for rec in recordings], theta=1.0)
+    result = diagnose_table(table)           # Diagnosis: verdict, baseline, candidates, best, location
+    result.as_json()                          # the contract's diagnose document
+    result.calibration()                      # Calibration with the chosen effect in ``extension``
+    write_report(result, 'out/report')        # PNG figures and index.md / index.html
+
+Candidate effects live in :mod:`.effects`, one module each, registered on import.
+"""
+from __future__ import annotations
+
+from .effects import Effect, effect_ids, get_effect, register, registered
+from .engine import ADEQUATE, AMBIGUOUS, UNEXPLAINED, Candidate, Diagnosis, diagnose_table
+from .table import WindowTable, table_from_windows
+
+__all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Effect', 'WindowTable',
+           'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect', 'register', 'registered',
+           'table_from_windows', 'write_report']
+
+
+def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = 5.0) -> Diagnosis:
+    """Diagnose :class:`~prsm_lube_ros.analysis.RecordingWindows` taken at lubrication state ``theta``."""
+    table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
+                               sources=[rec.path for rec in recordings])
+    return diagnose_table(table)
+
+
+def write_report(diagnosis: Diagnosis, folder):
+    """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`)."""
+    from .report import write_report as _write
+    return _write(diagnosis, folder)

@@ -1,0 +1,82 @@
+"""Vibration not from the thread contacts, adding in power: A^2 = A_22^2 + B^2.
+
+Physics: the accelerometer on the nut also picks up the motor and its drive,
+bearings, the frame and the sensor chain.  Their vibration is uncorrelated with
+the thread-contact excitation, so powers add:
+
+    A = sqrt(A_22^2 + B^2)
+
+B does not follow the screw speed, so it matters most at low speed where A_22
+(~omega^2) is small; in the spectrum it shows as energy at fixed frequencies
+that do not move with the rotation orders.  Parameter: B (m/s^2); internally
+B over the smallest RMS recorded.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Effect, register
+
+#: Bounds of B over the smallest recorded RMS.
+FRACTION_RANGE = (0.0, 1.5)
+#: Smallest share of the power at the lowest speed in fixed spectral lines that counts as evidence.
+MIN_LINE_SHARE = 1e-3
+
+
+@register
+class BackgroundVibration(Effect):
+    """Vibration from elsewhere adds in power; at low speed the amplitude stops following the model."""
+
+    id = 'background_vibration'
+    title = 'background vibration'
+    physics = ('Vibration that does not come from the thread contacts (motor, bearings, frame) adds in power, '
+               'A^2 = A_22^2 + B^2; it does not follow the screw speed, so at low speed the amplitude stops '
+               'falling with omega^2 as the model says.')
+    equations = 'A = sqrt(A_22^2 + B^2)'
+    parameter_names = ('background_fraction',)
+    covariate = 'speed'
+    to_separate = ('lower screw speeds (the background dominates there), a record at standstill with the drive '
+                   'on, and vibration spectra')
+
+    def scales(self, table) -> dict:
+        """Smallest recorded RMS, m/s^2."""
+        return {'rms_scale': float(np.min(table.rms))}
+
+    def bounds(self):
+        """B / min RMS in :data:`FRACTION_RANGE`."""
+        return np.array([FRACTION_RANGE[0]]), np.array([FRACTION_RANGE[1]])
+
+    def starts(self):
+        """Small to large backgrounds."""
+        return [np.array([0.1]), np.array([0.3]), np.array([0.6])]
+
+    def to_params(self, p, scales):
+        """background_rms B (m/s^2)."""
+        return {'background_rms': float(p[0] * scales['rms_scale']), **scales}
+
+    def log_gain(self, params, covariates, ln_a22):
+        """``0.5 ln(1 + B^2 / A_22^2)``."""
+        b = params['background_rms']
+        if b <= 0:
+            return np.zeros_like(np.asarray(ln_a22, dtype=float))
+        with np.errstate(over='ignore'):
+            return 0.5 * np.log1p(np.exp(2.0 * (np.log(b) - np.asarray(ln_a22, dtype=float))))
+
+    def eq22_amplitude(self, params, covariates, rms):
+        """``sqrt(A^2 - B^2)``; NaN where the RMS does not exceed the background."""
+        rms = np.asarray(rms, dtype=float)
+        power = rms ** 2 - params['background_rms'] ** 2
+        return np.where(power > 0, np.sqrt(np.maximum(power, 0.0)), np.nan)
+
+    def independent_evidence(self, table, location) -> str:
+        """Fixed-frequency spectral lines with constant power, at least :data:`MIN_LINE_SHARE` of the power."""
+        lines = location.spectrum if location is not None else None
+        if lines is None or not lines.frequencies or lines.share_at_lowest_speed < MIN_LINE_SHARE:
+            return ''
+        return 'spectrum: ' + lines.note
+
+    def describe(self, params):
+        """B and its share of the smallest RMS."""
+        b = params['background_rms']
+        return (f'Background of B = {b:.4g} m/s^2 RMS, {100 * b / params["rms_scale"]:.0f} % of the smallest '
+                'window RMS recorded. ' + self.physics)

@@ -1,0 +1,111 @@
+"""What a candidate effect is: its physics, its parameters and how it changes Eq. 22.
+
+Every candidate extends Eq. 22 in one of two places, or both:
+
+* ``film_factor``: a factor on ``theta_Oil C_lambda omega^0.68 F^-0.073``
+  in the exponent of Eq. 22 (the film thickness, Eq. 9-12, changes);
+* ``log_gain``: a term added to ``ln A_0`` (the response to the same
+  excitation changes, or vibration from elsewhere adds to it).
+
+So the extended model is ``ln A = ln A_22(theta f) + gain`` where ``A_22`` is
+Eq. 22 with theta_Oil scaled by ``f``.  Effects describe themselves with
+physical parameters (a ``dict`` of floats, SI units) so a calibration can store
+them; during a fit they work on an internal vector ``p`` inside ``bounds``,
+converted by :meth:`Effect.to_params` with ``scales`` taken once from the data
+(reference load, stroke, ...), so fits on subsets of the data stay comparable.
+
+The covariates an effect reads come from any object with the window table's
+attribute names (``speed``, ``load``, ``position``, ``revolutions``,
+``temperature``, ``time``), arrays or floats.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+
+class Effect:
+    """A candidate physical effect the paper's model leaves out (subclass and register it)."""
+
+    #: Effect ID (CONTRACT.md names the known ones).
+    id: str = ''
+    #: One-line name.
+    title: str = ''
+    #: The physics, in words.
+    physics: str = ''
+    #: How it extends Eq. 22, as text.
+    equations: str = ''
+    #: Names of the internal fit parameters, in order.
+    parameter_names: tuple[str, ...] = ()
+    #: The covariate its mismatch follows (a column of the window table or 'speed').
+    covariate: str = ''
+    #: What to record so this effect can be told apart from the others.
+    to_separate: str = ''
+
+    def applicable(self, table) -> str:
+        """Empty when the recordings can test this effect, else why not (in words)."""
+        return ''
+
+    def scales(self, table) -> dict:
+        """Data scales fixed once per diagnosis (reference values the parameters refer to)."""
+        return {}
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the internal parameter vector."""
+        return np.zeros(0), np.zeros(0)
+
+    def starts(self) -> Sequence[np.ndarray]:
+        """Initial internal parameter vectors for a multi-start fit."""
+        return [np.zeros(0)]
+
+    def to_params(self, p: np.ndarray, scales: dict) -> dict:
+        """Physical parameters (SI) from the internal vector and the data scales."""
+        return dict(scales)
+
+    def film_factor(self, params: dict, covariates):
+        """Factor on theta_Oil in Eq. 22's film term (1 = none)."""
+        return 1.0
+
+    def log_gain(self, params: dict, covariates, ln_a22):
+        """Term added to ln A_0 (0 = none); ``ln_a22`` is Eq. 22's ln amplitude."""
+        return 0.0
+
+    def describe(self, params: dict) -> str:
+        """The fitted effect in words, with its size."""
+        return self.physics
+
+    def independent_evidence(self, table, location) -> str:
+        """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none."""
+        return ''
+
+    # -- assessment ------------------------------------------------------
+    def eq22_amplitude(self, params: dict, covariates, rms):
+        """The measured RMS mapped back to the amplitude Eq. 22 describes, m/s^2.
+
+        Default: remove a multiplicative gain that does not depend on the
+        amplitude itself.
+        """
+        rms = np.asarray(rms, dtype=float)
+        return rms * np.exp(-np.asarray(self.log_gain(params, covariates, np.log(rms)), dtype=float))
+
+    def assessment_film_factor(self, params: dict, covariates):
+        """Factor dividing Eq. 23's theta_Oil so it reports the oil supply (default: :meth:`film_factor`)."""
+        return self.film_factor(params, covariates)
+
+
+_REGISTRY: dict[str, Effect] = {}
+
+
+def register(effect_class):
+    """Class decorator: add an :class:`Effect` subclass (instantiated) to the registry under its ``id``."""
+    effect = effect_class()
+    if not effect.id:
+        raise ValueError(f'{effect_class.__name__} has no id')
+    _REGISTRY[effect.id] = effect
+    return effect_class
+
+
+def registered() -> dict[str, Effect]:
+    """All registered effects by ID, in registration order."""
+    return dict(_REGISTRY)

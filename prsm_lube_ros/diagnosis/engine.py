@@ -1,0 +1,278 @@
+"""Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
+
+A candidate *earns its extra parameters* when, with physical constants
+(C_lambda > 0), it lowers the BIC (effective sample size, see
+:mod:`.fitting`) by :data:`BIC_MARGIN` or more **and** lowers the held-out
+error by :data:`MIN_GAIN` or more; or when evidence from outside the
+amplitude fit (the spectrum's fixed lines for background vibration) shows it
+and it does not predict held-out runs worse.  Earning candidates rank by
+held-out error.  When the runner-up comes close (half the leader's gain or
+more) both are fitted together and each is tested for what it adds given the
+other: the one that adds nothing is dropped; if neither adds anything the
+recording cannot tell them apart and the verdict is ``ambiguous`` with both
+listed and what to record to separate them.
+
+Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters);
+``ambiguous`` (tied candidates in ``tied``); ``unexplained`` (the residual is
+strongly structured or the baseline constants are unphysical, yet no
+candidate explains it).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+
+from ..calibration import Calibration, check_identifiable, operating_levels
+from ..errors import InputError
+from .combined import CombinedEffect
+from .effects import Effect, registered
+from .fitting import effective_sample_size, fit_vector, ModelFit, bic, cv_folds, fit_model, predict_log
+from .locate import Location, locate
+from .table import WindowTable
+
+#: BIC improvement (effective sample size) a candidate needs.
+BIC_MARGIN = 10.0
+#: Relative fall of the held-out error a candidate needs.
+MIN_GAIN = 0.05
+#: A candidate with independent evidence may not predict held-out runs worse than this (relative).
+EVIDENCE_TOLERANCE = 0.02
+#: Runner-up gain, relative to the leader's, from which the two are tested against each other.
+TIE_RATIO = 0.5
+#: p-value below which a located covariate without an explaining candidate makes the verdict 'unexplained'.
+UNEXPLAINED_P = 1e-8
+
+ADEQUATE, AMBIGUOUS, UNEXPLAINED = 'adequate', 'ambiguous', 'unexplained'
+
+
+@dataclass
+class Candidate:
+    """One candidate effect: its fit, scores and status."""
+
+    effect: Effect
+    fit: ModelFit | None
+    status: str                 # 'earns', 'rejected', 'not testable', 'dropped'
+    reason: str = ''
+    gain: float = math.nan      # 1 - cv_rmse / baseline cv_rmse
+    delta_bic: float = math.nan
+    evidence: str = ''
+
+    def as_json(self) -> dict:
+        """Mapping for the ``candidates`` list."""
+        out = {'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
+               'reason': self.reason, 'equations': self.effect.equations,
+               'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
+        if self.fit is not None:
+            c = self.fit.constants
+            out.update({'rmse': _num(self.fit.rmse), 'cv_rmse': _num(self.fit.cv_rmse), 'gain': _num(self.gain),
+                        'delta_bic': _num(self.delta_bic), 'effective_windows': _num(self.fit.n_eff),
+                        'params': _clean(self.fit.params),
+                        'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
+                        'explanation': self.effect.describe(self.fit.params)})
+        return out
+
+
+@dataclass
+class Diagnosis:
+    """The outcome of :func:`diagnose_table`."""
+
+    verdict: str
+    baseline: ModelFit
+    candidates: list
+    best: Candidate | None
+    location: Location
+    tied: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    what_to_record: str = ''
+    table: WindowTable | None = None
+
+    @property
+    def chosen(self) -> Candidate | None:
+        """The candidate the verdict names (None for adequate, ambiguous, unexplained)."""
+        return self.best if self.best is not None and self.verdict == self.best.effect.id else None
+
+    def calibration(self) -> Calibration:
+        """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
+        fit = self.chosen.fit if self.chosen is not None else self.baseline
+        effect = self.chosen.effect if self.chosen is not None else None
+        table = self.table
+        covariance, residual_std = _constant_covariance(table, fit, effect)
+        extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
+        return Calibration(constants=fit.constants, covariance=covariance, fit_rmse=fit.rmse,
+                           residual_std=residual_std, windows_used=len(table), reference_theta=table.theta,
+                           speed_levels=tuple(operating_levels(table.speed)),
+                           load_levels=tuple(operating_levels(table.load)), sources=table.sources,
+                           extension=extension)
+
+    def as_json(self) -> dict:
+        """The contract's ``diagnose`` document (plus location, notes and tied candidates)."""
+        base = self.baseline
+        c = base.constants
+        best = None
+        if self.best is not None:
+            f = self.best.fit
+            best = {'effect': self.best.effect.id, 'rmse': _num(f.rmse), 'cv_rmse': _num(f.cv_rmse),
+                    'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
+                    'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
+                    'status': self.best.status}
+        table = self.table
+        return {'verdict': self.verdict, 'confident': self.verdict not in (AMBIGUOUS, UNEXPLAINED),
+                'tied': list(self.tied), 'what_to_record': self.what_to_record,
+                'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
+                             'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
+                             'unphysical': base.unphysical(), 'effective_windows': _num(base.n_eff)},
+                'best': best, 'candidates': [cand.as_json() for cand in self.candidates],
+                'location': self.location.as_json(), 'notes': list(self.notes),
+                'data': {'windows': len(table), 'runs': int(table.runs.size),
+                         'recordings': int(np.unique(table.recording).size),
+                         'speed_levels': operating_levels(table.speed), 'load_levels': operating_levels(table.load),
+                         'reference_theta': table.theta, 'sources': list(table.sources)}}
+
+
+def _num(value):
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
+def _clean(params: dict) -> dict:
+    """JSON-safe copy: non-finite floats become None."""
+    out = {}
+    for key, value in params.items():
+        if isinstance(value, dict):
+            out[key] = _clean(value)
+        elif isinstance(value, (float, int, np.floating)):
+            out[key] = _num(float(value))
+        else:
+            out[key] = value
+    return out
+
+
+def _constant_covariance(table, fit: ModelFit, effect):
+    """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held: s^2 (J^T J)^-1."""
+    scales = effect.scales(table) if effect is not None else {}
+    base = predict_log(table, fit.vector, effect, scales)
+    jac = np.empty((len(table), 3))
+    for i in range(3):
+        step = 1e-6 * max(abs(fit.vector[i]), 1e-3)
+        shifted = fit.vector.copy()
+        shifted[i] += step
+        jac[:, i] = (predict_log(table, shifted, effect, scales) - base) / step
+    dof = max(len(table) - fit.n_params, 1)
+    variance = float(fit.log_residual @ fit.log_residual) / dof
+    try:
+        covariance = variance * np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        covariance = np.full((3, 3), np.nan)
+    return covariance, math.sqrt(variance)
+
+
+def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
+    """BIC(candidate) - BIC(reference) with the candidate's effective sample size."""
+    n_eff = candidate.n_eff
+    own = bic(candidate.log_residual, candidate.n_params, n_eff)
+    return own - bic(reference.log_residual, reference.n_params, n_eff)
+
+
+def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
+    reason = effect.applicable(table)
+    if reason:
+        return Candidate(effect, None, 'not testable', reason)
+    fit = fit_model(table, effect, folds)
+    gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
+    delta = _delta_bic(fit, baseline)
+    evidence = effect.independent_evidence(table, location)
+    unphysical = fit.unphysical()
+    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence)
+    if unphysical:
+        candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
+    elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
+        candidate.status = 'earns'
+        candidate.reason = f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}'
+    elif evidence and gain >= -EVIDENCE_TOLERANCE:
+        candidate.status = 'earns'
+        candidate.reason = f'{evidence}; held-out error {100 * gain:+.1f} % lower'
+    else:
+        candidate.reason = (f'does not earn its {len(effect.parameter_names)} parameter(s): held-out error '
+                            f'{100 * gain:+.1f} % lower, BIC {delta:+.1f}')
+    return candidate
+
+
+def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool, bool]:
+    """Fit both effects together and say whether each adds to the other (BIC drop of BIC_MARGIN)."""
+    both = CombinedEffect(leader.effect, runner.effect)
+    first_vec = leader.fit.vector[3:] if both.first is leader.effect else runner.fit.vector[3:]
+    second_vec = runner.fit.vector[3:] if both.second is runner.effect else leader.fit.vector[3:]
+    scales = both.scales(table)
+    starts = [np.r_[first_vec, second_vec]] + both.starts()[:4]
+    vector = fit_vector(table, both, scales, starts=starts)
+    residual = predict_log(table, vector, both, scales) - table.log_rms
+    n_eff = effective_sample_size(residual, table.run)
+    k = 3 + len(both.parameter_names)
+    joint = bic(residual, k, n_eff)
+    leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -BIC_MARGIN
+    runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -BIC_MARGIN
+    return leader_adds, runner_adds
+
+
+def _separation_advice(a: Effect, b: Effect) -> str:
+    return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
+
+
+def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis:
+    """Run the whole diagnosis on a window table (see module doc)."""
+    check_identifiable(table.speed, table.load)
+    effects = registered() if effects is None else effects
+    folds = cv_folds(table)
+    if len(folds) < 3:
+        raise InputError(f'diagnose: {len(folds)} run(s) can be held out with the constants still identifiable; '
+                         'record each speed and load in two runs or more (6 runs or more in all)')
+    baseline = fit_model(table, None, folds)
+    location = locate(table, baseline.log_residual)
+    notes = []
+    if baseline.unphysical():
+        notes.append('the paper\'s model fits with unphysical constants (' + '; '.join(baseline.unphysical())
+                     + '): evidence that its form misses something')
+    if len(folds) < table.runs.size:
+        notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
+                     'would not be identifiable')
+    candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
+    fitted = [c for c in candidates if c.fit is not None]
+    ranked = sorted(fitted, key=lambda c: c.fit.cv_rmse)
+    earning = [c for c in ranked if c.status == 'earns']
+    best = earning[0] if earning else (ranked[0] if ranked else None)
+    verdict, tied, advice = ADEQUATE, [], ''
+    if earning:
+        verdict = best.effect.id
+        for runner in earning[1:]:
+            close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
+            if not close:
+                runner.status = 'dropped'
+                runner.reason += f'; explains less than {best.effect.id}'
+                continue
+            leader_adds, runner_adds = _pair_test(table, best, runner, folds)
+            if leader_adds and not runner_adds:
+                runner.status = 'dropped'
+                runner.reason += f'; adds nothing given {best.effect.id}'
+            elif runner_adds and not leader_adds:
+                best.status = 'dropped'
+                best.reason += f'; adds nothing given {runner.effect.id}'
+                best, verdict = runner, runner.effect.id
+            elif runner_adds and leader_adds:
+                notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
+            else:
+                tied = [best.effect.id, runner.effect.id]
+                verdict = AMBIGUOUS
+                advice = _separation_advice(best.effect, runner.effect)
+                notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
+                             'neither adds anything given the other: the recording cannot tell them apart')
+                break
+    else:
+        strong = [t for t in location.tests if t.p_value < UNEXPLAINED_P]
+        if strong or baseline.unphysical():
+            verdict = UNEXPLAINED
+            advice = 'a candidate for the located mismatch is missing from the catalogue'
+            notes.append(f'the mismatch is real ({location.summary}) but no candidate explains it')
+    if verdict in effects and not advice:
+        advice = ''
+    return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
+                     tied=tied, notes=notes, what_to_record=advice, table=table)

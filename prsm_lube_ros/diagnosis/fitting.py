@@ -1,0 +1,215 @@
+"""Fit Eq. 22 alone and extended by each candidate effect; score on held-out runs.
+
+Every model is fitted by least squares on ``ln A`` (window RMS), so residuals
+are relative errors.  The baseline is the paper's model (ordinary least squares
+in ``(ln C_sys, C_F, C_lambda)``, as :mod:`prsm_lube_ros.calibration`); an
+extended model adds the effect's parameters and is fitted jointly with the
+constants (bounded trust-region least squares, multi-start).
+
+Scores:
+
+* ``rmse``: relative RMS error ``A_model / A - 1`` over the windows fitted;
+* ``cv_rmse``: the same on runs held out of the fit (leave one run out; folds
+  that would leave fewer than two speeds or two loads to fit are skipped for
+  every model alike);
+* ``bic``: BIC on window log residuals with an effective sample size
+  ``n / (1 + (m - 1) ICC)`` (``m`` windows per run, ICC of the residuals
+  between runs), because windows of one run are not independent.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..calibration import operating_levels
+from ..vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
+from .effects import Effect
+from .table import WindowTable
+
+BASELINE = 'baseline'
+#: Parameters of the paper's model.
+BASE_PARAMETERS = 3
+
+
+def ln_eq22(table, vector, film_factor=1.0) -> np.ndarray:
+    """ln A_0 of Eq. 22 with theta_Oil scaled by ``film_factor``; vector = (ln C_sys, C_F, C_lambda)."""
+    speed = np.abs(np.asarray(table.speed, dtype=float))
+    load = np.abs(np.asarray(table.load, dtype=float))
+    return (vector[0] + FREQUENCY_EXPONENT * np.log(speed) - STIFFNESS_EXPONENT * np.log(load)
+            + vector[1] * load - vector[2] * table.theta * film_factor * table.film_term)
+
+
+def predict_log(table, vector, effect: Effect | None = None, scales: dict | None = None) -> np.ndarray:
+    """ln A of the model: Eq. 22 (``effect`` None) or Eq. 22 extended by ``effect``.
+
+    ``vector`` holds (ln C_sys, C_F, C_lambda) followed by the effect's internal parameters.
+    """
+    if effect is None:
+        return ln_eq22(table, vector)
+    params = effect.to_params(np.asarray(vector[3:]), scales or {})
+    base = ln_eq22(table, vector, effect.film_factor(params, table))
+    return base + effect.log_gain(params, table, base)
+
+
+def _ols_constants(table, film_factor=1.0, offset=0.0):
+    """(ln C_sys, C_F, C_lambda) by OLS with the film column scaled and ``offset`` removed from ln A."""
+    load = np.abs(table.load)
+    x = np.column_stack([np.ones(len(table)), load, -table.theta * film_factor * table.film_term])
+    y = table.reduced - offset
+    scale = np.linalg.norm(x, axis=0)
+    scale[scale == 0] = 1.0
+    solution, *_ = np.linalg.lstsq(x / scale, y, rcond=None)
+    return solution / scale
+
+
+def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict | None = None,
+               starts=None) -> np.ndarray:
+    """Least-squares parameter vector of the baseline or of Eq. 22 extended by ``effect``.
+
+    ``starts``: internal effect parameter vectors (or full vectors) to start from;
+    default the effect's own multi-start grid.
+    """
+    baseline = _ols_constants(table)
+    if effect is None:
+        return baseline
+    scales = scales if scales is not None else effect.scales(table)
+    lo, hi = effect.bounds()
+    lower = np.r_[-np.inf, -np.inf, -np.inf, lo]
+    upper = np.r_[np.inf, np.inf, np.inf, hi]
+    y = table.log_rms
+
+    def residual(vector):
+        return predict_log(table, vector, effect, scales) - y
+
+    best, best_cost = None, math.inf
+    for start in (starts if starts is not None else effect.starts()):
+        start = np.asarray(start, dtype=float)
+        if start.size == 3 + lo.size:
+            x0 = start.copy()
+        else:
+            params = effect.to_params(start, scales)
+            film = effect.film_factor(params, table)
+            gain = effect.log_gain(params, table, ln_eq22(table, baseline))
+            x0 = np.r_[_ols_constants(table, film, gain), start]
+        x0[3:] = np.clip(x0[3:], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        if not np.all(np.isfinite(residual(x0))):
+            continue
+        result = least_squares(residual, x0, bounds=(lower, upper), x_scale='jac', max_nfev=300)
+        if np.all(np.isfinite(result.fun)) and result.cost < best_cost:
+            best, best_cost = result.x, result.cost
+    if best is None:
+        best = np.r_[baseline, np.clip(np.asarray(effect.starts()[0], float), lo, hi)]
+    return best
+
+
+def relative_errors(log_residual) -> np.ndarray:
+    """Relative amplitude errors ``A_model / A - 1`` from log residuals ``ln A_model - ln A``."""
+    return np.expm1(np.asarray(log_residual, dtype=float))
+
+
+def relative_rmse(log_residual) -> float:
+    """RMS of the relative errors over the finite entries."""
+    errors = relative_errors(log_residual)
+    errors = errors[np.isfinite(errors)]
+    return float(np.sqrt(np.mean(errors ** 2))) if errors.size else math.nan
+
+
+def identifiable(table: WindowTable) -> bool:
+    """True when the windows span two speed levels and two load levels (the constants are identifiable)."""
+    return len(table) >= 4 and len(operating_levels(table.speed)) >= 2 and len(operating_levels(table.load)) >= 2
+
+
+def cv_folds(table: WindowTable) -> list[int]:
+    """Runs that can be held out: the rest still identifies the constants."""
+    return [int(r) for r in table.runs if identifiable(table.subset(table.run != r))]
+
+
+def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: dict | None,
+                           full_vector: np.ndarray, folds) -> np.ndarray:
+    """Leave-one-run-out log residuals (prediction minus measurement); NaN for runs not held out."""
+    out = np.full(len(table), np.nan)
+    for run in folds:
+        held = table.run == run
+        train = table.subset(~held)
+        starts = None if effect is None else [full_vector]
+        vector = fit_vector(train, effect, scales, starts=starts)
+        test = table.subset(held)
+        out[held] = predict_log(test, vector, effect, scales) - test.log_rms
+    return out
+
+
+def intraclass_correlation(residual, groups) -> tuple[float, float]:
+    """One-way ANOVA ICC of ``residual`` between ``groups`` and the mean group size m0."""
+    residual = np.asarray(residual, dtype=float)
+    labels, inverse, sizes = np.unique(groups, return_inverse=True, return_counts=True)
+    n, k = residual.size, labels.size
+    if k < 2 or n <= k:
+        return 0.0, float(n / max(k, 1))
+    means = np.bincount(inverse, residual) / sizes
+    grand = residual.mean()
+    msb = float(np.sum(sizes * (means - grand) ** 2) / (k - 1))
+    msw = float(np.sum((residual - means[inverse]) ** 2) / (n - k))
+    m0 = float((n - np.sum(sizes ** 2) / n) / (k - 1))
+    denominator = msb + (m0 - 1) * msw
+    icc = (msb - msw) / denominator if denominator > 0 else 0.0
+    return float(np.clip(icc, 0.0, 1.0)), m0
+
+
+def effective_sample_size(residual, groups) -> float:
+    """``n / (1 + (m0 - 1) ICC)``: windows counted as independent observations."""
+    icc, m0 = intraclass_correlation(residual, groups)
+    return float(len(residual) / (1.0 + max(m0 - 1.0, 0.0) * icc))
+
+
+def bic(log_residual, n_params: int, n_eff: float) -> float:
+    """Gaussian BIC with ``n_eff`` observations: ``n_eff ln(SSR/n) + k ln(n_eff)``."""
+    r = np.asarray(log_residual, dtype=float)
+    ssr = float(np.mean(r ** 2))
+    return float(n_eff * math.log(max(ssr, 1e-300)) + n_params * math.log(max(n_eff, 2.0)))
+
+
+@dataclass
+class ModelFit:
+    """One fitted model: the baseline or Eq. 22 extended by one effect."""
+
+    effect: str                     # effect ID or 'baseline'
+    vector: np.ndarray              # (ln C_sys, C_F, C_lambda, internal effect parameters)
+    params: dict                    # effect parameters, physical (SI)
+    log_residual: np.ndarray        # ln A_model - ln A, per window
+    cv_log_residual: np.ndarray     # the same for held-out runs (NaN where not held out)
+    n_params: int
+    rmse: float = math.nan
+    cv_rmse: float = math.nan
+    n_eff: float = math.nan
+    notes: list = field(default_factory=list)
+
+    @property
+    def constants(self) -> ModelConstants:
+        """C_sys, C_F, C_lambda of this fit."""
+        return ModelConstants.from_vector(self.vector[:3])
+
+    def unphysical(self) -> list[str]:
+        """What about the constants no real actuator gives (empty when none)."""
+        problems = []
+        c = self.constants
+        if not c.c_lambda > 0:
+            problems.append(f'C_lambda = {c.c_lambda:.3g} <= 0 (the film would raise vibration)')
+        return problems
+
+
+def fit_model(table: WindowTable, effect: Effect | None = None, folds=None) -> ModelFit:
+    """Fit a model on all windows and score it on held-out runs."""
+    scales = effect.scales(table) if effect is not None else {}
+    vector = fit_vector(table, effect, scales)
+    residual = predict_log(table, vector, effect, scales) - table.log_rms
+    folds = cv_folds(table) if folds is None else folds
+    cv = held_out_log_residuals(table, effect, scales, vector, folds)
+    params = effect.to_params(vector[3:], scales) if effect is not None else {}
+    n_params = BASE_PARAMETERS + (len(effect.parameter_names) if effect is not None else 0)
+    return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
+                    log_residual=residual, cv_log_residual=cv, n_params=n_params,
+                    rmse=relative_rmse(residual), cv_rmse=relative_rmse(cv),
+                    n_eff=effective_sample_size(residual, table.run))

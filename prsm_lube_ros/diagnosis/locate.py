@@ -1,0 +1,241 @@
+"""Where recording and model disagree: residual tests against covariates and the spectrum.
+
+Residuals are the baseline's ``ln A_model - ln A`` per window.  For each
+covariate a test says how much of the residual variance it carries and how
+strongly, with windows of one run treated as correlated:
+
+* ``position`` — nut position inside runs (residual and position centred per
+  run, so only the within-run trend counts);
+* ``revolutions``, ``time`` and ``temperature`` — linear trend over all
+  windows;
+* ``speed`` and ``load`` — residual means per operating level (what the
+  model's speed and load laws leave over).
+
+Trends use a cluster-robust (by run) standard error and a t test with
+``runs - 1`` degrees of freedom; level means use an F test with the effective
+sample size of :func:`~.fitting.effective_sample_size`.
+
+The spectral test looks for lines at fixed frequencies: narrow peaks standing
+out of their neighbourhood at the same frequency at the two lowest screw
+speeds at least (so not rotation orders, which move with speed) whose power
+stays put, wherever they stand out, while the total power changes with speed
+(so not a resonance of the thread-contact excitation, which scales with it).  That is the signature
+of vibration from elsewhere.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+from scipy import stats
+from scipy.ndimage import median_filter
+
+from ..calibration import operating_levels
+from .fitting import effective_sample_size
+from .table import WindowTable
+
+#: A covariate carries the mismatch when its p-value is below this.
+SIGNIFICANCE = 1e-3
+#: A spectral line stands out when it exceeds its neighbourhood's median by this factor at every speed.
+LINE_PROMINENCE = 4.0
+#: Half width, bins, of the neighbourhood a line is compared with.
+FLOOR_HALF_WIDTH = 8
+#: Fixed lines count as constant when their power varies by less than this factor between speeds ...
+LINE_CONSTANCY = 2.5
+#: ... while the total power varies by more than this factor.
+POWER_SPREAD = 1.5
+
+COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
+                   'speed': 'rad/s', 'load': 'N'}
+
+
+@dataclass
+class CovariateTest:
+    """How much of the residual one covariate carries."""
+
+    covariate: str
+    kind: str                 # 'within-run trend', 'trend' or 'level means'
+    r_squared: float          # share of residual variance explained
+    statistic: float          # t or F
+    p_value: float
+    slope: float = math.nan   # relative amplitude change per unit covariate (trends)
+
+    def as_json(self) -> dict:
+        """Plain mapping."""
+        return {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
+                'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
+                'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
+
+
+@dataclass
+class SpectralLines:
+    """Fixed-frequency lines whose power does not follow the operating point."""
+
+    frequencies: list = field(default_factory=list)     # Hz
+    powers: list = field(default_factory=list)          # (m/s^2)^2 per line (median over speed levels)
+    total_power: float = 0.0                            # (m/s^2)^2, sum of the lines
+    share_at_lowest_speed: float = 0.0                  # of the mean square RMS at the lowest speed
+    testable: bool = False
+    note: str = ''
+
+    def as_json(self) -> dict:
+        """Plain mapping."""
+        return {'testable': self.testable, 'frequencies_hz': [float(f) for f in self.frequencies],
+                'line_powers': [float(p) for p in self.powers], 'total_power': float(self.total_power),
+                'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note}
+
+
+@dataclass
+class Location:
+    """All covariate tests, the spectrum's lines and the covariate that carries the mismatch."""
+
+    tests: list
+    spectrum: SpectralLines
+    located: str              # covariate name, 'spectrum' or 'none'
+    summary: str
+
+    def test(self, covariate: str) -> CovariateTest | None:
+        """The test of one covariate, if run."""
+        return next((t for t in self.tests if t.covariate == covariate), None)
+
+    def as_json(self) -> dict:
+        """Plain mapping."""
+        return {'located': self.located, 'summary': self.summary,
+                'tests': [t.as_json() for t in self.tests], 'spectrum': self.spectrum.as_json()}
+
+
+def _finite(value):
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
+def _cluster_trend(residual, covariate, groups, name, kind) -> CovariateTest | None:
+    """OLS slope of residual on covariate, cluster-robust SE by run, t test with G-1 dof."""
+    ok = np.isfinite(residual) & np.isfinite(covariate)
+    y, x, g = residual[ok], covariate[ok], groups[ok]
+    labels = np.unique(g)
+    if y.size < 4 or labels.size < 3 or np.ptp(x) <= 0:
+        return None
+    xc = x - x.mean()
+    yc = y - y.mean()
+    sxx = float(xc @ xc)
+    slope = float(xc @ yc) / sxx
+    e = yc - slope * xc
+    meat = sum(float(np.sum(xc[g == label] * e[g == label])) ** 2 for label in labels)
+    n, k = y.size, labels.size
+    correction = k / (k - 1) * (n - 1) / (n - 2)
+    se = math.sqrt(correction * meat) / sxx if meat > 0 else math.inf
+    t = slope / se if se > 0 else 0.0
+    p = float(2 * stats.t.sf(abs(t), df=k - 1))
+    r2 = 1 - float(e @ e) / float(yc @ yc) if yc @ yc > 0 else 0.0
+    # Residual is ln A_model - ln A: the amplitude changes by -slope per unit.
+    return CovariateTest(name, kind, r2, t, p, -slope)
+
+
+def _level_means(residual, values, groups, name) -> CovariateTest | None:
+    """F test of residual means per operating level, with the effective sample size."""
+    levels = operating_levels(values)
+    if len(levels) < 2:
+        return None
+    edges = np.array(levels)
+    index = np.argmin(np.abs(np.abs(values)[:, None] - edges[None, :]), axis=1)
+    n_eff = effective_sample_size(residual, groups)
+    means = np.array([residual[index == i].mean() for i in range(len(levels))])
+    fitted = means[index]
+    ss_total = float(np.sum((residual - residual.mean()) ** 2))
+    ss_between = float(np.sum((fitted - residual.mean()) ** 2))
+    if ss_total <= 0:
+        return None
+    r2 = ss_between / ss_total
+    dof1 = len(levels) - 1
+    dof2 = max(n_eff - len(levels), 1.0)
+    f = (r2 / dof1) / max((1 - r2) / dof2, 1e-300)
+    return CovariateTest(name, 'level means', r2, f, float(stats.f.sf(f, dof1, dof2)))
+
+
+def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateTest]:
+    """Every test the table supports, strongest evidence first."""
+    residual = np.asarray(residual, dtype=float)
+    tests = []
+    centred_r = residual - table.run_means(residual)[np.searchsorted(table.runs, table.run)]
+    centred_x = table.position - table.run_means('position')[np.searchsorted(table.runs, table.run)]
+    tests.append(_cluster_trend(centred_r, centred_x, table.run, 'position', 'within-run trend'))
+    for name in ('revolutions', 'time', 'temperature'):
+        tests.append(_cluster_trend(residual, getattr(table, name), table.run, name, 'trend'))
+    for name in ('speed', 'load'):
+        tests.append(_level_means(residual, getattr(table, name), table.run, name))
+    tests = [t for t in tests if t is not None]
+    tests.sort(key=lambda t: (t.p_value, -t.r_squared))
+    return tests
+
+
+def spectral_lines(table: WindowTable) -> SpectralLines:
+    """Fixed-frequency lines with constant power (see module doc); untestable without spectra or with one speed."""
+    if table.spectra is None or not math.isfinite(table.spectrum_resolution):
+        return SpectralLines(note='no spectra (vibration samples not kept)')
+    levels = operating_levels(table.speed)
+    if len(levels) < 2:
+        return SpectralLines(note='one screw speed only: fixed lines cannot be told from rotation orders')
+    df = table.spectrum_resolution
+    ratio = max(levels) / min(levels)
+    # Below this frequency a rotation order moves by less than 2 bins between the extreme speeds.
+    lowest = max(3 * df, 2 * df / (ratio - 1))
+    edges = np.array(levels)
+    index = np.argmin(np.abs(np.abs(table.speed)[:, None] - edges[None, :]), axis=1)
+    medians = np.array([np.median(table.spectra[index == i], axis=0) for i in range(len(levels))])
+    floors = median_filter(medians, size=(1, 2 * FLOOR_HALF_WIDTH + 1), mode='nearest')
+    excess = medians / np.maximum(floors, 1e-300)
+    # Allow a line to sit one bin off between speeds.
+    widened = np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
+    freqs = np.arange(medians.shape[1]) * df
+    slow = np.argsort(edges)[:2]
+    # Prominent at the two lowest speeds (where the thread contacts are weakest) at the same frequency.
+    candidate = np.all(widened[slow] >= LINE_PROMINENCE, axis=0) & (freqs >= lowest)
+    candidate &= excess[slow].max(axis=0) >= LINE_PROMINENCE
+    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(levels))])
+    result = SpectralLines(testable=True)
+    bins = np.flatnonzero(candidate)
+    groups = np.split(bins, np.flatnonzero(np.diff(bins) > 2) + 1) if bins.size else []
+    for group in groups:
+        lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
+        prominent = widened[:, lo:hi].max(axis=1) >= LINE_PROMINENCE
+        power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
+        power = power[prominent]
+        if power.size < 2 or power.min() <= 0:
+            continue
+        constant = power.max() / power.min() <= LINE_CONSTANCY
+        spread = mean_square[prominent].max() / mean_square[prominent].min()
+        if constant and spread >= POWER_SPREAD:
+            peak = lo + int(np.argmax(medians[slow, lo:hi].mean(axis=0)))
+            result.frequencies.append(float(freqs[peak]))
+            result.powers.append(float(np.median(power)))
+    result.total_power = float(sum(result.powers))
+    slowest = int(np.argmin(edges))
+    result.share_at_lowest_speed = result.total_power / float(mean_square[slowest])
+    if result.frequencies:
+        result.note = (f'{len(result.frequencies)} line(s) at fixed frequencies '
+                       f'({", ".join(f"{f:.0f}" for f in result.frequencies)} Hz) with constant power, '
+                       f'{100 * result.share_at_lowest_speed:.2f} % of the power at the lowest speed')
+    else:
+        result.note = 'no fixed-frequency line with constant power'
+    return result
+
+
+def locate(table: WindowTable, residual: np.ndarray) -> Location:
+    """Test the baseline residual against every covariate and the spectrum."""
+    tests = covariate_tests(table, residual)
+    spectrum = spectral_lines(table)
+    significant = [t for t in tests if t.p_value < SIGNIFICANCE]
+    if significant:
+        top = max(significant, key=lambda t: t.r_squared)
+        located = top.covariate
+        summary = (f'the mismatch follows {top.covariate} ({top.kind}): it carries '
+                   f'{100 * top.r_squared:.0f} % of the residual variance, p = {top.p_value:.2g}')
+    else:
+        located = 'none'
+        summary = 'no covariate carries a significant part of the residual'
+    if spectrum.frequencies:
+        summary += '; spectrum: ' + spectrum.note
+        if located == 'none':
+            located = 'spectrum'
+    return Location(tests, spectrum, located, summary)

@@ -1,0 +1,233 @@
+"""A one-minute report of a diagnosis: four figures and a page (Markdown and HTML).
+
+* ``residual.png`` — model error against the covariate that carries the
+  mismatch, the paper's model beside the chosen one;
+* ``runs.png`` — measured RMS against both models, run by run;
+* ``candidates.png`` — held-out error of every candidate against the paper's;
+* ``spectrum.png`` — median spectrum per screw speed with fixed lines marked
+  (when spectra were kept).
+"""
+from __future__ import annotations
+
+import html
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .engine import Diagnosis
+from .fitting import predict_log
+from .locate import COVARIATE_UNITS
+
+LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revolutions since start of recording',
+          'time': 'time since start of recording, s', 'temperature': 'temperature, degC',
+          'speed': 'screw speed, rad/s', 'load': 'axial load, N'}
+
+
+def _pyplot():
+    import matplotlib
+    matplotlib.use('Agg', force=False)
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _covariate(diagnosis: Diagnosis) -> str:
+    located = diagnosis.location.located
+    if located in LABELS:
+        return located
+    chosen = diagnosis.chosen or diagnosis.best
+    return chosen.effect.covariate if chosen is not None and chosen.effect.covariate in LABELS else 'speed'
+
+
+def _values(table, name):
+    values = np.asarray(getattr(table, name), dtype=float)
+    return values * 1e3 if name == 'position' else values
+
+
+def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
+    table = diagnosis.table
+    name = _covariate(diagnosis)
+    x = _values(table, name)
+    panels = [('paper\'s model (Eq. 22)', diagnosis.baseline)]
+    if diagnosis.chosen is not None:
+        panels.append((f'with {diagnosis.chosen.effect.id}', diagnosis.chosen.fit))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 3.6), dpi=110, sharey=True,
+                             squeeze=False)
+    for ax, (title, fit) in zip(axes[0], panels):
+        error = 100 * np.expm1(fit.log_residual)
+        ax.scatter(x, error, c=table.run, cmap='tab20', s=10)
+        ax.axhline(0, color='k', linewidth=0.8)
+        ax.set_title(f'{title}: RMS error {100 * fit.rmse:.1f} %', fontsize=9)
+        ax.set_xlabel(LABELS[name])
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel('model / measured - 1, %  (colour: run)')
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
+    table = diagnosis.table
+    measured = table.run_means(table.rms)
+    base = table.run_means(np.exp(predict_log(table, diagnosis.baseline.vector)))
+    speeds, loads = table.run_means('speed'), table.run_means('load')
+    order = np.arange(table.runs.size)
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.35 * order.size + 2), 3.6), dpi=110)
+    ax.plot(order, measured, 'ko', label='measured')
+    ax.plot(order, base, 'x', color='tab:red', label='paper\'s model', markersize=8)
+    if diagnosis.chosen is not None:
+        fit, effect = diagnosis.chosen.fit, diagnosis.chosen.effect
+        chosen = table.run_means(np.exp(predict_log(table, fit.vector, effect, effect.scales(table))))
+        ax.plot(order, chosen, '+', color='tab:green', label=f'with {effect.id}', markersize=10)
+    ax.set_xticks(order, [f'{s * 30 / math.pi:.0f}/{f:.0f}' for s, f in zip(speeds, loads)], rotation=90,
+                  fontsize=7)
+    ax.set_xlabel('run in recorded order (r/min / N)')
+    ax.set_ylabel('mean RMS, m/s$^2$')
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
+    fitted = sorted([c for c in diagnosis.candidates if c.fit is not None], key=lambda c: -c.fit.cv_rmse)
+    fig, ax = plt.subplots(figsize=(7.0, 0.5 * len(fitted) + 1.4), dpi=110)
+    colours = {'earns': 'tab:green', 'rejected': 'tab:gray', 'dropped': 'tab:orange'}
+    for i, cand in enumerate(fitted):
+        ax.barh(i, 100 * cand.fit.cv_rmse, color=colours.get(cand.status, 'tab:gray'))
+        ax.text(100 * cand.fit.cv_rmse, i, f' {100 * cand.gain:+.0f} %  ({cand.status})', va='center', fontsize=8)
+    ax.axvline(100 * diagnosis.baseline.cv_rmse, color='tab:red', linestyle='--', label='paper\'s model')
+    ax.set_yticks(range(len(fitted)), [c.effect.id for c in fitted], fontsize=8)
+    ax.set_xlabel('relative RMS error on held-out runs, %  (label: gain over the paper\'s model)')
+    ax.legend(fontsize=8, loc='lower right')
+    ax.set_xlim(0, 100 * max([diagnosis.baseline.cv_rmse] + [c.fit.cv_rmse for c in fitted]) * 1.5)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
+    table = diagnosis.table
+    if table.spectra is None or not math.isfinite(table.spectrum_resolution):
+        return False
+    from ..calibration import operating_levels
+    levels = np.array(operating_levels(table.speed))
+    index = np.argmin(np.abs(np.abs(table.speed)[:, None] - levels[None, :]), axis=1)
+    freqs = np.arange(table.spectra.shape[1]) * table.spectrum_resolution
+    fig, ax = plt.subplots(figsize=(7.0, 3.4), dpi=110)
+    for i, level in enumerate(levels):
+        ax.semilogy(freqs, np.median(table.spectra[index == i], axis=0), linewidth=0.9,
+                    label=f'{level * 30 / math.pi:.0f} r/min')
+    for f in diagnosis.location.spectrum.frequencies:
+        ax.axvline(f, color='k', linestyle=':', linewidth=0.8)
+    ax.set_xlabel('frequency, Hz (dotted: fixed lines with constant power)')
+    ax.set_ylabel('PSD, (m/s$^2$)$^2$/Hz')
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
+
+def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
+    base = diagnosis.baseline
+    lines = ['# prsm-lube diagnose', '']
+    if diagnosis.chosen is not None:
+        cand = diagnosis.chosen
+        lines += [f'**Verdict: `{diagnosis.verdict}`** — {cand.effect.title}. Held-out error '
+                  f'{100 * base.cv_rmse:.1f} % → {100 * cand.fit.cv_rmse:.1f} % ({100 * cand.gain:.0f} % lower).',
+                  '', cand.effect.describe(cand.fit.params), '', f'Model: `{cand.effect.equations}`']
+    elif diagnosis.verdict == 'adequate':
+        lines += ['**Verdict: `adequate`** — no candidate earns its extra parameters; the paper\'s model explains '
+                  f'the recording to {100 * base.cv_rmse:.1f} % on held-out runs.']
+    else:
+        tied = f' — tied: {", ".join(diagnosis.tied)}' if diagnosis.tied else ''
+        lines += [f'**Verdict: `{diagnosis.verdict}`**{tied}']
+    if diagnosis.what_to_record:
+        lines += ['', f'**What to record:** {diagnosis.what_to_record}']
+    lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.', '']
+    for note in diagnosis.notes:
+        lines.append(f'- {note}')
+    lines += ['', '| candidate | status | held-out error | gain | ΔBIC | why |', '|---|---|---|---|---|---|',
+              f'| paper\'s model | — | {100 * base.cv_rmse:.2f} % | — | — | C_sys {base.constants.c_sys:.4g}, '
+              f'C_F {base.constants.c_f:.3g}, C_lambda {base.constants.c_lambda:.3g} |']
+    for cand in sorted(diagnosis.candidates, key=lambda c: c.fit.cv_rmse if c.fit else math.inf):
+        if cand.fit is None:
+            lines.append(f'| {cand.effect.id} | {cand.status} | — | — | — | {cand.reason} |')
+        else:
+            lines.append(f'| {cand.effect.id} | {cand.status} | {100 * cand.fit.cv_rmse:.2f} % | '
+                         f'{100 * cand.gain:+.0f} % | {cand.delta_bic:+.0f} | {cand.reason} |')
+    lines += ['', '| covariate | test | share of residual variance | p |', '|---|---|---|---|']
+    for test in diagnosis.location.tests:
+        lines.append(f'| {test.covariate} | {test.kind} | {100 * test.r_squared:.0f} % | {test.p_value:.2g} |')
+    lines.append('')
+    for figure in figures:
+        lines += [f'![{figure}]({figure})', '']
+    return '\n'.join(lines)
+
+
+def _html(markdown: str) -> str:
+    """Minimal Markdown-to-HTML for the report page (headings, bold, tables, images, lists)."""
+    import re
+    body, in_table = [], False
+    for line in markdown.split('\n'):
+        text = html.escape(line)
+        text = re.sub(r'\*\*(.+?)\*\*', r'<b>\1</b>', text)
+        text = re.sub(r'`(.+?)`', r'<code>\1</code>', text)
+        if line.startswith('|'):
+            cells = [c.strip() for c in text.strip('|').split('|')]
+            if set(line.replace('|', '').strip()) <= {'-'}:
+                continue
+            tag = 'th' if not in_table else 'td'
+            if not in_table:
+                body.append('<table border="1" cellspacing="0" cellpadding="3">')
+                in_table = True
+            body.append('<tr>' + ''.join(f'<{tag}>{c}</{tag}>' for c in cells) + '</tr>')
+            continue
+        if in_table:
+            body.append('</table>')
+            in_table = False
+        image = re.match(r'!\[(.*)\]\((.*)\)', line)
+        if image:
+            body.append(f'<p><img src="{html.escape(image.group(2))}" alt="{html.escape(image.group(1))}"></p>')
+        elif line.startswith('# '):
+            body.append(f'<h1>{text[2:]}</h1>')
+        elif line.startswith('- '):
+            body.append(f'<li>{text[2:]}</li>')
+        elif line:
+            body.append(f'<p>{text}</p>')
+    if in_table:
+        body.append('</table>')
+    return ('<!DOCTYPE html><html><head><meta charset="utf-8"><title>prsm-lube diagnose</title></head>'
+            '<body style="font-family: sans-serif; max-width: 1100px">' + '\n'.join(body) + '</body></html>')
+
+
+def write_report(diagnosis: Diagnosis, folder) -> Path:
+    """Write the figures, ``index.md`` and ``index.html`` into ``folder``; returns the HTML page's path."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f'{folder}: cannot create report folder ({exc.strerror or exc})') from None
+    plt = _pyplot()
+    figures = []
+    _residual_figure(diagnosis, folder / 'residual.png', plt)
+    figures.append('residual.png')
+    _runs_figure(diagnosis, folder / 'runs.png', plt)
+    figures.append('runs.png')
+    if any(c.fit is not None for c in diagnosis.candidates):
+        _candidates_figure(diagnosis, folder / 'candidates.png', plt)
+        figures.append('candidates.png')
+    if _spectrum_figure(diagnosis, folder / 'spectrum.png', plt):
+        figures.append('spectrum.png')
+    markdown = _page(diagnosis, figures)
+    (folder / 'index.md').write_text(markdown)
+    page = folder / 'index.html'
+    page.write_text(_html(markdown))
+    return page
+
+
+__all__ = ['write_report', 'COVARIATE_UNITS']

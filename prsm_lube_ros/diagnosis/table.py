@@ -1,0 +1,172 @@
+"""The steady windows of diagnosis recordings as one table of numpy columns.
+
+Diagnosis works on the windows ``prsm-lube calibrate`` would fit (steady, under
+load), with the covariates the contract's topics give: screw speed, axial load,
+nut position, revolutions and time since the start of the recording, and, when
+recorded, temperature and the Welch spectrum of each window.
+
+Runs are numbered uniquely over all recordings (``run``); ``recording`` says
+which recording a window came from.  ``position`` is the nut's place along the
+stroke, m from the end where forward runs start: forward runs (nut travel > 0)
+use their travel, backward runs ``stroke + travel`` with ``stroke`` the
+largest forward travel seen (the paper's runs all start at one end).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..vibration_model import film_speed_load_term, reduced_log_amplitude
+
+#: Columns every table has, in SI units (temperature in degC, time in s).
+COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
+
+
+@dataclass(frozen=True)
+class WindowTable:
+    """Steady windows, one row each; arrays share one length.
+
+    speed rad/s, load N, rms m/s^2, position m along the stroke, revolutions
+    since the start of the recording, time s since the start of the recording,
+    temperature degC (NaN when not recorded), run (unique over recordings),
+    recording index.  ``spectra`` (n x bins, (m/s^2)^2/Hz) and
+    ``spectrum_resolution`` (Hz) are set when the windows carried spectra.
+    """
+
+    speed: np.ndarray
+    load: np.ndarray
+    rms: np.ndarray
+    position: np.ndarray
+    revolutions: np.ndarray
+    time: np.ndarray
+    temperature: np.ndarray
+    run: np.ndarray
+    recording: np.ndarray
+    theta: float = 1.0
+    spectra: np.ndarray | None = field(default=None, compare=False, repr=False)
+    spectrum_resolution: float = math.nan
+    sources: tuple = ()
+
+    def __post_init__(self):
+        """Coerce the columns to arrays of one length."""
+        n = None
+        for name in COLUMNS:
+            kind = np.int64 if name in ('run', 'recording') else float
+            value = np.atleast_1d(np.asarray(getattr(self, name), dtype=kind))
+            object.__setattr__(self, name, value)
+            if n is None:
+                n = value.size
+            elif value.size != n:
+                raise InputError(f'window table: column {name} has {value.size} rows, expected {n}')
+
+    def __len__(self) -> int:
+        """Number of windows."""
+        return int(self.speed.size)
+
+    # -- derived columns -------------------------------------------------
+    @property
+    def log_rms(self) -> np.ndarray:
+        """ln of the window RMS."""
+        return np.log(self.rms)
+
+    @property
+    def reduced(self) -> np.ndarray:
+        """``ln(A omega^-2 F^(1/3))``, the left side of the linear form of Eq. 22."""
+        return reduced_log_amplitude(self.rms, self.speed, self.load)
+
+    @property
+    def film_term(self) -> np.ndarray:
+        """``omega^0.68 F^-0.073`` (Eq. 19)."""
+        return film_speed_load_term(self.speed, self.load)
+
+    @property
+    def runs(self) -> np.ndarray:
+        """Distinct run numbers, sorted."""
+        return np.unique(self.run)
+
+    @property
+    def has_temperature(self) -> bool:
+        """True when most windows carry a temperature."""
+        return bool(np.isfinite(self.temperature).mean() >= 0.8) if len(self) else False
+
+    def subset(self, mask) -> 'WindowTable':
+        """Rows where ``mask`` is true (a boolean array or indices)."""
+        mask = np.asarray(mask)
+        spectra = self.spectra[mask] if self.spectra is not None else None
+        values = {name: getattr(self, name)[mask] for name in COLUMNS}
+        return replace(self, spectra=spectra, **values)
+
+    def run_means(self, column: str) -> np.ndarray:
+        """Mean of ``column`` per run, in the order of :attr:`runs` (NaN-aware)."""
+        values = np.asarray(getattr(self, column), dtype=float) if isinstance(column, str) else column
+        out = np.full(self.runs.size, np.nan)
+        for i, r in enumerate(self.runs):
+            sel = values[self.run == r]
+            if np.isfinite(sel).any():
+                out[i] = float(np.nanmean(sel))
+        return out
+
+
+def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: float = 1.0,
+                       min_axial_load: float = 5.0, sources: Sequence[str] = ()) -> WindowTable:
+    """Build a :class:`WindowTable` from :class:`~prsm_lube_ros.windowing.Window` lists, one list per recording.
+
+    Keeps steady windows with a finite positive RMS, speed and load of at least
+    ``min_axial_load``; raises :class:`InputError` when none is left.
+    """
+    rows = {name: [] for name in COLUMNS}
+    spectra, resolution = [], math.nan
+    run_offset = 0
+    for rec_index, windows in enumerate(windows_per_recording):
+        chosen = [w for w in windows if w.steady and _positive(w.vibration_rms) and _positive(w.screw_speed)
+                  and _positive(w.axial_load) and w.axial_load >= min_axial_load]
+        if not chosen:
+            continue
+        t0 = min(w.start for w in windows)
+        travel = np.array([w.nut_position for w in chosen], dtype=float)
+        run_ids = np.array([w.run_index for w in chosen])
+        position = _stroke_position(travel, run_ids)
+        _, local_run = np.unique(run_ids, return_inverse=True)
+        rows['speed'].extend(w.screw_speed for w in chosen)
+        rows['load'].extend(w.axial_load for w in chosen)
+        rows['rms'].extend(w.vibration_rms for w in chosen)
+        rows['position'].extend(position.tolist())
+        rows['revolutions'].extend(w.revolutions for w in chosen)
+        rows['time'].extend(0.5 * (w.start + w.end) - t0 for w in chosen)
+        rows['temperature'].extend(w.temperature for w in chosen)
+        rows['run'].extend((local_run + run_offset).tolist())
+        rows['recording'].extend([rec_index] * len(chosen))
+        run_offset += int(local_run.max()) + 1
+        for w in chosen:
+            spectra.append(w.spectrum)
+            if math.isfinite(w.spectrum_resolution):
+                resolution = w.spectrum_resolution
+    if not rows['speed']:
+        raise InputError('diagnose: no steady window under load in the recordings; record runs at constant '
+                         'speed under axial load')
+    spectrum_array = None
+    if spectra and all(s is not None for s in spectra) and len({s.size for s in spectra}) == 1:
+        spectrum_array = np.vstack(spectra)
+    return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
+                       sources=tuple(str(s) for s in sources), **rows)
+
+
+def _positive(value) -> bool:
+    return value is not None and math.isfinite(value) and value > 0
+
+
+def _stroke_position(travel: np.ndarray, run_ids: np.ndarray) -> np.ndarray:
+    """Nut place along the stroke from travel since each run's motion start (see module doc)."""
+    position = np.where(np.isfinite(travel), travel, 0.0)
+    forward = [np.nanmax(travel[run_ids == r]) for r in np.unique(run_ids)
+               if np.nanmedian(travel[run_ids == r]) > 0]
+    stroke = max(forward) if forward else float(np.nanmax(np.abs(travel))) if np.isfinite(travel).any() else 0.0
+    for r in np.unique(run_ids):
+        sel = run_ids == r
+        if np.nanmedian(travel[sel]) < 0:
+            position[sel] = stroke + position[sel]
+    return position
