@@ -25,11 +25,6 @@ from prsm_lube_ros import interfaces
 
 T0_SEC = 1767225600          # 2026-01-01T00:00:00Z
 
-try:  # TODO(lead): remove once interfaces.interface_dir() no longer indexes parents[3] of a shallow checkout
-    interfaces.contract_typestore()
-except IndexError:  # pragma: no cover - depends on where the checkout lives
-    interfaces.interface_dir = lambda: Path(__file__).resolve().parents[1]
-
 
 def typestore():
     """The contract typestore."""
