@@ -25,7 +25,7 @@ setup(
         ('share/' + package_name + '/srv', glob('srv/*.srv')),
     ],
     python_requires='>=3.10',
-    install_requires=['numpy', 'scipy', 'rosbags>=0.10.4', 'mcap', 'PyYAML',
+    install_requires=['numpy', 'scipy', 'rosbags>=0.10.4', 'mcap', 'zstandard', 'lz4', 'PyYAML',
                       'matplotlib', 'tqdm'],
     extras_require={'hardware': ['nidaqmx'], 'test': ['pytest', 'flake8', 'pydocstyle']},
     zip_safe=True,
