@@ -13,6 +13,11 @@ With ``g = C_lambda omega^0.68 F^-0.073`` Eq. 23 has the partial derivatives
 
 Where Eq. 23 means nothing (screw at rest or crawling, no load, no film term,
 no vibration) theta is NaN and ``reason`` says why, in words.
+
+A calibration with a model extension (``Calibration.extension``, written by
+``prsm-lube diagnose``) is honoured: each window's RMS is first mapped back to
+the amplitude Eq. 22 describes and theta_Oil divided by the extension's film
+factor (see :mod:`prsm_lube_ros.diagnosis.extension`).
 """
 from __future__ import annotations
 
@@ -103,6 +108,14 @@ class Assessor:
         variance = ln_rms_var / g ** 2 + float(gradient @ self.calibration.covariance @ gradient)
         return theta, math.sqrt(max(variance, 0.0))
 
+    def _through_extension(self, windows: Sequence[Window]) -> tuple[np.ndarray, np.ndarray]:
+        """Window RMS mapped to Eq. 22's amplitude and the film factor of the calibration's extension."""
+        rms = np.array([w.vibration_rms for w in windows], dtype=float)
+        if not self.calibration.extension:
+            return rms, np.ones_like(rms)
+        from .diagnosis.extension import eq22_inputs
+        return eq22_inputs(self.calibration.extension, windows, rms)
+
     def assess_window(self, window: Window) -> WindowAssessment:
         """theta_Oil of one window, NaN with the reason where it is not assessable."""
         if not window.steady:
@@ -110,8 +123,10 @@ class Assessor:
         reason = self._not_assessable((window.screw_speed, window.axial_load, window.vibration_rms))
         if reason:
             return WindowAssessment(window, math.nan, math.nan, reason)
-        theta, std = self.theta(window.vibration_rms, window.screw_speed, window.axial_load,
+        amplitude, factor = self._through_extension([window])
+        theta, std = self.theta(float(amplitude[0]), window.screw_speed, window.axial_load,
                                 self.calibration.residual_std ** 2)
+        theta, std = theta / float(factor[0]), std / abs(float(factor[0]))
         if not math.isfinite(theta):
             return WindowAssessment(window, math.nan, math.nan, 'Eq. 23 has no finite value for this window')
         return WindowAssessment(window, theta, std)
@@ -133,6 +148,9 @@ class Assessor:
         counts = np.array([w.sample_count for w in windows], dtype=float)
         rms_values = np.array([w.vibration_rms for w in windows])
         rms = float(np.sqrt(np.sum(counts * rms_values ** 2) / np.sum(counts)))
+        amplitudes, factors = self._through_extension(windows)
+        amplitude = float(np.sqrt(np.sum(counts * amplitudes ** 2) / np.sum(counts)))
+        factor = float(np.average(factors, weights=counts))
         speed = float(np.average([w.screw_speed for w in windows], weights=counts))
         load = float(np.average([w.axial_load for w in windows], weights=counts))
         temps = np.array([w.temperature for w in windows])
@@ -143,7 +161,8 @@ class Assessor:
         else:
             ln_var = self.calibration.residual_std ** 2 / n
         reason = self._not_assessable((speed, load, rms))
-        theta, std = (math.nan, math.nan) if reason else self.theta(rms, speed, load, ln_var)
+        theta, std = (math.nan, math.nan) if reason else self.theta(amplitude, speed, load, ln_var)
+        theta, std = theta / factor, std / abs(factor)
         if not reason and not math.isfinite(theta):
             reason = 'Eq. 23 has no finite value for this run'
         return RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
