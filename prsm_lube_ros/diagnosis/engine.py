@@ -8,9 +8,11 @@ amplitude fit (the spectrum's fixed lines for background vibration) shows it
 and it does not predict held-out runs worse.  Earning candidates rank by
 held-out error.  When the runner-up comes close (half the leader's gain or
 more) both are fitted together and each is tested for what it adds given the
-other: the one that adds nothing is dropped; if neither adds anything the
-recording cannot tell them apart and the verdict is ``ambiguous`` with both
-listed and what to record to separate them.
+other: the one that adds nothing is dropped.  If neither adds anything, the
+amplitudes cannot tell them apart; evidence from outside the fit decides if it
+favours one (a background shows fixed spectral lines, or the spectra could
+show them and do not); otherwise the verdict is ``ambiguous`` with both listed
+and what to record to separate them.
 
 Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters);
 ``ambiguous`` (tied candidates in ``tied``); ``unexplained`` (the residual is
@@ -57,6 +59,7 @@ class Candidate:
     gain: float = math.nan      # 1 - cv_rmse / baseline cv_rmse
     delta_bic: float = math.nan
     evidence: str = ''
+    evidence_against: str = ''
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
@@ -214,6 +217,23 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     return leader_adds, runner_adds
 
 
+def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
+    """The candidate to drop from a tie on evidence outside the amplitude fit, or None."""
+    for cand in (first, second):
+        cand.evidence_against = cand.effect.contrary_evidence(table, location)
+    support = [bool(first.evidence), bool(second.evidence)]
+    against = [bool(first.evidence_against), bool(second.evidence_against)]
+    if support[0] and not support[1]:
+        return second
+    if support[1] and not support[0]:
+        return first
+    if against[0] and not against[1]:
+        return first
+    if against[1] and not against[0]:
+        return second
+    return None
+
+
 def _separation_advice(a: Effect, b: Effect) -> str:
     return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
 
@@ -259,6 +279,15 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 best, verdict = runner, runner.effect.id
             elif runner_adds and leader_adds:
                 notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
+            elif _spectral_tiebreak(table, location, best, runner):
+                loser = _spectral_tiebreak(table, location, best, runner)
+                winner = runner if loser is best else best
+                loser.status = 'dropped'
+                loser.reason += (f'; fits as well as {winner.effect.id} but '
+                                 f'{loser.evidence_against or "the other has independent evidence"}')
+                notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; '
+                             f'decided by evidence from outside the fit: {winner.effect.id}')
+                best, verdict = winner, winner.effect.id
             else:
                 tied = [best.effect.id, runner.effect.id]
                 verdict = AMBIGUOUS

@@ -75,6 +75,13 @@ class BackgroundVibration(Effect):
             return ''
         return 'spectrum: ' + lines.note
 
+    def contrary_evidence(self, table, location) -> str:
+        """The spectra could show fixed lines (two speeds or more) and show none."""
+        lines = location.spectrum if location is not None else None
+        if lines is None or not lines.testable or lines.frequencies:
+            return ''
+        return 'the spectra show no fixed-frequency line, the usual mark of motor, bearing or frame vibration'
+
     def describe(self, params):
         """B and its share of the smallest RMS."""
         b = params['background_rms']

@@ -79,6 +79,10 @@ class Effect:
         """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none."""
         return ''
 
+    def contrary_evidence(self, table, location) -> str:
+        """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
+        return ''
+
     # -- assessment ------------------------------------------------------
     def eq22_amplitude(self, params: dict, covariates, rms):
         """The measured RMS mapped back to the amplitude Eq. 22 describes, m/s^2.
