@@ -25,6 +25,7 @@ from pathlib import Path
 import sys
 import threading
 import time
+import traceback
 from typing import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -107,9 +108,12 @@ PARAMETERS = {
     'calibrate_service': ('/prsm/calibrate', _STRING, 'calibration service of the first actuator (each '
                           'actuator also has <ns>/calibrate)', None, True),
     'screw_joint': ('screw', _STRING, 'name of the screw entry in JointState', None, True),
-    'qos_depth': (200, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data)',
+    'qos_depth': (500, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data)',
                   (1, 100000), True),
 }
+
+#: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
+MAX_DRAIN = 5000
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
                      'stream_timeout')
@@ -253,9 +257,11 @@ class LubricationEstimator(Node):
             'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
         }
+        holder = {}
         for key, (msg_type, convert) in converters.items():
-            self.create_subscription(msg_type, topics[key], self._input_callback(channel, key, convert), qos,
-                                     callback_group=self._input_group)
+            holder[key] = self.create_subscription(
+                msg_type, topics[key], self._input_callback(channel, key, convert, holder), qos,
+                callback_group=self._input_group)
 
     def _load_initial_calibration(self, channel: ActuatorChannel):
         path = channel.calibration_file
@@ -283,22 +289,41 @@ class LubricationEstimator(Node):
         """Node-clock time in s (sim time when use_sim_time is set)."""
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _input_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+    def _input_callback(self, channel: ActuatorChannel, key: str, convert: Callable, subscriptions: dict):
+        """Callback of one input topic: take the message and every one queued behind it.
+
+        An executor serves each ready subscription once per wait, so when the
+        node falls behind, a 1 kHz topic would lag ever further behind a 20 Hz
+        one and be judged silent by the window builder.  Draining the queue in
+        the callback keeps all topics level whatever their rates.
+        """
         def callback(msg):
             with self._lock:
                 if key == 'vibration':
                     channel.monitor.note_input(self.now())
-                try:
-                    channel.builder.add(convert(msg))
-                    windows = channel.builder.pop_closed()
-                except (InputError, ValueError, TypeError, IndexError) as exc:
-                    self._input_problem(channel, key, exc)
-                    windows = []
-                for line in channel.builder.take_problems():
-                    self.get_logger().warning(f'{channel.name}: {line}')
-                for window in windows:
-                    self._evaluate(channel, window)
+                self._take(channel, key, convert, msg)
+                for queued in _drain(subscriptions.get(key), MAX_DRAIN):
+                    self._take(channel, key, convert, queued)
         return callback
+
+    def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+        """Feed one message to the actuator's builder and assess the windows it closes."""
+        try:
+            channel.builder.add(convert(msg))
+            windows = channel.builder.pop_closed()
+        except (InputError, ValueError, TypeError, IndexError) as exc:
+            self._input_problem(channel, key, exc)
+            windows = []
+        except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
+            if channel.input_errors.get('internal', 0) == 0:
+                self.get_logger().error(f'{channel.name}: internal error on {key} (please report): '
+                                        f'{"".join(traceback.format_exception(exc)).strip()}')
+            channel.input_errors['internal'] = channel.input_errors.get('internal', 0) + 1
+            windows = []
+        for line in channel.builder.take_problems():
+            self.get_logger().warning(f'{channel.name}: {line}')
+        for window in windows:
+            self._evaluate(channel, window)
 
     def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception):
         """Count a message that could not be taken; log the first of each kind."""
@@ -490,6 +515,19 @@ class LubricationEstimator(Node):
                         self._swap_calibration(channel, calibration)
                         self.get_logger().info(f'{channel.name}: calibration {path} loaded')
         return SetParametersResult(successful=True)
+
+
+def _drain(subscription, limit: int):
+    """Messages already queued on ``subscription`` (at most ``limit``), oldest first."""
+    handle = getattr(subscription, 'handle', None)
+    if handle is None or not hasattr(handle, 'take_message'):
+        return
+    for _ in range(limit):
+        with handle:
+            taken = handle.take_message(subscription.msg_type, subscription.raw)
+        if taken is None:
+            return
+        yield taken[0]
 
 
 def spin_nodes(nodes, executor=None) -> int:
