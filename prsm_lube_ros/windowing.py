@@ -89,39 +89,66 @@ class Window:
     spectrum_resolution: float = math.nan  # Hz per spectrum bin
 
 
-class _OpenWindow:
-    """Running sums of one window still receiving data."""
+# Columns of the open-window table (one row per open window, counts held exactly as float64).
+(_SUMSQ, _COUNT, _RATE, _SPEED_N, _SPEED_SUM, _SPEED_MIN, _SPEED_MAX, _TRAVEL_N, _TRAVEL_SUM,
+ _LOAD_N, _LOAD_SUM, _TEMP_N, _TEMP_SUM, _RUN_MIN, _RUN_MAX, _REVOLUTIONS) = range(16)
+_EMPTY_ROW = np.array([0.0, 0.0, 0.0, 0.0, 0.0, math.inf, -math.inf, 0.0, 0.0,
+                       0.0, 0.0, 0.0, 0.0, math.inf, -math.inf, math.nan])
 
-    __slots__ = ('sumsq', 'count', 'rate', 'speed_n', 'speed_sum', 'speed_min', 'speed_max',
-                 'travel_n', 'travel_sum', 'load_n', 'load_sum', 'temp_n', 'temp_sum',
-                 'run_min', 'run_max', 'revolutions', 'chunks')
+
+class _OpenWindows:
+    """Running sums of the windows still receiving data: one table row per window, rows sorted by key.
+
+    Windows are keyed by their grid index ``k`` (window ``[k L, (k + 1) L)``).
+    Keys need not be contiguous (a gap in a recording opens no windows), and
+    only open windows are held, so memory stays flat.
+    """
+
+    __slots__ = ('keys', 'table')
 
     def __init__(self):
-        self.sumsq = 0.0
-        self.count = 0
-        self.rate = 0.0
-        self.speed_n = 0
-        self.speed_sum = 0.0
-        self.speed_min = math.inf
-        self.speed_max = -math.inf
-        self.travel_n = 0
-        self.travel_sum = 0.0
-        self.load_n = 0
-        self.load_sum = 0.0
-        self.temp_n = 0
-        self.temp_sum = 0.0
-        self.run_min = None
-        self.run_max = None
-        self.revolutions = math.nan
-        self.chunks = None
+        self.keys = np.zeros(0, np.int64)
+        self.table = np.zeros((0, _EMPTY_ROW.size))
+
+    def __len__(self) -> int:
+        return int(self.keys.size)
+
+    def rows(self, keys: np.ndarray) -> np.ndarray:
+        """Row of each of ``keys`` (sorted, unique), opening the windows not open yet."""
+        have = self.keys
+        pos = np.searchsorted(have, keys)
+        inside = pos < have.size
+        known = np.zeros(keys.size, bool)
+        known[inside] = have[pos[inside]] == keys[inside]
+        if not known.all():
+            new = keys[~known]
+            at = np.searchsorted(have, new)
+            self.keys = np.insert(have, at, new)
+            self.table = np.insert(self.table, at, _EMPTY_ROW, axis=0)
+            pos = np.searchsorted(self.keys, keys)
+        return pos
+
+    def pop_first(self, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """Remove the ``count`` earliest windows; return their keys and table rows."""
+        keys, table = self.keys[:count], self.table[:count]
+        self.keys, self.table = self.keys[count:].copy(), self.table[count:].copy()
+        return keys, table
 
 
 def _grouped(keys: np.ndarray):
-    """Sort order, unique keys and segment starts for reduceat over ``keys``."""
-    order = np.argsort(keys, kind='stable')
-    sorted_keys = keys[order]
-    starts = np.flatnonzero(np.r_[True, sorted_keys[1:] != sorted_keys[:-1]])
-    return order, sorted_keys[starts], starts
+    """Sort order, unique keys, segment starts and segment sizes for reduceat over ``keys``.
+
+    The order is ``slice(None)`` when ``keys`` is sorted already (the usual case).
+    """
+    if keys.size == 1:
+        return slice(None), keys, np.zeros(1, np.int64), np.ones(1, np.int64)
+    if (keys[1:] >= keys[:-1]).all():
+        order, sorted_keys = slice(None), keys
+    else:
+        order = np.argsort(keys, kind='stable')
+        sorted_keys = keys[order]
+    starts = np.flatnonzero(np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])))
+    return order, sorted_keys[starts], starts, np.diff(np.append(starts, keys.size))
 
 
 class WindowBuilder:
@@ -136,7 +163,8 @@ class WindowBuilder:
     def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005):
         self.settings = settings or WindowSettings()
         self.lead = float(lead)
-        self._open: dict[int, _OpenWindow] = {}
+        self._open = _OpenWindows()
+        self._chunks: dict[int, list[np.ndarray]] = {}   # spectrum samples per open window key
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -147,7 +175,8 @@ class WindowBuilder:
         self._problem_counts: dict[str, int] = {}
         self.problems: list[str] = []
         self._closed: list[Window] = []
-        self._block_stamps: set[int] = set()   # vibration block stamps (us) of open windows
+        self._block_stamps = np.zeros(0, np.int64)   # vibration block stamps (us) of open windows
+        self._square_buffer = np.empty(0)
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
@@ -182,22 +211,20 @@ class WindowBuilder:
         else:
             raise TypeError(f'not an input batch: {type(batch).__name__}')
 
-    def _window(self, index: int) -> _OpenWindow:
-        acc = self._open.get(index)
-        if acc is None:
-            acc = self._open[index] = _OpenWindow()
-        return acc
-
     def _first_sight(self, stamps: np.ndarray, good: np.ndarray) -> np.ndarray:
         """Mask of blocks whose stamp was not seen before in an open window (repeats are left out)."""
         keep = np.ones(stamps.size, bool)
-        for i in np.flatnonzero(good).tolist():
-            key = int(round(float(stamps[i]) * 1e6))
-            if key in self._block_stamps:
-                keep[i] = False
-            else:
-                self._block_stamps.add(key)
-        repeats = int((good & ~keep).sum())
+        index = np.flatnonzero(good)
+        if index.size == 0:
+            return keep
+        keys = np.round(stamps[index] * 1e6).astype(np.int64)
+        fresh = np.zeros(index.size, bool)
+        fresh[np.unique(keys, return_index=True)[1]] = True   # first of equal stamps in this batch
+        if self._block_stamps.size:
+            fresh &= ~np.isin(keys, self._block_stamps)
+        keep[index[~fresh]] = False
+        self._block_stamps = np.concatenate((self._block_stamps, keys[fresh]))
+        repeats = int(index.size - np.count_nonzero(fresh))
         if repeats:
             self._report('vibration-repeat', f'vibration: {repeats} block(s) repeating an earlier block\'s stamp '
                          '(stamps going backwards or repeated) left out', repeats)
@@ -254,14 +281,16 @@ class WindowBuilder:
         good &= ~bad_rate & ~empty
         if not good.any():
             return
-        samples = np.asarray(batch.samples)
-        values = samples.astype(np.float64)
-        finite = np.isfinite(values)
+        samples = np.asarray(batch.samples).reshape(-1)
+        finite = np.isfinite(samples)
         all_finite = bool(finite.all())
-        if not all_finite:
-            n = int((~finite).sum())
+        keep_spectra = self.settings.spectrum_segment > 0
+        if all_finite:
+            values = samples.astype(np.float64) if keep_spectra else samples
+        else:
+            n = int(samples.size - np.count_nonzero(finite))
             self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
-            values = np.where(finite, values, 0.0)
+            values = np.where(finite, samples.astype(np.float64), 0.0)
         length = self.settings.window_length
         good &= self._first_sight(stamps, good)
         if not good.any():
@@ -280,30 +309,35 @@ class WindowBuilder:
         hi = np.ceil(((seg_k + 1) * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
         lo = np.clip(lo, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
         hi = np.clip(hi, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
-        csum = np.concatenate(([0.0], np.cumsum(values * values)))
-        seg_sumsq = csum[hi] - csum[lo]
+        seg_sumsq = _segment_sums(self._squares(values), lo, hi)
         if all_finite:
             seg_count = hi - lo
         else:
-            ccount = np.concatenate(([0], np.cumsum(finite)))
-            seg_count = ccount[hi] - ccount[lo]
-        order, keys, starts = _grouped(seg_k)
-        sumsq = np.add.reduceat(seg_sumsq[order], starts)
-        count = np.add.reduceat(seg_count[order], starts)
-        rate = np.maximum.reduceat(b_rate[seg_block][order], starts)
-        keep_spectra = self.settings.spectrum_segment > 0
-        for j, k in enumerate(keys.tolist()):
-            acc = self._window(k)
-            acc.sumsq += float(sumsq[j])
-            acc.count += int(count[j])
-            acc.rate = max(acc.rate, float(rate[j]))
+            seg_count = _segment_sums(finite.astype(np.int64), lo, hi)
+        if seg_k.size == 1:
+            keys, sumsq, count, rate = seg_k, seg_sumsq, seg_count, b_rate
+        else:
+            order, keys, starts, _ = _grouped(seg_k)
+            sumsq = np.add.reduceat(seg_sumsq[order], starts)
+            count = np.add.reduceat(seg_count[order], starts)
+            rate = np.maximum.reduceat(b_rate[seg_block][order], starts)
+        rows = self._open.rows(keys)
+        table = self._open.table
+        table[rows, _SUMSQ] += sumsq
+        table[rows, _COUNT] += count
+        table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
         if keep_spectra:
-            for s, k in enumerate(seg_k.tolist()):
-                acc = self._open[k]
-                if acc.chunks is None:
-                    acc.chunks = []
-                acc.chunks.append(values[lo[s]:hi[s]])
+            for k, first, last in zip(seg_k.tolist(), lo.tolist(), hi.tolist()):
+                self._chunks.setdefault(k, []).append(values[first:last])
         self._advance('vibration', float(b_end.max()))
+
+    def _squares(self, values: np.ndarray) -> np.ndarray:
+        """``values ** 2`` in float64, written into a buffer kept between batches (no new pages per batch)."""
+        if self._square_buffer.size < values.size:
+            self._square_buffer = np.empty(max(values.size, 2 * self._square_buffer.size))
+        squares = self._square_buffer[:values.size]
+        np.square(values, out=squares, dtype=np.float64)
+        return squares
 
     def _add_screw(self, batch: ScrewStateBatch):
         stamps = np.asarray(batch.stamps, float)
@@ -317,11 +351,14 @@ class WindowBuilder:
         good &= np.isfinite(speeds)
         if not good.any():
             return
-        order = np.argsort(stamps[good], kind='stable')
-        stamps, speeds, angles = stamps[good][order], speeds[good][order], angles[good][order]
+        if not good.all():
+            stamps, speeds, angles = stamps[good], speeds[good], angles[good]
+        if stamps.size > 1 and not (stamps[1:] >= stamps[:-1]).all():
+            order = np.argsort(stamps, kind='stable')
+            stamps, speeds, angles = stamps[order], speeds[order], angles[order]
         # Runs: a new run starts where the speed rises to min_speed after standstill.
         moving = speeds >= self.settings.min_speed
-        previous = np.r_[self._moving, moving[:-1]]
+        previous = np.concatenate(([self._moving], moving[:-1]))
         starts = moving & ~previous
         run = self._run_index + np.cumsum(starts)
         # Nut travel from the angle at motion start (CONTRACT.md).
@@ -330,7 +367,7 @@ class WindowBuilder:
         start_angle = _forward_fill(start_angle)
         travel = np.where(moving, self.lead * (angles - start_angle) / (2 * math.pi), np.nan)
         # Revolutions turned since the builder started.
-        steps = np.abs(np.diff(np.r_[self._last_angle, angles]))
+        steps = np.abs(np.diff(angles, prepend=self._last_angle))
         steps[~np.isfinite(steps)] = 0.0
         revolutions = self._revolutions + np.cumsum(steps) / (2 * math.pi)
         self._moving = bool(moving[-1])
@@ -342,9 +379,8 @@ class WindowBuilder:
         self._revolutions = float(revolutions[-1])
 
         keys = np.floor(stamps / self.settings.window_length).astype(np.int64)
-        order, unique, seg = _grouped(keys)
+        order, unique, seg, n = _grouped(keys)
         sp = speeds[order]
-        n = np.diff(np.r_[seg, sp.size])
         ssum = np.add.reduceat(sp, seg)
         smin = np.minimum.reduceat(sp, seg)
         smax = np.maximum.reduceat(sp, seg)
@@ -355,18 +391,18 @@ class WindowBuilder:
         tr_ok = np.isfinite(tr)
         tsum = np.add.reduceat(np.where(tr_ok, tr, 0.0), seg)
         tn = np.add.reduceat(tr_ok.astype(np.int64), seg)
-        rev_last = revolutions[order][np.r_[seg[1:], sp.size] - 1]
-        for j, k in enumerate(unique.tolist()):
-            acc = self._window(k)
-            acc.speed_n += int(n[j])
-            acc.speed_sum += float(ssum[j])
-            acc.speed_min = min(acc.speed_min, float(smin[j]))
-            acc.speed_max = max(acc.speed_max, float(smax[j]))
-            acc.travel_n += int(tn[j])
-            acc.travel_sum += float(tsum[j])
-            acc.run_min = int(rmin[j]) if acc.run_min is None else min(acc.run_min, int(rmin[j]))
-            acc.run_max = int(rmax[j]) if acc.run_max is None else max(acc.run_max, int(rmax[j]))
-            acc.revolutions = float(rev_last[j])
+        rev_last = revolutions[order][seg + n - 1]
+        rows = self._open.rows(unique)
+        table = self._open.table
+        table[rows, _SPEED_N] += n
+        table[rows, _SPEED_SUM] += ssum
+        table[rows, _SPEED_MIN] = np.minimum(table[rows, _SPEED_MIN], smin)
+        table[rows, _SPEED_MAX] = np.maximum(table[rows, _SPEED_MAX], smax)
+        table[rows, _TRAVEL_N] += tn
+        table[rows, _TRAVEL_SUM] += tsum
+        table[rows, _RUN_MIN] = np.minimum(table[rows, _RUN_MIN], rmin)
+        table[rows, _RUN_MAX] = np.maximum(table[rows, _RUN_MAX], rmax)
+        table[rows, _REVOLUTIONS] = rev_last
         self._advance('screw', float(stamps[-1]))
 
     def _add_scalar(self, stamps, values, stream: str):
@@ -381,18 +417,14 @@ class WindowBuilder:
         if not good.any():
             return
         keys = np.floor(stamps[good] / self.settings.window_length).astype(np.int64)
-        order, unique, seg = _grouped(keys)
+        order, unique, seg, n = _grouped(keys)
         vals = values[good][order]
-        n = np.diff(np.r_[seg, vals.size])
         sums = np.add.reduceat(vals, seg)
-        for j, k in enumerate(unique.tolist()):
-            acc = self._window(k)
-            if stream == 'load':
-                acc.load_n += int(n[j])
-                acc.load_sum += float(sums[j])
-            else:
-                acc.temp_n += int(n[j])
-                acc.temp_sum += float(sums[j])
+        count_column, sum_column = (_LOAD_N, _LOAD_SUM) if stream == 'load' else (_TEMP_N, _TEMP_SUM)
+        rows = self._open.rows(unique)
+        table = self._open.table
+        table[rows, count_column] += n
+        table[rows, sum_column] += sums
         if stream in self._progress:
             self._advance(stream, float(stamps[good].max()))
 
@@ -409,15 +441,16 @@ class WindowBuilder:
 
     def _close(self, horizon: float):
         length = self.settings.window_length
-        ready = sorted(k for k in self._open if (k + 1) * length <= horizon)
-        for k in ready:
-            self._closed.append(self._finish_window(k, self._open.pop(k)))
+        keys = self._open.keys
+        ready = int(np.count_nonzero((keys + 1) * length <= horizon)) if keys.size else 0
+        if ready:   # keys are sorted, so the ready windows are the first ones
+            self._closed.extend(self._finish_windows(*self._open.pop_first(ready)))
         if math.isfinite(horizon):
             self._closed_before = max(self._closed_before, math.floor(horizon / length) * length)
             floor = int(round(self._closed_before * 1e6))
-            self._block_stamps = {key for key in self._block_stamps if key >= floor}
+            self._block_stamps = self._block_stamps[self._block_stamps >= floor]
         else:
-            self._block_stamps.clear()
+            self._block_stamps = self._block_stamps[:0]
 
     def pop_closed(self) -> list[Window]:
         """Close what every live stream has passed and return the closed windows, in time order.
@@ -435,48 +468,92 @@ class WindowBuilder:
         closed, self._closed = self._closed, []
         return closed
 
-    def _finish_window(self, k: int, acc: _OpenWindow) -> Window:
+    def _finish_windows(self, keys: np.ndarray, table: np.ndarray) -> list[Window]:
+        """Closed windows from the keys and table rows of windows leaving the open set, in key order."""
         s = self.settings
-        start, end = k * s.window_length, (k + 1) * s.window_length
-        rms = math.sqrt(acc.sumsq / acc.count) if acc.count else math.nan
-        coverage = acc.count / (s.window_length * acc.rate) if acc.rate > 0 else 0.0
-        speed = acc.speed_sum / acc.speed_n if acc.speed_n else math.nan
-        spread = (acc.speed_max - acc.speed_min) / speed if acc.speed_n and speed > 0 else math.nan
-        load = acc.load_sum / acc.load_n if acc.load_n else math.nan
-        temperature = acc.temp_sum / acc.temp_n if acc.temp_n else math.nan
-        position = acc.travel_sum / acc.travel_n if acc.travel_n else math.nan
-        if acc.count == 0:
-            reason = 'no vibration samples in the window'
-        elif coverage < s.min_coverage:
-            reason = (f'vibration covers {100 * coverage:.0f}% of the window '
-                      f'(< {100 * s.min_coverage:.0f}%): blocks lost')
-        elif acc.speed_n == 0:
-            reason = 'no screw speed in the window (joint_states entry "screw")'
-        elif speed < s.min_speed:
-            reason = f'screw at rest or crawling ({speed:.3g} rad/s < min_speed {s.min_speed:.3g} rad/s)'
-        elif spread > s.max_speed_spread:
-            reason = (f'screw speed not steady (varies {100 * spread:.1f}% > {100 * s.max_speed_spread:.1f}%):'
-                      ' acceleration or deceleration')
-        elif acc.run_min != acc.run_max:
-            reason = 'window spans the end of one run and the start of the next'
-        elif acc.load_n == 0:
-            reason = 'no axial load in the window'
-        else:
-            reason = ''
-        spectrum, resolution = None, math.nan
-        if acc.chunks and s.spectrum_segment > 0 and acc.rate > 0:
-            spectrum, resolution = _power_spectrum(np.concatenate(acc.chunks), acc.rate, s.spectrum_segment)
-        return Window(start=start, end=end, vibration_rms=rms, sample_count=acc.count,
-                      coverage=coverage, screw_speed=speed, speed_spread=spread, axial_load=load,
-                      temperature=temperature, nut_position=position, revolutions=acc.revolutions,
-                      run_index=acc.run_max if acc.run_max is not None else self._run_index,
-                      steady=not reason, reason=reason, spectrum=spectrum,
-                      spectrum_resolution=resolution)
+        length = s.window_length
+        count, rate, speed_n = table[:, _COUNT], table[:, _RATE], table[:, _SPEED_N]
+        with np.errstate(divide='ignore', invalid='ignore'):
+            rms = np.where(count > 0, np.sqrt(table[:, _SUMSQ] / count), math.nan)
+            coverage = np.where(rate > 0, count / (length * rate), 0.0)
+            speed = np.where(speed_n > 0, table[:, _SPEED_SUM] / speed_n, math.nan)
+            spread = np.where((speed_n > 0) & (speed > 0),
+                              (table[:, _SPEED_MAX] - table[:, _SPEED_MIN]) / speed, math.nan)
+            load = _mean(table[:, _LOAD_SUM], table[:, _LOAD_N])
+            temperature = _mean(table[:, _TEMP_SUM], table[:, _TEMP_N])
+            position = _mean(table[:, _TRAVEL_SUM], table[:, _TRAVEL_N])
+        # Steady unless one of _unsteady_reason's tests fires; only the others get a reason in words.
+        maybe_steady = ((count > 0) & ~(coverage < s.min_coverage) & (speed_n > 0) & ~(speed < s.min_speed)
+                        & ~(spread > s.max_speed_spread) & (table[:, _RUN_MIN] == table[:, _RUN_MAX])
+                        & (table[:, _LOAD_N] > 0))
+        run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
+        columns = zip(keys.tolist(), (keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
+                      count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
+                      load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
+                      run_index.tolist(), maybe_steady.tolist(), rate.tolist(), range(keys.size))
+        windows = []
+        for (k, start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
+             revolutions_k, run_k, steady_k, rate_k, row) in columns:
+            reason = '' if steady_k else _unsteady_reason(s, table[row], coverage_k, speed_k, spread_k)
+            spectrum, resolution = None, math.nan
+            chunks = self._chunks.pop(k, None)
+            if chunks and s.spectrum_segment > 0 and rate_k > 0:
+                spectrum, resolution = _power_spectrum(np.concatenate(chunks), rate_k, s.spectrum_segment)
+            windows.append(Window(start=start, end=end, vibration_rms=rms_k, sample_count=count_k,
+                                  coverage=coverage_k, screw_speed=speed_k, speed_spread=spread_k,
+                                  axial_load=load_k, temperature=temperature_k, nut_position=position_k,
+                                  revolutions=revolutions_k, run_index=run_k, steady=not reason, reason=reason,
+                                  spectrum=spectrum, spectrum_resolution=resolution))
+        return windows
+
+
+def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``sums / counts`` where counts > 0, NaN elsewhere."""
+    return np.where(counts > 0, sums / counts, math.nan)
+
+
+def _unsteady_reason(s: WindowSettings, row: np.ndarray, coverage: float, speed: float, spread: float) -> str:
+    """Why a closed window (its open-table row and derived values) is not steady, in words; '' if it is."""
+    if row[_COUNT] == 0:
+        return 'no vibration samples in the window'
+    if coverage < s.min_coverage:
+        return (f'vibration covers {100 * coverage:.0f}% of the window '
+                f'(< {100 * s.min_coverage:.0f}%): blocks lost')
+    if row[_SPEED_N] == 0:
+        return 'no screw speed in the window (joint_states entry "screw")'
+    if speed < s.min_speed:
+        return f'screw at rest or crawling ({speed:.3g} rad/s < min_speed {s.min_speed:.3g} rad/s)'
+    if spread > s.max_speed_spread:
+        return (f'screw speed not steady (varies {100 * spread:.1f}% > {100 * s.max_speed_spread:.1f}%):'
+                ' acceleration or deceleration')
+    if row[_RUN_MIN] != row[_RUN_MAX]:
+        return 'window spans the end of one run and the start of the next'
+    if row[_LOAD_N] == 0:
+        return 'no axial load in the window'
+    return ''
+
+
+def _segment_sums(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``values[lo[i]:hi[i]].sum()`` for each i, in one pass when the segments do not overlap."""
+    sums = np.zeros(lo.size, values.dtype)
+    full = hi > lo
+    first, last = lo[full], hi[full]
+    if first.size == 0:
+        return sums
+    if first.size > 1 and not (first[1:] >= last[:-1]).all():   # overlapping blocks: malformed offsets
+        sums[full] = [values[a:b].sum() for a, b in zip(first.tolist(), last.tolist())]
+        return sums
+    bounds = np.unique(np.concatenate((first, last)))
+    bounds = bounds[bounds < values.size]
+    sums[full] = np.add.reduceat(values, bounds)[np.searchsorted(bounds, first)]
+    return sums
 
 
 def _forward_fill(values: np.ndarray) -> np.ndarray:
     """Replace NaNs by the last finite value before them (leading NaNs stay)."""
     valid = np.isfinite(values)
+    if values.size == 1 or valid.all():
+        return values
     index = np.where(valid, np.arange(values.size), 0)
     np.maximum.accumulate(index, out=index)
     filled = values[index]
