@@ -85,3 +85,15 @@ def test_json_document_has_the_contract_fields_and_no_nan():
     calibration = result.calibration()
     assert calibration.extension['effect'] == 'position_dependent_stiffness'
     assert np.all(np.isfinite(calibration.covariance))
+
+
+def test_run_order_confounded_with_speed_is_reported_not_passed_as_adequate():
+    plan = dataclasses.replace(PLAN, random_order=False, repeats=1)
+    # Depletion hidden: the within-run rise still shows it, and the confounding is reported.
+    result, _ = diagnose('lubricant_depletion', 3, plan=plan, params={'fall': 0.2})
+    assert result.verdict == 'lubricant_depletion'
+    assert any('confounded with speed' in note for note in result.notes)
+    # Nothing hidden: the paper's model fits, but adequacy is not claimed on a confounded plan.
+    result, _ = diagnose(None, 3, plan=plan)
+    assert result.verdict == AMBIGUOUS
+    assert 'random order' in result.what_to_record

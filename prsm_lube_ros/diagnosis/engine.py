@@ -15,7 +15,9 @@ show them and do not); otherwise the verdict is ``ambiguous`` with both listed
 and what to record to separate them.
 
 Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters);
-``ambiguous`` (tied candidates in ``tied``); ``unexplained`` (the residual is
+``ambiguous`` (tied candidates in ``tied``, or none earns its parameters but
+the run order is confounded with speed or load, so adequacy cannot be
+confirmed); ``unexplained`` (the residual is
 strongly structured or the baseline constants are unphysical, yet no
 candidate explains it).
 """
@@ -42,6 +44,8 @@ MIN_GAIN = 0.05
 EVIDENCE_TOLERANCE = 0.02
 #: Runner-up gain, relative to the leader's, from which the two are tested against each other.
 TIE_RATIO = 0.5
+#: |Spearman| over runs from which two covariates count as confounded.
+CONFOUNDED = 0.9
 #: p-value below which a located covariate without an explaining candidate makes the verdict 'unexplained'.
 UNEXPLAINED_P = 1e-8
 
@@ -234,6 +238,29 @@ def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> 
     return None
 
 
+def confounding(table: WindowTable) -> list[str]:
+    """Run-level covariates that move together (|Spearman| >= :data:`CONFOUNDED`), in words."""
+    from scipy.stats import spearmanr
+    names = ['speed', 'load', 'revolutions', 'time'] + (['temperature'] if table.has_temperature else [])
+    means = {name: table.run_means(name) for name in names}
+    for name in ('speed', 'load'):
+        levels = np.array(operating_levels(means[name]))
+        means[name] = levels[np.argmin(np.abs(means[name][:, None] - levels[None, :]), axis=1)]
+    found = []
+    for i, a in enumerate(names[:2]):
+        for b in names[2:]:
+            x, y = means[a], means[b]
+            ok = np.isfinite(x) & np.isfinite(y)
+            if ok.sum() < 4 or np.ptp(x[ok]) == 0 or np.ptp(y[ok]) == 0:
+                continue
+            rho = float(spearmanr(x[ok], y[ok]).statistic)
+            if abs(rho) >= CONFOUNDED:
+                found.append(f'run order is confounded with {a}: {b} {"rises" if rho > 0 else "falls"} with {a} '
+                             f'(Spearman {rho:+.2f} over runs), so effects that follow {b} look like effects of '
+                             f'{a}; record the runs in random order')
+    return found
+
+
 def _separation_advice(a: Effect, b: Effect) -> str:
     return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
 
@@ -252,6 +279,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     if baseline.unphysical():
         notes.append('the paper\'s model fits with unphysical constants (' + '; '.join(baseline.unphysical())
                      + '): evidence that its form misses something')
+    notes.extend(confounding(table))
     if len(folds) < table.runs.size:
         notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
                      'would not be identifiable')
@@ -301,7 +329,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
             verdict = UNEXPLAINED
             advice = 'a candidate for the located mismatch is missing from the catalogue'
             notes.append(f'the mismatch is real ({location.summary}) but no candidate explains it')
-    if verdict in effects and not advice:
-        advice = ''
+    confounded = any(note.startswith('run order is confounded') for note in notes)
+    if verdict == AMBIGUOUS and confounded:
+        advice = 'runs in random order of speed and load; ' + advice
+    if verdict == ADEQUATE and confounded:
+        verdict = AMBIGUOUS
+        advice = 'the same conditions with the runs in random order of speed and load'
+        notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
+                     'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
+                     'adequacy cannot be confirmed')
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
                      tied=tied, notes=notes, what_to_record=advice, table=table)
