@@ -17,6 +17,11 @@ from .windowing import Window, WindowBuilder, WindowSettings
 
 ProblemSink = Callable[[str], None]
 
+#: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
+#: overhead stops mattering (an hour: 0.63 s CPU with 10 s slices, 0.34 s with 60 s; nothing gained
+#: beyond), short enough that memory stays flat (a 60 s slice of 4 kHz float32 samples is about 1 MB).
+SLICE_SECONDS = 60.0
+
 
 @dataclass
 class RecordingWindows:
@@ -29,12 +34,14 @@ class RecordingWindows:
 
 def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings | None = None,
                       namespace: str = '/prsm', on_problem: ProblemSink | None = None,
-                      progress: Callable[[float], None] | None = None) -> RecordingWindows:
+                      progress: Callable[[float], None] | None = None,
+                      slice_seconds: float = SLICE_SECONDS) -> RecordingWindows:
     """Stream one recording through a :class:`WindowBuilder` and return its windows.
 
     Problems (bad messages, truncation) are collected and, if given, passed to
     ``on_problem`` as one line each, prefixed with the recording's path.
     ``progress`` receives the fraction of the recording read so far.
+    ``slice_seconds`` is how much recording is decoded and windowed at a time.
     Raises :class:`InputError` for a recording that cannot be read at all.
     """
     problems: list[str] = []
@@ -48,7 +55,7 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     builder = WindowBuilder(settings, lead=lead)
     windows: list[Window] = []
     recording = bag_reader.open_recording(path, namespace=namespace)
-    for batches in recording.slices(on_problem=report, progress=progress):
+    for batches in recording.slices(on_problem=report, progress=progress, slice_seconds=slice_seconds):
         for batch in batches:
             builder.add(batch)
         windows.extend(builder.pop_closed())
@@ -90,9 +97,9 @@ def assess_recording(recording: RecordingWindows, calibration: Calibration,
 def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Calibration) -> dict:
     """The contract's ``assess`` output: ``runs`` with a finite theta; runs not assessed apart.
 
-``windows`` lists every window, steady or not, with ``theta_oil`` null and
-the reason in words where it was not assessable.
-"""
+    ``windows`` lists every window, steady or not, with ``theta_oil`` null and
+    the reason in words where it was not assessable.
+    """
     runs, unassessed, windows, problems = [], [], [], []
     for rec in assessments:
         problems.extend(rec.problems)
