@@ -182,3 +182,32 @@ def test_a_repeated_block_is_counted_once():
     windows, builder = build_sliced(streams)
     assert any('repeating an earlier block' in p for p in builder.take_problems())
     assert [w.sample_count for w in windows] == [w.sample_count for w in reference]
+
+
+def test_a_gap_of_an_hour_opens_no_windows_in_it():
+    first = run_streams()
+    second = run_streams(t0=T0 + 3600.0)
+    streams = {k: first[k] + second[k] for k in ('vibration', 'screw', 'load', 'temperature')}
+    single, _ = build_sliced(run_streams())
+    for windows in (build_live(streams)[0], build_sliced(streams)[0]):
+        starts = [round(w.start - T0) for w in windows]
+        assert starts == [round(w.start - T0) for w in single] + [3600 + round(w.start - T0) for w in single]
+        assert sum(w.steady for w in windows) == 2 * 9
+        assert sorted({w.run_index for w in windows if w.steady}) == [1, 2]
+
+
+def test_messages_out_of_time_order_within_a_slice_give_the_same_windows():
+    streams = run_streams()
+    reference, _ = build_sliced(streams)
+    rng = np.random.default_rng(5)
+    builder = WindowBuilder()
+    for key in ('vibration', 'screw', 'load', 'temperature'):
+        items = list(streams[key])
+        rng.shuffle(items)
+        builder.add(merge(items))
+    windows = builder.pop_closed() + builder.finish()
+    assert [(w.start, w.sample_count, w.steady, w.reason, w.run_index) for w in windows] == \
+        [(w.start, w.sample_count, w.steady, w.reason, w.run_index) for w in reference]
+    for a, b in zip(windows, reference):
+        for field in ('vibration_rms', 'screw_speed', 'axial_load', 'nut_position', 'revolutions'):
+            assert getattr(a, field) == pytest.approx(getattr(b, field), rel=1e-12, nan_ok=True)
