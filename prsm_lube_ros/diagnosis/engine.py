@@ -72,7 +72,8 @@ class Candidate:
                'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
         if self.fit is not None:
             c = self.fit.constants
-            out.update({'rmse': _num(self.fit.rmse), 'cv_rmse': _num(self.fit.cv_rmse), 'gain': _num(self.gain),
+            out.update({'rmse': _num(self.fit.rmse), 'cv_rmse': _num(self.fit.cv_rmse),
+                        'cv_run_rmse': _num(self.fit.cv_run_rmse), 'gain': _num(self.gain),
                         'delta_bic': _num(self.delta_bic), 'effective_windows': _num(self.fit.n_eff),
                         'params': _clean(self.fit.params),
                         'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
@@ -120,6 +121,7 @@ class Diagnosis:
         if self.best is not None:
             f = self.best.fit
             best = {'effect': self.best.effect.id, 'rmse': _num(f.rmse), 'cv_rmse': _num(f.cv_rmse),
+                    'cv_run_rmse': _num(f.cv_run_rmse),
                     'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
                     'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
                     'status': self.best.status}
@@ -127,6 +129,7 @@ class Diagnosis:
         return {'verdict': self.verdict, 'confident': self.verdict not in (AMBIGUOUS, UNEXPLAINED),
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
+                             'cv_run_rmse': _num(base.cv_run_rmse),
                              'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
                              'unphysical': base.unphysical(), 'effective_windows': _num(base.n_eff)},
                 'best': best, 'candidates': [cand.as_json() for cand in self.candidates],

@@ -11,7 +11,8 @@ Scores:
 * ``rmse``: relative RMS error ``A_model / A - 1`` over the windows fitted;
 * ``cv_rmse``: the same on runs held out of the fit (leave one run out; folds
   that would leave fewer than two speeds or two loads to fit are skipped for
-  every model alike);
+  every model alike); ``cv_run_rmse`` the same for run amplitudes (windows
+  pooled per run), where the window scatter averages out;
 * ``bic``: BIC on window log residuals with an effective sample size
   ``n / (1 + (m - 1) ICC)`` (``m`` windows per run, ICC of the residuals
   between runs), because windows of one run are not independent.
@@ -117,6 +118,20 @@ def relative_rmse(log_residual) -> float:
     return float(np.sqrt(np.mean(errors ** 2))) if errors.size else math.nan
 
 
+def run_level_rmse(table: WindowTable, log_residual) -> float:
+    """Relative RMS error of run amplitudes (windows pooled in power per run) over runs with finite residuals.
+
+    Window-to-window scatter averages out, so this measures the model's error, not the noise.
+    """
+    errors = []
+    for run in table.runs:
+        sel = (table.run == run) & np.isfinite(log_residual)
+        if sel.any():
+            power = table.rms[sel] ** 2
+            errors.append(math.sqrt(np.mean(power * np.exp(2 * log_residual[sel])) / np.mean(power)) - 1.0)
+    return float(np.sqrt(np.mean(np.square(errors)))) if errors else math.nan
+
+
 def identifiable(table: WindowTable) -> bool:
     """True when the windows span two speed levels and two load levels (the constants are identifiable)."""
     return len(table) >= 4 and len(operating_levels(table.speed)) >= 2 and len(operating_levels(table.load)) >= 2
@@ -184,6 +199,7 @@ class ModelFit:
     rmse: float = math.nan
     cv_rmse: float = math.nan
     n_eff: float = math.nan
+    cv_run_rmse: float = math.nan   # relative RMS error of held-out run amplitudes
     notes: list = field(default_factory=list)
 
     @property
@@ -212,4 +228,5 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds=None) -> M
     return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
                     log_residual=residual, cv_log_residual=cv, n_params=n_params,
                     rmse=relative_rmse(residual), cv_rmse=relative_rmse(cv),
+                    cv_run_rmse=run_level_rmse(table, cv),
                     n_eff=effective_sample_size(residual, table.run))
