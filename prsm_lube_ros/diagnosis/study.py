@@ -55,7 +55,7 @@ def _simulate_rig(effect: str, seed: int, order: str, sessions: int):
 def _simulate_synthetic(effect: str, seed: int, order: str, sessions: int):
     from .synthetic import SyntheticPlan, synthetic_table
     rng = np.random.default_rng(10_000 + seed)
-    plan = SyntheticPlan(repeats=sessions, random_order=order == 'random', spectrum_bins=128)
+    plan = SyntheticPlan(repeats=1, sessions=sessions, random_order=order == 'random', spectrum_bins=128)
     table, truth = synthetic_table(rng, None if effect == NONE else effect, plan)
     return table, {k: (list(v) if isinstance(v, tuple) else v) for k, v in truth['params'].items()}
 

@@ -29,7 +29,9 @@ class SyntheticPlan:
 
     speeds_rpm: tuple = (100.0, 150.0, 200.0)
     loads: tuple = (100.0, 200.0)
-    repeats: int = 2
+    repeats: int = 2                # each condition this often per session
+    sessions: int = 1               # sessions, each after a relubrication (revolutions restart), one recording each
+    session_pause: float = 60.0     # s between sessions (oil injection; the actuator cools)
     random_order: bool = True
     stroke: float = 0.17            # m of steady travel per run
     lead: float = 0.005             # m per revolution
@@ -73,7 +75,7 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
 
 def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: SyntheticPlan | None = None,
                     params: dict | None = None, order=None) -> tuple[WindowTable, dict]:
-    """A window table of one session with ``effect`` hidden (None: the paper's model holds) and its truth.
+    """A window table of ``plan.sessions`` sessions with ``effect`` hidden (None: none) and its truth.
 
     ``order``: run order as indices into the condition list (default: random or plan order).
     Returns ``(table, truth)``, truth with the effect, its parameters and the true theta per window.
@@ -82,12 +84,20 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
     params = dict(params) if params is not None else (_draw_effect(effect, rng, plan) if effect else {})
     conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
     if order is None:
-        order = rng.permutation(len(conditions)) if plan.random_order else np.arange(len(conditions))
-    rows = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run')}
+        order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
+                                else np.arange(len(conditions)) for _ in range(plan.sessions)])
+    rows = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run',
+                            'recording')}
     theta_eff, spectra, a22_list = [], [], []
     clock, revs, temp = 0.0, 0.0, plan.ambient
     total_revs = sum(plan.stroke / plan.lead for _ in conditions)
+    per_session = max(len(order) // plan.sessions, 1)
     for run, index in enumerate(order):
+        session = run // per_session
+        if run and run % per_session == 0:
+            revs, clock = 0.0, 0.0   # relubricated; a new recording starts
+            if effect == 'thermal_viscosity':
+                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / params['tau'])
         speed, load = conditions[index]
         nut_speed = plan.lead * speed / (2 * math.pi)
         n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
@@ -131,6 +141,7 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
             rows['time'].append(clock)
             rows['temperature'].append(temp + rng.normal(0, 0.05) if plan.record_temperature else math.nan)
             rows['run'].append(run)
+            rows['recording'].append(session)
             theta_eff.append(theta * film)
             a22_list.append(a22)
             if plan.spectrum_bins:
@@ -140,7 +151,7 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
         if effect == 'thermal_viscosity':
             temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / params['tau'])
     resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-    table = WindowTable(recording=np.zeros(len(rows['run']), dtype=int), theta=plan.theta,
+    table = WindowTable(theta=plan.theta,
                         spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
     truth = {'effect': effect, 'params': params, 'theta_effective': np.array(theta_eff),
              'amplitude_eq22': np.array(a22_list)}
