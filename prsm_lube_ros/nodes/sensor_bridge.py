@@ -1,0 +1,448 @@
+"""``sensor_bridge``: puts the contract's input topics on the graph from a bag, the rig simulator or the card.
+
+Parameter ``source`` (read-only) chooses where the data come from:
+
+- ``playback``: the ``bag``'s contract topics (actuator ``bag_namespace``,
+  default ``namespace``), paced on their header stamps ``playback_rate`` times
+  faster than real time (a vibration block goes out when its last sample was
+  taken, other messages at their stamp).  Header stamps are published
+  unchanged, bit for bit as ``prsm-lube assess`` reads them.  ``loop`` starts
+  over at the end (logged; stamps go back, which the estimator takes as a clock
+  reset); ``publish_clock`` puts the replay's time on ``/clock`` for nodes on
+  sim time.  Without ``loop`` the ``ros2 run`` process ends with status 0 after
+  the last message (``exit_at_end``).  A bag that cannot be opened, or holds no
+  ``<ns>/vibration``, ends the node at start with one line and status 2.
+- ``simulator``: :class:`~prsm_lube_ros.rig_simulator.RigSignalGenerator` in
+  real time; ``speed``, ``load`` and ``theta_oil`` may be changed while it runs.
+- ``hardware``: the nut accelerometer through NI-DAQmx (:mod:`.daq`) published
+  as VibrationBlocks; speed and load come from the EMA stack's own topics,
+  optionally relayed from ``relay_joint_states`` / ``relay_axial_load`` onto the
+  contract names.  Without the nidaqmx package, the driver or the card: one
+  line and status 2.
+
+Topics are ``<namespace>/vibration``, ``/joint_states``, ``/axial_load`` and
+``/temperature`` (CONTRACT.md).  Publishers are RELIABLE / KEEP_LAST by
+default: a reliable writer serves best-effort readers (the estimator's
+sensor-data subscriptions) and reliable ones (``ros2 bag record``) alike,
+whereas a best-effort writer would be silently ignored by a reliable reader;
+``reliability: best_effort`` is there for links where retransmission hurts.
+"""
+from __future__ import annotations
+
+import array
+import math
+import sys
+import threading
+import time
+import traceback
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
+    SetParametersResult
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState, Temperature
+
+from .bridge_sources import Pacer, recording_events, rig_block_events
+from .daq import DaqSettings, NiDaqAccelerometer
+from ..bag_reader import open_recording, topic_name
+from ..errors import InputError
+from ..msg import VibrationBlock
+from ..rig_simulator import load_rig_config, RigSignalGenerator
+
+NODE_NAME = 'sensor_bridge'
+SOURCES = ('playback', 'simulator', 'hardware')
+_NS = 1_000_000_000
+
+_BOOL = ParameterType.PARAMETER_BOOL
+_DOUBLE = ParameterType.PARAMETER_DOUBLE
+_INTEGER = ParameterType.PARAMETER_INTEGER
+_STRING = ParameterType.PARAMETER_STRING
+
+#: name: (default, type, description, range (low, high) or None, read_only)
+PARAMETERS = {
+    'source': ('simulator', _STRING, 'where the data come from: playback (a recorded bag), simulator (the rig '
+               'simulator in real time) or hardware (NI-DAQmx accelerometer)', None, True),
+    'namespace': ('/prsm', _STRING, 'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature '
+                  '(a namespace ending in / or _ is a plain prefix)', None, True),
+    'reliability': ('reliable', _STRING, 'QoS of the publishers: reliable (serves best-effort and reliable '
+                    'readers) or best_effort', None, True),
+    'qos_depth': (100, _INTEGER, 'KEEP_LAST depth of the publishers', (1, 100000), True),
+    'frame_id': ('nut_accelerometer', _STRING, 'header.frame_id of the VibrationBlocks (playback, hardware; the '
+                 'simulator uses its rig file\'s)', None, True),
+    # playback
+    'bag': ('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', None, True),
+    'bag_namespace': ('', _STRING, 'playback: actuator namespace inside the bag (empty: namespace)', None, True),
+    'playback_rate': (1.0, _DOUBLE, 'playback: 1.0 replays in real time, larger is faster (header-stamp time '
+                      'over wall time)', (0.01, 10000.0), False),
+    'loop': (False, _BOOL, 'playback: start over at the end (header stamps then go back)', None, True),
+    'publish_clock': (False, _BOOL, 'playback: publish the replay time on /clock for nodes with use_sim_time',
+                      None, True),
+    'clock_period': (0.01, _DOUBLE, 'playback: s of replay time between /clock messages', (0.0001, 10.0), True),
+    'wait_for_subscribers': (2.0, _DOUBLE, 'playback: s of wall time to wait for a vibration subscriber before '
+                             'the first message (best-effort readers miss what is sent before they match)',
+                             (0.0, 3600.0), True),
+    'exit_at_end': (True, _BOOL, 'playback without loop: end the process (ros2 run) after the last message',
+                    None, True),
+    # simulator
+    'speed': (10.471975511965976, _DOUBLE, 'simulator: commanded screw speed in rad/s (ramps at the rig\'s '
+              'live_acceleration)', (-1000.0, 1000.0), False),
+    'load': (100.0, _DOUBLE, 'simulator: commanded axial load in N', (0.0, 1.0e6), False),
+    'theta_oil': (1.0, _DOUBLE, 'simulator: true lubrication supply factor (1 = fully lubricated)', (0.0, 2.0),
+                  False),
+    'seed': (0, _INTEGER, 'simulator: random seed', (0, 2 ** 31 - 1), True),
+    'rig_config': ('', _STRING, 'simulator: rig YAML (config/rig_simulator.yaml layout); empty: defaults', None,
+                   True),
+    # hardware
+    'daq_channel': ('Dev1/ai0', _STRING, 'hardware: NI-DAQmx physical channel of the nut accelerometer', None,
+                    True),
+    'sample_rate': (4000.0, _DOUBLE, 'hardware: samples per second (paper: 4 kHz)', (1.0, 1.0e6), True),
+    'block_length': (0.1, _DOUBLE, 'hardware: s per VibrationBlock (rounded to whole samples)', (0.001, 10.0),
+                     True),
+    'sensitivity': (100.0, _DOUBLE, 'hardware: accelerometer sensitivity in mV/g (paper: 100 mV/g)',
+                    (0.001, 1.0e5), True),
+    'iepe_current': (0.004, _DOUBLE, 'hardware: IEPE excitation current in A (0: no excitation)', (0.0, 0.1),
+                     True),
+    'range_g': (50.0, _DOUBLE, 'hardware: measurement range +/- g', (0.001, 1.0e5), True),
+    'buffer_seconds': (10.0, _DOUBLE, 'hardware: ring buffer of the continuous acquisition in s', (0.1, 3600.0),
+                       True),
+    'relay_joint_states': ('', _STRING, 'hardware: JointState topic of the EMA stack to republish on '
+                           '<namespace>/joint_states (empty: the stack publishes there itself)', None, True),
+    'relay_joint': ('', _STRING, 'hardware: name of the screw joint in the relayed JointState, renamed to screw '
+                    '(empty: already named screw)', None, True),
+    'relay_axial_load': ('', _STRING, 'hardware: WrenchStamped topic of the EMA stack to republish on '
+                         '<namespace>/axial_load (empty: none)', None, True),
+}
+SIMULATOR_PARAMETERS = ('speed', 'load', 'theta_oil')
+
+
+def time_from_ns(stamp_ns: int) -> Time:
+    """Int ns since the epoch as ``builtin_interfaces/Time``."""
+    sec, nanosec = divmod(int(stamp_ns), _NS)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def vibration_block(stamp_ns: int, sample_rate: float, samples, frame_id: str) -> VibrationBlock:
+    """A VibrationBlock; samples (m/s^2) go in as one float32 copy."""
+    msg = VibrationBlock()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = frame_id
+    msg.sample_rate = float(sample_rate)
+    values = array.array('f')
+    values.frombytes(np.ascontiguousarray(samples, dtype=np.float32).tobytes())
+    msg.samples = values
+    return msg
+
+
+def joint_state(stamp_ns: int, angle: float, speed: float, joint: str = 'screw') -> JointState:
+    """A JointState with the screw's angle (rad) and speed (rad/s)."""
+    msg = JointState()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.name = [joint]
+    msg.position = [float(angle)]
+    msg.velocity = [float(speed)]
+    return msg
+
+
+def axial_load(stamp_ns: int, force: float, frame_id: str = '') -> WrenchStamped:
+    """A WrenchStamped with the axial load (N, sign kept) in ``wrench.force.z``."""
+    msg = WrenchStamped()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = frame_id
+    msg.wrench.force.z = float(force)
+    return msg
+
+
+def temperature(stamp_ns: int, value: float, frame_id: str = '') -> Temperature:
+    """A Temperature reading in degC."""
+    msg = Temperature()
+    msg.header.stamp = time_from_ns(stamp_ns)
+    msg.header.frame_id = frame_id
+    msg.temperature = float(value)
+    return msg
+
+
+def publisher_qos(reliability: str, depth: int) -> QoSProfile:
+    """The publishers' QoS: KEEP_LAST ``depth``, volatile, ``reliable`` or ``best_effort``."""
+    policies = {'reliable': ReliabilityPolicy.RELIABLE, 'best_effort': ReliabilityPolicy.BEST_EFFORT}
+    if reliability not in policies:
+        raise InputError(f'parameter reliability: {reliability!r} is neither reliable nor best_effort')
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(depth), reliability=policies[reliability],
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+class SensorBridge(Node):
+    """The bridge node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`.
+
+    Raises :class:`InputError` at construction when the source cannot be used
+    (nothing is published then).  A worker thread paces and publishes; it sets
+    :attr:`finished` when the source ends (playback done, acquisition failed),
+    with :attr:`exit_status` 0 or 1.
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        for name, (default, ptype, description, bounds, read_only) in PARAMETERS.items():
+            descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
+            if bounds and ptype == _DOUBLE:
+                descriptor.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]),
+                                                                      to_value=float(bounds[1]))]
+            elif bounds and ptype == _INTEGER:
+                descriptor.integer_range = [IntegerRange(from_value=int(bounds[0]), to_value=int(bounds[1]),
+                                                         step=1)]
+            self.declare_parameter(name, default, descriptor)
+        values = {name: self.get_parameter(name).value for name in PARAMETERS}
+        self.source = str(values['source']).strip()
+        if self.source not in SOURCES:
+            raise InputError(f'parameter source: {self.source!r} is not one of {", ".join(SOURCES)}')
+        self.namespace = str(values['namespace']).strip() or '/prsm'
+        self.frame_id = str(values['frame_id'])
+        self.finished = threading.Event()
+        self.exit_status = 0
+        self.messages_published = 0
+        self.loops = 0
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._values = values
+        self._recording = self._generator = self._daq = None
+        qos = publisher_qos(str(values['reliability']), values['qos_depth'])
+        # Open the source first: if it cannot be used, the node ends before publishing anything.
+        kinds = ['vibration', 'joint_states', 'axial_load', 'temperature']
+        if self.source == 'playback':
+            self._open_playback(values)
+            kinds = list(self._recording.selected)
+        elif self.source == 'simulator':
+            self._open_simulator(values)
+        else:
+            self._open_hardware(values)
+            kinds = ['vibration']
+        types = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
+                 'temperature': Temperature}
+        self.topics = {kind: topic_name(self.namespace, kind) for kind in kinds}
+        self._outputs = {kind: self.create_publisher(types[kind], topic, qos) for kind, topic in self.topics.items()}
+        self._clock = (self.create_publisher(Clock, '/clock', QoSProfile(depth=10))
+                       if self.source == 'playback' and values['publish_clock'] else None)
+        self._relays = []
+        if self.source == 'hardware':
+            self._create_relays(values, qos)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._thread = threading.Thread(target=self._work, name='sensor_bridge source', daemon=True)
+        self._thread.start()
+
+    # -- sources -----------------------------------------------------------------------------------
+    def _open_playback(self, values):
+        bag = str(values['bag']).strip()
+        if not bag:
+            raise InputError('parameter bag: empty; name the rosbag2 directory or .mcap file to replay')
+        self._recording = open_recording(bag, namespace=str(values['bag_namespace']).strip() or self.namespace)
+        self._pacer = Pacer(values['playback_rate'], self._stop)
+
+    def _open_simulator(self, values):
+        rig = load_rig_config(values['rig_config'] or None)
+        start_ns = time.time_ns()
+        self._generator = RigSignalGenerator(rig, seed=int(values['seed']), theta_oil=float(values['theta_oil']),
+                                             start_stamp_ns=start_ns)
+        self._generator.set_load(float(values['load']))
+        self._generator.set_speed(float(values['speed']))
+        self.frame_id = rig.vibration_frame_id
+        self._load_frame, self._temperature_frame = rig.load_frame_id, rig.temperature_frame_id
+        self._pacer = Pacer(1.0, self._stop)
+
+    def _open_hardware(self, values):
+        size = int(round(values['block_length'] * values['sample_rate']))
+        settings = DaqSettings(channel=str(values['daq_channel']), sample_rate=float(values['sample_rate']),
+                               block_size=max(size, 1), sensitivity=float(values['sensitivity']),
+                               iepe_current=float(values['iepe_current']), range_g=float(values['range_g']),
+                               buffer_seconds=float(values['buffer_seconds']))
+        self._daq = NiDaqAccelerometer(settings)
+
+    def _create_relays(self, values, qos):
+        sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
+        joint = str(values['relay_joint']).strip()
+        if values['relay_joint_states']:
+            out = self.create_publisher(JointState, topic_name(self.namespace, 'joint_states'), qos)
+
+            def relay_joints(msg):
+                if joint and joint in msg.name:
+                    names = list(msg.name)
+                    names[names.index(joint)] = 'screw'
+                    msg.name = names
+                out.publish(msg)
+            self._relays.append(self.create_subscription(JointState, values['relay_joint_states'], relay_joints,
+                                                         sensor_qos))
+        if values['relay_axial_load']:
+            out_load = self.create_publisher(WrenchStamped, topic_name(self.namespace, 'axial_load'), qos)
+            self._relays.append(self.create_subscription(WrenchStamped, values['relay_axial_load'],
+                                                         out_load.publish, sensor_qos))
+
+    # -- the worker thread -------------------------------------------------------------------------
+    def _work(self):
+        try:
+            if self.source == 'playback':
+                self._play()
+            elif self.source == 'simulator':
+                self._simulate()
+            else:
+                self._acquire()
+        except InputError as exc:
+            self.get_logger().error(str(exc))
+            self.exit_status = 1
+        except Exception as exc:      # a bug, not bad input: say so with the traceback
+            self.get_logger().error(f'internal error (please report): '
+                                    f'{"".join(traceback.format_exception(exc)).strip()}')
+            self.exit_status = 1
+        finally:
+            self.finished.set()
+
+    def _play(self):
+        values = self._values
+        rate, bag = values['playback_rate'], values['bag']
+        deadline = time.monotonic() + values['wait_for_subscribers']
+        vibration = self._outputs['vibration']
+        while vibration.get_subscription_count() == 0 and time.monotonic() < deadline:
+            if self._stop.wait(0.02):
+                return
+        if vibration.get_subscription_count():
+            self._stop.wait(0.3)      # best-effort readers match the writer a little after it matches them
+        self.get_logger().info(f'playback of {bag} ({", ".join(self.topics.values())}) at {rate:g} x real time'
+                               + (', looping' if values['loop'] else ''))
+        first_stamp = None
+        while not self._stop.is_set():
+            count = 0
+            clock_at = -math.inf
+            for events in recording_events(self._recording, on_problem=self._problem):
+                for due, kind, stamp_ns, payload in events:
+                    if not self._pacer.wait(due):
+                        return
+                    if self._clock is not None and (due >= clock_at + values['clock_period'] or due < clock_at):
+                        clock_at = due
+                        self._clock.publish(Clock(clock=time_from_ns(int(round(due * 1e9)))))
+                    if first_stamp is None:
+                        first_stamp = stamp_ns
+                    self._publish(kind, stamp_ns, payload)
+                    count += 1
+            if count == 0:
+                raise InputError(f'{bag}: no messages to replay on {", ".join(self.topics.values())}')
+            if not values['loop']:
+                self.get_logger().info(f'playback of {bag} finished: {count} messages')
+                return
+            self.loops += 1
+            self.get_logger().info(f'loop {self.loops}: replaying {bag} from the start; header stamps go back '
+                                   f'to {first_stamp * 1e-9:.3f} (subscribers see a clock reset)')
+            self._pacer.restart()
+
+    def _simulate(self):
+        while not self._stop.is_set():
+            with self._lock:
+                block = self._generator.next_block()
+            for due, kind, stamp_ns, payload in rig_block_events(block):
+                if not self._pacer.wait(due):
+                    return
+                self._publish(kind, stamp_ns, payload)
+
+    def _acquire(self):
+        daq = self._daq
+        settings = daq.settings
+        self.get_logger().info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
+                               f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
+        vibration = self._outputs['vibration']
+        try:
+            while not self._stop.is_set():
+                stamp_ns, samples = daq.read_block()
+                vibration.publish(vibration_block(stamp_ns, settings.sample_rate, samples, self.frame_id))
+                self.messages_published += 1
+        finally:
+            daq.close()
+
+    def _publish(self, kind: str, stamp_ns: int, payload: tuple):
+        if kind == 'vibration':
+            msg = vibration_block(stamp_ns, payload[0], payload[1], self.frame_id)
+        elif kind == 'joint_states':
+            msg = joint_state(stamp_ns, *payload)
+        elif kind == 'axial_load':
+            msg = axial_load(stamp_ns, payload[0], getattr(self, '_load_frame', ''))
+        else:
+            msg = temperature(stamp_ns, payload[0], getattr(self, '_temperature_frame', ''))
+        publisher = self._outputs.get(kind)
+        if publisher is not None:
+            publisher.publish(msg)
+            self.messages_published += 1
+
+    def _problem(self, line: str):
+        self.get_logger().warning(f'{self._values["bag"]}: {line}')
+
+    # -- parameters --------------------------------------------------------------------------------
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        """Simulator: speed, load and theta_oil act from the next block; playback: playback_rate at once."""
+        for parameter in parameters:
+            if parameter.name in SIMULATOR_PARAMETERS and self.source != 'simulator':
+                return SetParametersResult(successful=False,
+                                           reason=f'{parameter.name} applies to source simulator only')
+            if parameter.name == 'playback_rate' and self.source != 'playback':
+                return SetParametersResult(successful=False, reason='playback_rate applies to source playback only')
+        for parameter in parameters:
+            value = parameter.value
+            if parameter.name in SIMULATOR_PARAMETERS:
+                with self._lock:
+                    setter = {'speed': self._generator.set_speed, 'load': self._generator.set_load,
+                              'theta_oil': self._generator.set_theta}[parameter.name]
+                    setter(float(value))
+                self.get_logger().info(f'simulator: {parameter.name} set to {value:g}')
+            elif parameter.name == 'playback_rate':
+                self._pacer.rate = float(value)
+                self._pacer.restart()
+        return SetParametersResult(successful=True)
+
+    def destroy_node(self):
+        """Stop the worker (and the acquisition) before the node goes."""
+        self._stop.set()
+        if self._thread.is_alive() and self._thread is not threading.current_thread():
+            self._thread.join(timeout=5.0)
+        if self._daq is not None:
+            self._daq.close()
+        return super().destroy_node()
+
+
+def create_node(**kwargs) -> SensorBridge:
+    """The bridge node (``prsm-lube run`` starts it beside the estimator)."""
+    return SensorBridge(**kwargs)
+
+
+def main(args=None) -> int:
+    """Entry point of ``ros2 run prsm_lube_ros sensor_bridge``; returns the exit status.
+
+    Bad configuration or an unusable source: one line on stderr, status 2.
+    Playback without ``loop`` ends with status 0 after the last message
+    (``exit_at_end``); an acquisition that fails while running ends with 1.
+    """
+    rclpy.init(args=args)
+    try:
+        node = SensorBridge()
+    except InputError as exc:
+        print(f'{NODE_NAME}: error: {exc}', file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+            if node.finished.is_set() and (exit_at_end or node.exit_status):
+                break
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return node.exit_status
+
+
+if __name__ == '__main__':
+    sys.exit(main())
