@@ -22,6 +22,7 @@ import shutil
 
 import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2.writer import CompressionFormat, CompressionMode
 
 from .errors import InputError
 from .interfaces import JOINT_STATE, TEMPERATURE, VIBRATION_BLOCK, WRENCH_STAMPED, contract_typestore
@@ -68,8 +69,9 @@ class ContractBagWriter:
     :class:`InputError`.  Temperature is only registered when first written.
     """
 
-    def __init__(self, path: str | Path, *, storage: str = 'mcap', namespace: str = '/prsm'):
-        """Open the bag for writing."""
+    def __init__(self, path: str | Path, *, storage: str = 'mcap', namespace: str = '/prsm',
+                 compression: str | None = None):
+        """Open the bag for writing; ``compression='zstd'`` compresses mcap chunks (storage compression)."""
         self.path = Path(path)
         self.storage = check_storage(storage)
         if self.path.exists():
@@ -87,6 +89,11 @@ class ContractBagWriter:
         self.typestore = contract_typestore()
         plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
         self._writer = Writer(self._bag_dir, version=Writer.VERSION_LATEST, storage_plugin=plugin)
+        if compression is not None:
+            if compression != 'zstd' or storage == 'sqlite3':
+                raise InputError(f'{self.path}: compression {compression!r} is not offered for {storage} storage '
+                                 '(mcap storage supports zstd)')
+            self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self._writer.open()
         self._connections = {}
         self._pending: list[tuple[int, int, object, bytes]] = []

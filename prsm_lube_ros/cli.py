@@ -139,11 +139,13 @@ def cmd_simulate(args) -> int:
         if args.endurance:
             paths = [simulate_endurance(Path(args.out) / 'endurance', args.endurance, plan=plan, rig=rig,
                                         seed=args.seed, effects=effects, storage=args.storage,
-                                        theta_oil=args.stages[0] if args.stages else 1.0, progress=progress)]
+                                        theta_oil=args.stages[0] if args.stages else 1.0, progress=progress,
+                                        compression=args.compression)]
         else:
             paths = simulate_experiment(args.out, plan=plan, rig=rig, seed=args.seed, effects=effects,
                                         storage=args.storage, run_order=args.run_order,
-                                        stage_thetas=args.stages, progress=progress)
+                                        stage_thetas=args.stages, progress=progress,
+                                        compression=args.compression)
     finally:
         bar.close()
     for path in paths:
@@ -193,6 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help='true theta_oil per lubrication stage (default 0.72 0.83 1.0)')
     sim.add_argument('--storage', choices=('mcap', 'sqlite3', 'mcap-file'), default='mcap',
                      help='rosbag2 folder with mcap (default) or sqlite3 storage, or a bare .mcap file')
+    sim.add_argument('--compression', choices=('zstd',), default=None,
+                     help='compress mcap chunks (default: none, as rosbag2 records by default)')
     sim.add_argument('--run-order', choices=('fixed', 'random'), default=None,
                      help='order of the six conditions in each stage (default: the plan\'s, fixed)')
     sim.add_argument('--effect', action='append', default=[], metavar='EFFECT',

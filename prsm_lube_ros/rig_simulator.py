@@ -770,12 +770,12 @@ def _latencies(rng: np.random.Generator, rig: RigConfig, count: int) -> np.ndarr
 
 def _record(path: Path, storage: str, stream: RigStream, first_block: int, stop_block: int,
             theta_oil: float, latency_rng: np.random.Generator,
-            progress: Callable[[int], None] | None) -> None:
+            progress: Callable[[int], None] | None, compression: str | None = None) -> None:
     """Write blocks ``[first_block, stop_block)`` of the stream to a new bag."""
     rig = stream.rig
     step = max(1, int(round(CHUNK_DURATION / rig.vibration_block)))
     block_ns = int(round(rig.vibration_block * 1e9))
-    with ContractBagWriter(path, storage=storage, namespace=rig.namespace) as writer:
+    with ContractBagWriter(path, storage=storage, namespace=rig.namespace, compression=compression) as writer:
         for start in range(first_block, stop_block, step):
             stop = min(start + step, stop_block)
             chunk = stream.advance(start, stop, theta_oil)
@@ -859,7 +859,7 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
                         rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
                         storage: str = 'mcap', run_order: str | None = None,
                         stage_thetas: Sequence[float] | None = None,
-                        progress: ProgressCallback | None = None) -> list[Path]:
+                        progress: ProgressCallback | None = None, compression: str | None = None) -> list[Path]:
     """Record the paper's experiment: one bag per lubrication stage in ``out_dir``, plus ``truth.json``.
 
     Bags are named ``stage_1``, ``stage_2``, ... (storage per
@@ -868,7 +868,7 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     ``'random'``, seeded) and ``stage_thetas`` (true theta_Oil per stage)
     override the plan's.  Stages follow each other after
     ``plan.stage_pause``.  ``progress(done_s, total_s)`` is called with simulated
-    seconds.  Returns the bag paths.
+    seconds.  ``compression='zstd'`` compresses the mcap chunks.  Returns the bag paths.
     """
     rig, plan, effects = rig or RigConfig(), plan or ExperimentPlan(), effects or Effects()
     check_storage(storage)
@@ -908,7 +908,7 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     origin = _origin_seconds(stream)
     for (name, theta, first, stop, strokes), path in zip(schedule, paths):
         stream.relubricate()
-        _record(path, storage, stream, first, stop, theta, latency_rng, advance)
+        _record(path, storage, stream, first, stop, theta, latency_rng, advance, compression)
         bags.append({'name': name, 'path': path.name, 'theta_oil': theta,
                      'start': origin + first * rig.vibration_block,
                      'end': origin + stop * rig.vibration_block,
@@ -927,11 +927,12 @@ def _run_truth(stroke: Stroke, origin: float, theta: float, rig: RigConfig) -> d
 def simulate_endurance(path: str | Path, duration: float, *, plan: ExperimentPlan | None = None,
                        rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
                        storage: str = 'mcap', theta_oil: float = 1.0, truth_path: str | Path | None = None,
-                       progress: ProgressCallback | None = None) -> Path:
+                       progress: ProgressCallback | None = None, compression: str | None = None) -> Path:
     """One long bag at ``path``: the plan's conditions cycled (with rewinds) for ``duration`` s.
 
     For benchmarks and long-term effects; lubricated once at the start with
-    ``theta_oil``.  Writes the truth to ``truth_path`` if given.  Returns ``path``.
+    ``theta_oil``.  Writes the truth to ``truth_path`` if given; ``compression='zstd'``
+    compresses the mcap chunks.  Returns ``path``.
     """
     rig, plan, effects = rig or RigConfig(), plan or ExperimentPlan(), effects or Effects()
     check_storage(storage)
@@ -956,7 +957,7 @@ def simulate_endurance(path: str | Path, duration: float, *, plan: ExperimentPla
         if progress is not None:
             progress(done * rig.vibration_block, total)
 
-    _record(path, storage, stream, 0, stop_block, theta_oil, latency_rng, advance)
+    _record(path, storage, stream, 0, stop_block, theta_oil, latency_rng, advance, compression)
     if truth_path is not None:
         origin = _origin_seconds(stream)
         kept = [stroke for stroke in strokes if stroke.start < total]
