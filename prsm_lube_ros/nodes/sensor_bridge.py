@@ -225,8 +225,8 @@ class SensorBridge(Node):
                  'temperature': Temperature}
         self.topics = {kind: topic_name(self.namespace, kind) for kind in kinds}
         self._outputs = {kind: self.create_publisher(types[kind], topic, qos) for kind, topic in self.topics.items()}
-        self._clock = (self.create_publisher(Clock, '/clock', QoSProfile(depth=10))
-                       if self.source == 'playback' and values['publish_clock'] else None)
+        wants_clock = self.source == 'playback' and values['publish_clock']
+        self._clock_publisher = self.create_publisher(Clock, '/clock', QoSProfile(depth=10)) if wants_clock else None
         self._relays = []
         if self.source == 'hardware':
             self._create_relays(values, qos)
@@ -319,9 +319,10 @@ class SensorBridge(Node):
                 for due, kind, stamp_ns, payload in events:
                     if not self._pacer.wait(due):
                         return
-                    if self._clock is not None and (due >= clock_at + values['clock_period'] or due < clock_at):
+                    clock_due = due >= clock_at + values["clock_period"] or due < clock_at
+                    if self._clock_publisher is not None and clock_due:
                         clock_at = due
-                        self._clock.publish(Clock(clock=time_from_ns(int(round(due * 1e9)))))
+                        self._clock_publisher.publish(Clock(clock=time_from_ns(int(round(due * 1e9)))))
                     if first_stamp is None:
                         first_stamp = stamp_ns
                     self._publish(kind, stamp_ns, payload)
