@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from ..sim_effects import BACKGROUND_FRACTION_RANGE
+
 from ..vibration_model import ModelConstants, acceleration_amplitude
 from .table import WindowTable
 
@@ -57,7 +59,6 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
         length_start = offset + plan.stroke if far else offset
         # 1 + rho L_a/L_ref vs 1 + rho L_b/L_ref: solve rho (at the longer length) for the change.
         long, short = max(length_start, length_end), min(length_start, length_end)
-        rho_long = change / (1 - change - short / long * (1 - change) + change * 0) if False else None
         # (1 + rho_long) / (1 + rho_long short/long) = 1 / (1 - change)
         rho_long = (1 / (1 - change) - 1) / (1 - (short / long) / (1 - change))
         return {'free_length_start': length_start, 'free_length_end': length_end,
@@ -69,7 +70,7 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
     if effect == 'lubricant_depletion':
         return {'fall': rng.uniform(0.08, 0.25)}
     if effect == 'background_vibration':
-        return {'fraction': rng.uniform(0.2, 0.5), 'tones': tuple(rng.uniform(60, 900, size=2))}
+        return {'fraction': rng.uniform(*BACKGROUND_FRACTION_RANGE), 'tones': tuple(rng.uniform(60, 900, size=2))}
     raise ValueError(effect)
 
 
