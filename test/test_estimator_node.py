@@ -359,6 +359,28 @@ def test_bad_inputs_are_left_out_and_the_node_keeps_publishing(graph, tmp_path):
     wait_for(lambda: int(values_of(status_of(diagnostics[-1], '/prsm'))['problems']) > 5, 5, 'problem count')
 
 
+def test_joint_states_and_load_are_taken_while_vibration_is_silent(graph, tmp_path):
+    """Only vibration wakes the executor; when it stops, the other inputs are still taken (drain timer).
+
+    Vibration for 1.5 s, joint states and load for 5.5 s: once they are
+    stream_timeout (3 s) past the last block, vibration stops holding the windows
+    open and the silent ones close without theta (no vibration samples; the status goes STALE).
+    """
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    events = [e for e in segments_stream([(5.5, rms_for(0.9), SPEED, LOAD)])
+              if not (e[1] == 'vibration' and e[0] >= T0 + 1.5)]
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: 4.5 in by_window(states), 10, 'the windows after the vibration stopped')
+    live = by_window(states)
+    for start in (0.0, 0.5, 1.0):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), live[start].message
+    for start in (1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5):
+        assert math.isnan(live[start].theta_oil) and 'no vibration' in live[start].message, start
+        assert live[start].screw_speed == pytest.approx(SPEED, rel=1e-6)
+
+
 def test_parameters_are_validated_and_applied(graph, tmp_path):
     node = graph.estimator(tmp_path)
     broken = tmp_path / 'broken.yaml'

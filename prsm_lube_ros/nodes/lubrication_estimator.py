@@ -9,6 +9,14 @@ message to that actuator's :class:`~prsm_lube_ros.windowing.WindowBuilder`
 ``LubricationState`` on ``<ns>/lubrication_state``.  ``/diagnostics`` carries
 one status per actuator, judged by :mod:`prsm_lube_ros.health`.
 
+Only the vibration subscriptions (with the timers and services) wake the
+executor, which rebuilds its wait set from every entity on every wake.  The
+joint state, load and temperature subscriptions, which bring 151 of the 161
+messages per second of a typical actuator, sit in a callback group executors
+never wait on: the vibration callback drains their queues with the block, and a
+steady-clock timer drains them every ``DRAIN_PERIOD`` s for an actuator whose
+vibration stopped, so queues stay bounded and silent windows still close.
+
 The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
 the first actuator, ``<ns>/calibrate`` each one.  Fitting runs on a worker
 thread: the service callback is a coroutine that awaits it, so subscriptions
@@ -18,7 +26,7 @@ once per kind.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 import math
 import os
 from pathlib import Path
@@ -30,10 +38,13 @@ from typing import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
+import numpy as np
 import rclpy
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
     SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -114,6 +125,9 @@ PARAMETERS = {
 
 #: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
 MAX_DRAIN = 5000
+#: Longest time in s an auxiliary queue waits for a drain when no vibration arrives (the queue must hold
+#: what arrives meanwhile: 200 messages of a 1 kHz joint_states topic, qos_depth is 500).
+DRAIN_PERIOD = 0.2
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
                      'stream_timeout')
@@ -172,6 +186,8 @@ class ActuatorChannel:
     last_level: int | None = None
     windows: int = 0
     input_errors: dict = field(default_factory=dict)
+    auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
+    last_drain: float = -math.inf                    # time.monotonic() of the last auxiliary drain
 
     @property
     def status_name(self) -> str:
@@ -212,6 +228,7 @@ class LubricationEstimator(Node):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
+        self._drained_group = DrainedCallbackGroup()
         qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
                          reliability=ReliabilityPolicy.BEST_EFFORT)
         hardware_ids = list(values['hardware_ids'])
@@ -238,6 +255,10 @@ class LubricationEstimator(Node):
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
         self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
                                         callback_group=self._input_group)
+        # Steady clock: the auxiliary queues must be drained even when a simulated clock stands still.
+        self._drain_period = min(DRAIN_PERIOD, float(values['diagnostics_period']))
+        self._drain_timer = self.create_timer(self._drain_period, self._drain_idle, callback_group=self._input_group,
+                                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.get_logger().info(
             f'watching {", ".join(c.name for c in self.channels)}; window {self._settings.window_length:g} s; '
@@ -248,6 +269,7 @@ class LubricationEstimator(Node):
         return {name: self.get_parameter(name).value for name in PARAMETERS}
 
     def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
+        """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
         joint = values['screw_joint']
         topics = {key: join_topic(channel.name, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
@@ -257,11 +279,18 @@ class LubricationEstimator(Node):
             'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
         }
+        msg_type, convert = converters.pop('vibration')
         holder = {}
+        holder['vibration'] = self.create_subscription(
+            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
+            callback_group=self._input_group)
         for key, (msg_type, convert) in converters.items():
-            holder[key] = self.create_subscription(
-                msg_type, topics[key], self._input_callback(channel, key, convert, holder), qos,
-                callback_group=self._input_group)
+            # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
+            # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
+            subscription = self.create_subscription(
+                msg_type, topics[key], _never_called, qos, callback_group=self._drained_group,
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+            channel.auxiliary.append((key, subscription, convert))
 
     def _load_initial_calibration(self, channel: ActuatorChannel):
         path = channel.calibration_file
@@ -289,41 +318,109 @@ class LubricationEstimator(Node):
         """Node-clock time in s (sim time when use_sim_time is set)."""
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _input_callback(self, channel: ActuatorChannel, key: str, convert: Callable, subscriptions: dict):
-        """Callback of one input topic: take the message and every one queued behind it.
+    def _vibration_callback(self, channel: ActuatorChannel, convert: Callable, subscriptions: dict):
+        """Callback of one actuator's vibration topic: everything queued for the actuator, then closing.
 
-        An executor serves each ready subscription once per wait, so when the
-        node falls behind, a 1 kHz topic would lag ever further behind a 20 Hz
-        one and be judged silent by the window builder.  Draining the queue in
-        the callback keeps all topics level whatever their rates.
+        The auxiliary queues are drained with the block, and the vibration queue
+        behind it too (an executor serves each ready subscription only once per
+        wait, so a lagging node would otherwise fall ever further behind).  All
+        of it is one time slice: the builder closes windows once, after the
+        slice, so no stream is judged silent halfway through it.
         """
         def callback(msg):
             with self._lock:
-                if key == 'vibration':
-                    channel.monitor.note_input(self.now())
-                self._take(channel, key, convert, msg)
-                for queued in _drain(subscriptions.get(key), MAX_DRAIN):
-                    self._take(channel, key, convert, queued)
+                channel.monitor.note_input(self.now())
+                self._drain_auxiliary(channel)
+                self._take(channel, 'vibration', convert, msg)
+                for queued in _drain(subscriptions.get('vibration'), MAX_DRAIN):
+                    self._take(channel, 'vibration', convert, queued)
+                self._close_windows(channel)
         return callback
 
+    def _drain_auxiliary(self, channel: ActuatorChannel):
+        """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
+        channel.last_drain = time.monotonic()
+        for key, subscription, convert in channel.auxiliary:
+            messages = list(_drain(subscription, MAX_DRAIN))
+            if messages:
+                self._take_queued(channel, key, convert, messages)
+
+    def _drain_idle(self):
+        """Drain timer: the auxiliary inputs of actuators whose vibration stopped (bounded queues, staleness)."""
+        with self._lock:
+            limit = time.monotonic() - self._drain_period
+            for channel in self.channels:
+                if channel.last_drain < limit:
+                    self._drain_auxiliary(channel)
+                    self._close_windows(channel)
+
     def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
-        """Feed one message to the actuator's builder and assess the windows it closes."""
+        """Add one message to the actuator's builder (closing is left to :meth:`_close_windows`)."""
+        batch = self._convert(channel, key, convert, msg)
+        if batch is not None:
+            self._add(channel, key, batch)
+
+    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list):
+        """Add messages drained from one auxiliary queue, joined into batches while their stamps rise.
+
+        A message that cannot be read is left out and counted on its own.  A
+        stamp going back starts a new batch, so back-steps and clock resets reach
+        the builder where they happened, as with one message at a time.
+        """
+        run, last = [], -math.inf
+        for msg in messages:
+            batch = self._convert(channel, key, convert, msg)
+            if batch is None:
+                continue
+            stamp = float(batch.stamps[0]) if len(batch) == 1 else math.nan
+            if run and not stamp > last:
+                self._add(channel, key, join_batches(run))
+                run = []
+            run.append(batch)
+            last = stamp
+        if run:
+            self._add(channel, key, join_batches(run))
+
+    def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+        """The message as a one-entry batch, or None (counted, logged once per kind) when it cannot be read."""
         try:
-            channel.builder.add(convert(msg))
-            windows = channel.builder.pop_closed()
+            return convert(msg)
         except (InputError, ValueError, TypeError, IndexError) as exc:
             self._input_problem(channel, key, exc)
+        except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
+            self._internal_error(channel, key, exc)
+        return None
+
+    def _add(self, channel: ActuatorChannel, key: str, batch):
+        """Add one batch to the actuator's builder; a batch it refuses is counted and left out."""
+        try:
+            channel.builder.add(batch)
+        except (InputError, ValueError, TypeError, IndexError) as exc:
+            self._input_problem(channel, key, exc)
+        except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
+            self._internal_error(channel, key, exc)
+
+    def _close_windows(self, channel: ActuatorChannel):
+        """Close the windows every live input has passed, assess and publish them; log new input problems."""
+        try:
+            windows = channel.builder.pop_closed()
+        except (InputError, ValueError, TypeError, IndexError) as exc:
+            self._input_problem(channel, 'windows', exc)
             windows = []
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
-            if channel.input_errors.get('internal', 0) == 0:
-                self.get_logger().error(f'{channel.name}: internal error on {key} (please report): '
-                                        f'{"".join(traceback.format_exception(exc)).strip()}')
-            channel.input_errors['internal'] = channel.input_errors.get('internal', 0) + 1
+            self._internal_error(channel, 'windows', exc)
             windows = []
         for line in channel.builder.take_problems():
             self.get_logger().warning(f'{channel.name}: {line}')
         for window in windows:
             self._evaluate(channel, window)
+
+    def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception):
+        """Count an unexpected exception; log the first with its traceback."""
+        if channel.input_errors.get('internal', 0) == 0:
+            self.get_logger().error(f'{channel.name}: internal error on {key} (please report): '
+                                    f'{"".join(traceback.format_exception(exc)).strip()}')
+        channel.input_errors['internal'] = channel.input_errors.get('internal', 0) + 1
 
     def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception):
         """Count a message that could not be taken; log the first of each kind."""
@@ -517,6 +614,26 @@ class LubricationEstimator(Node):
         return SetParametersResult(successful=True)
 
 
+class DrainedCallbackGroup(ReentrantCallbackGroup):
+    """Callback group whose entities the executor never waits on: the node takes their messages itself."""
+
+    def can_execute(self, entity) -> bool:
+        """Always False: executors leave the group's entities out of their wait sets."""
+        return False
+
+
+def join_batches(batches: list):
+    """One input batch holding the entries of ``batches`` (all of one kind, one value per entry), in order."""
+    if len(batches) == 1:
+        return batches[0]
+    first = batches[0]
+    return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
+
+
+def _never_called(msg):
+    """Callback of a subscription in :class:`DrainedCallbackGroup` (its queue is drained, not spun)."""
+
+
 def _drain(subscription, limit: int):
     """Messages already queued on ``subscription`` (at most ``limit``), oldest first."""
     handle = getattr(subscription, 'handle', None)
@@ -533,8 +650,8 @@ def _drain(subscription, limit: int):
 def spin_nodes(nodes, executor=None) -> int:
     """Spin ``nodes`` until Ctrl-C or shutdown; destroy them; return 0.
 
-    One thread is enough and keeps the input topics fair (each ready
-    subscription is served once per wait): the calibration service fits on a
+    One thread is enough: the input callbacks drain their queues, so topics
+    stay level whatever their rates, and the calibration service fits on a
     worker thread of its own.
     """
     executor = executor or SingleThreadedExecutor()
