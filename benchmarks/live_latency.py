@@ -3,29 +3,34 @@
 
 Two processes per measurement, on a ROS graph of their own (random domain, loopback):
 
-* the **estimator** (:class:`LubricationEstimator`, unchanged, subclassed only to
-  read clocks) pinned with ``os.sched_setaffinity`` to CPU 0 before rclpy starts,
+* the **estimator** (:class:`LubricationEstimator`, unchanged, subclassed and its
+  callbacks wrapped only to read clocks) pinned with ``os.sched_setaffinity`` to CPU 0 before rclpy starts,
   so its executor and Fast DDS threads all share that one core;
 * a **generator** pinned to CPU 1 publishing, for each of N actuators
   (``/aNN/prsm``), 4 kHz vibration in 0.1 s blocks (10 per s), joint states at
-  100 Hz and axial load at 50 Hz, stamped with the wall clock, screw at a steady
-  20 rad/s and 150 N, so every 1 s window is steady and gets a theta_Oil.
+  100 Hz, axial load at 50 Hz and temperature at 1 Hz (161 messages per s),
+  stamped with the wall clock, screw at a steady 20 rad/s and 150 N, so every
+  1 s window is steady and gets a theta_Oil.
 
-Inside the estimator, ``arrival`` is the moment the estimator's code gets the
-message (entry of ``_take``, after rclpy has taken and deserialized it);
-``latency`` is from the arrival of the vibration block that closes a window
-to the return of that window's ``LubricationState`` ``publish()``.  ``processing``
-is the time of ``_take`` for every message (window building, assessment and
-publishing included).  ``lag`` is wall time at arrival minus the block's last
-sample time: it grows without bound once the estimator falls behind.
+Inside the estimator, ``arrival`` is the entry of an executor callback (after
+rclpy has taken and deserialized its message); ``latency`` is from the arrival
+of the callback that closes a window to the return of that window's
+``LubricationState`` ``publish()`` (whatever the callback drains from other
+queues first is inside it).  ``close delay`` is wall time at that return minus
+the window's end plus ``completion_delay``: end to end, with transport and the
+wait for the closing callback.  ``processing`` is the time of each ``_add``
+(one block, or the joint states or loads drained at once, into the window
+builder) and of each ``_close_windows`` (closing, assessment, publishing).  ``lag`` is wall time at a block's
+arrival minus its last sample time: it grows without bound once the estimator
+falls behind.
 
 N rises until the estimator falls behind: CPU > 90 % of its core, the lag's
 p99 above 0.5 s or growing, fewer than 98 % of the blocks arriving, or fewer
 than 90 % of the windows published.  Results go to
 ``benchmarks/results/live_latency.{json,md}``.
 
-Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,12,16,20,24,32]``
-(run after ``source .env-jazzy.sh``).  A last run at ``--profile-at`` actuators (default 8) under cProfile
+Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,16,24,32,40,48,56,64]``
+(run after ``source .env-jazzy.sh``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
 shows where the estimator's time goes (cProfile slows it; the shares are what counts).
 """
 from __future__ import annotations
@@ -75,8 +80,8 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator
 
     clock = time.perf_counter
-    record = {'latency': [], 'processing': {}, 'lag': [], 'lag_at': [], 'blocks': 0, 'windows': 0,
-              'take_total': 0.0}
+    record = {'latency': [], 'close_delay': [], 'callback': [], 'processing': {}, 'fed': {}, 'lag': [],
+              'lag_at': [], 'blocks': 0, 'windows': 0}
     state = {'measuring': False, 'arrival': 0.0, 'seen': 0}
 
     class Publisher:
@@ -89,23 +94,39 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
             self.inner.publish(msg)
             if state['measuring']:
                 record['latency'].append(clock() - state['arrival'])
+                stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+                record['close_delay'].append(time.time() - (stamp + delay))
                 record['windows'] += 1
 
-    class TimedEstimator(LubricationEstimator):
-        def _take(self, channel, key, convert, msg):
+    def timed_callback(inner):
+        def callback(msg):
             start = clock()
             state['arrival'] = start
-            state['seen'] += 1
-            super()._take(channel, key, convert, msg)
+            inner(msg)
             if state['measuring']:
-                took = clock() - start
-                record['processing'].setdefault(key, []).append(took)
-                record['take_total'] += took
+                record['callback'].append(clock() - start)
+        return callback
+
+    class TimedEstimator(LubricationEstimator):
+        def _add(self, channel, key, batch):
+            start = clock()
+            state['seen'] += 1
+            super()._add(channel, key, batch)
+            if state['measuring']:
+                record['processing'].setdefault(key, []).append(clock() - start)
+                record['fed'][key] = record['fed'].get(key, 0) + len(batch)
                 if key == 'vibration':
-                    stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-                    record['lag'].append(time.time() - (stamp + len(msg.samples) / msg.sample_rate))
+                    samples = int(batch.offsets[-1] - batch.offsets[-2])
+                    end = float(batch.stamps[-1]) + samples / float(batch.sample_rates[-1])
+                    record['lag'].append(time.time() - end)
                     record['lag_at'].append(time.monotonic())
-                    record['blocks'] += 1
+                    record['blocks'] += len(batch)
+
+        def _close_windows(self, channel):
+            start = clock()
+            super()._close_windows(channel)
+            if state['measuring']:
+                record['processing'].setdefault('closing', []).append(clock() - start)
 
     rclpy.init(args=['estimator'])
     node = TimedEstimator(parameter_overrides=[
@@ -115,6 +136,9 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
         Parameter('stale_timeout', value=60.0)])
     for channel in node.channels:
         channel.publisher = Publisher(channel.publisher)
+    for subscription in node.subscriptions:        # every callback the executor runs marks an arrival
+        subscription.callback = timed_callback(subscription.callback)
+    delay = node._settings.completion_delay
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     print('ready', flush=True)
@@ -166,7 +190,7 @@ def run_generator(count: int, duration: float) -> dict:
     import numpy as np
     import rclpy
     from geometry_msgs.msg import WrenchStamped
-    from sensor_msgs.msg import JointState
+    from sensor_msgs.msg import JointState, Temperature
     from prsm_lube_ros.msg import VibrationBlock
     from prsm_lube_ros.nodes.sensor_bridge import publisher_qos, time_from_ns
     from prsm_lube_ros.rig_simulator import RigConfig
@@ -178,7 +202,8 @@ def run_generator(count: int, duration: float) -> dict:
     names = actuator_names(count)
     pubs = [(node.create_publisher(VibrationBlock, f'{ns}/vibration', qos),
              node.create_publisher(JointState, f'{ns}/joint_states', qos),
-             node.create_publisher(WrenchStamped, f'{ns}/axial_load', qos)) for ns in names]
+             node.create_publisher(WrenchStamped, f'{ns}/axial_load', qos),
+             node.create_publisher(Temperature, f'{ns}/temperature', qos)) for ns in names]
     rms = float(acceleration_amplitude(SPEED, LOAD, THETA, RigConfig().constants))
     rng = np.random.default_rng(0)
     size = int(RATE * BLOCK)
@@ -191,9 +216,13 @@ def run_generator(count: int, duration: float) -> dict:
     while any(p[0].get_subscription_count() == 0 for p in pubs) and time.monotonic() < deadline:
         time.sleep(0.05)
     time.sleep(0.5)
-    sent = {'vibration': 0, 'joint_states': 0, 'axial_load': 0}
+    sent = {'vibration': 0, 'joint_states': 0, 'axial_load': 0, 'temperature': 0}
     late_ticks, tick, period = 0, 0, 0.01
-    start_wall, start = time.time_ns(), time.monotonic()
+    # Blocks on the 0.1 s grid, as the windows are on theirs: the close delay does not depend on when a run starts.
+    now_ns = time.time_ns()
+    start_wall = -(-now_ns // int(BLOCK * 1e9)) * int(BLOCK * 1e9)
+    time.sleep((start_wall - now_ns) * 1e-9)
+    start = time.monotonic()
     stop = start + duration
     while True:
         due = start + tick * period
@@ -207,7 +236,7 @@ def run_generator(count: int, duration: float) -> dict:
         stamp_ns = start_wall + int(round(tick * period * 1e9))
         angle = SPEED * tick * period
         stamp = time_from_ns(stamp_ns)
-        for k, (vibration, joints, load) in enumerate(pubs):
+        for k, (vibration, joints, load, temperature) in enumerate(pubs):
             msg = JointState(name=['screw'], position=[angle], velocity=[SPEED])
             msg.header.stamp = stamp
             joints.publish(msg)
@@ -218,6 +247,11 @@ def run_generator(count: int, duration: float) -> dict:
                 wrench.wrench.force.z = -LOAD
                 load.publish(wrench)
                 sent['axial_load'] += 1
+            if tick % 100 == 0:
+                reading = Temperature(temperature=31.0)
+                reading.header.stamp = stamp
+                temperature.publish(reading)
+                sent['temperature'] += 1
             if tick % 10 == 0 and tick > 0:
                 block = VibrationBlock()
                 block.header.stamp = time_from_ns(stamp_ns - int(BLOCK * 1e9))
@@ -268,15 +302,22 @@ def measure(count: int, duration: float, profile: bool = False) -> dict:
     lag, lag_at = record['lag'], record['lag_at']
     slope = float(np.polyfit(lag_at, lag, 1)[0]) if len(lag) > 10 else math.nan
     processing = {key: dict(zip(('p50_ms', 'p99_ms'), [v * 1e3 for v in _percentiles(values, 50, 99)]),
-                            count=len(values)) for key, values in record['processing'].items()}
+                            count=len(values), messages=record['fed'].get(key, 0))
+                  for key, values in record['processing'].items()}
     summary = {
         'actuators': count,
         'cpu_utilisation': record['cpu_seconds'] / wall,
         'latency_p50_ms': _percentiles(record['latency'], 50)[0] * 1e3,
         'latency_p99_ms': _percentiles(record['latency'], 99)[0] * 1e3,
         'latency_max_ms': max(record['latency']) * 1e3 if record['latency'] else math.nan,
+        'close_delay_p50_ms': _percentiles(record['close_delay'], 50)[0] * 1e3,
+        'close_delay_p99_ms': _percentiles(record['close_delay'], 99)[0] * 1e3,
+        'callbacks_per_s': len(record['callback']) / wall,
+        'callback_p50_ms': _percentiles(record['callback'], 50)[0] * 1e3,
+        'callback_p99_ms': _percentiles(record['callback'], 99)[0] * 1e3,
         'processing': processing,
-        'take_share_of_cpu': record['take_total'] / record['cpu_seconds'] if record['cpu_seconds'] else math.nan,
+        'callbacks_share_of_cpu': sum(record['callback']) / record['cpu_seconds'] if record['cpu_seconds']
+        else math.nan,
         'lag_p50_s': _percentiles(lag, 50)[0], 'lag_p99_s': _percentiles(lag, 99)[0],
         'lag_slope_s_per_s': slope,
         'blocks_received_fraction': record['blocks'] / (count * wall / BLOCK),
@@ -307,23 +348,34 @@ def markdown(results: dict) -> str:
              f'{results["python"]}, {results["cpus"]} CPUs; estimator pinned to CPU {ESTIMATOR_CPU} (executor and '
              f'Fast DDS threads), generator to CPU {GENERATOR_CPU}; {results["duration"]:g} s measured per level '
              f'after {WARM_UP:g} s warm-up. Per actuator: 4 kHz vibration in 0.1 s blocks, joint states 100 Hz, '
-             'load 50 Hz; 1 s windows, each published with a theta_Oil.', '',
-             'Latency: arrival of the window-closing VibrationBlock in the estimator\'s code (entry of `_take`, '
-             'after rclpy took and deserialized it) to the return of the LubricationState `publish()`. '
-             'Processing: `_take` of one message (windowing, assessment, publishing). Lag: wall time at arrival '
-             'minus the block\'s last sample time.', '',
-             '| actuators | CPU of its core | latency p50 ms | latency p99 ms | block p50 ms | block p99 ms | '
-             'joint p50 ms | load p50 ms | _take share of CPU | lag p99 s | lag slope s/s | blocks in | '
-             'windows out | generator kept up | falls behind |',
-             '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|']
+             'load 50 Hz, temperature 1 Hz; 1 s windows, each published with a theta_Oil.', '',
+             'Latency: entry of the executor callback that closes a window (after rclpy took and deserialized '
+             'its message; any queues the callback drains are inside the latency) to the return of the '
+             'LubricationState `publish()`. Close delay: wall time at that return minus (window end + '
+             'completion_delay), the earliest moment every input of the window can have been sent; it also '
+             'counts transport, waiting for the closing callback, and one block (0.1 s): a stream has passed a '
+             'time when its last sample has, and the block ending on end + completion_delay ends a quarter of a ms '
+             'short of it (blocks are generated on the 0.1 s grid). Callbacks: input callbacks the executor ran '
+             'per s, their duration, and their share of the process\'s CPU time (the rest is rclpy\'s executor, '
+             'deserialization and DDS). Block, joint, load: one `_add` to the window builder of one block, or of '
+             'the joint states or loads drained at once; closing: one `_close_windows` (closing, assessment, '
+             'publishing). Lag: wall time at a block\'s arrival '
+             'minus its last sample time.', '',
+             '| actuators | CPU of its core | latency p50 ms | latency p99 ms | close delay p50 ms | '
+             'close delay p99 ms | callbacks /s | callback p50 ms | callback p99 ms | block p50 ms | '
+             'joint p50 ms | load p50 ms | closing p50 ms | callbacks share of CPU | lag p99 s | lag slope s/s | '
+             'blocks in | windows out | generator kept up | falls behind |',
+             '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|']
     for r in results['levels']:
         p = r['processing']
         lines.append(
             f'| {r["actuators"]} | {100 * r["cpu_utilisation"]:.0f} % | {r["latency_p50_ms"]:.2f} | '
-            f'{r["latency_p99_ms"]:.2f} | {p.get("vibration", {}).get("p50_ms", math.nan):.3f} | '
-            f'{p.get("vibration", {}).get("p99_ms", math.nan):.3f} | '
+            f'{r["latency_p99_ms"]:.2f} | {r["close_delay_p50_ms"]:.1f} | {r["close_delay_p99_ms"]:.1f} | '
+            f'{r["callbacks_per_s"]:.0f} | {r["callback_p50_ms"]:.3f} | {r["callback_p99_ms"]:.3f} | '
+            f'{p.get("vibration", {}).get("p50_ms", math.nan):.3f} | '
             f'{p.get("joint_states", {}).get("p50_ms", math.nan):.3f} | '
-            f'{p.get("axial_load", {}).get("p50_ms", math.nan):.3f} | {100 * r["take_share_of_cpu"]:.0f} % | '
+            f'{p.get("axial_load", {}).get("p50_ms", math.nan):.3f} | '
+            f'{p.get("closing", {}).get("p50_ms", math.nan):.3f} | {100 * r["callbacks_share_of_cpu"]:.0f} % | '
             f'{r["lag_p99_s"]:.3f} | {r["lag_slope_s_per_s"]:.4f} | {100 * r["blocks_received_fraction"]:.1f} % | '
             f'{100 * r["windows_published_fraction"]:.1f} % | {"yes" if r["generator_kept_up"] else "NO"} | '
             f'{", ".join(r["behind"]) or "no"} |')
@@ -345,8 +397,8 @@ def main(argv=None) -> int:
     """Run the levels (or one role of a measurement, when called by itself) and write the results."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--duration', type=float, default=8.0, help='s measured per level')
-    parser.add_argument('--levels', default='1,4,8,12,16,20,24,32', help='actuator counts, in rising order')
-    parser.add_argument('--profile-at', type=int, default=8, help='actuators of the profiled run (0: none)')
+    parser.add_argument('--levels', default='1,4,8,16,24,32,40,48,56,64', help='actuator counts, in rising order')
+    parser.add_argument('--profile-at', type=int, default=32, help='actuators of the profiled run (0: none)')
     parser.add_argument('--profile', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--role', choices=('estimator', 'generator'), help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, help=argparse.SUPPRESS)
