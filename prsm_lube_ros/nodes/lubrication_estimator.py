@@ -119,15 +119,16 @@ PARAMETERS = {
     'calibrate_service': ('/prsm/calibrate', _STRING, 'calibration service of the first actuator (each '
                           'actuator also has <ns>/calibrate)', None, True),
     'screw_joint': ('screw', _STRING, 'name of the screw entry in JointState', None, True),
-    'qos_depth': (500, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data)',
-                  (1, 100000), True),
+    'qos_depth': (500, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data); joint '
+                  'states, load and temperature are taken once per vibration block (at most every 0.2 s without '
+                  'vibration), so it must hold what a topic brings meanwhile', (1, 100000), True),
 }
 
 #: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
 MAX_DRAIN = 5000
-#: Longest time in s an auxiliary queue waits for a drain when no vibration arrives (the queue must hold
-#: what arrives meanwhile: 200 messages of a 1 kHz joint_states topic, qos_depth is 500).
-DRAIN_PERIOD = 0.2
+#: Period in s of the drain timer: an actuator's auxiliary queues not drained for this long are drained,
+#: so without vibration a queue holds at most 2 periods (200 messages of a 1 kHz topic; qos_depth is 500).
+DRAIN_PERIOD = 0.1
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
                      'stream_timeout')
