@@ -40,8 +40,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import rclpy
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
-    SetParametersResult
+from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -53,6 +52,7 @@ from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
 from .calibration_request import calibrate_from_request, recordings_folder
+from .parameters import declare_parameter_table
 from ..actuator import load_actuator
 from ..assessment import Assessor
 from ..calibration import Calibration
@@ -207,15 +207,7 @@ class LubricationEstimator(Node):
         super().__init__(node_name, **kwargs)
         self._lock = threading.RLock()
         self._fit_lock = threading.Lock()
-        for name, (default, ptype, description, bounds, read_only) in PARAMETERS.items():
-            descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
-            if bounds and ptype == _DOUBLE:
-                descriptor.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]),
-                                                                      to_value=float(bounds[1]))]
-            elif bounds and ptype == _INTEGER:
-                descriptor.integer_range = [IntegerRange(from_value=int(bounds[0]), to_value=int(bounds[1]),
-                                                         step=1)]
-            self.declare_parameter(name, default, descriptor)
+        declare_parameter_table(self, PARAMETERS)
         values = self._values()
         self._settings = window_settings(values)
         self._thresholds = health_thresholds(values)

@@ -40,8 +40,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import rclpy
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
-    SetParametersResult
+from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -50,6 +49,7 @@ from sensor_msgs.msg import JointState, Temperature
 
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
+from .parameters import declare_parameter_table
 from ..bag_reader import open_recording, topic_name
 from ..errors import InputError
 from ..msg import VibrationBlock
@@ -187,16 +187,7 @@ class SensorBridge(Node):
 
     def __init__(self, node_name: str = NODE_NAME, **kwargs):
         super().__init__(node_name, **kwargs)
-        for name, (default, ptype, description, bounds, read_only) in PARAMETERS.items():
-            descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
-            if bounds and ptype == _DOUBLE:
-                descriptor.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]),
-                                                                      to_value=float(bounds[1]))]
-            elif bounds and ptype == _INTEGER:
-                descriptor.integer_range = [IntegerRange(from_value=int(bounds[0]), to_value=int(bounds[1]),
-                                                         step=1)]
-            self.declare_parameter(name, default, descriptor)
-        values = {name: self.get_parameter(name).value for name in PARAMETERS}
+        values = declare_parameter_table(self, PARAMETERS)
         self.source = str(values['source']).strip()
         if self.source not in SOURCES:
             raise InputError(f'parameter source: {self.source!r} is not one of {", ".join(SOURCES)}')
@@ -401,11 +392,14 @@ class SensorBridge(Node):
 
     def destroy_node(self):
         """Stop the worker (and the acquisition) before the node goes."""
-        self._stop.set()
-        if self._thread.is_alive() and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5.0)
-        if self._daq is not None:
-            self._daq.close()
+        # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
+        stop, thread, daq = (getattr(self, name, None) for name in ('_stop', '_thread', '_daq'))
+        if stop is not None:
+            stop.set()
+        if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+            thread.join(timeout=5.0)
+        if daq is not None:
+            daq.close()
         return super().destroy_node()
 
 
