@@ -192,7 +192,8 @@ def run_generator(count: int, duration: float) -> dict:
     from geometry_msgs.msg import WrenchStamped
     from sensor_msgs.msg import JointState, Temperature
     from prsm_lube_ros.msg import VibrationBlock
-    from prsm_lube_ros.nodes.sensor_bridge import publisher_qos, time_from_ns
+    from prsm_lube_ros.nodes.ros_convert import time_from_ns
+    from prsm_lube_ros.nodes.sensor_bridge import publisher_qos
     from prsm_lube_ros.rig_simulator import RigConfig
     from prsm_lube_ros.vibration_model import acceleration_amplitude
 

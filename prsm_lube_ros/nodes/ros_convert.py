@@ -9,8 +9,9 @@ the sensor bridge and the tests.  A message that cannot be read raises
 """
 from __future__ import annotations
 
+import array
 import math
-from typing import Iterable
+from typing import Iterable, Union
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -52,6 +53,20 @@ def time_msg(seconds: float) -> Time:
     return Time(sec=total // 1_000_000_000, nanosec=total % 1_000_000_000)
 
 
+def time_from_ns(stamp_ns: int) -> Time:
+    """Integer ns since the epoch as ``builtin_interfaces/Time`` (exact, for stamps replayed bit for bit)."""
+    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+#: A header stamp given as float seconds or as a ready ``Time``.
+Stamp = Union[float, Time]
+
+
+def _header_time(stamp: Stamp) -> Time:
+    return stamp if isinstance(stamp, Time) else time_msg(float(stamp))
+
+
 # -- inputs -> batches ------------------------------------------------------------------------------
 def vibration_batch(msg: VibrationBlock, topic: str = 'vibration') -> VibrationBatch:
     """One ``VibrationBlock`` as a batch (bad rates or samples are judged by the window builder)."""
@@ -86,39 +101,44 @@ def temperature_batch(msg: Temperature, topic: str = 'temperature') -> Temperatu
 
 
 # -- batches -> inputs (sensor bridge, tests) --------------------------------------------------------
-def vibration_block_msg(stamp: float, sample_rate: float, samples, frame_id: str = '') -> VibrationBlock:
-    """A ``VibrationBlock`` with samples (m/s^2) acquired from ``stamp`` (s) at ``sample_rate`` (Hz)."""
+def vibration_block_msg(stamp: Stamp, sample_rate: float, samples, frame_id: str = '') -> VibrationBlock:
+    """A ``VibrationBlock`` with samples (m/s^2) acquired from ``stamp`` at ``sample_rate`` (Hz).
+
+    The samples go in as one float32 copy (``array.array``, rclpy's fast path).
+    """
     msg = VibrationBlock()
-    msg.header.stamp = time_msg(stamp)
+    msg.header.stamp = _header_time(stamp)
     msg.header.frame_id = frame_id
     msg.sample_rate = float(sample_rate)
-    msg.samples = np.ascontiguousarray(samples, dtype=np.float32)
+    values = array.array('f')
+    values.frombytes(np.ascontiguousarray(samples, dtype=np.float32).tobytes())
+    msg.samples = values
     return msg
 
 
-def joint_state_msg(stamp: float, angle: float, speed: float, joint: str = SCREW_JOINT) -> JointState:
+def joint_state_msg(stamp: Stamp, angle: float, speed: float, joint: str = SCREW_JOINT) -> JointState:
     """A ``JointState`` with one entry: screw angle (rad) and speed (rad/s)."""
     msg = JointState()
-    msg.header.stamp = time_msg(stamp)
+    msg.header.stamp = _header_time(stamp)
     msg.name = [joint]
     msg.position = [float(angle)]
     msg.velocity = [float(speed)]
     return msg
 
 
-def wrench_msg(stamp: float, force: float, frame_id: str = '') -> WrenchStamped:
+def wrench_msg(stamp: Stamp, force: float, frame_id: str = '') -> WrenchStamped:
     """A ``WrenchStamped`` carrying the axial load (N) in ``wrench.force.z``."""
     msg = WrenchStamped()
-    msg.header.stamp = time_msg(stamp)
+    msg.header.stamp = _header_time(stamp)
     msg.header.frame_id = frame_id
     msg.wrench.force.z = float(force)
     return msg
 
 
-def temperature_msg(stamp: float, temperature: float, frame_id: str = '') -> Temperature:
+def temperature_msg(stamp: Stamp, temperature: float, frame_id: str = '') -> Temperature:
     """A ``Temperature`` reading in degC."""
     msg = Temperature()
-    msg.header.stamp = time_msg(stamp)
+    msg.header.stamp = _header_time(stamp)
     msg.header.frame_id = frame_id
     msg.temperature = float(temperature)
     return msg

@@ -29,16 +29,13 @@ whereas a best-effort writer would be silently ignored by a reliable reader;
 """
 from __future__ import annotations
 
-import array
 import math
 import sys
 import threading
 import time
 import traceback
 
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
-import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -50,6 +47,7 @@ from sensor_msgs.msg import JointState, Temperature
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .parameters import declare_parameter_table
+from .ros_convert import joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg, wrench_msg
 from ..bag_reader import open_recording, topic_name
 from ..errors import InputError
 from ..msg import VibrationBlock
@@ -57,7 +55,6 @@ from ..rig_simulator import load_rig_config, RigSignalGenerator
 
 NODE_NAME = 'sensor_bridge'
 SOURCES = ('playback', 'simulator', 'hardware')
-_NS = 1_000_000_000
 
 _BOOL = ParameterType.PARAMETER_BOOL
 _DOUBLE = ParameterType.PARAMETER_DOUBLE
@@ -119,52 +116,6 @@ PARAMETERS = {
                          '<namespace>/axial_load (empty: none)', None, True),
 }
 SIMULATOR_PARAMETERS = ('speed', 'load', 'theta_oil')
-
-
-def time_from_ns(stamp_ns: int) -> Time:
-    """Int ns since the epoch as ``builtin_interfaces/Time``."""
-    sec, nanosec = divmod(int(stamp_ns), _NS)
-    return Time(sec=sec, nanosec=nanosec)
-
-
-def vibration_block(stamp_ns: int, sample_rate: float, samples, frame_id: str) -> VibrationBlock:
-    """A VibrationBlock; samples (m/s^2) go in as one float32 copy."""
-    msg = VibrationBlock()
-    msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = frame_id
-    msg.sample_rate = float(sample_rate)
-    values = array.array('f')
-    values.frombytes(np.ascontiguousarray(samples, dtype=np.float32).tobytes())
-    msg.samples = values
-    return msg
-
-
-def joint_state(stamp_ns: int, angle: float, speed: float, joint: str = 'screw') -> JointState:
-    """A JointState with the screw's angle (rad) and speed (rad/s)."""
-    msg = JointState()
-    msg.header.stamp = time_from_ns(stamp_ns)
-    msg.name = [joint]
-    msg.position = [float(angle)]
-    msg.velocity = [float(speed)]
-    return msg
-
-
-def axial_load(stamp_ns: int, force: float, frame_id: str = '') -> WrenchStamped:
-    """A WrenchStamped with the axial load (N, sign kept) in ``wrench.force.z``."""
-    msg = WrenchStamped()
-    msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = frame_id
-    msg.wrench.force.z = float(force)
-    return msg
-
-
-def temperature(stamp_ns: int, value: float, frame_id: str = '') -> Temperature:
-    """A Temperature reading in degC."""
-    msg = Temperature()
-    msg.header.stamp = time_from_ns(stamp_ns)
-    msg.header.frame_id = frame_id
-    msg.temperature = float(value)
-    return msg
 
 
 def publisher_qos(reliability: str, depth: int) -> QoSProfile:
@@ -346,20 +297,21 @@ class SensorBridge(Node):
         try:
             while not self._stop.is_set():
                 stamp_ns, samples = daq.read_block()
-                vibration.publish(vibration_block(stamp_ns, settings.sample_rate, samples, self.frame_id))
+                block = vibration_block_msg(time_from_ns(stamp_ns), settings.sample_rate, samples, self.frame_id)
+                vibration.publish(block)
                 self.messages_published += 1
         finally:
             daq.close()
 
     def _publish(self, kind: str, stamp_ns: int, payload: tuple):
         if kind == 'vibration':
-            msg = vibration_block(stamp_ns, payload[0], payload[1], self.frame_id)
+            msg = vibration_block_msg(time_from_ns(stamp_ns), payload[0], payload[1], self.frame_id)
         elif kind == 'joint_states':
-            msg = joint_state(stamp_ns, *payload)
+            msg = joint_state_msg(time_from_ns(stamp_ns), *payload)
         elif kind == 'axial_load':
-            msg = axial_load(stamp_ns, payload[0], getattr(self, '_load_frame', ''))
+            msg = wrench_msg(time_from_ns(stamp_ns), payload[0], getattr(self, '_load_frame', ''))
         else:
-            msg = temperature(stamp_ns, payload[0], getattr(self, '_temperature_frame', ''))
+            msg = temperature_msg(time_from_ns(stamp_ns), payload[0], getattr(self, '_temperature_frame', ''))
         publisher = self._outputs.get(kind)
         if publisher is not None:
             publisher.publish(msg)
