@@ -11,9 +11,8 @@ from dataclasses import asdict, dataclass, fields, replace
 import math
 from pathlib import Path
 
-import yaml
-
 from .errors import InputError
+from .yaml_file import read_yaml
 
 
 @dataclass(frozen=True)
@@ -86,12 +85,7 @@ def load_actuator(path: str | Path | None = None) -> Actuator:
     if path is None:
         return Actuator()
     path = Path(path)
-    try:
-        document = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise InputError(f'{path}: cannot read actuator file ({exc.strerror})') from None
-    except yaml.YAMLError as exc:
-        raise InputError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
+    document = read_yaml(path, 'actuator file')
     section = (document or {}).get('actuator', document) if isinstance(document, dict) else None
     if not isinstance(section, dict):
         raise InputError(f'{path}: expected a mapping under "actuator:"')

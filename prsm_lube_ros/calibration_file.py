@@ -18,6 +18,7 @@ import yaml
 from .calibration import Calibration
 from .errors import InputError
 from .vibration_model import ModelConstants
+from .yaml_file import read_yaml
 
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
@@ -99,14 +100,7 @@ def save_calibration(calibration: Calibration, path: str | Path) -> Path:
 def load_calibration(path: str | Path) -> Calibration:
     """Read a calibration file; one-line :class:`InputError` naming the file for anything wrong."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f'{path}: calibration file not found') from None
-    except OSError as exc:
-        raise InputError(f'{path}: cannot read calibration ({exc.strerror or exc})') from None
-    except yaml.YAMLError as exc:
-        raise InputError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
+    data = read_yaml(path, 'calibration file')
     if not isinstance(data, dict):
         raise InputError(f'{path}: not a prsm_lube_ros calibration (expected a mapping)')
     return calibration_from_dict(data, str(path))

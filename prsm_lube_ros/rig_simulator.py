@@ -36,7 +36,6 @@ from typing import Callable, Iterator, Sequence
 
 import numpy as np
 from scipy.signal import iirpeak, lfilter
-import yaml
 
 from .actuator import Actuator, load_actuator
 from .bag_writer import ContractBagWriter, bag_path, check_storage
@@ -45,6 +44,7 @@ from .kinematics import roller_revolution_speed
 from .sim_effects import (EFFECT_IDS, Effects, draw_background_vibration, draw_lubricant_depletion,
                           draw_position_dependent_stiffness, draw_resonance, draw_thermal_viscosity)
 from .vibration_model import ModelConstants, acceleration_amplitude
+from .yaml_file import read_yaml
 
 RPM = 2.0 * math.pi / 60.0
 #: Harmonic order placeholder for the roller-pass order ``roller_count omega_P / omega_S`` (Eq. 1).
@@ -235,12 +235,7 @@ def _number(name: str, value) -> float:
 
 def _read_section(path: str | Path, section: str) -> tuple[dict, Path]:
     path = Path(path)
-    try:
-        document = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise InputError(f'{path}: cannot read rig simulator file ({exc.strerror})') from None
-    except yaml.YAMLError as exc:
-        raise InputError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
+    document = read_yaml(path, 'rig simulator file')
     root = document.get('rig_simulator', document) if isinstance(document, dict) else None
     if not isinstance(root, dict):
         raise InputError(f'{path}: expected a mapping under "rig_simulator:"')

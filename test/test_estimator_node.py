@@ -37,6 +37,7 @@ from prsm_lube_ros.vibration_model import acceleration_amplitude, film_speed_loa
 from prsm_lube_ros.windowing import WindowBuilder, WindowSettings  # noqa: E402
 
 import synthetic_inputs  # noqa: E402
+from polling import wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(60)]
 
@@ -174,16 +175,6 @@ class Graph:
         for node in self.nodes + [self.probe]:
             node.destroy_node()
         rclpy.try_shutdown(context=self.context)
-
-
-def wait_for(predicate, timeout, what):
-    """Poll ``predicate`` until true; fail with ``what`` after ``timeout`` s."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.02)
-    raise AssertionError(f'timed out after {timeout} s waiting for: {what}')
 
 
 @pytest.fixture

@@ -38,6 +38,7 @@ from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # no
 from prsm_lube_ros.nodes.sensor_bridge import publisher_qos, SensorBridge  # noqa: E402
 from prsm_lube_ros.rig_simulator import ExperimentPlan, RigConfig, simulate_experiment  # noqa: E402
 from prsm_lube_ros.windowing import WindowSettings  # noqa: E402
+from polling import wait_for, settle  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -148,28 +149,6 @@ def graph():
         yield g
     finally:
         g.close()
-
-
-def wait_for(predicate, timeout, what):
-    """Poll ``predicate`` until true; fail with ``what`` after ``timeout`` s."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.02)
-    raise AssertionError(f'timed out after {timeout} s waiting for: {what}')
-
-
-def settle(items, quiet=1.0, timeout=20.0):
-    """Wait until ``items`` stops growing for ``quiet`` s."""
-    deadline = time.monotonic() + timeout
-    count, since = len(items), time.monotonic()
-    while time.monotonic() < deadline:
-        time.sleep(0.05)
-        if len(items) != count:
-            count, since = len(items), time.monotonic()
-        elif time.monotonic() - since > quiet:
-            return
 
 
 def stop_process(process):

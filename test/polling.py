@@ -1,0 +1,24 @@
+"""Waiting on a live ROS graph in tests: poll a condition with a deadline, never a bare sleep."""
+import time
+
+
+def wait_for(predicate, timeout, what):
+    """Poll ``predicate`` until true; fail with ``what`` after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f'timed out after {timeout} s waiting for: {what}')
+
+
+def settle(items, quiet=1.0, timeout=20.0):
+    """Wait until ``items`` stops growing for ``quiet`` s (or ``timeout`` s pass)."""
+    deadline = time.monotonic() + timeout
+    count, since = len(items), time.monotonic()
+    while time.monotonic() < deadline:
+        time.sleep(0.05)
+        if len(items) != count:
+            count, since = len(items), time.monotonic()
+        elif time.monotonic() - since > quiet:
+            return
