@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """pip installation of prsm_lube_ros without colcon (core, command line, nodes).
 
 In a ROS 2 workspace ``colcon build`` builds this package through

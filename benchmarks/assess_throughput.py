@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Assessment throughput on a one-hour 4 kHz recording, beside the bare read, and peak memory.
 
 The recordings are the rig simulator's endurance bags (the six conditions of

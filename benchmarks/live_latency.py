@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Live estimator: block-arrival-to-publish latency, and how many 4 kHz actuators one core serves.
 
 Two processes per measurement, on a ROS graph of their own (random domain, loopback):

@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Micro benchmark of the recording reader on a one-hour, 4 kHz recording.
 
 The recording (written once with rosbags' Writer, storage mcap, its defaults:

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Bring-up: the sensor bridge and the lubrication estimator with the package's config/*.yaml.
 
     ros2 launch prsm_lube_ros prsm_lube.launch.py [bridge:=false] [use_sim_time:=true]

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Lubrication assessment of planetary roller screws (theta_Oil) for ROS 2.
 
 The physics, statistics and recording handling in this package import no ROS

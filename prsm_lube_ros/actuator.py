@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Actuator geometry, materials and lubricant: the inputs of the paper's model.
 
 Every quantity is SI (m, rad, N, Pa, Pa*s, 1/Pa); temperatures are degC as in

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Recordings in, windows, calibrations and assessments out: the offline pipeline.
 
 This is what ``prsm-lube calibrate | assess`` and the calibration service run.

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """theta_Oil and its one-sigma uncertainty for windows and runs (Eq. 23).
 
 Uncertainty is propagated to first order from two sources:

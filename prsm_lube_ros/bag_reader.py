@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Recordings (rosbag2 directories, bare ``.mcap`` files) in, numpy batches of the contract's topics out.
 
 ::

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Writing contract recordings (rosbag2) with :mod:`rosbags`, no ROS install needed.
 
 Three storage forms, as CONTRACT.md accepts them:

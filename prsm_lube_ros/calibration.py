@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Least-squares fit of C_sys, C_F and C_lambda on windows at a known theta_Oil.
 
 With theta_Oil known, Eq. 22 is linear in ``p = (ln C_sys, C_F, C_lambda)``::

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Calibration files: YAML with the constants, their uncertainty and the fit's record.
 
 Writes are atomic: the new content goes to a temporary file in the same folder,

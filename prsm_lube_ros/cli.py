@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``prsm-lube``: simulate, calibrate, assess and diagnose recordings from the command line.
 
 User errors (a missing or broken recording, data that cannot calibrate, a bad

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Hertzian point contact of the screw-roller threads (Eq. 16-17).
 
 Assumed geometry (the paper gives none; this is the usual PRSM one):

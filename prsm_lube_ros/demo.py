@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The main job end to end: the paper's experiment simulated, calibrated and assessed.
 
 1. The rig simulator records the paper's experiment: 3 speeds x 2 loads after each of

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The one exception type for problems with what a user gave us.
 
 An :class:`InputError` carries a single line that names the input (a file, a

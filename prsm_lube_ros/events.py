@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Samples of the contract's input topics as numpy batches, no ROS types.
 
 Recordings (:mod:`prsm_lube_ros.bag_reader`) and live subscriptions

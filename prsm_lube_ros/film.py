@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Lubricant film of the screw-roller thread contact (Eq. 8-12) and oil viscosity vs temperature.
 
 Units: viscosity in Pa s, speeds in m/s (sliding) or rad/s (screw), forces in

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Diagnostic level of one actuator's lubrication: thresholds, hysteresis, staleness.
 
 Pure logic, no ROS import: the estimator node feeds it each window's theta_Oil

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The contract's message layouts for rosbags, without a ROS install.
 
 ``msg/*.msg`` and ``srv/*.srv`` at the package root are the single source of

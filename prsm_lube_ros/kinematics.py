@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Screw-roller kinematics and the thread-contact sliding velocity (Eq. 1-7).
 
 Units: angular speeds in rad/s, diameters and deformations in m, angles in

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Figures like the paper's Fig. 5: RMS and theta_Oil per operating condition and lubrication stage."""
 from __future__ import annotations
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Simulated test rig of the paper: contract recordings with a known truth.
 
 The rig turns the screw of the default actuator through the paper's

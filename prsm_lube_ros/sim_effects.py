@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Physical effects the paper's model leaves out, as the rig simulator's *truth*.
 
 Each effect is a frozen dataclass of physical parameters (SI) with the

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """One-degree-of-freedom vibration model and the lubrication index (Eq. 13-15, 18-23).
 
 Units: screw speed omega_S in rad/s, axial load F_a in N, acceleration

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Streaming windows over the inputs: RMS, speed, load and run of each window.
 
 The same :class:`WindowBuilder` serves recordings and live topics, so a replay

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Reading the package's YAML files with one-line errors that name the file."""
 from __future__ import annotations
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Write small recordings of the contract's topics with rosbags, for tests and benchmarks.
 
 Values follow closed forms so tests can check decoded data against them:

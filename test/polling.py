@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Waiting on a live ROS graph in tests: poll a condition with a deadline, never a bare sleep."""
 import time
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Synthetic input batches with known answers, for tests without recordings."""
 import math
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Actuator configuration: the shipped file, the contract's defaults and bad files."""
 import math
 from pathlib import Path

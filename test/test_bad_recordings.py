@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """A recording carrying every bad input of the foundation issue, assessed end to end.
 
 A clean simulated stage is copied message by message with defects written in:

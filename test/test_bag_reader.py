@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Reading recordings: every storage format, foreign type names, bad files, and fast == rosbags decoding.
 
 Recordings are written by ``bagfactory`` with closed-form values (see its

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Contract bags written by prsm_lube_ros.bag_writer read back with rosbags' AnyReader."""
 from pathlib import Path
 

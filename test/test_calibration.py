@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Least-squares calibration, its refusals, calibration files and theta_Oil with uncertainty."""
 import math
 

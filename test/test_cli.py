@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """prsm-lube end to end on simulated recordings, and its one-line errors."""
 import json
 import math

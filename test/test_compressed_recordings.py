@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Chunk-compressed (zstd) recordings give the same windows as uncompressed ones."""
 from prsm_lube_ros.actuator import Actuator
 from prsm_lube_ros.analysis import recording_windows

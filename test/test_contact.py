@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Eq. 16-17: Hertz contact of the thread flanks, against closed forms and hand values."""
 import math
 

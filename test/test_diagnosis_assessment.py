@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """theta_Oil assessed through the chosen extension lands closer to the truth than with the paper's model."""
 import dataclasses
 

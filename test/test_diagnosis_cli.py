@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """prsm-lube diagnose end to end on small recordings of the rig simulator."""
 import json
 

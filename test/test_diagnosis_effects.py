@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Candidate effects: registry and each effect's equations against hand-worked values."""
 import math
 from types import SimpleNamespace

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Diagnosis on window tables generated directly (no bags): verdicts, gains, ties and the JSON document."""
 import dataclasses
 import json

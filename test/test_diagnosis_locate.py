@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Locating the mismatch: covariate tests and fixed spectral lines on hand-made tables."""
 import numpy as np
 import pytest

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The lubrication_estimator node on a real ROS graph (rclpy + Fast DDS on loopback).
 
 Inputs are synthetic runs with a known RMS (a whole number of sine periods per

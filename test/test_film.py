@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Eq. 8-12: Hamrock-Dowson film, starvation, film ratio and viscosity, against hand values."""
 import math
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Diagnostic levels from theta_Oil: thresholds, hysteresis, NaN windows and staleness."""
 import math
 

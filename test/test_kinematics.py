@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Eq. 1-7: roller speeds, contact velocities and the sliding velocity, against hand values."""
 import math
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """A parameter override that breaks its declared range ends a node with one line, not a traceback."""
 import subprocess
 import sys

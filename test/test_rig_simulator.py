@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The simulated rig: Eq. 22 levels, schedule, sensors, effects, recordings, reproducibility.
 
 Expected values are worked out here from closed forms (Eq. 22 written out by

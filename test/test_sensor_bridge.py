@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The sensor_bridge node on a real ROS graph (rclpy + Fast DDS on loopback).
 
 A short simulated stage (two runs) is replayed at 8x to the lubrication

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The sensor bridge's ROS-free parts: exact stamps, event order, pacing, and NI-DAQmx through a fake module."""
 import math
 import sys

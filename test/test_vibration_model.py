@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Eq. 22-23 of vibration_model: hand value, exact inversion, linear form and NaN behaviour."""
 import math
 import warnings

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """WindowBuilder against a straightforward per-sample computation; Assessor's array path against Eq. 23.
 
 The reference below takes each sample and message on its own: it puts it in

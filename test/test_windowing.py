@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Windows, runs and steady parts from input batches, and bad input on the way."""
 import math
 

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``prsm-lube diagnose``: find the physics the paper's model leaves out, name it, model it, refit, show it.
 
 Public API::

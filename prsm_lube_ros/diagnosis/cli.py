@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``prsm-lube diagnose``: the subcommand (plugged into :mod:`prsm_lube_ros.cli` by ``add_command``)."""
 from __future__ import annotations
 

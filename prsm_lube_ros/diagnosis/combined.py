@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Two effects at once: used to test whether each adds anything given the other."""
 from __future__ import annotations
 

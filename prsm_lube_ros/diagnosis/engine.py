@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
 
 A candidate *earns its extra parameters* when, with physical constants

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """A calibration's model extension applied in assessment: back to Eq. 22's amplitude and theta_Oil.
 
 ``Calibration.extension`` holds ``{'effect': ID, 'params': {...}}`` as

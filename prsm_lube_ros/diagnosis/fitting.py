@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Fit Eq. 22 alone and extended by each candidate effect; score on held-out runs.
 
 Every model is fitted by least squares on ``ln A`` (window RMS), so residuals

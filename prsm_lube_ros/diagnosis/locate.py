@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Where recording and model disagree: residual tests against covariates and the spectrum.
 
 Residuals are the baseline's ``ln A_model - ln A`` per window.  For each

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """A one-minute report of a diagnosis: four figures and a page (Markdown and HTML).
 
 * ``residual.png`` — model error against the covariate that carries the

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Study: does ``diagnose`` name a concealed effect, and stay quiet without one.
 
 For every effect ID and for no effect, ``--seeds`` recordings are simulated with

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Window tables generated directly from Eq. 22 and one hidden effect (no signals, no bags).
 
 A second, independent simulator at the level the diagnosis works on: for unit

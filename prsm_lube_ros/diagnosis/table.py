@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The steady windows of diagnosis recordings as one table of numpy columns.
 
 Diagnosis works on the windows ``prsm-lube calibrate`` would fit (steady, under

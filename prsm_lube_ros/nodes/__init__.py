@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """ROS 2 nodes: thin shells around the pure modules of :mod:`prsm_lube_ros`.
 
 Importing this package imports nothing from ROS; the node modules do

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """What the sensor bridge publishes, as plain events: recordings and the rig simulator, no ROS types.
 
 An *event* is one message to publish, a tuple ``(due, kind, stamp_ns, values)``:

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """What the calibration service does with a request, without ROS: check, read, fit.
 
 The estimator node runs :func:`calibrate_from_request` on a worker thread and

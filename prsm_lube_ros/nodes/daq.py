@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The nut accelerometer through an NI-DAQmx card (the paper's acquisition), no ROS types.
 
 ::

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``lubrication_estimator``: theta_Oil per steady window, live, for one or several actuators.
 
 For each actuator (a namespace or topic prefix in the ``actuators`` parameter)

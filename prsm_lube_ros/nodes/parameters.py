@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Node parameters declared from a table, with descriptions, ranges and one-line errors.
 
 Both nodes describe their parameters as ``{name: (default, type, description,

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """ROS messages to input batches and back: the only place nodes touch message fields.
 
 Incoming contract messages become one-message batches of

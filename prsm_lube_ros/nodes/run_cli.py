@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``prsm-lube run``: the sensor bridge and the lubrication estimator in one process.
 
 For machines without ``ros2 launch`` (a venv with ROS 2 from wheels): it does

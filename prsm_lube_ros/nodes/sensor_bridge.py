@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """``sensor_bridge``: puts the contract's input topics on the graph from a bag, the rig simulator or the card.
 
 Parameter ``source`` (read-only) chooses where the data come from:

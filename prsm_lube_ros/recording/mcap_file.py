@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """A small, defensive reader of the MCAP container format, chunk by chunk.
 
 Only what the recordings need: Schema, Channel, Chunk, MessageIndex, Message,

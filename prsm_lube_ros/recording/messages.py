@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """The contract's four input messages: layout checks and bulk CDR decoding.
 
 A topic is accepted when the message definition embedded in the recording has

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Catalogue of candidate physics the paper's model leaves out: one module per effect.
 
 Each module in this package defines an :class:`~.base.Effect` subclass and

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Vibration not from the thread contacts, adding in power: A^2 = A_22^2 + B^2.
 
 Physics: the accelerometer on the nut also picks up the motor and its drive,

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """What a candidate effect is: its physics, its parameters and how it changes Eq. 22.
 
 Every candidate extends Eq. 22 in one of two places, or both:

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Oil flung out of the contacts as the screw turns: theta_Oil decays with revolutions.
 
 Physics: the paper notes centrifugal loss of oil (Sec. 2.2); between

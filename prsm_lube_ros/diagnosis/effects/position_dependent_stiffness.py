@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Screw shaft axial stiffness in series with the thread contacts, changing with nut position.
 
 Physics: the load path from nut to frame runs through the Hertzian thread

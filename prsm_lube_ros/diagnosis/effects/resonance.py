@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Dynamic amplification of a lightly damped structural mode (Eq. 13 without the step to Eq. 14).
 
 Physics: Eq. 14 takes the quasi-static response ``X_0 = F_0 / K_0``, valid far

@@ -1,3 +1,5 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
 """Oil viscosity falling with temperature, thinning the film of Eq. 9.
 
 Physics: Eq. 9 holds the viscosity at its reference value; in service the nut
