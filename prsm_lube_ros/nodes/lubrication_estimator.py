@@ -55,6 +55,7 @@ from sensor_msgs.msg import JointState, Temperature
 from . import ros_convert
 from .calibration_request import calibrate_from_request, recordings_folder
 from .parameters import declare_parameter_table
+from .startup import build_node, EXIT_BAD_INPUT
 from ..actuator import load_actuator
 from ..assessment import Assessor
 from ..calibration import Calibration
@@ -667,12 +668,9 @@ def spin_nodes(nodes, executor=None) -> int:
 def main(args=None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
     rclpy.init(args=args)
-    try:
-        node = LubricationEstimator()
-    except InputError as exc:
-        print(f'{NODE_NAME}: error: {exc}', file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
+    node = build_node(LubricationEstimator, NODE_NAME)
+    if node is None:
+        return EXIT_BAD_INPUT
     return spin_nodes([node])
 
 

@@ -49,6 +49,7 @@ from sensor_msgs.msg import JointState, Temperature
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .parameters import declare_parameter_table
+from .startup import build_node, EXIT_BAD_INPUT
 from .ros_convert import joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg, wrench_msg
 from ..bag_reader import open_recording, topic_name
 from ..errors import InputError
@@ -370,12 +371,9 @@ def main(args=None) -> int:
     (``exit_at_end``); an acquisition that fails while running ends with 1.
     """
     rclpy.init(args=args)
-    try:
-        node = SensorBridge()
-    except InputError as exc:
-        print(f'{NODE_NAME}: error: {exc}', file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
+    node = build_node(SensorBridge, NODE_NAME)
+    if node is None:
+        return EXIT_BAD_INPUT
     exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
     executor = SingleThreadedExecutor()
     executor.add_node(node)
