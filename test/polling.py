@@ -1,6 +1,8 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Waiting on a live ROS graph in tests: poll a condition with a deadline, never a bare sleep."""
+"""Waiting on a live ROS graph in tests: poll with a deadline (never a bare sleep), stop node processes."""
+import signal
+import subprocess
 import time
 
 
@@ -24,3 +26,15 @@ def settle(items, quiet=1.0, timeout=20.0):
             count, since = len(items), time.monotonic()
         elif time.monotonic() - since > quiet:
             return
+
+
+def stop_process(process):
+    """SIGINT, then the process's stderr (killed if it hangs)."""
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+    try:
+        _, stderr = process.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        _, stderr = process.communicate()
+    return stderr

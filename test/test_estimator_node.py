@@ -8,7 +8,6 @@ checked against the offline WindowBuilder + Assessor on the same messages.
 """
 import math
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -39,7 +38,7 @@ from prsm_lube_ros.vibration_model import acceleration_amplitude, film_speed_loa
 from prsm_lube_ros.windowing import WindowBuilder, WindowSettings  # noqa: E402
 
 import synthetic_inputs  # noqa: E402
-from polling import wait_for  # noqa: E402
+from polling import stop_process, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(60)]
 
@@ -580,12 +579,7 @@ def test_the_estimator_runs_as_its_own_process(tmp_path):
         assert states[0].theta_oil == pytest.approx(0.9, abs=0.01)
     finally:
         graph.close()
-        process.send_signal(signal.SIGINT)
-        try:
-            _, stderr = process.communicate(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            _, stderr = process.communicate()
+        stderr = stop_process(process)
     assert process.returncode == 0, stderr
     assert 'Traceback' not in stderr
 
@@ -628,12 +622,7 @@ def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
         assert not response.success and 'not found' in response.message
     finally:
         graph.close()
-        process.send_signal(signal.SIGINT)
-        try:
-            _, stderr = process.communicate(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            _, stderr = process.communicate()
+        stderr = stop_process(process)
     assert process.returncode == 0, stderr
     assert 'Traceback' not in stderr
 

@@ -11,7 +11,6 @@ constants, so both sides assess with the same numbers.
 import math
 import os
 from pathlib import Path
-import signal
 import subprocess
 import sys
 import threading
@@ -40,7 +39,7 @@ from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # no
 from prsm_lube_ros.nodes.sensor_bridge import publisher_qos, SensorBridge  # noqa: E402
 from prsm_lube_ros.rig_simulator import ExperimentPlan, RigConfig, simulate_experiment  # noqa: E402
 from prsm_lube_ros.windowing import WindowSettings  # noqa: E402
-from polling import wait_for, settle  # noqa: E402
+from polling import settle, stop_process, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -151,18 +150,6 @@ def graph():
         yield g
     finally:
         g.close()
-
-
-def stop_process(process):
-    """SIGINT, then the process's stderr (killed if it hangs)."""
-    if process.poll() is None:
-        process.send_signal(signal.SIGINT)
-    try:
-        _, stderr = process.communicate(timeout=15)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        _, stderr = process.communicate()
-    return stderr
 
 
 def bridge_command(bag, *params):
