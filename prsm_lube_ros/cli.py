@@ -35,11 +35,6 @@ def _progress_bar(total: int, description: str):
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 
 
-def _window_settings(args):
-    from .windowing import WindowSettings
-    return WindowSettings(window_length=args.window)
-
-
 def _read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording, with a progress bar and problems on stderr."""
     from .actuator import load_actuator

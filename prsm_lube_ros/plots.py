@@ -42,21 +42,3 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
     fig.savefig(path)
     plt.close(fig)
     return path
-
-
-def signal_snippets(path: Path, snippets: Mapping[str, tuple[np.ndarray, np.ndarray]], title: str) -> Path:
-    """Raw acceleration traces (time in s, acceleration in m/s^2), one panel each, like the paper's Fig. 4."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(len(snippets), 1, figsize=(8.0, 1.6 * len(snippets) + 0.6), dpi=120,
-                             sharex=True, sharey=True, squeeze=False)
-    for ax, (label, (t, a)) in zip(axes[:, 0], snippets.items()):
-        ax.plot(t, a, linewidth=0.4)
-        ax.set_ylabel('m/s$^2$', fontsize=8)
-        ax.set_title(label, fontsize=8, loc='left')
-    axes[-1, 0].set_xlabel('nut travel time in run, s')
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path

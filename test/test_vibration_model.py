@@ -54,3 +54,17 @@ def test_design_matrix_times_parameters_is_reduced_log_amplitude():
                                reduced_log_amplitude(amplitude, speed, load), rtol=1e-12, atol=1e-12)
     # hand check of one row: [1, 100, -0.8 * 3.419794] = [1, 100, -2.735835]
     np.testing.assert_allclose(design_matrix(10.0, 100.0, 0.8)[0], [1.0, 100.0, -2.735835], rtol=1e-6)
+
+
+def test_eq13_to_15_one_degree_of_freedom_by_hand():
+    """Eq. 13-15 for m = 2 kg, c = 40 N s/m, k = 8e6 N/m, F_0 = 10 N, w = 1000 rad/s."""
+    from prsm_lube_ros.vibration_model import (acceleration_from_displacement, forced_response_amplitude,
+                                               quasi_static_amplitude)
+    # Eq. 14: X_0 = F_0 / K_0 = 10 / 8e6 = 1.25e-6 m
+    assert quasi_static_amplitude(10.0, 8e6) == pytest.approx(1.25e-6)
+    # Eq. 13: X = 10 / sqrt((8e6 - 2 * 1e6)^2 + (40 * 1000)^2) = 10 / sqrt(3.6e13 + 1.6e9) = 1.666630e-6 m
+    assert forced_response_amplitude(10.0, 8e6, 2.0, 40.0, 1000.0) == pytest.approx(1.666630e-6, rel=1e-6)
+    # far below resonance (w = 10 rad/s) Eq. 13 tends to Eq. 14
+    assert forced_response_amplitude(10.0, 8e6, 2.0, 40.0, 10.0) == pytest.approx(1.25e-6, rel=1e-4)
+    # Eq. 15: A_0 = w^2 X_0 = 1e6 * 1.25e-6 = 1.25 m/s^2
+    assert acceleration_from_displacement(1.25e-6, 1000.0) == pytest.approx(1.25)
