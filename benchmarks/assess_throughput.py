@@ -10,7 +10,7 @@ Each measurement runs in a fresh subprocess so its peak resident memory
 (ru_maxrss) is its own:
 
 * ``bare read``: every message read, decompressed and split, nothing decoded
-  (:func:`prsm_lube_ros.bag_reader.bare_read`);
+  (:func:`prsm_lube_ros.recording.reader.bare_read`);
 * ``assess``: what ``prsm-lube assess`` does -- read, decode, window, assess
   every window and run with a calibration fitted beforehand.
 
@@ -39,11 +39,11 @@ RESULTS = ROOT / 'benchmarks' / 'results'
 def child(kind: str, bag: str, calibration: str) -> None:
     """Run one measurement in this process and print a JSON line."""
     sys.path.insert(0, str(ROOT))
-    from prsm_lube_ros.actuator import Actuator
-    from prsm_lube_ros.analysis import assess_recording, recording_windows
-    from prsm_lube_ros.bag_reader import bare_read
-    from prsm_lube_ros.calibration_file import load_calibration
-    from prsm_lube_ros.interfaces import contract_typestore
+    from prsm_lube_ros.physics.actuator import Actuator
+    from prsm_lube_ros.estimation.pipeline import assess_recording, recording_windows
+    from prsm_lube_ros.recording.reader import bare_read
+    from prsm_lube_ros.estimation.calibration_file import load_calibration
+    from prsm_lube_ros.recording.typestore import contract_typestore
     # One-time set-up of a process (the ROS type store the layout checks use): timed apart,
     # so the figures below are throughput on the recording itself.
     setup_start = time.perf_counter()
@@ -80,10 +80,11 @@ def measure(kind: str, bag: Path, calibration: Path, repeat: int) -> dict:
 def prepare(data: Path) -> tuple[dict, Path]:
     """Simulate (once) the recordings and a calibration; return {label: (bag, seconds)}, calibration."""
     sys.path.insert(0, str(ROOT))
-    from prsm_lube_ros.actuator import Actuator
-    from prsm_lube_ros.analysis import calibrate_recordings, recording_windows
-    from prsm_lube_ros.calibration_file import save_calibration
-    from prsm_lube_ros.rig_simulator import ExperimentPlan, simulate_endurance, simulate_experiment
+    from prsm_lube_ros.physics.actuator import Actuator
+    from prsm_lube_ros.estimation.pipeline import calibrate_recordings, recording_windows
+    from prsm_lube_ros.estimation.calibration_file import save_calibration
+    from prsm_lube_ros.simulation.recordings import simulate_endurance, simulate_experiment
+    from prsm_lube_ros.simulation.rig_config import ExperimentPlan
     data.mkdir(parents=True, exist_ok=True)
     bags = {}
     for label, seconds, compression in (('15 min', 900.0, None), ('1 h', 3600.0, None),

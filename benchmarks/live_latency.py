@@ -196,8 +196,8 @@ def run_generator(count: int, duration: float) -> dict:
     from prsm_lube_ros.msg import VibrationBlock
     from prsm_lube_ros.nodes.ros_convert import time_from_ns
     from prsm_lube_ros.nodes.sensor_bridge import publisher_qos
-    from prsm_lube_ros.rig_simulator import RigConfig
-    from prsm_lube_ros.vibration_model import acceleration_amplitude
+    from prsm_lube_ros.simulation.rig_config import RigConfig
+    from prsm_lube_ros.physics.vibration_model import acceleration_amplitude
 
     rclpy.init(args=['generator'])
     node = rclpy.create_node('live_latency_generator')
@@ -273,10 +273,10 @@ def measure(count: int, duration: float, profile: bool = False) -> dict:
     """One level: N actuators for ``duration`` s of measurement; a summary dict."""
     sys.path.insert(0, str(ROOT))
     import numpy as np
-    from prsm_lube_ros.calibration import Calibration
-    from prsm_lube_ros.calibration_file import save_calibration
+    from prsm_lube_ros.estimation.calibration import Calibration
+    from prsm_lube_ros.estimation.calibration_file import save_calibration
     from prsm_lube_ros.nodes.lubrication_estimator import actuator_label
-    from prsm_lube_ros.rig_simulator import RigConfig
+    from prsm_lube_ros.simulation.rig_config import RigConfig
 
     env = dict(os.environ, ROS_DOMAIN_ID=str(random.randint(100, 199)), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                PYTHONUNBUFFERED='1')

@@ -9,7 +9,7 @@ The recording (written once with rosbags' Writer, storage mcap, its defaults:
 WrenchStamped at 50 Hz, Temperature at 1 Hz.  Timed, best of ``--repeat``:
 
 * ``file read``: the file's bytes into memory, nothing else;
-* ``bare read``: :func:`prsm_lube_ros.bag_reader.bare_read` -- every chunk read,
+* ``bare read``: :func:`prsm_lube_ros.recording.reader.bare_read` -- every chunk read,
   decompressed and split into messages, no decoding;
 * ``open``: :func:`open_recording` (summary, layouts);
 * ``decode``: open + every slice of :meth:`Recording.slices`, all values decoded.
@@ -28,11 +28,11 @@ import time
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'test'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'test' / 'support'))
 
 import bagfactory  # noqa: E402  (test helper: writes contract recordings)
-from prsm_lube_ros.bag_reader import bare_read, open_recording  # noqa: E402
-from prsm_lube_ros.interfaces import VIBRATION_BLOCK  # noqa: E402
+from prsm_lube_ros.recording.reader import bare_read, open_recording  # noqa: E402
+from prsm_lube_ros.contract import VIBRATION_BLOCK  # noqa: E402
 
 HOUR = 3600.0
 

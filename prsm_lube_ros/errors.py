@@ -1,11 +1,19 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The one exception type for problems with what a user gave us.
+"""Exception types for problems with what a user gave us, one line each.
 
 An :class:`InputError` carries a single line that names the input (a file, a
 topic, a parameter) and what is wrong with it.  Command-line tools print that
 line and exit non-zero; nodes log it and keep running.  Anything else that
-escapes is a bug in this package, not a user error.
+escapes is a bug in this package, not a user error.  Callers that must tell
+kinds apart branch on the subclass, never on the wording:
+
+* :class:`RecordingError` -- a recording cannot be opened or read;
+* :class:`ConfigError` -- a configuration file, parameter or option is invalid;
+* :class:`NotIdentifiable` -- the data are readable but cannot determine what
+  was asked (too few operating conditions for the constants, no usable window).
+
+This module imports nothing of the package.
 """
 
 
@@ -14,3 +22,15 @@ class InputError(ValueError):
 
     def __init__(self, message: str):
         super().__init__(' '.join(str(message).split()))
+
+
+class RecordingError(InputError):
+    """A recording (file or bag folder) that cannot be opened or read."""
+
+
+class ConfigError(InputError):
+    """A configuration file, parameter value or command-line option that is invalid."""
+
+
+class NotIdentifiable(InputError):
+    """Readable data that cannot determine what was asked of them (constants, windows, a verdict)."""

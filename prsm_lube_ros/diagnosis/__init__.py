@@ -10,13 +10,17 @@ Public API::
     result.calibration()                      # Calibration with the chosen effect in ``extension``
     write_report(result, 'out/report')        # PNG figures and index.md / index.html
 
-Candidate effects live in :mod:`.effects`, one module each, registered on import.
+Owns: the window table (``table``), locating the mismatch (``locate``), fitting
+the model with candidate effects (``fitting``, ``combined``), the verdict
+(``engine``), the report (``report``) and the candidates (``effects/``, one per
+law of :mod:`prsm_lube_ros.physics.effects`).  May import the base layer,
+:mod:`..physics`, :mod:`..recording` and :mod:`..estimation`; no ROS.
 """
 from __future__ import annotations
 
 from .effects import Effect, effect_ids, get_effect, register, registered
-from .engine import ADEQUATE, AMBIGUOUS, UNEXPLAINED, Candidate, Diagnosis, diagnose_table
-from .table import WindowTable, table_from_windows
+from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
+from .table import table_from_windows, WindowTable
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Effect', 'WindowTable',
            'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect', 'register', 'registered',
@@ -24,7 +28,7 @@ __all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Ef
 
 
 def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = 5.0) -> Diagnosis:
-    """Diagnose :class:`~prsm_lube_ros.analysis.RecordingWindows` taken at lubrication state ``theta``."""
+    """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``."""
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
                                sources=[rec.path for rec in recordings])
     return diagnose_table(table)

@@ -30,12 +30,12 @@ import math
 
 import numpy as np
 
-from ..calibration import Calibration, check_identifiable, operating_levels
 from ..errors import InputError
+from ..estimation.calibration import Calibration, check_identifiable, operating_levels
 from .combined import CombinedEffect
 from .effects import Effect, registered
-from .fitting import effective_sample_size, fit_vector, ModelFit, bic, cv_folds, fit_model, predict_log
-from .locate import Location, locate
+from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log
+from .locate import locate, Location
 from .table import WindowTable
 
 #: BIC improvement (effective sample size) a candidate needs.

@@ -4,7 +4,7 @@
 
 Every model is fitted by least squares on ``ln A`` (window RMS), so residuals
 are relative errors.  The baseline is the paper's model (ordinary least squares
-in ``(ln C_sys, C_F, C_lambda)``, as :mod:`prsm_lube_ros.calibration`); an
+in ``(ln C_sys, C_F, C_lambda)``, as :mod:`prsm_lube_ros.estimation.calibration`); an
 extended model adds the effect's parameters and is fitted jointly with the
 constants (bounded trust-region least squares, multi-start).
 
@@ -27,8 +27,8 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..calibration import operating_levels
-from ..vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
+from ..estimation.calibration import operating_levels
+from ..physics.vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
 from .effects import Effect
 from .table import WindowTable
 

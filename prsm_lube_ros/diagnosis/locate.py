@@ -33,7 +33,7 @@ import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
 
-from ..calibration import operating_levels
+from ..estimation.calibration import operating_levels
 from .fitting import effective_sample_size
 from .table import WindowTable
 

@@ -114,7 +114,7 @@ def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     table = diagnosis.table
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
         return False
-    from ..calibration import operating_levels
+    from ..estimation.calibration import operating_levels
     levels = np.array(operating_levels(table.speed))
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - levels[None, :]), axis=1)
     freqs = np.arange(table.spectra.shape[1]) * table.spectrum_resolution

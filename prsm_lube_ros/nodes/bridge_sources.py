@@ -26,7 +26,7 @@ from typing import Iterator, List, Tuple
 
 import numpy as np
 
-from ..events import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 
 Event = Tuple[float, str, int, tuple]
 KINDS = ('vibration', 'joint_states', 'axial_load', 'temperature')
@@ -94,13 +94,13 @@ def batch_events(batches) -> List[Event]:
 
 
 def recording_events(recording, on_problem=None) -> Iterator[List[Event]]:
-    """Events of a :class:`~prsm_lube_ros.bag_reader.Recording`, one sorted list per time slice."""
+    """Events of a :class:`~prsm_lube_ros.recording.reader.Recording`, one sorted list per time slice."""
     for batches in recording.slices(on_problem=on_problem):
         yield batch_events(batches)
 
 
 def rig_block_events(block) -> List[Event]:
-    """Events of one :class:`~prsm_lube_ros.rig_simulator.RigBlock`: the block and its span's sensor data."""
+    """Events of one :class:`~prsm_lube_ros.simulation.signal.RigBlock`: the block and its span's sensor data."""
     chunk = block.topics
     events: List[Event] = []
     rate = float(chunk.sample_rate)

@@ -14,9 +14,9 @@ import os
 from pathlib import Path
 from typing import Callable, Sequence
 
-from ..calibration import Calibration
 from ..errors import InputError
-from ..windowing import WindowSettings
+from ..estimation.calibration import Calibration
+from ..estimation.windowing import WindowSettings
 
 
 def recordings_folder(folder: str) -> Path:
@@ -78,7 +78,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
     theta = reference_theta(theta)
     paths = resolve_bag_paths(bag_paths, folder)
     try:
-        from ..analysis import calibrate_recordings, recording_windows
+        from ..estimation.pipeline import calibrate_recordings, recording_windows
     except ImportError as exc:    # the bag reader is not installed with this build
         raise InputError(f'calibrate: cannot read recordings on this installation ({exc})') from None
     problems: list[str] = []

@@ -5,11 +5,11 @@
 For each actuator (a namespace or topic prefix in the ``actuators`` parameter)
 the node subscribes ``<ns>/vibration``, ``<ns>/joint_states``,
 ``<ns>/axial_load`` and ``<ns>/temperature`` with sensor-data QoS, feeds each
-message to that actuator's :class:`~prsm_lube_ros.windowing.WindowBuilder`
+message to that actuator's :class:`~prsm_lube_ros.estimation.windowing.WindowBuilder`
 (which pairs the streams by header stamp), assesses every closed window with
-:class:`~prsm_lube_ros.assessment.Assessor` and publishes a
+:class:`~prsm_lube_ros.estimation.assessment.Assessor` and publishes a
 ``LubricationState`` on ``<ns>/lubrication_state``.  ``/diagnostics`` carries
-one status per actuator, judged by :mod:`prsm_lube_ros.health`.
+one status per actuator, judged by :mod:`prsm_lube_ros.estimation.health`.
 
 Only the vibration subscriptions (with the timers and services) wake the
 executor, which rebuilds its wait set from every entity on every wake.  The
@@ -53,18 +53,19 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
+from ..contract import topic_name
+from ..errors import InputError
+from ..estimation.assessment import Assessor
+from ..estimation.calibration import Calibration
+from ..estimation.calibration_file import load_calibration, save_calibration
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES
+from ..estimation.windowing import WindowBuilder, WindowSettings
+from ..msg import LubricationState, VibrationBlock
+from ..physics.actuator import load_actuator
+from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recordings_folder
 from .parameters import declare_parameter_table
 from .startup import build_node, EXIT_BAD_INPUT
-from ..actuator import load_actuator
-from ..assessment import Assessor
-from ..calibration import Calibration
-from ..calibration_file import load_calibration, save_calibration
-from ..errors import InputError
-from ..health import HealthMonitor, HealthThresholds, LEVEL_NAMES
-from ..msg import LubricationState, VibrationBlock
-from ..srv import Calibrate
-from ..windowing import WindowBuilder, WindowSettings
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -150,14 +151,6 @@ def calibration_path(template: str, actuator: str) -> str:
     return os.path.expanduser(template.replace('{actuator}', actuator_label(actuator)))
 
 
-def join_topic(namespace: str, topic: str) -> str:
-    """``<namespace>/<topic>``; a topic starting with / stays as it is."""
-    if topic.startswith('/'):
-        return topic
-    namespace = namespace.rstrip('/')
-    return f'{namespace}/{topic}' if namespace else topic
-
-
 def window_settings(values: dict) -> WindowSettings:
     """WindowSettings from parameter values (InputError when out of range)."""
     return WindowSettings(window_length=values['window_length'], min_speed=values['min_speed'],
@@ -238,10 +231,10 @@ class LubricationEstimator(Node):
                                       calibration_file=calibration_path(values['calibration_file'], name))
             self._load_initial_calibration(channel)
             channel.publisher = self.create_publisher(
-                LubricationState, join_topic(name, values['state_topic']), 10)
+                LubricationState, topic_name(name, values['state_topic']), 10)
             self._subscribe(channel, values, qos)
             self.channels.append(channel)
-            service_names = [join_topic(name, 'calibrate')]
+            service_names = [topic_name(name, 'calibrate')]
             if i == 0 and values['calibrate_service'] not in service_names:
                 service_names.insert(0, values['calibrate_service'])
             for service_name in service_names:
@@ -267,7 +260,7 @@ class LubricationEstimator(Node):
     def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
         """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
         joint = values['screw_joint']
-        topics = {key: join_topic(channel.name, values[f'{key}_topic'])
+        topics = {key: topic_name(channel.name, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
         converters = {
             'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),

@@ -3,7 +3,7 @@
 """ROS messages to input batches and back: the only place nodes touch message fields.
 
 Incoming contract messages become one-message batches of
-:mod:`prsm_lube_ros.events` (what :class:`~prsm_lube_ros.windowing.WindowBuilder`
+:mod:`prsm_lube_ros.recording.batches` (what :class:`~prsm_lube_ros.estimation.windowing.WindowBuilder`
 takes); results become ``LubricationState``, ``DiagnosticStatus`` and
 ``Calibrate`` responses.  The ``*_msg`` builders for the input topics serve
 the sensor bridge and the tests.  A message that cannot be read raises
@@ -21,13 +21,13 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from sensor_msgs.msg import JointState, Temperature
 
+from ..contract import SCREW_JOINT
 from ..errors import InputError
-from ..events import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
-from ..health import format_value
+from ..estimation.health import format_value
 from ..msg import LubricationState, VibrationBlock
+from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 
 #: Name of the screw's entry in ``JointState`` (CONTRACT.md).
-SCREW_JOINT = 'screw'
 
 
 def stamp_seconds(stamp) -> float:
@@ -164,7 +164,7 @@ def batch_messages(batch):
 # -- results -> outputs ------------------------------------------------------------------------------
 def lubrication_state_msg(actuator: str, window, theta: float, theta_std: float, level: int,
                           message: str) -> LubricationState:
-    """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.windowing.Window`)."""
+    """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.estimation.windowing.Window`)."""
     msg = LubricationState()
     msg.header.stamp = time_msg(window.end)
     msg.theta_oil = float(theta)

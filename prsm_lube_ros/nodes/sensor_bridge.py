@@ -14,7 +14,7 @@ Parameter ``source`` (read-only) chooses where the data come from:
   sim time.  Without ``loop`` the ``ros2 run`` process ends with status 0 after
   the last message (``exit_at_end``).  A bag that cannot be opened, or holds no
   ``<ns>/vibration``, ends the node at start with one line and status 2.
-- ``simulator``: :class:`~prsm_lube_ros.rig_simulator.RigSignalGenerator` in
+- ``simulator``: :class:`~prsm_lube_ros.simulation.signal.RigSignalGenerator` in
   real time; ``speed``, ``load`` and ``theta_oil`` may be changed while it runs.
 - ``hardware``: the nut accelerometer through NI-DAQmx (:mod:`.daq`) published
   as VibrationBlocks; speed and load come from the EMA stack's own topics,
@@ -46,15 +46,17 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, Temperature
 
+from ..contract import topic_name
+from ..errors import InputError
+from ..msg import VibrationBlock
+from ..recording.reader import open_recording
+from ..simulation.rig_config import load_rig_config
+from ..simulation.signal import RigSignalGenerator
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .parameters import declare_parameter_table
-from .startup import build_node, EXIT_BAD_INPUT
 from .ros_convert import joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg, wrench_msg
-from ..bag_reader import open_recording, topic_name
-from ..errors import InputError
-from ..msg import VibrationBlock
-from ..rig_simulator import load_rig_config, RigSignalGenerator
+from .startup import build_node, EXIT_BAD_INPUT
 
 NODE_NAME = 'sensor_bridge'
 SOURCES = ('playback', 'simulator', 'hardware')

@@ -1,6 +1,11 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Low-level reading of recordings: the MCAP container and the contract's CDR messages.
+"""Recordings in and out: rosbag2 folders and bare MCAP files.
 
-The public entry point is :mod:`prsm_lube_ros.bag_reader`.
+Owns: the streaming reader (``reader``: recordings in, numpy batches of the
+contract's topics out), the MCAP container parser (``mcap_file``), bulk CDR
+decoding of the contract's messages (``cdr``), the batch types every layer
+above consumes (``batches``), the contract bag writer (``writer``) and the
+rosbags type store with the contract's interfaces (``typestore``).  May
+import only the base layer; no physics, no ROS.
 """

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...physics.effects import background_vibration as law
 from .base import Effect, register
 
 #: Bounds of B over the smallest recorded RMS.
@@ -26,7 +27,7 @@ MIN_LINE_SHARE = 1e-3
 
 
 @register
-class BackgroundVibration(Effect):
+class BackgroundVibration(Effect, law.Extension):
     """Vibration from elsewhere adds in power; at low speed the amplitude stops following the model."""
 
     id = 'background_vibration'
@@ -55,20 +56,6 @@ class BackgroundVibration(Effect):
     def to_params(self, p, scales):
         """background_rms B (m/s^2)."""
         return {'background_rms': float(p[0] * scales['rms_scale']), **scales}
-
-    def log_gain(self, params, covariates, ln_a22):
-        """``0.5 ln(1 + B^2 / A_22^2)``."""
-        b = params['background_rms']
-        if b <= 0:
-            return np.zeros_like(np.asarray(ln_a22, dtype=float))
-        with np.errstate(over='ignore'):
-            return 0.5 * np.log1p(np.exp(2.0 * (np.log(b) - np.asarray(ln_a22, dtype=float))))
-
-    def eq22_amplitude(self, params, covariates, rms):
-        """``sqrt(A^2 - B^2)``; NaN where the RMS does not exceed the background."""
-        rms = np.asarray(rms, dtype=float)
-        power = rms ** 2 - params['background_rms'] ** 2
-        return np.where(power > 0, np.sqrt(np.maximum(power, 0.0)), np.nan)
 
     def independent_evidence(self, table, location) -> str:
         """Fixed-frequency spectral lines with constant power, at least :data:`MIN_LINE_SHARE` of the power."""

@@ -26,9 +26,15 @@ from typing import Sequence
 
 import numpy as np
 
+from ...physics.effects import Extension
 
-class Effect:
-    """A candidate physical effect the paper's model leaves out (subclass and register it)."""
+
+class Effect(Extension):
+    """A candidate physical effect the paper's model leaves out, with how to fit it (subclass and register it).
+
+    How it changes Eq. 22 comes from the effect's law module
+    (:class:`prsm_lube_ros.physics.effects.Extension`); this class adds what a fit needs.
+    """
 
     #: Effect ID (CONTRACT.md names the known ones).
     id: str = ''
@@ -65,14 +71,6 @@ class Effect:
         """Physical parameters (SI) from the internal vector and the data scales."""
         return dict(scales)
 
-    def film_factor(self, params: dict, covariates):
-        """Factor on theta_Oil in Eq. 22's film term (1 = none)."""
-        return 1.0
-
-    def log_gain(self, params: dict, covariates, ln_a22):
-        """Term added to ln A_0 (0 = none); ``ln_a22`` is Eq. 22's ln amplitude."""
-        return 0.0
-
     def describe(self, params: dict) -> str:
         """The fitted effect in words, with its size."""
         return self.physics
@@ -84,20 +82,6 @@ class Effect:
     def contrary_evidence(self, table, location) -> str:
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
-
-    # -- assessment ------------------------------------------------------
-    def eq22_amplitude(self, params: dict, covariates, rms):
-        """The measured RMS mapped back to the amplitude Eq. 22 describes, m/s^2.
-
-        Default: remove a multiplicative gain that does not depend on the
-        amplitude itself.
-        """
-        rms = np.asarray(rms, dtype=float)
-        return rms * np.exp(-np.asarray(self.log_gain(params, covariates, np.log(rms)), dtype=float))
-
-    def assessment_film_factor(self, params: dict, covariates):
-        """Factor dividing Eq. 23's theta_Oil so it reports the oil supply (default: :meth:`film_factor`)."""
-        return self.film_factor(params, covariates)
 
 
 _REGISTRY: dict[str, Effect] = {}

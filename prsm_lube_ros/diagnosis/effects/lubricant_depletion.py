@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...physics.effects import lubricant_depletion as law
 from .base import Effect, register
 
 #: Bounds of N_max / N_d (theta falls by 1 - exp(-x) over the longest recording).
@@ -26,7 +27,7 @@ RATE_RANGE = (0.0, 3.0)
 
 
 @register
-class LubricantDepletion(Effect):
+class LubricantDepletion(Effect, law.Extension):
     """theta_Oil falls with revolutions run since the last lubrication."""
 
     id = 'lubricant_depletion'
@@ -63,15 +64,6 @@ class LubricantDepletion(Effect):
     def to_params(self, p, scales):
         """depletion_per_revolution (1/N_d) and the revolution scale."""
         return {'depletion_per_revolution': float(p[0] / scales['revolution_scale']), **scales}
-
-    def film_factor(self, params, covariates):
-        """``exp(-N_rev / N_d)``."""
-        revolutions = np.nan_to_num(np.asarray(covariates.revolutions, dtype=float))
-        return np.exp(-params['depletion_per_revolution'] * revolutions)
-
-    def assessment_film_factor(self, params, covariates):
-        """1: depletion is a real fall of theta_Oil, which assessment must report."""
-        return np.ones_like(np.asarray(covariates.speed, dtype=float))
 
     def describe(self, params):
         """N_d and the fall of theta over the longest recording."""

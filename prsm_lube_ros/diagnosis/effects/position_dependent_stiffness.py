@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...vibration_model import STIFFNESS_EXPONENT
+from ...physics.effects import position_dependent_stiffness as law
 from .base import Effect, register
 
 #: Bounds of the stiffness ratio k_c / k_s.
@@ -33,7 +33,7 @@ RATIO_RANGE = (0.0, 3.0)
 
 
 @register
-class PositionDependentStiffness(Effect):
+class PositionDependentStiffness(Effect, law.Extension):
     """Series shaft compliance that changes as the nut travels (amplitude trends with nut position)."""
 
     id = 'position_dependent_stiffness'
@@ -74,13 +74,6 @@ class PositionDependentStiffness(Effect):
     def to_params(self, p, scales):
         """ratio_at_start, ratio_at_end with reference_load (N) and stroke (m)."""
         return {'ratio_at_start': float(p[0]), 'ratio_at_end': float(p[1]), **scales}
-
-    def log_gain(self, params, covariates, ln_a22):
-        """``ln(1 + rho(x) (F/F_ref)^(1/3))``."""
-        x = np.nan_to_num(np.asarray(covariates.position, dtype=float)) / params['stroke']
-        ratio = params['ratio_at_start'] + (params['ratio_at_end'] - params['ratio_at_start']) * x
-        load = np.abs(np.asarray(covariates.load, dtype=float)) / params['reference_load']
-        return np.log1p(np.maximum(ratio, 0.0) * load ** STIFFNESS_EXPONENT)
 
     def describe(self, params):
         """Amplitude change along the stroke and where the fixed bearing would be."""

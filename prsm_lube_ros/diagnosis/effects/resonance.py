@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...physics.effects import resonance as law
 from .base import Effect, register
 
 #: Bounds of the frequency ratio at the highest recorded speed.
@@ -26,14 +27,8 @@ TOP_RATIO_RANGE = (0.05, 3.0)
 DAMPING_RANGE = (0.005, 0.5)
 
 
-def magnification(frequency_ratio, damping_ratio):
-    """``|H(r)| = 1/sqrt((1 - r^2)^2 + (2 zeta r)^2)``, Eq. 13's response over Eq. 14's F_0/K_0."""
-    r = np.abs(np.asarray(frequency_ratio, dtype=float))
-    return 1.0 / np.sqrt((1.0 - r * r) ** 2 + (2.0 * damping_ratio * r) ** 2)
-
-
 @register
-class Resonance(Effect):
+class Resonance(Effect, law.Extension):
     """The excitation frequency approaches a structural mode; amplitude departs from the omega^2 law."""
 
     id = 'resonance'
@@ -48,7 +43,7 @@ class Resonance(Effect):
 
     def applicable(self, table) -> str:
         """Needs three speed levels at least (the shape of A against speed)."""
-        from ...calibration import operating_levels
+        from ...estimation.calibration import operating_levels
         levels = operating_levels(table.speed)
         if len(levels) < 3:
             return f'{len(levels)} screw speed(s) recorded: a resonance needs 3 or more to show its shape'
@@ -71,15 +66,10 @@ class Resonance(Effect):
         """resonant_speed (rad/s), damping_ratio and top_speed."""
         return {'resonant_speed': float(scales['top_speed'] / p[0]), 'damping_ratio': float(p[1]), **scales}
 
-    def log_gain(self, params, covariates, ln_a22):
-        """``ln |H(omega_S / omega_r)|``."""
-        ratio = np.abs(np.asarray(covariates.speed, dtype=float)) / params['resonant_speed']
-        return np.log(magnification(ratio, params['damping_ratio']))
-
     def describe(self, params):
         """Where the resonance lies and how much it magnifies the top speed."""
         top = params['top_speed'] / params['resonant_speed']
-        gain = float(magnification(top, params['damping_ratio']))
+        gain = float(law.magnification(top, params['damping_ratio']))
         return (f'The excitation meets a mode at a screw speed of {params["resonant_speed"]:.1f} rad/s '
                 f'({params["resonant_speed"] * 30 / np.pi:.0f} r/min), damping ratio '
                 f'{params["damping_ratio"]:.3f}; at the top speed r = {top:.2f} and the response is magnified '

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...vibration_model import VELOCITY_EXPONENT
+from ...physics.effects import thermal_viscosity as law
+from ...physics.vibration_model import VELOCITY_EXPONENT
 from .base import Effect, register
 
 #: Bounds of the viscosity-temperature coefficient beta, 1/K (mineral oils: about 0.02-0.05).
@@ -27,7 +28,7 @@ MIN_SPREAD = 0.5
 
 
 @register
-class ThermalViscosity(Effect):
+class ThermalViscosity(Effect, law.Extension):
     """The oil warms in service and thins; amplitude follows temperature."""
 
     id = 'thermal_viscosity'
@@ -65,17 +66,6 @@ class ThermalViscosity(Effect):
     def to_params(self, p, scales):
         """viscosity_temperature_coefficient (1/K) and reference_temperature (degC)."""
         return {'viscosity_temperature_coefficient': float(p[0]), **scales}
-
-    def film_factor(self, params, covariates):
-        """``exp(-0.68 beta (T - T_ref))``; windows without a temperature count as at T_ref."""
-        temperature = np.asarray(covariates.temperature, dtype=float)
-        delta = np.nan_to_num(temperature - params['reference_temperature'])
-        return np.exp(-VELOCITY_EXPONENT * params['viscosity_temperature_coefficient'] * delta)
-
-    def assessment_film_factor(self, params, covariates):
-        """As :meth:`film_factor`, but NaN (not assessable) without a temperature."""
-        temperature = np.asarray(covariates.temperature, dtype=float)
-        return np.where(np.isfinite(temperature), self.film_factor(params, covariates), np.nan)
 
     def describe(self, params):
         """Viscosity coefficient and the film factor at the warmest point."""

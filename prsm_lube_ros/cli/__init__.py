@@ -1,0 +1,52 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""``prsm-lube``: simulate, calibrate, assess and diagnose recordings from the command line.
+
+Owns: one module per command, each with ``add_command(subparsers)`` (which adds
+its parser with ``set_defaults(func=run)``) and ``run(args)`` returning the
+exit status.  Building the parser imports no numpy, scipy or ROS: each
+command imports what it needs when it runs, so ``prsm-lube --help`` starts
+at once and ``assess`` does not pay for the diagnosis engine.
+
+User errors (a missing or broken recording, data that cannot calibrate, a bad
+option) end with one line on stderr naming the input and a non-zero status;
+there is no traceback for them.  This package may import every other one.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..errors import InputError
+from .common import EXIT_USER_ERROR
+
+#: Command modules, in the order ``--help`` lists them.
+COMMAND_MODULES = ('simulate', 'calibrate', 'assess', 'diagnose', 'demo', 'run')
+
+__all__ = ['build_parser', 'COMMAND_MODULES', 'EXIT_USER_ERROR', 'main']
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``prsm-lube`` argument parser."""
+    parser = argparse.ArgumentParser(prog='prsm-lube', description=(
+        'Lubrication assessment of planetary roller screws (theta_Oil) from nut vibration, '
+        'screw speed and axial load.'))
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
+    for name in COMMAND_MODULES:
+        importlib.import_module(f'{__name__}.{name}').add_command(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f'prsm-lube {args.command}: error: {exc}', file=sys.stderr)
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        print(f'prsm-lube {args.command}: interrupted', file=sys.stderr)
+        return 130

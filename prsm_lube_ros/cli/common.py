@@ -1,0 +1,79 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""What several ``prsm-lube`` commands share: options, reading recordings with a progress bar, writing JSON.
+
+Imports nothing heavy at module level: each command pays only for what it uses.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+import sys
+
+from ..errors import ConfigError
+
+#: Exit status of a user error (bad file, bad option, unusable data).
+EXIT_USER_ERROR = 2
+
+
+def add_recording_options(parser) -> None:
+    """``--namespace``, ``--window`` and ``--actuator``, for commands that read recordings."""
+    parser.add_argument('--namespace', default='/prsm', help='topic namespace of the actuator (default /prsm)')
+    parser.add_argument('--window', type=float, default=1.0, metavar='S',
+                        help='window length in s for the RMS (default 1.0)')
+    parser.add_argument('--actuator', default=None, metavar='YAML',
+                        help='actuator geometry (default: the contract\'s default actuator)')
+
+
+def progress_bar(total: int, description: str):
+    """A tqdm bar on stderr that hides itself when stderr is not a terminal."""
+    from tqdm import tqdm
+    return tqdm(total=total, desc=description, unit='%', disable=None, leave=False,
+                bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
+
+
+def percent_updater(bar):
+    """A ``progress(fraction)`` callback that advances ``bar`` in whole percent."""
+    last = [0]
+
+    def progress(fraction):
+        step = int(100 * fraction)
+        if step > last[0]:
+            bar.update(step - last[0])
+            last[0] = step
+    return progress
+
+
+def warn(line: str) -> None:
+    """One warning line on stderr."""
+    print(f'warning: {line}', file=sys.stderr)
+
+
+def read_recordings(paths, args, *, spectra: bool = False):
+    """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
+    from ..estimation.pipeline import recording_windows
+    from ..estimation.windowing import WindowSettings
+    from ..physics.actuator import load_actuator
+    from ..validation import require_positive
+    actuator = load_actuator(args.actuator)
+    settings = WindowSettings(window_length=require_positive('--window', args.window),
+                              spectrum_segment=256 if spectra else 0)
+    recordings = []
+    for path in paths:
+        bar = progress_bar(100, Path(path).name)
+        try:
+            recordings.append(recording_windows(path, lead=actuator.lead, settings=settings,
+                                                namespace=args.namespace, on_problem=warn,
+                                                progress=percent_updater(bar)))
+        finally:
+            bar.close()
+    return recordings, actuator
+
+
+def write_json(path, document) -> None:
+    """``document`` as indented JSON at ``path`` (folders made); NaN is refused, never written."""
+    try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(document, indent=1, allow_nan=False))
+    except OSError as exc:
+        raise ConfigError(f'{path}: cannot write ({exc.strerror or exc})') from None

@@ -1,0 +1,63 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""``prsm-lube diagnose``: find the physics the paper's model leaves out (see :mod:`prsm_lube_ros.diagnosis`)."""
+from __future__ import annotations
+
+import math
+
+
+def add_command(subparsers) -> None:
+    """Add ``diagnose`` to the ``prsm-lube`` subcommands."""
+    from .common import add_recording_options
+    parser = subparsers.add_parser(
+        'diagnose', help='find the physics the model leaves out, model it, refit and show the gain',
+        description='Recordings at one known lubrication state: fit the paper\'s model, locate where recording '
+        'and model disagree, fit every candidate effect with the constants, rank them on held-out runs and '
+        'say which one the recording needs (or that the model is adequate).')
+    parser.add_argument('bags', nargs='+', metavar='BAG', help='rosbag2 folder or .mcap file')
+    parser.add_argument('--theta', type=float, default=1.0, help='theta_oil of the recordings (default 1.0)')
+    parser.add_argument('--json', required=True, metavar='OUT.json', help='write the diagnosis as JSON')
+    parser.add_argument('--report', metavar='DIR', help='write figures and a one-page report to DIR')
+    parser.add_argument('--calibration-out', metavar='CALIB.yaml',
+                        help='write the calibration of the chosen model (effect in its extension)')
+    add_recording_options(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Handler of ``prsm-lube diagnose``; returns the exit status."""
+    from ..validation import reference_theta
+    from .common import read_recordings, write_json
+    from ..diagnosis import diagnose_recordings
+    theta = reference_theta(args.theta, '--theta')
+    recordings, _ = read_recordings(args.bags, args, spectra=True)
+    result = diagnose_recordings(recordings, theta)
+    document = result.as_json()
+    write_json(args.json, document)
+    base = result.baseline
+    print(f'paper\'s model: relative RMS error {100 * base.rmse:.2f} %, on held-out runs {100 * base.cv_rmse:.2f} %')
+    print(f'located: {result.location.summary}')
+    print(f'{"candidate":<30} {"status":<13} {"cv_rmse":>8} {"gain":>7} {"dBIC":>7}')
+    for cand in sorted(result.candidates, key=lambda c: c.fit.cv_rmse if c.fit else math.inf):
+        if cand.fit is None:
+            print(f'{cand.effect.id:<30} {cand.status:<13} {cand.reason}')
+            continue
+        print(f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
+              f'{cand.delta_bic:7.1f}')
+    print(f'verdict: {result.verdict}' + (f' (tied: {", ".join(result.tied)})' if result.tied else ''))
+    if result.chosen is not None:
+        print(result.chosen.effect.describe(result.chosen.fit.params))
+    for note in result.notes:
+        print(f'note: {note}')
+    if result.what_to_record:
+        print(f'record: {result.what_to_record}')
+    if args.calibration_out:
+        from ..estimation.calibration_file import save_calibration
+        save_calibration(result.calibration(), args.calibration_out)
+        print(f'wrote {args.calibration_out}')
+    if args.report:
+        from ..diagnosis import write_report
+        page = write_report(result, args.report)
+        print(f'wrote {page}')
+    print(f'wrote {args.json}')
+    return 0

@@ -1,0 +1,109 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Reading the package's YAML files into dataclasses, with one-line errors that name the file.
+
+:func:`read_yaml` parses a file, :func:`read_section` finds a mapping in it
+(``actuator:``, ``rig_simulator: rig:``), and :func:`coerce_fields` turns that
+mapping into keyword arguments of a dataclass, typed by the fields' defaults.
+Every failure is a :class:`~prsm_lube_ros.errors.ConfigError` naming the file.
+Imports only :mod:`.errors` and :mod:`.validation`.
+"""
+from __future__ import annotations
+
+from dataclasses import fields, MISSING
+from pathlib import Path
+from typing import Iterable
+
+from .errors import ConfigError, InputError
+from .validation import as_number
+
+
+def read_yaml(path: str | Path, what: str):
+    """The parsed document of ``path``; :class:`ConfigError` naming the file (``what`` says which kind).
+
+    A missing file, an unreadable one, invalid YAML and text that is not UTF-8 each give one line.
+    """
+    import yaml
+    path = Path(path)
+    try:
+        return yaml.safe_load(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f'{path}: {what} not found') from None
+    except IsADirectoryError:
+        raise ConfigError(f'{path}: {what} is a folder, not a file') from None
+    except OSError as exc:
+        raise ConfigError(f'{path}: cannot read {what} ({exc.strerror or exc})') from None
+    except UnicodeDecodeError:
+        raise ConfigError(f'{path}: {what} is not text (not UTF-8)') from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
+
+
+def read_section(path: str | Path, keys: Iterable[str], what: str) -> dict:
+    """The mapping under ``keys`` (outermost first) of a YAML file; a missing section is empty.
+
+    The outermost key may be left out (a file holding just the inner mapping).
+    """
+    path = Path(path)
+    keys = list(keys)
+    document = read_yaml(path, what)
+    node = document if document is not None else {}
+    if isinstance(node, dict) and keys and keys[0] in node:
+        node = node[keys[0]]
+    if node is None:
+        node = {}
+    if not isinstance(node, dict):
+        raise ConfigError(f'{path}: expected a mapping under "{keys[0]}:"')
+    for depth, key in enumerate(keys[1:], start=2):
+        node = node.get(key) or {}
+        if not isinstance(node, dict):
+            raise ConfigError(f'{path}: expected a mapping under "{": ".join(keys[:depth])}:"')
+    return node
+
+
+def coerce_fields(path: str | Path, kind, values: dict, skip: Iterable[str] = (), label: str = '') -> dict:
+    """Keyword arguments of dataclass ``kind`` from a YAML mapping, each typed like its field's default.
+
+    Unknown keys, a list where a number belongs, text where a number belongs,
+    a fraction for a whole-number field: one :class:`ConfigError` naming the file and key
+    (``label`` names the section in messages; default the dataclass's name).
+    """
+    skip = set(skip)
+    known = {f.name: f for f in fields(kind)}
+    unknown = sorted(set(values) - set(known) - skip)
+    if unknown:
+        raise ConfigError(f'{path}: unknown {label or kind.__name__} field(s) {", ".join(map(str, unknown))}')
+    result = {}
+    for key, value in values.items():
+        if key in skip:
+            continue
+        default = known[key].default
+        if default is MISSING and known[key].default_factory is not MISSING:
+            default = known[key].default_factory()
+        name = f'{path}: {key}'
+        if isinstance(default, tuple):
+            if not isinstance(value, (list, tuple)):
+                raise ConfigError(f'{name} must be a list, got {value!r}')
+            result[key] = tuple(value)
+        elif isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise ConfigError(f'{name} must be true or false, got {value!r}')
+            result[key] = value
+        elif isinstance(default, str):
+            result[key] = str(value)
+        elif isinstance(default, int):
+            number = as_number(name, value)
+            if number != int(number):
+                raise ConfigError(f'{name} must be a whole number, got {value!r}')
+            result[key] = int(number)
+        else:
+            result[key] = as_number(name, value)
+    return result
+
+
+def build(path: str | Path, kind, values: dict, **extra):
+    """``kind(**values, **extra)``; a validation error of the dataclass is prefixed with the file."""
+    try:
+        return kind(**values, **extra)
+    except InputError as exc:
+        raise ConfigError(f'{path}: {exc}') from None

@@ -1,0 +1,239 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""theta_Oil and its one-sigma uncertainty for windows and runs (Eq. 23).
+
+Uncertainty is propagated to first order from two sources:
+
+* the scatter of the measured RMS: for a window, the window-to-window scatter
+  of ln(RMS) seen at calibration (``Calibration.residual_std``); for a run,
+  the scatter of its own windows' ln(RMS) divided by sqrt(n);
+* the covariance of (ln C_sys, C_F, C_lambda) from the calibration fit.
+
+With ``g = C_lambda omega^0.68 F^-0.073`` Eq. 23 has the partial derivatives
+``d theta/d ln A = -1/g``, ``d theta/d ln C_sys = 1/g``,
+``d theta/d C_F = F/g`` and ``d theta/d C_lambda = -theta/C_lambda``.
+
+Where Eq. 23 means nothing (screw at rest or crawling, no load, no film term,
+no vibration) theta is NaN and ``reason`` says why, in words.
+
+A calibration with a model extension (``Calibration.extension``, written by
+``prsm-lube diagnose``) is honoured: each window's RMS is first mapped back to
+the amplitude Eq. 22 describes and theta_Oil divided by the extension's film
+factor (see :mod:`prsm_lube_ros.estimation.extension`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from ..physics.vibration_model import film_speed_load_term, lubrication_index
+from .calibration import Calibration
+from .windowing import Window
+
+#: Default smallest axial load, N, at which Eq. 23 is evaluated (the nut is unloaded below it).
+MIN_AXIAL_LOAD = 5.0
+
+
+@dataclass(frozen=True)
+class WindowAssessment:
+    """theta_Oil of one window."""
+
+    window: Window
+    theta_oil: float
+    theta_oil_std: float
+    reason: str = ''
+
+
+@dataclass(frozen=True)
+class RunAssessment:
+    """theta_Oil of one run (the steady windows of one traverse)."""
+
+    bag: str
+    run_index: int
+    start: float            # s since the epoch, first steady window
+    end: float              # s since the epoch, last steady window
+    screw_speed: float      # rad/s
+    axial_load: float       # N
+    vibration_rms: float    # m/s^2 over the run's steady windows
+    theta_oil: float
+    theta_oil_std: float
+    windows: int
+    temperature: float = math.nan
+    reason: str = ''
+
+    def as_json(self) -> dict:
+        """Mapping for the contract's ``runs`` list (plus extra fields)."""
+        return {'bag': self.bag, 'start': self.start, 'end': self.end,
+                'screw_speed': self.screw_speed, 'axial_load': self.axial_load,
+                'vibration_rms': self.vibration_rms, 'theta_oil': self.theta_oil,
+                'theta_oil_std': self.theta_oil_std, 'run_index': self.run_index,
+                'windows': self.windows, 'temperature': _json_float(self.temperature),
+                'reason': self.reason}
+
+
+def _json_float(value: float):
+    return value if math.isfinite(value) else None
+
+
+class Assessor:
+    """Evaluates Eq. 23 with a calibration, for windows and for runs."""
+
+    def __init__(self, calibration: Calibration, min_axial_load: float = MIN_AXIAL_LOAD):
+        self.calibration = calibration
+        self.min_axial_load = float(min_axial_load)
+
+    def _not_assessable(self, window_or_values) -> str:
+        speed, load, rms = window_or_values
+        if not (math.isfinite(rms) and rms > 0):
+            return 'no vibration: the RMS is zero or missing'
+        if not (math.isfinite(load) and load >= self.min_axial_load):
+            return (f'axial load {load:.3g} N is below {self.min_axial_load:.3g} N: Eq. 23 needs the nut '
+                    'under load')
+        if not (math.isfinite(speed) and speed > 0):
+            return 'screw at rest: Eq. 23 needs a screw speed'
+        return ''
+
+    def theta(self, rms: float, speed: float, load: float, ln_rms_var: float) -> tuple[float, float]:
+        """theta_Oil (Eq. 23) and its one-sigma uncertainty for one amplitude, speed and load.
+
+        ``ln_rms_var`` is the variance of ln(rms) from measurement scatter.
+        """
+        theta, std = self.thetas(np.array([rms], float), np.array([speed], float), np.array([load], float),
+                                 np.array([ln_rms_var], float))
+        return float(theta[0]), float(std[0])
+
+    def thetas(self, rms: np.ndarray, speed: np.ndarray, load: np.ndarray,
+               ln_rms_var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`theta` element by element for arrays of amplitudes, speeds, loads and ln(rms) variances.
+
+        Each element gets the same numbers whatever the length of the arrays, so
+        one window, all windows of a recording and runs are evaluated alike.
+        NaN (theta and std) where Eq. 23 has no finite value.
+        """
+        constants = self.calibration.constants
+        theta = np.asarray(lubrication_index(rms, speed, load, constants), float).reshape(-1)
+        std = np.full(theta.shape, math.nan)
+        ok = np.isfinite(theta)
+        theta[~ok] = math.nan
+        if ok.any():
+            g = constants.c_lambda * film_speed_load_term(speed[ok], load[ok])
+            gradient = np.stack((1.0 / g, np.abs(load[ok]) / g, -theta[ok] / constants.c_lambda), axis=-1)
+            parameters = (gradient[:, None, :] @ self.calibration.covariance @ gradient[:, :, None])[:, 0, 0]
+            variance = ln_rms_var[ok] / g ** 2 + parameters
+            std[ok] = np.sqrt(np.maximum(variance, 0.0))
+        return theta, std
+
+    def _through_extension(self, windows: Sequence[Window]) -> tuple[np.ndarray, np.ndarray]:
+        """Window RMS mapped to Eq. 22's amplitude and the film factor of the calibration's extension."""
+        rms = np.array([w.vibration_rms for w in windows], dtype=float)
+        if not self.calibration.extension:
+            return rms, np.ones_like(rms)
+        from .extension import eq22_inputs
+        return eq22_inputs(self.calibration.extension, windows, rms)
+
+    def assess_window(self, window: Window) -> WindowAssessment:
+        """theta_Oil of one window, NaN with the reason where it is not assessable."""
+        return self.assess_windows([window])[0]
+
+    def assess_windows(self, windows: Iterable[Window]) -> list[WindowAssessment]:
+        """:meth:`assess_window` for each window, evaluated for all of them at once."""
+        windows = list(windows)
+        theta = np.full(len(windows), math.nan)
+        std = np.full(len(windows), math.nan)
+        reasons = [w.reason for w in windows]
+        steady = [i for i, w in enumerate(windows) if w.steady]
+        if steady:
+            speed = np.array([windows[i].screw_speed for i in steady], float)
+            load = np.array([windows[i].axial_load for i in steady], float)
+            rms = np.array([windows[i].vibration_rms for i in steady], float)
+            with np.errstate(invalid='ignore'):
+                assessable = (np.isfinite(rms) & (rms > 0) & np.isfinite(load) & (load >= self.min_axial_load)
+                              & np.isfinite(speed) & (speed > 0))
+            for j in np.flatnonzero(~assessable).tolist():
+                reasons[steady[j]] = self._not_assessable((float(speed[j]), float(load[j]), float(rms[j])))
+            rows = [steady[j] for j in np.flatnonzero(assessable).tolist()]
+            if rows:
+                amplitude, factor = self._through_extension([windows[i] for i in rows])
+                values, errors = self.thetas(amplitude, speed[assessable], load[assessable],
+                                             np.full(len(rows), self.calibration.residual_std ** 2))
+                with np.errstate(divide='ignore', invalid='ignore'):
+                    values, errors = values / factor, errors / np.abs(factor)
+                finite = np.isfinite(values)
+                theta[rows] = np.where(finite, values, math.nan)
+                std[rows] = np.where(finite, errors, math.nan)
+                for j in np.flatnonzero(~finite).tolist():
+                    reasons[rows[j]] = 'Eq. 23 has no finite value for this window'
+        return [WindowAssessment(w, t, s, r) for w, t, s, r in zip(windows, theta.tolist(), std.tolist(), reasons)]
+
+    def assess_runs(self, assessed: Sequence[WindowAssessment], bag: str = '') -> list[RunAssessment]:
+        """One :class:`RunAssessment` per run that has steady windows, in run order."""
+        by_run: dict[int, list[Window]] = {}
+        for item in assessed:
+            if item.window.steady:
+                by_run.setdefault(item.window.run_index, []).append(item.window)
+        return self._assess_runs([windows for _, windows in sorted(by_run.items())], bag)
+
+    def assess_run(self, windows: Sequence[Window], bag: str = '') -> RunAssessment:
+        """theta_Oil of a run from its steady windows' pooled RMS, mean speed and load."""
+        return self._assess_runs([list(windows)], bag)[0]
+
+    def _assess_runs(self, runs: Sequence[Sequence[Window]], bag: str) -> list[RunAssessment]:
+        """:meth:`assess_run` for each run: pooled per run, Eq. 23 for all runs at once."""
+        if not runs:
+            return []
+        everything = [w for windows in runs for w in windows]
+        amplitudes, factors = self._through_extension(everything)
+        # The same numpy reductions as np.average, np.nanmean and np.var per run, on slices of one array each.
+        counts_all = np.array([w.sample_count for w in everything], dtype=float)
+        rms_all = np.array([w.vibration_rms for w in everything], dtype=float)
+        speed_all = np.array([w.screw_speed for w in everything], dtype=float)
+        load_all = np.array([w.axial_load for w in everything], dtype=float)
+        temps_all = np.array([w.temperature for w in everything], dtype=float)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            log_rms_all = np.log(rms_all)
+            weighted = [counts_all * rms_all ** 2, counts_all * amplitudes ** 2, counts_all * factors,
+                        counts_all * speed_all, counts_all * load_all]
+        temp_known = ~np.isnan(temps_all)
+        temps_zeroed = np.where(temp_known, temps_all, 0.0)
+        temp_finite = np.isfinite(temps_all)
+        pooled = []
+        first = 0
+        for windows in runs:
+            n = len(windows)
+            last = first + n
+            total = np.sum(counts_all[first:last])
+            sq_sum, amp_sum, factor_sum, speed_sum, load_sum = (float(np.sum(w[first:last])) for w in weighted)
+            rms = float(np.sqrt(sq_sum / total))
+            amplitude = float(np.sqrt(amp_sum / total))
+            factor, speed, load = float(factor_sum / total), float(speed_sum / total), float(load_sum / total)
+            if temp_finite[first:last].any():
+                temperature = float(np.sum(temps_zeroed[first:last]) / np.count_nonzero(temp_known[first:last]))
+            else:
+                temperature = math.nan
+            if n >= 3:
+                logs = log_rms_all[first:last]
+                deviation = logs - np.sum(logs) / n
+                ln_var = float(np.sum(deviation * deviation) / (n - 1)) / n
+            else:
+                ln_var = self.calibration.residual_std ** 2 / n
+            pooled.append((rms, amplitude, factor, speed, load, temperature, ln_var,
+                           self._not_assessable((speed, load, rms))))
+            first = last
+        rms, amplitude, factor, speed, load, temperature, ln_var, reasons = (list(c) for c in zip(*pooled))
+        theta, std = self.thetas(np.array(amplitude), np.array(speed), np.array(load), np.array(ln_var))
+        with np.errstate(divide='ignore', invalid='ignore'):
+            theta, std = theta / np.array(factor), std / np.abs(factor)
+        results = []
+        for i, windows in enumerate(runs):
+            reason = reasons[i]
+            theta_i, std_i = (math.nan, math.nan) if reason else (float(theta[i]), float(std[i]))
+            if not reason and not math.isfinite(theta_i):
+                reason = 'Eq. 23 has no finite value for this run'
+            results.append(RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
+                                         end=windows[-1].end, screw_speed=speed[i], axial_load=load[i],
+                                         vibration_rms=rms[i], theta_oil=theta_i, theta_oil_std=std_i,
+                                         windows=len(windows), temperature=temperature[i], reason=reason))
+        return results

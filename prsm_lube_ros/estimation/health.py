@@ -1,0 +1,186 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Diagnostic level of one actuator's lubrication: thresholds, hysteresis, staleness.
+
+Pure logic, no ROS import: the estimator node feeds it each window's theta_Oil
+and the node-clock time of each vibration message, and turns
+:meth:`HealthMonitor.status` into a ``diagnostic_msgs/DiagnosticStatus``.
+
+Levels follow ``diagnostic_msgs/DiagnosticStatus``: OK=0, WARN=1, ERROR=2,
+STALE=3.  The rules:
+
+* theta_Oil below ``warn_below`` is WARN, below ``error_below`` is ERROR; a
+  worse level is taken at once, a better one only when theta_Oil rises above
+  the threshold plus ``hysteresis`` (so a theta hovering at a threshold does
+  not make the level flicker);
+* a window that cannot be assessed (NaN theta: screw at rest, no load, blocks
+  lost) does not change the theta level; the message says "not assessable:
+  <reason>".  Only when ``max_unassessed_windows`` consecutive windows in a
+  row cannot be assessed *while the screw moves* (an input problem, not a
+  pause) is the status raised to at least WARN; a screw at rest never is;
+* STALE when no vibration arrived for ``stale_timeout`` s of node clock (and
+  before the first one); the theta level is kept and comes back with the
+  inputs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from ..errors import InputError
+
+OK = 0
+WARN = 1
+ERROR = 2
+STALE = 3
+
+LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
+
+
+@dataclass(frozen=True)
+class HealthThresholds:
+    """Where the levels change, theta_Oil dimensionless, times in s of node clock."""
+
+    warn_below: float = 0.85
+    error_below: float = 0.70
+    hysteresis: float = 0.03
+    stale_timeout: float = 5.0
+    max_unassessed_windows: int = 30   # 0: never raise for windows that cannot be assessed
+
+    def __post_init__(self):
+        """Reject thresholds that cannot order the levels."""
+        numbers = {'warn_below': self.warn_below, 'error_below': self.error_below,
+                   'hysteresis': self.hysteresis, 'stale_timeout': self.stale_timeout}
+        for name, value in numbers.items():
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                raise InputError(f'health threshold {name}={value!r} must be a finite number')
+        if not self.error_below < self.warn_below:
+            raise InputError(f'health thresholds: error_below ({self.error_below}) must be below '
+                             f'warn_below ({self.warn_below})')
+        if not 0 <= self.hysteresis < self.warn_below - self.error_below:
+            raise InputError(f'health threshold hysteresis={self.hysteresis} must be >= 0 and smaller than '
+                             f'warn_below - error_below ({self.warn_below - self.error_below:.3g})')
+        if not self.stale_timeout > 0:
+            raise InputError(f'health threshold stale_timeout={self.stale_timeout} s must be > 0')
+        if not (isinstance(self.max_unassessed_windows, int) and self.max_unassessed_windows >= 0):
+            raise InputError(f'health threshold max_unassessed_windows={self.max_unassessed_windows!r} '
+                             'must be an integer >= 0')
+
+
+def theta_level(theta: float, previous: int | None, thresholds: HealthThresholds) -> int:
+    """Level for a finite theta_Oil given the previous theta level (None: no previous), with hysteresis.
+
+    Worsening is immediate (theta < threshold); improving needs theta above
+    threshold + hysteresis.
+    """
+    t = thresholds
+    if theta < t.error_below:
+        return ERROR
+    if theta < t.warn_below:
+        if previous == ERROR and not theta > t.error_below + t.hysteresis:
+            return ERROR
+        return WARN
+    # theta >= warn_below
+    if previous in (WARN, ERROR) and not theta > t.warn_below + t.hysteresis:
+        return WARN
+    return OK
+
+
+@dataclass(frozen=True)
+class HealthStatus:
+    """What the diagnostic status says right now."""
+
+    level: int
+    message: str
+    theta_level: int | None        # level from the last assessed theta (None before the first)
+    unassessed_windows: int        # consecutive windows without a theta
+
+
+class HealthMonitor:
+    """Level and message of one actuator, updated window by window."""
+
+    def __init__(self, thresholds: HealthThresholds | None = None):
+        self.thresholds = thresholds or HealthThresholds()
+        self._theta_level: int | None = None
+        self._theta = math.nan
+        self._theta_std = math.nan
+        self._unassessed = 0
+        self._unassessed_moving = 0
+        self._reason = ''
+        self._last_input: float | None = None
+        self._message = 'no window evaluated yet'
+
+    def set_thresholds(self, thresholds: HealthThresholds) -> None:
+        """New thresholds; the theta level is re-judged at the next assessed window."""
+        self.thresholds = thresholds
+
+    def note_input(self, now: float) -> None:
+        """A vibration message arrived at node-clock time ``now`` (s)."""
+        self._last_input = now
+
+    def observe(self, theta: float, theta_std: float = math.nan, reason: str = '',
+                moving: bool = True) -> int:
+        """Take one window's theta_Oil (NaN with ``reason`` when not assessable); return the theta level.
+
+        ``moving`` says whether the screw turned in that window (a NaN window at
+        rest is a pause, not a problem).
+        """
+        if math.isfinite(theta):
+            self._theta_level = theta_level(theta, self._theta_level, self.thresholds)
+            self._theta, self._theta_std = theta, theta_std
+            self._unassessed = self._unassessed_moving = 0
+            self._reason = ''
+            t = self.thresholds
+            std = f' +/- {theta_std:.3f}' if math.isfinite(theta_std) else ''
+            if self._theta_level == ERROR:
+                why = (f'below the error threshold {t.error_below:g}' if theta < t.error_below else
+                       f'not yet above {t.error_below + t.hysteresis:g} (error threshold + hysteresis)')
+                self._message = f'lubrication insufficient: theta_oil {theta:.3f}{std} {why}'
+            elif self._theta_level == WARN:
+                why = (f'below the warning threshold {t.warn_below:g}' if theta < t.warn_below else
+                       f'not yet above {t.warn_below + t.hysteresis:g} (warning threshold + hysteresis)')
+                self._message = f'lubrication degraded: theta_oil {theta:.3f}{std} {why}'
+            else:
+                self._message = f'lubrication good: theta_oil {theta:.3f}{std}'
+        else:
+            self._unassessed += 1
+            self._unassessed_moving = self._unassessed_moving + 1 if moving else 0
+            self._reason = reason or 'theta_oil is not a number'
+            self._message = f'not assessable: {self._reason}'
+            if self._theta_level is not None:
+                self._message += (f'; last theta_oil {self._theta:.3f} '
+                                  f'({LEVEL_NAMES[self._theta_level]})')
+        return self._theta_level if self._theta_level is not None else OK
+
+    def stale_for(self, now: float) -> float:
+        """Seconds since the last vibration message (inf before the first)."""
+        return math.inf if self._last_input is None else now - self._last_input
+
+    def status(self, now: float) -> HealthStatus:
+        """Level and message at node-clock time ``now`` (s)."""
+        t = self.thresholds
+        silent = self.stale_for(now)
+        if silent > t.stale_timeout:
+            if self._last_input is None:
+                message = 'no vibration received yet'
+            else:
+                message = f'inputs stopped: no vibration for {silent:.1f} s (stale_timeout {t.stale_timeout:g} s)'
+            if self._theta_level is not None:
+                message += f'; last theta_oil {self._theta:.3f} ({LEVEL_NAMES[self._theta_level]})'
+            return HealthStatus(STALE, message, self._theta_level, self._unassessed)
+        level = self._theta_level if self._theta_level is not None else OK
+        message = self._message
+        if t.max_unassessed_windows and self._unassessed_moving >= t.max_unassessed_windows:
+            level = max(level, WARN)
+            message = (f'not assessable for {self._unassessed_moving} windows while the screw moves: '
+                       f'{self._reason}')
+            if self._theta_level is not None:
+                message += f'; last theta_oil {self._theta:.3f} ({LEVEL_NAMES[self._theta_level]})'
+        return HealthStatus(level, message, self._theta_level, self._unassessed)
+
+
+def format_value(value) -> str:
+    """A diagnostic KeyValue string: numbers with 6 significant digits, NaN as 'nan'."""
+    if isinstance(value, float):
+        return f'{value:.6g}'
+    return str(value)

@@ -1,0 +1,578 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Streaming windows over the inputs: RMS, speed, load and run of each window.
+
+The same :class:`WindowBuilder` serves recordings and live topics, so a replay
+assessed live gives the windows ``prsm-lube assess`` gives.  Windows lie on a
+fixed grid of absolute time, ``[k L, (k + 1) L)`` for window length ``L``, so
+they do not depend on where a recording or a subscription starts.
+
+Runs (traverses at one speed and load) and their steady part are found from the
+``screw`` velocity alone (CONTRACT.md): a run starts when the screw speed rises
+above ``min_speed`` after standstill; a window is steady when its speed is
+above ``min_speed`` and varies by less than ``max_speed_spread`` inside it,
+which leaves out acceleration and deceleration.
+
+Memory stays flat: only windows that can still receive data are open; a window
+is closed once every input stream has passed its end by ``completion_delay``
+(a stream silent for ``stale_timeout`` while others advance stops holding
+windows open, so lost topics give NaN windows with a reason, not a stall).
+Bad input (non-finite samples, empty blocks, rates <= 0, stamps going back)
+is left out and reported once per kind through ``problems``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+
+from ..errors import InputError
+from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+
+#: Streams whose progress closes windows.
+GATING_STREAMS = ('vibration', 'screw', 'load')
+
+
+@dataclass(frozen=True)
+class WindowSettings:
+    """How windows are cut and judged; all times in s, speeds in rad/s."""
+
+    window_length: float = 1.0
+    min_speed: float = 1.0
+    max_speed_spread: float = 0.03
+    min_coverage: float = 0.8
+    completion_delay: float = 0.5
+    stale_timeout: float = 3.0
+    reset_after_backstep: float = 5.0
+    spectrum_segment: int = 0
+
+    def __post_init__(self):
+        """Reject settings that cannot cut windows."""
+        checks = {
+            'window_length': self.window_length > 0,
+            'min_speed': self.min_speed > 0,
+            'max_speed_spread': self.max_speed_spread > 0,
+            'min_coverage': 0 < self.min_coverage <= 1,
+            'completion_delay': self.completion_delay >= 0,
+            'stale_timeout': self.stale_timeout > 0,
+            'reset_after_backstep': self.reset_after_backstep > 0,
+            'spectrum_segment': self.spectrum_segment >= 0,
+        }
+        for name, ok in checks.items():
+            value = getattr(self, name)
+            if not (ok and math.isfinite(value)):
+                raise InputError(f'window setting {name}={value!r} is out of range')
+
+
+@dataclass(frozen=True)
+class Window:
+    """One closed window of the inputs.
+
+    ``reason`` is empty for a steady window; otherwise it says in words why the
+    window is not steady (and so not assessable).
+    """
+
+    start: float                # s since the epoch
+    end: float                  # s since the epoch
+    vibration_rms: float        # m/s^2 over the samples present (NaN if none)
+    sample_count: int           # finite vibration samples in the window
+    coverage: float             # sample_count / (window_length * sample_rate)
+    screw_speed: float          # rad/s, mean magnitude (NaN if no screw state)
+    speed_spread: float         # (max - min) / mean of the speed magnitude
+    axial_load: float           # N, mean magnitude (NaN if no load)
+    temperature: float          # degC, mean (NaN if not recorded)
+    nut_position: float         # m, mean nut travel since the run's motion start (NaN if unknown)
+    revolutions: float          # screw revolutions turned since the builder started, at the window end
+    run_index: int              # run counter (0 before the first motion)
+    steady: bool
+    reason: str = ''
+    spectrum: np.ndarray | None = field(default=None, compare=False, repr=False)
+    spectrum_resolution: float = math.nan  # Hz per spectrum bin
+
+
+# Columns of the open-window table (one row per open window, counts held exactly as float64).
+(_SUMSQ, _COUNT, _RATE, _SPEED_N, _SPEED_SUM, _SPEED_MIN, _SPEED_MAX, _TRAVEL_N, _TRAVEL_SUM,
+ _LOAD_N, _LOAD_SUM, _TEMP_N, _TEMP_SUM, _RUN_MIN, _RUN_MAX, _REVOLUTIONS) = range(16)
+_EMPTY_ROW = np.array([0.0, 0.0, 0.0, 0.0, 0.0, math.inf, -math.inf, 0.0, 0.0,
+                       0.0, 0.0, 0.0, 0.0, math.inf, -math.inf, math.nan])
+
+
+class _OpenWindows:
+    """Running sums of the windows still receiving data: one table row per window, rows sorted by key.
+
+    Windows are keyed by their grid index ``k`` (window ``[k L, (k + 1) L)``).
+    Keys need not be contiguous (a gap in a recording opens no windows), and
+    only open windows are held, so memory stays flat.
+    """
+
+    __slots__ = ('keys', 'table')
+
+    def __init__(self):
+        self.keys = np.zeros(0, np.int64)
+        self.table = np.zeros((0, _EMPTY_ROW.size))
+
+    def __len__(self) -> int:
+        return int(self.keys.size)
+
+    def rows(self, keys: np.ndarray) -> np.ndarray:
+        """Row of each of ``keys`` (sorted, unique), opening the windows not open yet."""
+        have = self.keys
+        pos = np.searchsorted(have, keys)
+        inside = pos < have.size
+        known = np.zeros(keys.size, bool)
+        known[inside] = have[pos[inside]] == keys[inside]
+        if not known.all():
+            new = keys[~known]
+            at = np.searchsorted(have, new)
+            self.keys = np.insert(have, at, new)
+            self.table = np.insert(self.table, at, _EMPTY_ROW, axis=0)
+            pos = np.searchsorted(self.keys, keys)
+        return pos
+
+    def pop_first(self, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """Remove the ``count`` earliest windows; return their keys and table rows."""
+        keys, table = self.keys[:count], self.table[:count]
+        self.keys, self.table = self.keys[count:].copy(), self.table[count:].copy()
+        return keys, table
+
+
+def _grouped(keys: np.ndarray):
+    """Sort order, unique keys, segment starts and segment sizes for reduceat over ``keys``.
+
+    The order is ``slice(None)`` when ``keys`` is sorted already (the usual case).
+    """
+    if keys.size == 1:
+        return slice(None), keys, np.zeros(1, np.int64), np.ones(1, np.int64)
+    if (keys[1:] >= keys[:-1]).all():
+        order, sorted_keys = slice(None), keys
+    else:
+        order = np.argsort(keys, kind='stable')
+        sorted_keys = keys[order]
+    starts = np.flatnonzero(np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])))
+    return order, sorted_keys[starts], starts, np.diff(np.append(starts, keys.size))
+
+
+class WindowBuilder:
+    """Turns input batches into closed :class:`Window` objects, in time order.
+
+    ``lead`` (m per screw revolution) converts screw angle to nut travel.  Feed
+    batches with :meth:`add`, collect closed windows with :meth:`pop_closed`
+    and, at the end of a recording, :meth:`finish`.  One-line problem reports
+    accumulate in :attr:`problems` (drain it with :meth:`take_problems`).
+    """
+
+    def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005):
+        self.settings = settings or WindowSettings()
+        self.lead = float(lead)
+        self._open = _OpenWindows()
+        self._chunks: dict[int, list[np.ndarray]] = {}   # spectrum samples per open window key
+        self._progress = {name: -math.inf for name in GATING_STREAMS}
+        self._closed_before = -math.inf   # every window ending at or before this is closed
+        self._moving = False
+        self._run_index = 0
+        self._run_start_angle = math.nan
+        self._last_angle = math.nan
+        self._revolutions = 0.0
+        self._problem_counts: dict[str, int] = {}
+        self.problems: list[str] = []
+        self._closed: list[Window] = []
+        self._block_stamps = np.zeros(0, np.int64)   # vibration block stamps (us) of open windows
+        self._square_buffer = np.empty(0)
+
+    # -- problem reports -------------------------------------------------
+    def _report(self, kind: str, line: str, count: int = 1):
+        """Record a problem; the first of each kind is reported in words, later ones counted."""
+        seen = self._problem_counts.get(kind, 0)
+        self._problem_counts[kind] = seen + count
+        if seen == 0:
+            self.problems.append(line)
+
+    def take_problems(self) -> list[str]:
+        """Problem lines reported since the last call."""
+        lines, self.problems = self.problems, []
+        return lines
+
+    def problem_summary(self) -> dict[str, int]:
+        """How often each kind of problem occurred so far."""
+        return dict(self._problem_counts)
+
+    # -- input -----------------------------------------------------------
+    def add(self, batch) -> None:
+        """Take one input batch of any kind (see :mod:`prsm_lube_ros.recording.batches`)."""
+        if len(batch) == 0:
+            return
+        if isinstance(batch, VibrationBatch):
+            self._add_vibration(batch)
+        elif isinstance(batch, ScrewStateBatch):
+            self._add_screw(batch)
+        elif isinstance(batch, AxialLoadBatch):
+            self._add_scalar(batch.stamps, np.abs(np.asarray(batch.forces, float)), 'load')
+        elif isinstance(batch, TemperatureBatch):
+            self._add_scalar(batch.stamps, np.asarray(batch.temperatures, float), 'temperature')
+        else:
+            raise TypeError(f'not an input batch: {type(batch).__name__}')
+
+    def _first_sight(self, stamps: np.ndarray, good: np.ndarray) -> np.ndarray:
+        """Mask of blocks whose stamp was not seen before in an open window (repeats are left out)."""
+        keep = np.ones(stamps.size, bool)
+        index = np.flatnonzero(good)
+        if index.size == 0:
+            return keep
+        keys = np.round(stamps[index] * 1e6).astype(np.int64)
+        seen = self._block_stamps   # kept sorted
+        if (keys[1:] > keys[:-1]).all() and (seen.size == 0 or keys[0] > seen[-1]):
+            fresh = np.ones(index.size, bool)   # the usual case: later than every stamp seen, in order
+            self._block_stamps = np.concatenate((seen, keys))
+        else:
+            fresh = np.zeros(index.size, bool)
+            fresh[np.unique(keys, return_index=True)[1]] = True   # first of equal stamps in this batch
+            if seen.size:
+                fresh &= ~np.isin(keys, seen)
+            self._block_stamps = np.sort(np.concatenate((seen, keys[fresh])))
+        keep[index[~fresh]] = False
+        repeats = int(index.size - np.count_nonzero(fresh))
+        if repeats:
+            self._report('vibration-repeat', f'vibration: {repeats} block(s) repeating an earlier block\'s stamp '
+                         '(stamps going backwards or repeated) left out', repeats)
+        return keep
+
+    def _check_time(self, stamps: np.ndarray, stream: str) -> np.ndarray:
+        """Mask of stamps still usable; handles non-finite stamps, back-steps and time resets."""
+        finite = np.isfinite(stamps)
+        if not finite.all():
+            self._report(f'{stream}-stamp', f'{stream}: {int((~finite).sum())} message(s) with a non-finite '
+                         'stamp left out', int((~finite).sum()))
+        if not finite.any():
+            return finite
+        latest = self._progress.get(stream, -math.inf)
+        first = float(stamps[finite].min())
+        if math.isfinite(latest) and first < latest - self.settings.reset_after_backstep:
+            self._report('time-reset', f'{stream}: stamps went back {latest - first:.3f} s '
+                         '(clock reset or replay restarted); closing open windows and starting over')
+            self._restart_time()
+        usable = finite & (stamps >= self._closed_before)
+        late = int((finite & ~usable).sum())
+        if late:
+            self._report(f'{stream}-late', f'{stream}: {late} message(s) stamped before already closed windows '
+                         '(stamps going backwards or arriving late) left out', late)
+        return usable
+
+    def _restart_time(self):
+        """Close everything open and forget time progress (after a clock reset)."""
+        self._close(math.inf)
+        self._progress = {name: -math.inf for name in GATING_STREAMS}
+        self._closed_before = -math.inf
+        self._moving = False
+        self._last_angle = math.nan
+
+    def _advance(self, stream: str, stamp: float):
+        if stamp > self._progress.get(stream, -math.inf):
+            self._progress[stream] = stamp
+
+    def _add_vibration(self, batch: VibrationBatch):
+        rates = np.asarray(batch.sample_rates, float)
+        stamps = np.asarray(batch.stamps, float)
+        offsets = np.asarray(batch.offsets, np.int64)
+        counts = np.diff(offsets)
+        good = self._check_time(stamps, 'vibration')
+        bad_rate = ~(np.isfinite(rates) & (rates > 0))
+        if (bad_rate & good).any():
+            n = int((bad_rate & good).sum())
+            self._report('vibration-rate', f'vibration: {n} block(s) with sample_rate '
+                         f'{rates[bad_rate & good][0]!r} Hz (must be > 0) left out', n)
+        empty = counts == 0
+        if (empty & good).any():
+            n = int((empty & good).sum())
+            self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
+        good &= ~bad_rate & ~empty
+        if not good.any():
+            return
+        samples = np.asarray(batch.samples).reshape(-1)
+        finite = np.isfinite(samples)
+        all_finite = bool(finite.all())
+        keep_spectra = self.settings.spectrum_segment > 0
+        if all_finite:
+            values = samples.astype(np.float64) if keep_spectra else samples
+        else:
+            n = int(samples.size - np.count_nonzero(finite))
+            self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
+            values = np.where(finite, samples.astype(np.float64), 0.0)
+        length = self.settings.window_length
+        good &= self._first_sight(stamps, good)
+        if not good.any():
+            return
+        idx = np.flatnonzero(good)
+        b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
+        b_off = offsets[idx]
+        b_end = b_stamp + (b_count - 1) / b_rate
+        k_first = np.floor(b_stamp / length).astype(np.int64)
+        k_last = np.floor(b_end / length).astype(np.int64)
+        spans = k_last - k_first + 1
+        seg_block = np.repeat(np.arange(idx.size), spans)
+        seg_k = k_first[seg_block] + (np.arange(seg_block.size)
+                                      - np.repeat(np.cumsum(spans) - spans, spans))
+        lo = np.ceil((seg_k * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
+        hi = np.ceil(((seg_k + 1) * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
+        lo = np.clip(lo, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
+        hi = np.clip(hi, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
+        seg_sumsq = _segment_sums(self._squares(values), lo, hi)
+        if all_finite:
+            seg_count = hi - lo
+        else:
+            seg_count = _segment_sums(finite.astype(np.int64), lo, hi)
+        if seg_k.size == 1:
+            keys, sumsq, count, rate = seg_k, seg_sumsq, seg_count, b_rate
+        else:
+            order, keys, starts, _ = _grouped(seg_k)
+            sumsq = np.add.reduceat(seg_sumsq[order], starts)
+            count = np.add.reduceat(seg_count[order], starts)
+            rate = np.maximum.reduceat(b_rate[seg_block][order], starts)
+        rows = self._open.rows(keys)
+        table = self._open.table
+        table[rows, _SUMSQ] += sumsq
+        table[rows, _COUNT] += count
+        table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
+        if keep_spectra:
+            for k, first, last in zip(seg_k.tolist(), lo.tolist(), hi.tolist()):
+                self._chunks.setdefault(k, []).append(values[first:last])
+        self._advance('vibration', float(b_end.max()))
+
+    def _squares(self, values: np.ndarray) -> np.ndarray:
+        """``values ** 2`` in float64, written into a buffer kept between batches (no new pages per batch)."""
+        if self._square_buffer.size < values.size:
+            self._square_buffer = np.empty(max(values.size, 2 * self._square_buffer.size))
+        squares = self._square_buffer[:values.size]
+        np.square(values, out=squares, dtype=np.float64)
+        return squares
+
+    def _add_screw(self, batch: ScrewStateBatch):
+        stamps = np.asarray(batch.stamps, float)
+        good = self._check_time(stamps, 'screw')
+        speeds = np.abs(np.asarray(batch.speeds, float))
+        angles = np.asarray(batch.angles, float)
+        bad = good & ~np.isfinite(speeds)
+        if bad.any():
+            self._report('screw-nonfinite', f'joint_states: {int(bad.sum())} screw state(s) without a finite '
+                         'velocity left out', int(bad.sum()))
+        good &= np.isfinite(speeds)
+        if not good.any():
+            return
+        if not good.all():
+            stamps, speeds, angles = stamps[good], speeds[good], angles[good]
+        if stamps.size > 1 and not (stamps[1:] >= stamps[:-1]).all():
+            order = np.argsort(stamps, kind='stable')
+            stamps, speeds, angles = stamps[order], speeds[order], angles[order]
+        # Runs: a new run starts where the speed rises to min_speed after standstill.
+        moving = speeds >= self.settings.min_speed
+        previous = np.concatenate(([self._moving], moving[:-1]))
+        starts = moving & ~previous
+        run = self._run_index + np.cumsum(starts)
+        # Nut travel from the angle at motion start (CONTRACT.md).
+        start_angle = np.where(starts, angles, np.nan)
+        start_angle[0] = start_angle[0] if starts[0] else self._run_start_angle
+        start_angle = _forward_fill(start_angle)
+        travel = np.where(moving, self.lead * (angles - start_angle) / (2 * math.pi), np.nan)
+        # Revolutions turned since the builder started.
+        steps = np.abs(np.diff(angles, prepend=self._last_angle))
+        steps[~np.isfinite(steps)] = 0.0
+        revolutions = self._revolutions + np.cumsum(steps) / (2 * math.pi)
+        self._moving = bool(moving[-1])
+        self._run_index = int(run[-1])
+        self._run_start_angle = float(start_angle[-1])
+        finite_angles = angles[np.isfinite(angles)]
+        if finite_angles.size:
+            self._last_angle = float(finite_angles[-1])
+        self._revolutions = float(revolutions[-1])
+
+        keys = np.floor(stamps / self.settings.window_length).astype(np.int64)
+        order, unique, seg, n = _grouped(keys)
+        sp = speeds[order]
+        ssum = np.add.reduceat(sp, seg)
+        smin = np.minimum.reduceat(sp, seg)
+        smax = np.maximum.reduceat(sp, seg)
+        run_sorted = run[order]
+        rmin = np.minimum.reduceat(run_sorted, seg)
+        rmax = np.maximum.reduceat(run_sorted, seg)
+        tr = travel[order]
+        tr_ok = np.isfinite(tr)
+        tsum = np.add.reduceat(np.where(tr_ok, tr, 0.0), seg)
+        tn = np.add.reduceat(tr_ok.astype(np.int64), seg)
+        rev_last = revolutions[order][seg + n - 1]
+        rows = self._open.rows(unique)
+        table = self._open.table
+        table[rows, _SPEED_N] += n
+        table[rows, _SPEED_SUM] += ssum
+        table[rows, _SPEED_MIN] = np.minimum(table[rows, _SPEED_MIN], smin)
+        table[rows, _SPEED_MAX] = np.maximum(table[rows, _SPEED_MAX], smax)
+        table[rows, _TRAVEL_N] += tn
+        table[rows, _TRAVEL_SUM] += tsum
+        table[rows, _RUN_MIN] = np.minimum(table[rows, _RUN_MIN], rmin)
+        table[rows, _RUN_MAX] = np.maximum(table[rows, _RUN_MAX], rmax)
+        table[rows, _REVOLUTIONS] = rev_last
+        self._advance('screw', float(stamps[-1]))
+
+    def _add_scalar(self, stamps, values, stream: str):
+        stamps = np.asarray(stamps, float)
+        good = self._check_time(stamps, stream)
+        bad = good & ~np.isfinite(values)
+        if bad.any():
+            topic = 'axial_load' if stream == 'load' else stream
+            self._report(f'{stream}-nonfinite', f'{topic}: {int(bad.sum())} non-finite value(s) left out',
+                         int(bad.sum()))
+        good &= np.isfinite(values)
+        if not good.any():
+            return
+        keys = np.floor(stamps[good] / self.settings.window_length).astype(np.int64)
+        order, unique, seg, n = _grouped(keys)
+        vals = values[good][order]
+        sums = np.add.reduceat(vals, seg)
+        count_column, sum_column = (_LOAD_N, _LOAD_SUM) if stream == 'load' else (_TEMP_N, _TEMP_SUM)
+        rows = self._open.rows(unique)
+        table = self._open.table
+        table[rows, count_column] += n
+        table[rows, sum_column] += sums
+        if stream in self._progress:
+            self._advance(stream, float(stamps[good].max()))
+
+    # -- closing ---------------------------------------------------------
+    def _close_ready(self):
+        """Close windows every live stream has passed by ``completion_delay``."""
+        known = [p for p in self._progress.values() if math.isfinite(p)]
+        if not known:
+            return
+        lead = max(known)
+        live = [p for p in known if p >= lead - self.settings.stale_timeout]
+        horizon = min(live) - self.settings.completion_delay
+        self._close(horizon)
+
+    def _close(self, horizon: float):
+        length = self.settings.window_length
+        keys = self._open.keys
+        ready = int(np.count_nonzero((keys + 1) * length <= horizon)) if keys.size else 0
+        if ready:   # keys are sorted, so the ready windows are the first ones
+            self._closed.extend(self._finish_windows(*self._open.pop_first(ready)))
+        if math.isfinite(horizon):
+            self._closed_before = max(self._closed_before, math.floor(horizon / length) * length)
+            floor = int(round(self._closed_before * 1e6))
+            self._block_stamps = self._block_stamps[self._block_stamps >= floor]
+        else:
+            self._block_stamps = self._block_stamps[:0]
+
+    def pop_closed(self) -> list[Window]:
+        """Close what every live stream has passed and return the closed windows, in time order.
+
+        Call it after adding all batches of one time slice (a live node: after
+        each message), so a stream is not judged stale within a slice.
+        """
+        self._close_ready()
+        closed, self._closed = self._closed, []
+        return closed
+
+    def finish(self) -> list[Window]:
+        """Close every open window (end of a recording) and return what was not yet popped."""
+        self._close(math.inf)
+        closed, self._closed = self._closed, []
+        return closed
+
+    def _finish_windows(self, keys: np.ndarray, table: np.ndarray) -> list[Window]:
+        """Closed windows from the keys and table rows of windows leaving the open set, in key order."""
+        s = self.settings
+        length = s.window_length
+        count, rate, speed_n = table[:, _COUNT], table[:, _RATE], table[:, _SPEED_N]
+        with np.errstate(divide='ignore', invalid='ignore'):
+            rms = np.where(count > 0, np.sqrt(table[:, _SUMSQ] / count), math.nan)
+            coverage = np.where(rate > 0, count / (length * rate), 0.0)
+            speed = np.where(speed_n > 0, table[:, _SPEED_SUM] / speed_n, math.nan)
+            spread = np.where((speed_n > 0) & (speed > 0),
+                              (table[:, _SPEED_MAX] - table[:, _SPEED_MIN]) / speed, math.nan)
+            load = _mean(table[:, _LOAD_SUM], table[:, _LOAD_N])
+            temperature = _mean(table[:, _TEMP_SUM], table[:, _TEMP_N])
+            position = _mean(table[:, _TRAVEL_SUM], table[:, _TRAVEL_N])
+        # Steady unless one of _unsteady_reason's tests fires; only the others get a reason in words.
+        maybe_steady = ((count > 0) & ~(coverage < s.min_coverage) & (speed_n > 0) & ~(speed < s.min_speed)
+                        & ~(spread > s.max_speed_spread) & (table[:, _RUN_MIN] == table[:, _RUN_MAX])
+                        & (table[:, _LOAD_N] > 0))
+        run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
+        spectra = [(None, math.nan)] * keys.size
+        if s.spectrum_segment > 0:
+            for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
+                chunks = self._chunks.pop(k, None)
+                if chunks and rate_k > 0:
+                    spectra[row] = _power_spectrum(np.concatenate(chunks), rate_k, s.spectrum_segment)
+        columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
+                      count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
+                      load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
+                      run_index.tolist(), maybe_steady.tolist(), table, spectra)
+        windows = []
+        for (start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
+             revolutions_k, run_k, steady_k, row, (spectrum, resolution)) in columns:
+            reason = '' if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
+            # Positional, in field order (start ... spectrum_resolution): a third cheaper than keywords.
+            windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
+                                  position_k, revolutions_k, run_k, not reason, reason, spectrum, resolution))
+        return windows
+
+
+def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``sums / counts`` where counts > 0, NaN elsewhere."""
+    return np.where(counts > 0, sums / counts, math.nan)
+
+
+def _unsteady_reason(s: WindowSettings, row: np.ndarray, coverage: float, speed: float, spread: float) -> str:
+    """Why a closed window (its open-table row and derived values) is not steady, in words; '' if it is."""
+    if row[_COUNT] == 0:
+        return 'no vibration samples in the window'
+    if coverage < s.min_coverage:
+        return (f'vibration covers {100 * coverage:.0f}% of the window '
+                f'(< {100 * s.min_coverage:.0f}%): blocks lost')
+    if row[_SPEED_N] == 0:
+        return 'no screw speed in the window (joint_states entry "screw")'
+    if speed < s.min_speed:
+        return f'screw at rest or crawling ({speed:.3g} rad/s < min_speed {s.min_speed:.3g} rad/s)'
+    if spread > s.max_speed_spread:
+        return (f'screw speed not steady (varies {100 * spread:.1f}% > {100 * s.max_speed_spread:.1f}%):'
+                ' acceleration or deceleration')
+    if row[_RUN_MIN] != row[_RUN_MAX]:
+        return 'window spans the end of one run and the start of the next'
+    if row[_LOAD_N] == 0:
+        return 'no axial load in the window'
+    return ''
+
+
+def _segment_sums(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``values[lo[i]:hi[i]].sum()`` for each i, in one pass when the segments do not overlap."""
+    sums = np.zeros(lo.size, values.dtype)
+    full = hi > lo
+    first, last = lo[full], hi[full]
+    if first.size == 0:
+        return sums
+    if first.size > 1 and not (first[1:] >= last[:-1]).all():   # overlapping blocks: malformed offsets
+        sums[full] = [values[a:b].sum() for a, b in zip(first.tolist(), last.tolist())]
+        return sums
+    bounds = np.unique(np.concatenate((first, last)))
+    bounds = bounds[bounds < values.size]
+    sums[full] = np.add.reduceat(values, bounds)[np.searchsorted(bounds, first)]
+    return sums
+
+
+def _forward_fill(values: np.ndarray) -> np.ndarray:
+    """Replace NaNs by the last finite value before them (leading NaNs stay)."""
+    valid = np.isfinite(values)
+    if values.size == 1 or valid.all():
+        return values
+    index = np.where(valid, np.arange(values.size), 0)
+    np.maximum.accumulate(index, out=index)
+    filled = values[index]
+    filled[~valid & (np.cumsum(valid) == 0)] = np.nan
+    return filled
+
+
+def _power_spectrum(samples: np.ndarray, rate: float, segment: int):
+    """Welch power spectral density, (m/s^2)^2/Hz, and its bin width in Hz."""
+    from scipy.signal import welch
+    nperseg = min(segment, samples.size)
+    if nperseg < 8:
+        return None, math.nan
+    freqs, psd = welch(samples, fs=rate, nperseg=nperseg)
+    return psd, float(freqs[1] - freqs[0])

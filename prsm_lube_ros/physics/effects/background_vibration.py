@@ -1,0 +1,88 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Vibration not from the thread contacts, adding in power: A^2 = A_22^2 + B^2.
+
+Physics: the accelerometer on the nut also picks up the motor and its drive,
+bearings, the frame and the sensor chain.  Their vibration is uncorrelated with
+the thread-contact excitation, so powers add:
+
+    A = sqrt(A_22^2 + B^2)
+
+B does not follow the screw speed, so it matters most at low speed where A_22
+(~omega^2) is small; in the spectrum it shows as energy at fixed frequencies
+that do not move with the rotation orders.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import Extension as EffectExtension
+from ...validation import require, require_all_positive
+
+
+def total_amplitude(contact_amplitude, background_rms):
+    """``sqrt(A_22^2 + B^2)``, m/s^2."""
+    return np.hypot(np.asarray(contact_amplitude, dtype=float), background_rms)
+
+
+def log_gain(ln_contact_amplitude, background_rms: float):
+    """``ln A - ln A_22 = 0.5 ln(1 + B^2 / A_22^2)``, computed from ln A_22 without overflow."""
+    ln_contact_amplitude = np.asarray(ln_contact_amplitude, dtype=float)
+    if background_rms <= 0:
+        return np.zeros_like(ln_contact_amplitude)
+    with np.errstate(over='ignore'):
+        return 0.5 * np.log1p(np.exp(2.0 * (np.log(background_rms) - ln_contact_amplitude)))
+
+
+def contact_amplitude(total_rms, background_rms: float):
+    """``sqrt(A^2 - B^2)``: the thread-contact part of a measured RMS; NaN where A does not exceed B."""
+    total_rms = np.asarray(total_rms, dtype=float)
+    power = total_rms ** 2 - background_rms ** 2
+    return np.where(power > 0, np.sqrt(np.maximum(power, 0.0)), np.nan)
+
+
+@dataclass(frozen=True)
+class BackgroundVibration:
+    """Vibration not from the thread contacts (drive, bearings, frame), adding in power.
+
+    ``rms`` B in m/s^2 is split by power shares between fixed-frequency tones
+    (Hz, not following the rotation) and white broadband noise; present
+    whenever the rig is powered, including standstill.
+    """
+
+    rms: float                                  # m/s^2, B
+    tone_frequencies: tuple[float, ...] = (100.0, 287.0)   # Hz: drive (2x mains), frame/bearing
+    tone_shares: tuple[float, ...] = (0.4, 0.3)            # power shares of the tones
+    broadband_share: float = 0.3                           # power share of the white part
+
+    def __post_init__(self):
+        """Reject non-physical parameters; the shares must add up to 1."""
+        require_all_positive('background_vibration', rms=self.rms)
+        object.__setattr__(self, 'tone_frequencies', tuple(float(f) for f in self.tone_frequencies))
+        object.__setattr__(self, 'tone_shares', tuple(float(s) for s in self.tone_shares))
+        require(len(self.tone_frequencies) == len(self.tone_shares),
+                'background_vibration tone_frequencies and tone_shares differ in length')
+        for frequency in self.tone_frequencies:
+            require_all_positive('background_vibration', tone_frequency=frequency)
+        shares = (*self.tone_shares, self.broadband_share)
+        require(min(shares) >= 0 and abs(sum(shares) - 1.0) <= 1e-9,
+                f'background_vibration shares must be >= 0 and add up to 1, got {shares}')
+
+
+Law = BackgroundVibration
+
+
+class Extension(EffectExtension):
+    """``A = sqrt(A_22^2 + B^2)`` with ``background_rms`` B."""
+
+    id = 'background_vibration'
+
+    def log_gain(self, params, covariates, ln_a22):
+        """``0.5 ln(1 + B^2 / A_22^2)``."""
+        return log_gain(ln_a22, params['background_rms'])
+
+    def eq22_amplitude(self, params, covariates, rms):
+        """``sqrt(A^2 - B^2)``; NaN where the RMS does not exceed the background."""
+        return contact_amplitude(rms, params['background_rms'])

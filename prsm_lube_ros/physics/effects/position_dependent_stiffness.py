@@ -1,0 +1,93 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Screw shaft axial stiffness in series with the thread contacts, changing with nut position.
+
+Physics: the load path from nut to frame runs through the Hertzian thread
+contacts (stiffness k_c = k_delta F^(1/3), Eq. 17) and, in series, the
+screw shaft between the nut and the axially fixed bearing, k_s = E A / L(x)
+with L the free shaft length.  The series stiffness
+K = k_c k_s / (k_c + k_s) replaces K_0 in Eq. 14, so
+
+    X_0 = F_0 / K = (F_0 / k_c) (1 + k_c / k_s(x)),   A = A_22 (1 + k_c(F) / k_s(x)).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from . import Extension as EffectExtension
+from ...validation import require_all_positive
+from ..vibration_model import STIFFNESS_EXPONENT
+
+#: Shortest free shaft length the law is evaluated at, m (the nut cannot sit on the bearing).
+MIN_FREE_LENGTH = 1e-3
+
+
+def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float, free_length):
+    """Axial stiffness of the screw shaft between nut and fixed bearing, ``k_s = E A / L`` in N/m.
+
+    youngs_modulus E in Pa, root_diameter in m (A = pi d^2 / 4), free_length L in m.
+    """
+    area = math.pi * root_diameter ** 2 / 4.0
+    return youngs_modulus * area / np.asarray(free_length, dtype=float)
+
+
+def series_stiffness_amplification(contact_stiffness, shaft_stiffness):
+    """``K_hertz / K_series = 1 + k_c / k_s``: how much a compliant shaft in series raises X0 = F0/K."""
+    return 1.0 + np.asarray(contact_stiffness, dtype=float) / np.asarray(shaft_stiffness, dtype=float)
+
+
+def contact_stiffness_at(load, contact_stiffness: float, reference_load: float):
+    """``k_c(F) = k_c(F_ref) (|F| / F_ref)^(1/3)`` (Eq. 17, 20), N/m."""
+    return contact_stiffness * (np.abs(np.asarray(load, dtype=float)) / reference_load) ** STIFFNESS_EXPONENT
+
+
+@dataclass(frozen=True)
+class PositionDependentStiffness:
+    """Shaft compliance in series with the thread contacts, the fixed bearing beyond the far end of travel.
+
+    The free shaft length ``L(x) = free_length_at_start - x`` shrinks as the
+    nut travels by x (m, from the start of the stroke) and ``k_s = E A / L``
+    grows: the amplitude falls along the stroke, as the paper saw.
+    """
+
+    contact_stiffness: float        # N/m, k_c at reference_load
+    reference_load: float           # N
+    youngs_modulus: float           # Pa, shaft material
+    root_diameter: float            # m, shaft root diameter
+    free_length_at_start: float     # m, nut to fixed bearing at travel 0
+
+    def __post_init__(self):
+        """Reject non-physical parameters."""
+        require_all_positive('position_dependent_stiffness', **self.__dict__)
+
+    @property
+    def stiffness_ratio_at_start(self) -> float:
+        """``k_c / k_s`` at travel 0 and the reference load, dimensionless."""
+        return float(self.contact_stiffness
+                     / shaft_axial_stiffness(self.youngs_modulus, self.root_diameter, self.free_length_at_start))
+
+    def amplitude_factor(self, nut_position, axial_load):
+        """``1 + k_c(F) / k_s(x)`` for nut_position x in m and axial_load F in N."""
+        length = np.maximum(self.free_length_at_start - np.asarray(nut_position, dtype=float), MIN_FREE_LENGTH)
+        return series_stiffness_amplification(
+            contact_stiffness_at(axial_load, self.contact_stiffness, self.reference_load),
+            shaft_axial_stiffness(self.youngs_modulus, self.root_diameter, length))
+
+
+Law = PositionDependentStiffness
+
+
+class Extension(EffectExtension):
+    """Eq. 22 times ``1 + rho(x) (F/F_ref)^(1/3)``, rho(x) linear from ``ratio_at_start`` to ``ratio_at_end``."""
+
+    id = 'position_dependent_stiffness'
+
+    def log_gain(self, params, covariates, ln_a22):
+        """``ln(1 + rho(x) (F/F_ref)^(1/3))``."""
+        x = np.nan_to_num(np.asarray(covariates.position, dtype=float)) / params['stroke']
+        ratio = params['ratio_at_start'] + (params['ratio_at_end'] - params['ratio_at_start']) * x
+        contact_ratio = contact_stiffness_at(covariates.load, 1.0, params['reference_load'])
+        return np.log(series_stiffness_amplification(np.maximum(ratio, 0.0) * contact_ratio, 1.0))

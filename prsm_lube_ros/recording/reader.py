@@ -1,0 +1,542 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Recordings (rosbag2 directories, bare ``.mcap`` files) in, numpy batches of the contract's topics out.
+
+::
+
+    recording = open_recording('run.mcap', namespace='/prsm')   # InputError if unusable
+    print(recording.describe())
+    for batches in recording.slices(on_problem=print):           # one list per time slice
+        ...                                                      # VibrationBatch, ScrewStateBatch, ...
+
+What is read: ``<ns>/vibration`` (the VibrationBlock layout under any package
+name), ``<ns>/joint_states`` (the ``screw`` entry), ``<ns>/axial_load``
+(``wrench.force.z``) and, if present, ``<ns>/temperature``.  A namespace
+ending in ``/`` or ``_`` is used as a plain prefix (``/rig/left_`` reads
+``/rig/left_vibration``...).  :func:`find_actuators` lists the namespaces of a
+recording that carry a vibration topic.
+
+Slices are consecutive spans of ``slice_seconds`` of log time on a grid
+starting at the first chunk; each holds one batch per topic that has data in
+it, with values taken from the header stamps.  Memory stays at about one MCAP
+chunk plus one slice, however long the recording.
+
+MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file` and decoded in
+bulk by :mod:`prsm_lube_ros.recording.cdr`; sqlite3 (and file- or
+message-compressed) bags are read through rosbags' Reader and decoded the same
+way.  ``engine='rosbags'`` reads through rosbags (or, for a bare ``.mcap``, the
+``mcap`` package) and deserializes every message with rosbags: the slow
+reference path.
+
+Problems: :func:`open_recording` raises :class:`InputError` (one line naming
+the file) for a missing path, something that is not a bag, a bag without the
+vibration topic, a contract topic with the wrong layout, or no readable data.
+While streaming, everything readable is yielded first; then each problem is
+passed once to ``on_problem`` as one line without the path (truncation, chunks
+that do not decompress, per topic: messages that do not decode, JointStates
+without a ``screw`` entry).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from pathlib import Path
+from typing import Callable, Dict, Iterator, List, Optional
+
+import numpy as np
+import yaml
+
+from . import mcap_file
+from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
+from ..errors import InputError
+from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
+
+#: default length of one time slice, s of log time
+SLICE_SECONDS = 10.0
+#: raw bytes gathered per pseudo-chunk when reading through rosbags
+_ROSBAGS_CHUNK_BYTES = 1 << 20
+ProblemSink = Callable[[str], None]
+
+
+@dataclass
+class TopicInfo:
+    """One topic of a recording as listed at opening."""
+
+    name: str
+    msgtype: str
+    message_count: int
+    layout_problem: Optional[str] = None   # why it is not the contract layout (contract topics only)
+
+
+# -- sources: where raw messages come from ---------------------------------------------------------
+
+@dataclass
+class _RawChunk:
+    """Serialized messages of some topics, one chunk's worth: views into ``buffer``."""
+
+    start_time: int                                   # ns log time; nothing later in the file is earlier
+    buffer: np.ndarray
+    groups: Dict[str, mcap_file.MessageGroup]         # by topic
+    progress: float                                   # fraction of the recording read
+
+
+class _McapSource:
+    """One or more MCAP files (a bare file, or the files of a rosbag2 directory)."""
+
+    def __init__(self, label: str, paths: List[Path]):
+        self.label = label
+        self.paths = paths
+        self.files: List[mcap_file.McapFile] = []
+        self.problems: List[str] = []
+        self.topics: Dict[str, TopicInfo] = {}
+        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text)
+        self.start_time: Optional[int] = None
+        self.end_time: Optional[int] = None
+        for path in paths:
+            try:
+                mcap = mcap_file.McapFile(path)
+                summary = mcap.summary
+                if summary is None:
+                    summary, problems = mcap.scan()
+                    self.problems.extend(problems)
+            except mcap_file.McapProblem as problem:
+                raise InputError(f'{path}: {problem}') from None
+            except OSError as err:
+                raise InputError(f'{path}: cannot be read ({err.strerror or err})') from None
+            self.files.append(mcap)
+            self._add_listing(summary)
+
+    def _add_listing(self, summary: mcap_file.Summary):
+        for channel_id, channel in summary.channels.items():
+            schema = summary.schemas.get(channel.schema_id)
+            msgtype = schema.name if schema else '(no schema)'
+            count = summary.message_counts.get(channel_id, 0)
+            if channel.topic in self.topics:
+                self.topics[channel.topic].message_count += count
+                continue
+            self.topics[channel.topic] = TopicInfo(channel.topic, msgtype, count)
+            text = schema.data.decode('utf-8', 'replace') if schema else ''
+            self.definitions[channel.topic] = (msgtype, schema.encoding if schema else '', text,
+                                               channel.message_encoding)
+        for name, value, pick in (('start_time', summary.start_time, min), ('end_time', summary.end_time, max)):
+            if value is not None and (summary.message_counts or summary.complete):
+                old = getattr(self, name)
+                setattr(self, name, value if old is None else pick(old, value))
+
+    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
+        msgtype, encoding, text, message_encoding = self.definitions[topic]
+        if message_encoding != 'cdr':
+            return f'has message encoding {message_encoding!r}, not cdr'
+        return check_layout(kind, msgtype, encoding, text)
+
+    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        total = sum(f.size for f in self.files) or 1
+        done = 0
+        for mcap in self.files:
+            summary = mcap_file.Summary()
+            if mcap.summary is not None:
+                summary.channels.update(mcap.summary.channels)
+            for chunk in mcap.chunks(on_problem, summary):
+                groups = {}
+                for channel_id, group in chunk.groups.items():
+                    channel = summary.channels.get(channel_id)
+                    if channel is not None and channel.topic in topics:
+                        groups[channel.topic] = group
+                yield _RawChunk(chunk.start_time, chunk.buffer, groups, (done + chunk.file_offset) / total)
+            done += mcap.size
+
+
+def _pack(messages: List[tuple], progress: float) -> _RawChunk:
+    """``(topic, log_time, bytes)`` in log time order -> one pseudo-chunk."""
+    sizes = np.fromiter((len(m[2]) for m in messages), np.int64, len(messages))
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    log_times = np.fromiter((m[1] for m in messages), np.int64, len(messages))
+    topics = np.array([m[0] for m in messages])
+    buffer = np.frombuffer(b''.join(m[2] for m in messages), np.uint8)
+    groups = {}
+    for topic in np.unique(topics):
+        mask = topics == topic
+        groups[str(topic)] = mcap_file.MessageGroup(starts[mask], sizes[mask], log_times[mask])
+    return _RawChunk(int(log_times[0]), buffer, groups, progress)
+
+
+def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
+    """Gather a time-ordered stream of ``(topic, log_time, bytes)`` into chunks of about 1 MiB."""
+    pending, size = [], 0
+    for message in messages:
+        pending.append(message)
+        size += len(message[2])
+        if size >= _ROSBAGS_CHUNK_BYTES:
+            yield _pack(pending, (message[1] - start) / max(end - start, 1))
+            pending, size = [], 0
+    if pending:
+        yield _pack(pending, 1.0)
+
+
+class _RosbagsSource:
+    """A rosbag2 directory read through rosbags' Reader (sqlite3, compressed bags, reference path)."""
+
+    def __init__(self, path: Path):
+        from rosbags.rosbag2 import Reader
+        from rosbags.interfaces import MessageDefinitionFormat
+        self.label = str(path)
+        self.path = path
+        self.problems: List[str] = []
+        self.topics: Dict[str, TopicInfo] = {}
+        self.definitions: Dict[str, tuple] = {}
+        try:
+            with Reader(path) as reader:
+                encodings = {MessageDefinitionFormat.MSG: 'ros2msg', MessageDefinitionFormat.IDL: 'ros2idl'}
+                for connection in reader.connections:
+                    if connection.topic in self.topics:
+                        self.topics[connection.topic].message_count += connection.msgcount
+                        continue
+                    self.topics[connection.topic] = TopicInfo(connection.topic, connection.msgtype,
+                                                              connection.msgcount)
+                    self.definitions[connection.topic] = (
+                        connection.msgtype, encodings.get(connection.msgdef.format, ''),
+                        connection.msgdef.data or '')
+                count = reader.message_count
+                self.start_time = reader.start_time if count else None
+                self.end_time = reader.end_time - 1 if count else None
+        except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
+            raise InputError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
+
+    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
+        return check_layout(kind, *self.definitions[topic])
+
+    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        from rosbags.rosbag2 import Reader
+        try:
+            with Reader(self.path) as reader:
+                connections = [c for c in reader.connections if c.topic in topics]
+                messages = ((c.topic, t, data) for c, t, data in reader.messages(connections=connections))
+                yield from _pseudo_chunks(messages, self.start_time or 0, self.end_time or 0)
+        except Exception as err:  # keep what was read, report the rest in one line
+            on_problem(f'reading stopped early: {_reason(err)}')
+
+
+def _mcap_library_chunks(path: Path, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+    """Reference reading of a bare ``.mcap`` file with the ``mcap`` package."""
+    from mcap.reader import make_reader
+    try:
+        with open(path, 'rb') as stream:
+            reader = make_reader(stream)
+            messages = ((channel.topic, message.log_time, message.data)
+                        for _, channel, message in reader.iter_messages(topics=topics, log_time_order=True))
+            yield from _pseudo_chunks(messages, 0, 0)
+    except Exception as err:
+        on_problem(f'reading stopped early: {_reason(err)}')
+
+
+def _reason(err: BaseException) -> str:
+    text = ' '.join(str(err).split())
+    return f'{type(err).__name__}: {text}' if text else type(err).__name__
+
+
+def _open_source(path: Path):
+    """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
+    if not path.exists():
+        raise InputError(f'{path}: no such file or directory')
+    if path.is_file():
+        if path.name == 'metadata.yaml':
+            return _open_source(path.parent)
+        with open(path, 'rb') as stream:
+            magic = stream.read(len(mcap_file.MAGIC))
+        if magic != mcap_file.MAGIC:
+            if magic.startswith(b'SQLite format'):
+                raise InputError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
+                                 '(with metadata.yaml) instead')
+            raise InputError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
+        return _McapSource(str(path), [path])
+    metadata_path = path / 'metadata.yaml'
+    if not metadata_path.is_file():
+        mcaps = sorted(path.glob('*.mcap'))
+        if len(mcaps) == 1:
+            return _McapSource(str(path), mcaps)
+        raise InputError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
+    try:
+        info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
+        storage = info['storage_identifier']
+        files = [path / Path(name).name for name in info['relative_file_paths']]
+        compression = (info.get('compression_mode') or '').lower()
+    except Exception as err:
+        raise InputError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
+    if missing := [str(f) for f in files if not f.exists()]:
+        raise InputError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
+    if storage == 'mcap' and compression in ('', 'none'):
+        return _McapSource(str(path), files)
+    if storage not in ('mcap', 'sqlite3'):
+        raise InputError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
+    return _RosbagsSource(path)
+
+
+# -- slicing -----------------------------------------------------------------------------------------
+
+def _merge(parts: List[Decoded], kind: str) -> Decoded:
+    """Parts of one topic -> one, ordered by log time (stable)."""
+    if len(parts) == 1:
+        merged = parts[0]
+    else:
+        columns = {name: np.concatenate([p.columns[name] for p in parts]) for name in parts[0].columns}
+        merged = Decoded(np.concatenate([p.log_times for p in parts]), columns)
+        if kind == VIBRATION:
+            merged.samples = np.concatenate([p.samples[p.offsets[0]:p.offsets[-1]] for p in parts])
+            counts = np.concatenate([np.diff(p.offsets) for p in parts])
+            merged.offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])
+    log_times = merged.log_times
+    if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
+        order = np.argsort(log_times, kind='stable')
+        merged = Decoded(log_times[order], {k: v[order] for k, v in merged.columns.items()},
+                         merged.offsets, merged.samples)
+        if kind == VIBRATION:
+            merged.samples, merged.offsets = ragged_take(merged.samples, merged.offsets - merged.offsets[0],
+                                                         order)
+    return merged
+
+
+def _cut(decoded: Decoded, count: int):
+    """The first ``count`` messages and the rest, as views (vibration offsets stay absolute)."""
+    head = Decoded(decoded.log_times[:count], {k: v[:count] for k, v in decoded.columns.items()})
+    rest = Decoded(decoded.log_times[count:], {k: v[count:] for k, v in decoded.columns.items()})
+    if decoded.offsets is not None:
+        head.offsets, head.samples = decoded.offsets[:count + 1], decoded.samples
+        rest.offsets, rest.samples = decoded.offsets[count:], decoded.samples
+    return head, rest
+
+
+def _batch(kind: str, pieces: List[Decoded]) -> InputBatch:
+    """Pieces of one topic in log time order -> one batch."""
+    decoded = pieces[0] if len(pieces) == 1 else _merge(pieces, kind)
+    columns = decoded.columns
+    if kind == VIBRATION:
+        offsets = decoded.offsets
+        return VibrationBatch(columns['stamps'], columns['sample_rates'], offsets - offsets[0],
+                              decoded.samples[offsets[0]:offsets[-1]])
+    if kind == JOINT_STATES:
+        return ScrewStateBatch(columns['stamps'], columns['angles'], columns['speeds'])
+    if kind == AXIAL_LOAD:
+        return AxialLoadBatch(columns['stamps'], columns['forces'])
+    return TemperatureBatch(columns['stamps'], columns['temperatures'])
+
+
+class _Slicer:
+    """Holds decoded data until a whole time slice is complete, then hands it out."""
+
+    def __init__(self, kinds: List[str], slice_ns: int):
+        self.kinds = kinds
+        self.slice_ns = slice_ns
+        self.origin: Optional[int] = None
+        self.pending: Dict[str, List[Decoded]] = {kind: [] for kind in kinds}
+
+    def add(self, kind: str, decoded: Decoded):
+        """Queue decoded messages; parts are kept in log time order."""
+        log_times = decoded.log_times
+        if not log_times.size:
+            return
+        if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
+            decoded = _merge([decoded], kind)
+        parts = self.pending[kind]
+        if parts and decoded.log_times[0] < parts[-1].log_times[-1]:
+            parts[:] = [_merge(parts + [decoded], kind)]     # overlapping chunks: rare
+        else:
+            parts.append(decoded)
+
+    def flush(self, safe: Optional[int]) -> Iterator[List[InputBatch]]:
+        """Slices that end at or before log time ``safe`` (all when None)."""
+        pending = self.pending
+        while True:
+            heads = [int(parts[0].log_times[0]) for parts in pending.values() if parts]
+            if not heads:
+                return
+            earliest = min(heads)
+            if self.origin is None:
+                self.origin = earliest
+            end = self.origin + ((earliest - self.origin) // self.slice_ns + 1) * self.slice_ns
+            if safe is not None and end > safe:
+                return
+            batches = []
+            for kind in self.kinds:
+                parts = pending[kind]
+                pieces = []
+                while parts and parts[0].log_times[0] < end:
+                    count = int(np.searchsorted(parts[0].log_times, end, 'left'))
+                    if count == parts[0].log_times.size:
+                        pieces.append(parts.pop(0))
+                    else:
+                        head, parts[0] = _cut(parts[0], count)
+                        pieces.append(head)
+                        break
+                if pieces:
+                    batches.append(_batch(kind, pieces))
+            yield batches
+
+
+# -- the recording -----------------------------------------------------------------------------------
+
+class Recording:
+    """An opened recording: what it holds, and its contract topics as a stream of batches."""
+
+    def __init__(self, path, namespace: str = DEFAULT_NAMESPACE):
+        self.path = Path(path)
+        self.namespace = namespace
+        self._source = _open_source(self.path)
+        #: every topic of the recording, by name
+        self.topics: Dict[str, TopicInfo] = self._source.topics
+        #: problems noticed while opening (e.g. a missing summary section), one line each
+        self.problems: List[str] = list(self._source.problems)
+        for topic in self.topics.values():
+            kind = self._kind_of(topic.name)
+            if kind is not None:
+                topic.layout_problem = self._source.layout_problem(topic.name, kind)
+        #: namespaces with a vibration topic of the VibrationBlock layout
+        self.actuators: List[str] = sorted(
+            namespace_of(t.name) for t in self.topics.values()
+            if namespace_of(t.name) is not None and t.layout_problem is None)
+        #: contract topic of this namespace by kind (vibration, joint_states, axial_load, temperature)
+        self.selected: Dict[str, str] = {kind: topic_name(namespace, kind) for kind in KINDS
+                                         if topic_name(namespace, kind) in self.topics}
+        self._validate()
+
+    @staticmethod
+    def _kind_of(topic: str) -> Optional[str]:
+        for kind in KINDS:
+            if topic.endswith(('/' + kind, '_' + kind)):
+                return kind
+        return None
+
+    def _validate(self):
+        label = self._source.label
+        if not self.topics:
+            raise InputError(f'{label}: holds no topics' + self._problem_hint())
+        vibration = topic_name(self.namespace, VIBRATION)
+        if VIBRATION not in self.selected:
+            others = ', '.join(f'{t.name} ({t.msgtype})' for t in self.topics.values())
+            hint = (f'; actuators found: {", ".join(self.actuators)} (choose one as namespace)'
+                    if self.actuators else '')
+            raise InputError(f'{label}: no {vibration} topic; it has {others}{hint}' + self._problem_hint())
+        for kind, topic in self.selected.items():
+            problem = self.topics[topic].layout_problem
+            if problem:
+                raise InputError(f'{label}: topic {topic} {problem}')
+        if self.topics[vibration].message_count == 0:
+            raise InputError(f'{label}: no messages on {vibration}' + self._problem_hint())
+
+    def _problem_hint(self) -> str:
+        return f' ({self.problems[-1]})' if self.problems else ''
+
+    @property
+    def start_time(self) -> Optional[float]:
+        """Log time of the first message, s since the epoch (None if empty)."""
+        return None if self._source.start_time is None else self._source.start_time * 1e-9
+
+    @property
+    def end_time(self) -> Optional[float]:
+        """Log time of the last message, s since the epoch (None if empty)."""
+        return None if self._source.end_time is None else self._source.end_time * 1e-9
+
+    def describe(self) -> str:
+        """What the recording holds, a few lines of text."""
+        lines = [f'{self._source.label}: {len(self.topics)} topics']
+        if self.start_time is not None:
+            lines[0] += f', {self.end_time - self.start_time:.1f} s from {self.start_time:.3f}'
+        for topic in sorted(self.topics.values(), key=lambda t: t.name):
+            mark = ' <- ' + next(k for k, v in self.selected.items() if v == topic.name) \
+                if topic.name in self.selected.values() else ''
+            lines.append(f'  {topic.name}: {topic.msgtype}, {topic.message_count} messages{mark}')
+        if self.actuators:
+            lines.append('  actuators: ' + ', '.join(self.actuators))
+        lines.extend('  problem: ' + line for line in self.problems)
+        return '\n'.join(lines)
+
+    def slices(self, on_problem: Optional[ProblemSink] = None, progress: Optional[Callable[[float], None]] = None,
+               slice_seconds: float = SLICE_SECONDS, engine: str = 'fast') -> Iterator[List[InputBatch]]:
+        """The namespace's topics as lists of batches, one list per time slice, in log time order.
+
+        ``on_problem`` gets each problem once, as one line, after all data has
+        been yielded (default: appended to :attr:`problems`); ``progress`` gets
+        the fraction of the recording read.  ``engine='rosbags'`` is the slow
+        reference path (rosbags deserializer for every message).
+        """
+        if engine not in ('fast', 'rosbags'):
+            raise ValueError(f'engine must be fast or rosbags, not {engine!r}')
+        if not slice_seconds > 0 or not math.isfinite(slice_seconds):
+            raise InputError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
+        sink = on_problem or (lambda line: line in self.problems or self.problems.append(line))
+        problems: List[str] = []
+        kinds = [kind for kind in KINDS if kind in self.selected]
+        by_topic = {topic: kind for kind, topic in self.selected.items()}
+        slicer = _Slicer(kinds, int(round(slice_seconds * 1e9)))
+        undecodable = dict.fromkeys(kinds, 0)
+        without_screw = 0
+        vectorised = engine == 'fast'
+        for chunk in self._raw_chunks(list(by_topic), problems.append, engine):
+            yield from slicer.flush(chunk.start_time)
+            for topic, group in chunk.groups.items():
+                kind = by_topic[topic]
+                decoded = decode_messages(kind, chunk.buffer, group.data_offsets, group.data_lengths,
+                                          group.log_times, vectorised)
+                undecodable[kind] += decoded.undecodable
+                without_screw += decoded.without_screw
+                slicer.add(kind, decoded)
+            if progress is not None:
+                progress(min(max(chunk.progress, 0.0), 1.0))
+        yield from slicer.flush(None)
+        if progress is not None:
+            progress(1.0)
+        for kind, count in undecodable.items():
+            if count:
+                problems.append(f'{self.selected[kind]}: {count} message(s) could not be decoded and were '
+                                'skipped')
+        if without_screw:
+            problems.append(f'{self.selected[JOINT_STATES]}: {without_screw} JointState message(s) without '
+                            f'a "screw" entry skipped')
+        for line in problems:
+            sink(line)
+
+    def _raw_chunks(self, topics: List[str], on_problem: ProblemSink, engine: str) -> Iterator[_RawChunk]:
+        source = self._source
+        if engine == 'rosbags':
+            if isinstance(source, _McapSource) and self.path.is_file():
+                return _mcap_library_chunks(self.path, topics, on_problem)
+            if not isinstance(source, _RosbagsSource):
+                source = _RosbagsSource(self.path if self.path.is_dir() else self.path.parent)
+        return source.raw_chunks(topics, on_problem)
+
+
+def open_recording(path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
+    """Open a rosbag2 directory or bare ``.mcap`` file for the actuator at ``namespace``.
+
+    Raises :class:`InputError` (one line naming the file) when it cannot be used.
+    """
+    return Recording(path, namespace)
+
+
+def find_actuators(path) -> List[str]:
+    """Namespaces (or prefixes) of a recording that carry a vibration topic of the VibrationBlock layout."""
+    source = _open_source(Path(path))
+    actuators = []
+    for topic in source.topics:
+        namespace = namespace_of(topic)
+        if namespace is not None and source.layout_problem(topic, VIBRATION) is None:
+            actuators.append(namespace)
+    return sorted(actuators)
+
+
+def iter_batches(path, namespace: str = DEFAULT_NAMESPACE, on_problem: Optional[ProblemSink] = None,
+                 slice_seconds: float = SLICE_SECONDS) -> Iterator[List[InputBatch]]:
+    """Shorthand: ``open_recording(path, namespace).slices(on_problem, slice_seconds=...)``."""
+    return open_recording(path, namespace).slices(on_problem, slice_seconds=slice_seconds)
+
+
+def bare_read(path) -> int:
+    """Read, decompress and split every message of a recording without decoding; return the message count.
+
+    The cheapest full pass over the data: the baseline the decoding is timed against.
+    """
+    source = _open_source(Path(path))
+    count = 0
+    for chunk in source.raw_chunks(list(source.topics), lambda line: None):
+        count += sum(group.data_offsets.size for group in chunk.groups.values())
+    return count

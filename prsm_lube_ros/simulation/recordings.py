@@ -1,0 +1,229 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Contract recordings of the simulated rig: the paper's experiment, endurance bags, ``truth.json``."""
+from __future__ import annotations
+
+from dataclasses import asdict, replace
+import json
+import math
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..physics.effects import effect_ids
+from ..recording.writer import bag_path, check_storage, ContractBagWriter
+from ..validation import as_number, require
+from .drive import DriveProgram, schedule_session, Stroke
+from .effects import (draw_background_vibration, draw_lubricant_depletion, draw_position_dependent_stiffness,
+                      draw_resonance, draw_thermal_viscosity, Effects)
+from .rig_config import CHUNK_DURATION, ExperimentPlan, ProgressCallback, RigConfig
+from .signal import RigStream, thread_contact_amplitude
+
+
+# ---------------------------------------------------------------------------------------------
+# Recording
+# ---------------------------------------------------------------------------------------------
+def _latencies(rng: np.random.Generator, rig: RigConfig, count: int) -> np.ndarray:
+    seconds = rig.transport_latency + (rng.exponential(rig.latency_jitter, count)
+                                       if rig.latency_jitter > 0 else np.zeros(count))
+    return np.rint(seconds * 1e9).astype(np.int64)
+
+
+def _record(path: Path, storage: str, stream: RigStream, first_block: int, stop_block: int,
+            theta_oil: float, latency_rng: np.random.Generator,
+            progress: Callable[[int], None] | None, compression: str | None = None) -> None:
+    """Write blocks ``[first_block, stop_block)`` of the stream to a new bag."""
+    rig = stream.rig
+    step = max(1, int(round(CHUNK_DURATION / rig.vibration_block)))
+    block_ns = int(round(rig.vibration_block * 1e9))
+    with ContractBagWriter(path, storage=storage, namespace=rig.namespace, compression=compression) as writer:
+        for start in range(first_block, stop_block, step):
+            stop = min(start + step, stop_block)
+            chunk = stream.advance(start, stop, theta_oil)
+            writer.add_vibration(chunk.block_stamps,
+                                 chunk.block_stamps + block_ns + _latencies(latency_rng, rig,
+                                                                            len(chunk.block_stamps)),
+                                 chunk.sample_rate, chunk.samples, rig.vibration_frame_id)
+            writer.add_joint_states(chunk.joint_stamps, chunk.joint_stamps
+                                    + _latencies(latency_rng, rig, chunk.joint_stamps.size),
+                                    chunk.joint_angles, chunk.joint_speeds)
+            writer.add_axial_loads(chunk.load_stamps, chunk.load_stamps
+                                   + _latencies(latency_rng, rig, chunk.load_stamps.size),
+                                   chunk.loads, rig.load_frame_id)
+            writer.add_temperatures(chunk.temperature_stamps, chunk.temperature_stamps
+                                    + _latencies(latency_rng, rig, chunk.temperature_stamps.size),
+                                    chunk.temperatures, rig.temperature_noise ** 2, rig.temperature_frame_id)
+            writer.flush(stream.origin_ns + stop * block_ns)
+            if progress is not None:
+                progress(stop - start)
+
+
+def _blocks(seconds: float, rig: RigConfig) -> int:
+    """Whole vibration blocks covering ``seconds`` (rounded up)."""
+    return int(math.ceil(seconds / rig.vibration_block - 1e-9))
+
+
+def _streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Generator, np.random.Generator]:
+    rig_seed, latency_seed, order_seed = np.random.SeedSequence(seed).spawn(3)
+    return rig_seed, np.random.default_rng(latency_seed), np.random.default_rng(order_seed)
+
+
+def session_revolutions(plan: ExperimentPlan, rig: RigConfig) -> float:
+    """Screw revolutions of one session (all conditions, forward and rewind)."""
+    return 2.0 * len(plan.conditions) * plan.stroke / rig.actuator.lead
+
+
+def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None = None,
+                 plan: ExperimentPlan | None = None) -> Effects:
+    """Effects ``names`` (see :func:`~prsm_lube_ros.physics.effects.effect_ids`), parameters drawn in physical ranges.
+
+    The ranges refer to the plan: stroke, lowest load, top speed, one session's
+    revolutions and the thread-contact amplitude at the lowest speed, highest
+    load and theta = 1.
+    """
+    rig, plan = rig or RigConfig(), plan or ExperimentPlan()
+    unknown = sorted(set(names) - set(effect_ids()))
+    require(not unknown, f'effects: unknown effect(s) {", ".join(unknown)}; known: {", ".join(effect_ids())}')
+    rngs = dict(zip(effect_ids(), (np.random.default_rng(s) for s in
+                                   np.random.SeedSequence(seed).spawn(len(effect_ids())))))
+    actuator = rig.actuator
+    makers = {
+        'position_dependent_stiffness': lambda rng: draw_position_dependent_stiffness(
+            rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
+            stroke=plan.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
+            reference_load=min(plan.loads)),
+        'resonance': lambda rng: draw_resonance(rng, order=rig.roller_pass_order, top_speed=max(plan.speeds)),
+        'thermal_viscosity': lambda rng: draw_thermal_viscosity(
+            rng, viscosity_temperature_coefficient=actuator.viscosity_temperature_coefficient),
+        'lubricant_depletion': lambda rng: draw_lubricant_depletion(
+            rng, session_revolutions=session_revolutions(plan, rig)),
+        'background_vibration': lambda rng: draw_background_vibration(
+            rng, reference_amplitude=float(thread_contact_amplitude(min(plan.speeds), max(plan.loads),
+                                                                    1.0, rig))),
+    }
+    return Effects(**{name: makers[name](rngs[name]) for name in names})
+
+
+def _truth(rig: RigConfig, plan: ExperimentPlan | None, seed: int, effects: Effects, storage: str,
+           bags: list[dict]) -> dict:
+    return {'generator': 'prsm_lube_ros.simulation', 'seed': seed, 'storage': storage,
+            'constants': asdict(rig.constants), 'rig': rig.as_dict(),
+            'plan': plan.as_dict() if plan is not None else None,
+            'effects': effects.as_dict(), 'bags': bags}
+
+
+def _origin_seconds(stream: RigStream) -> float:
+    return stream.origin_ns * 1e-9
+
+
+def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = None,
+                        rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
+                        storage: str = 'mcap', run_order: str | None = None,
+                        stage_thetas: Sequence[float] | None = None,
+                        progress: ProgressCallback | None = None, compression: str | None = None) -> list[Path]:
+    """Record the paper's experiment: one bag per lubrication stage in ``out_dir``, plus ``truth.json``.
+
+    Bags are named ``stage_1``, ``stage_2``, ... (storage per
+    :data:`bag_writer.STORAGE_FORMATS`); each holds the plan's conditions as
+    forward runs with rewinds in between.  ``run_order`` (``'fixed'`` or
+    ``'random'``, seeded) and ``stage_thetas`` (true theta_Oil per stage)
+    override the plan's.  Stages follow each other after
+    ``plan.stage_pause``.  ``progress(done_s, total_s)`` is called with simulated
+    seconds.  ``compression='zstd'`` compresses the mcap chunks.  Returns the bag paths.
+    """
+    rig, plan, effects = rig or RigConfig(), plan or ExperimentPlan(), effects or Effects()
+    check_storage(storage)
+    if run_order is not None:
+        plan = replace(plan, run_order=run_order)
+    if stage_thetas is not None:
+        plan = replace(plan, stage_thetas=tuple(stage_thetas))
+    out_dir = Path(out_dir)
+    rig_seed, latency_rng, order_rng = _streams(seed)
+
+    program = DriveProgram()
+    schedule, now = [], 0.0
+    for number, theta in enumerate(plan.stage_thetas, start=1):
+        conditions = plan.conditions
+        if plan.run_order == 'random':
+            conditions = [conditions[k] for k in order_rng.permutation(len(conditions))]
+        first_block = _blocks(now, rig)
+        strokes, end = schedule_session(program, first_block * rig.vibration_block, conditions, plan, rig)
+        stop_block = _blocks(end, rig)
+        schedule.append((f'stage_{number}', theta, first_block, stop_block, strokes))
+        now = stop_block * rig.vibration_block + plan.stage_pause
+    paths = [bag_path(out_dir, name, storage) for name, *_ in schedule]
+    for path in paths + [out_dir / 'truth.json']:
+        require(not path.exists(), f'{path}: exists already, not overwriting')
+
+    stream = RigStream(rig, program, seed=rig_seed, effects=effects)
+    total = sum(stop - first for _, _, first, stop, _ in schedule)
+    done = 0
+
+    def advance(blocks: int) -> None:
+        nonlocal done
+        done += blocks
+        if progress is not None:
+            progress(done * rig.vibration_block, total * rig.vibration_block)
+
+    bags = []
+    origin = _origin_seconds(stream)
+    for (name, theta, first, stop, strokes), path in zip(schedule, paths):
+        stream.relubricate()
+        _record(path, storage, stream, first, stop, theta, latency_rng, advance, compression)
+        bags.append({'name': name, 'path': path.name, 'theta_oil': theta,
+                     'start': origin + first * rig.vibration_block,
+                     'end': origin + stop * rig.vibration_block,
+                     'runs': [_run_truth(stroke, origin, theta, rig) for stroke in strokes]})
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / 'truth.json').write_text(json.dumps(_truth(rig, plan, seed, effects, storage, bags), indent=2))
+    return paths
+
+
+def _run_truth(stroke: Stroke, origin: float, theta: float, rig: RigConfig) -> dict:
+    result = stroke.as_dict(origin)
+    result['eq22_amplitude'] = float(thread_contact_amplitude(stroke.speed, stroke.load, theta, rig))
+    return result
+
+
+def simulate_endurance(path: str | Path, duration: float, *, plan: ExperimentPlan | None = None,
+                       rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
+                       storage: str = 'mcap', theta_oil: float = 1.0, truth_path: str | Path | None = None,
+                       progress: ProgressCallback | None = None, compression: str | None = None) -> Path:
+    """One long bag at ``path``: the plan's conditions cycled (with rewinds) for ``duration`` s.
+
+    For benchmarks and long-term effects; lubricated once at the start with
+    ``theta_oil``.  Writes the truth to ``truth_path`` if given; ``compression='zstd'``
+    compresses the mcap chunks.  Returns ``path``.
+    """
+    rig, plan, effects = rig or RigConfig(), plan or ExperimentPlan(), effects or Effects()
+    check_storage(storage)
+    duration = as_number('duration', duration)
+    require(duration > 0, f'duration must be > 0 s, got {duration}')
+    path = Path(path)
+    rig_seed, latency_rng, _ = _streams(seed)
+    program = DriveProgram()
+    strokes, now = [], 0.0
+    while now < duration:
+        more, now = schedule_session(program, now, plan.conditions, plan, rig)
+        now -= plan.standstill  # sessions join with a single standstill
+        strokes += more
+    stop_block = _blocks(duration, rig)
+    stream = RigStream(rig, program, seed=rig_seed, effects=effects)
+    total = stop_block * rig.vibration_block
+    done = 0
+
+    def advance(blocks: int) -> None:
+        nonlocal done
+        done += blocks
+        if progress is not None:
+            progress(done * rig.vibration_block, total)
+
+    _record(path, storage, stream, 0, stop_block, theta_oil, latency_rng, advance, compression)
+    if truth_path is not None:
+        origin = _origin_seconds(stream)
+        kept = [stroke for stroke in strokes if stroke.start < total]
+        bag = {'name': path.stem, 'path': path.name, 'theta_oil': theta_oil, 'start': origin,
+               'end': origin + total, 'runs': [_run_truth(s, origin, theta_oil, rig) for s in kept]}
+        Path(truth_path).write_text(json.dumps(_truth(rig, plan, seed, effects, storage, [bag]), indent=2))
+    return path

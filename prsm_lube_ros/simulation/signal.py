@@ -1,0 +1,315 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Acceleration of the simulated rig: the true amplitude (Eq. 22 and effects), its time signal, streamed or live."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Iterator
+
+import numpy as np
+from scipy.signal import iirpeak, lfilter
+
+from ..physics.vibration_model import acceleration_amplitude
+from ..validation import as_number, require
+from .drive import DriveProgram
+from .effects import Effects
+from .rig_config import RigConfig, STANDSTILL_SPEED
+
+
+# ---------------------------------------------------------------------------------------------
+# Truth: the amplitude the signal is scaled to
+# ---------------------------------------------------------------------------------------------
+def effective_load(applied_load, rig: RigConfig):
+    """Load the thread contacts carry, N: the applied load, but at least the nut preload."""
+    return np.maximum(np.abs(np.asarray(applied_load, dtype=float)), rig.nut_preload)
+
+
+def thread_contact_amplitude(screw_speed, applied_load, theta_oil, rig: RigConfig,
+                             effects: Effects | None = None, *, nut_position=0.0, temperature=None,
+                             revolutions=0.0):
+    """True RMS of the thread-contact vibration, m/s^2: Eq. 22 changed by the active effects.
+
+    screw_speed in rad/s, applied_load in N (preload as floor), theta_oil the
+    stage's lubrication; nut_position in m from the start of the stroke,
+    temperature in degC (None = ambient), revolutions since the last
+    lubrication.  Background vibration and sensor noise are not included:
+    the recorded RMS is ``sqrt(A^2 + B^2 + sigma_n^2)``.
+    """
+    effects = effects or Effects()
+    load = effective_load(applied_load, rig)
+    theta = np.asarray(theta_oil, dtype=float)
+    if effects.lubricant_depletion is not None:
+        theta = theta * effects.lubricant_depletion.theta_factor(revolutions)
+    if effects.thermal_viscosity is not None and temperature is not None:
+        theta = theta * effects.thermal_viscosity.film_factor(temperature, rig.ambient_temperature)
+    amplitude = acceleration_amplitude(screw_speed, load, theta, rig.constants)
+    if effects.position_dependent_stiffness is not None:
+        amplitude = amplitude * effects.position_dependent_stiffness.amplitude_factor(nut_position, load)
+    if effects.resonance is not None:
+        amplitude = amplitude * effects.resonance.amplitude_factor(screw_speed)
+    return amplitude
+
+
+def expected_rms(screw_speed, applied_load, theta_oil, rig: RigConfig, effects: Effects | None = None,
+                 **state):
+    """RMS the recording should show in steady running, m/s^2: contact, background and sensor noise in power."""
+    effects = effects or Effects()
+    background = effects.background_vibration.rms if effects.background_vibration is not None else 0.0
+    contact = thread_contact_amplitude(screw_speed, applied_load, theta_oil, rig, effects, **state)
+    return np.sqrt(contact ** 2 + background ** 2 + rig.sensor_noise ** 2)
+
+
+# ---------------------------------------------------------------------------------------------
+# Streaming synthesis
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class RigChunk:
+    """Everything the rig's sensors produced in consecutive vibration blocks.
+
+    Stamps are int64 ns since the Unix epoch (acquisition times).  ``samples``
+    is (blocks, block_size) float32 m/s^2.  Joint states are true values; load
+    and temperature carry sensor noise.  ``block_*`` are true values at each
+    block's first sample.
+    """
+
+    block_stamps: np.ndarray
+    sample_rate: float
+    samples: np.ndarray
+    joint_stamps: np.ndarray
+    joint_angles: np.ndarray
+    joint_speeds: np.ndarray
+    load_stamps: np.ndarray
+    loads: np.ndarray
+    temperature_stamps: np.ndarray
+    temperatures: np.ndarray
+    block_speeds: np.ndarray
+    block_angles: np.ndarray
+    block_loads: np.ndarray
+    block_temperatures: np.ndarray
+
+
+def _stamps_ns(origin_ns: int, indices: np.ndarray, rate: float) -> np.ndarray:
+    return origin_ns + np.rint(indices * (1e9 / rate)).astype(np.int64)
+
+
+def _index_range(start: float, stop: float, rate: float) -> np.ndarray:
+    """Indices k with k / rate in [start, stop)."""
+    return np.arange(math.ceil(start * rate - 1e-9), math.ceil(stop * rate - 1e-9), dtype=np.int64)
+
+
+class RigStream:
+    """The rig's state machine: turns a :class:`DriveProgram` into sensor data block by block.
+
+    Carries the resonator state, the harmonic phases, the temperature and the
+    revolutions since the last lubrication across calls; random numbers come
+    from independent streams of ``seed``, so the samples do not depend on how
+    the time is cut into chunks.
+    """
+
+    def __init__(self, rig: RigConfig, program: DriveProgram, *, seed: int | np.random.SeedSequence = 0,
+                 effects: Effects | None = None, origin_ns: int | None = None):
+        """Prepare the filters and random streams; simulated time zero is stamped ``origin_ns``."""
+        self.rig, self.program, self.effects = rig, program, effects or Effects()
+        self.origin_ns = rig.epoch_ns if origin_ns is None else int(origin_ns)
+        sequence = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+        (self._contact_rng, self._sensor_rng, self._background_rng, self._load_rng,
+         self._temperature_rng, phase_rng) = (np.random.default_rng(s) for s in sequence.spawn(6))
+        fs = rig.vibration_rate
+        self._b, self._a = iirpeak(rig.contact_mode_frequency, 1.0 / (2.0 * rig.contact_mode_damping), fs)
+        self._contact_gain = math.sqrt(resonator_energy(self._b, self._a))
+        decay = 1.0 / (2.0 * math.pi * rig.contact_mode_frequency * rig.contact_mode_damping)
+        warm_up = self._contact_rng.standard_normal(int(math.ceil(30.0 * decay * fs)) + 8)
+        _, self._contact_state = lfilter(self._b, self._a, warm_up, zi=np.zeros(2))
+        self._orders = np.array(rig.resolved_harmonic_orders)
+        self._harmonic_amplitudes = np.sqrt(2.0 * np.array(rig.harmonic_shares))
+        self._harmonic_phases = phase_rng.uniform(0.0, 2.0 * math.pi, self._orders.size)
+        background = self.effects.background_vibration
+        tones = len(background.tone_frequencies) if background is not None else 0
+        self._tone_phases = phase_rng.uniform(0.0, 2.0 * math.pi, tones)
+        self._next_index: int | None = None
+        self._last_angle = float(program.motion(0.0)[0])
+        self.temperature = rig.ambient_temperature
+        self.revolutions = 0.0
+
+    def relubricate(self) -> None:
+        """Oil injected: the revolutions since the last lubrication restart at zero."""
+        self.revolutions = 0.0
+
+    def _relax_temperature(self, duration: float) -> None:
+        thermal = self.effects.thermal_viscosity
+        if thermal is not None and duration > 0:
+            ambient = self.rig.ambient_temperature
+            self.temperature = ambient + (self.temperature - ambient) * math.exp(-duration / thermal.time_constant)
+
+    def _temperatures(self, speeds: np.ndarray) -> np.ndarray:
+        thermal = self.effects.thermal_viscosity
+        if thermal is None:
+            return np.full(speeds.size, self.rig.ambient_temperature)
+        decay = math.exp(-1.0 / (self.rig.vibration_rate * thermal.time_constant))
+        target = self.rig.ambient_temperature + thermal.temperature_rise * (np.abs(speeds) > STANDSTILL_SPEED)
+        result, _ = lfilter([1.0 - decay], [1.0, -decay], target, zi=[decay * self.temperature])
+        self.temperature = float(result[-1])
+        return result
+
+    def advance(self, first_block: int, stop_block: int, theta_oil: float) -> RigChunk:
+        """Sensor data for blocks ``[first_block, stop_block)`` at lubrication ``theta_oil``.
+
+        Blocks must come in increasing order; a gap (e.g. between stages) is
+        standstill as far as the temperature is concerned.
+        """
+        rig, fs, size = self.rig, self.rig.vibration_rate, self.rig.block_size
+        first, count = first_block * size, (stop_block - first_block) * size
+        if self._next_index is not None:
+            require(first >= self._next_index, 'rig stream: blocks must advance in time')
+            self._relax_temperature((first - self._next_index) / fs)
+        self._next_index = first + count
+        indices = np.arange(first, first + count, dtype=np.int64)
+        times = indices / fs
+        angles, speeds = self.program.motion(times)
+        applied = self.program.load(times)
+
+        steps = np.abs(np.diff(angles, prepend=self._last_angle)) / (2.0 * math.pi)
+        revolutions = self.revolutions + np.cumsum(steps)
+        self.revolutions = float(revolutions[-1])
+        self._last_angle = float(angles[-1])
+        temperatures = self._temperatures(speeds)
+        nut_positions = self.rig.actuator.nut_travel_from_angle(angles, 0.0)
+        amplitude = thread_contact_amplitude(speeds, applied, theta_oil, rig, self.effects,
+                                             nut_position=nut_positions, temperature=temperatures,
+                                             revolutions=revolutions)
+
+        contact, self._contact_state = lfilter(self._b, self._a, self._contact_rng.standard_normal(count),
+                                               zi=self._contact_state)
+        mix = math.sqrt(rig.contact_share) / self._contact_gain * contact
+        for order, scale, phase in zip(self._orders, self._harmonic_amplitudes, self._harmonic_phases):
+            mix += scale * np.sin(order * angles + phase)
+        signal = amplitude * mix
+        background = self.effects.background_vibration
+        if background is not None:
+            part = np.zeros(count)
+            for frequency, share, phase in zip(background.tone_frequencies, background.tone_shares,
+                                               self._tone_phases):
+                part += math.sqrt(2.0 * share) * np.sin(2.0 * math.pi * frequency * times + phase)
+            if background.broadband_share > 0:
+                part += math.sqrt(background.broadband_share) * self._background_rng.standard_normal(count)
+            signal += background.rms * part
+        signal += rig.sensor_noise * self._sensor_rng.standard_normal(count)
+
+        start, stop = first / fs, (first + count) / fs
+        joint_index = _index_range(start, stop, rig.joint_state_rate)
+        joint_angles, joint_speeds = self.program.motion(joint_index / rig.joint_state_rate)
+        load_index = _index_range(start, stop, rig.load_rate)
+        true_loads = self.program.load(load_index / rig.load_rate)
+        sigma = rig.load_noise_relative * np.abs(true_loads) + rig.load_noise_absolute
+        loads = true_loads + sigma * self._load_rng.standard_normal(load_index.size)
+        temperature_index = _index_range(start, stop, rig.temperature_rate)
+        position = np.clip(np.floor((temperature_index / rig.temperature_rate - start) * fs + 1e-6)
+                           .astype(np.int64), 0, count - 1)
+        measured_temperatures = (temperatures[position] + rig.temperature_noise
+                                 * self._temperature_rng.standard_normal(temperature_index.size))
+        heads = np.arange(0, count, size)
+        return RigChunk(
+            block_stamps=_stamps_ns(self.origin_ns, indices[heads], fs), sample_rate=fs,
+            samples=signal.astype(np.float32).reshape(-1, size),
+            joint_stamps=_stamps_ns(self.origin_ns, joint_index, rig.joint_state_rate),
+            joint_angles=joint_angles, joint_speeds=joint_speeds,
+            load_stamps=_stamps_ns(self.origin_ns, load_index, rig.load_rate), loads=loads,
+            temperature_stamps=_stamps_ns(self.origin_ns, temperature_index, rig.temperature_rate),
+            temperatures=measured_temperatures, block_speeds=speeds[heads], block_angles=angles[heads],
+            block_loads=applied[heads], block_temperatures=temperatures[heads])
+
+
+def resonator_energy(b, a, tolerance: float = 1e-14) -> float:
+    """Energy sum(h[n]^2) of a stable IIR filter's impulse response: its output variance for unit white input."""
+    length = 1024
+    while True:
+        impulse = np.zeros(length)
+        impulse[0] = 1.0
+        response = lfilter(b, a, impulse)
+        energy = float(np.sum(response ** 2))
+        if np.sum(response[-length // 4:] ** 2) <= tolerance * energy:
+            return energy
+        length *= 2
+
+
+# ---------------------------------------------------------------------------------------------
+# Live generator
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class RigBlock:
+    """One vibration block from :class:`RigSignalGenerator`.
+
+    stamp in s since the epoch (first sample), samples float32 m/s^2 at
+    sample_rate; speed (rad/s), angle (rad), load (N, applied) and temperature
+    (degC) are true values at ``stamp``; ``topics`` holds all sensor messages
+    of the block's time span (joint states, noisy load and temperature).
+    """
+
+    stamp: float
+    sample_rate: float
+    samples: np.ndarray
+    speed: float
+    angle: float
+    load: float
+    temperature: float
+    topics: RigChunk
+
+
+class RigSignalGenerator:
+    """The simulated rig in real time: set speed, load and theta while it runs; take block after block.
+
+    Speed changes ramp at ``rig.live_acceleration`` (rad/s^2), load changes over
+    ``rig.load_ramp_time`` per 200 N (a step if that time is 0).
+    Changes act from the next block on.
+    """
+
+    def __init__(self, rig: RigConfig | None = None, *, seed: int = 0, effects: Effects | None = None,
+                 theta_oil: float = 1.0, start_stamp_ns: int | None = None):
+        """Rig at standstill and unloaded at ``start_stamp_ns`` (default: the rig's epoch)."""
+        self.rig = rig or RigConfig()
+        self.theta_oil = theta_oil
+        self._program = DriveProgram()
+        self._stream = RigStream(self.rig, self._program, seed=seed, effects=effects,
+                                 origin_ns=start_stamp_ns)
+        self._block = 0
+
+    @property
+    def now(self) -> float:
+        """Simulated time of the next block's first sample, s since start."""
+        return self._block * self.rig.vibration_block
+
+    def set_speed(self, speed: float) -> None:
+        """Command the screw speed in rad/s (signed)."""
+        self._program.forget_before(self.now)
+        self._program.command_speed(self.now, as_number('speed', speed), self.rig.live_acceleration)
+
+    def set_load(self, load: float) -> None:
+        """Command the applied axial load in N."""
+        rate = 200.0 / self.rig.load_ramp_time if self.rig.load_ramp_time > 0 else 0.0
+        self._program.forget_before(self.now)
+        self._program.command_load(self.now, as_number('load', load), rate)
+
+    def set_theta(self, theta_oil: float) -> None:
+        """Set the true lubrication supply factor from the next block on."""
+        self.theta_oil = as_number('theta_oil', theta_oil)
+
+    def relubricate(self, theta_oil: float | None = None) -> None:
+        """Inject oil: restart the depletion count and optionally set a new theta."""
+        if theta_oil is not None:
+            self.set_theta(theta_oil)
+        self._stream.relubricate()
+
+    def next_block(self) -> RigBlock:
+        """The next vibration block and the sensor data of its time span."""
+        chunk = self._stream.advance(self._block, self._block + 1, self.theta_oil)
+        self._block += 1
+        return RigBlock(stamp=int(chunk.block_stamps[0]) * 1e-9, sample_rate=chunk.sample_rate,
+                        samples=chunk.samples[0], speed=float(chunk.block_speeds[0]),
+                        angle=float(chunk.block_angles[0]), load=float(chunk.block_loads[0]),
+                        temperature=float(chunk.block_temperatures[0]), topics=chunk)
+
+    def __iter__(self) -> Iterator[RigBlock]:
+        """Blocks for ever."""
+        while True:
+            yield self.next_block()

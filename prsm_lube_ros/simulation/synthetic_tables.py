@@ -1,0 +1,185 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Window tables generated directly from Eq. 22 and one hidden effect (no signals, no bags).
+
+A second, independent simulator at the level the diagnosis works on: for unit
+tests and for the study's check that detection does not rest on the rig
+simulator's particulars.  It draws its own plan (speeds, loads, repeats, run
+order), its own noise (window scatter and a per-run gain scatter) and its own
+effect parametrisations (e.g. the fixed bearing at either end of the shaft,
+background tones at random frequencies).  Spectra, when asked for, are
+synthesised per window: rotation-order lines and broadband from the thread
+contacts, fixed tones and broadband from the background.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+
+from ..diagnosis.table import WindowTable
+from ..physics.effects import (background_vibration, lubricant_depletion as depletion,
+                               position_dependent_stiffness as stiffness, resonance, thermal_viscosity as thermal)
+from ..physics.vibration_model import acceleration_amplitude, ModelConstants
+from .effects import BACKGROUND_FRACTION_RANGE
+
+
+@dataclass(frozen=True)
+class SyntheticPlan:
+    """What is recorded: conditions, repeats, run order, window length and noise."""
+
+    speeds_rpm: tuple = (100.0, 150.0, 200.0)
+    loads: tuple = (100.0, 200.0)
+    repeats: int = 2                # each condition this often per session
+    sessions: int = 1               # sessions, each after a relubrication (revolutions restart), one recording each
+    session_pause: float = 60.0     # s between sessions (oil injection; the actuator cools)
+    random_order: bool = True
+    stroke: float = 0.17            # m of steady travel per run
+    lead: float = 0.005             # m per revolution
+    window: float = 1.0             # s
+    rest: float = 30.0              # s between runs
+    window_noise: float = 0.02      # std of ln RMS per window
+    run_noise: float = 0.005        # std of ln RMS per run (set-up scatter)
+    record_temperature: bool = True
+    ambient: float = 25.0           # degC
+    theta: float = 1.0
+    constants: ModelConstants = field(default_factory=lambda: ModelConstants(0.02, -1.0e-3, 0.33))
+    spectrum_bins: int = 0          # > 0: synthesise spectra with this many bins up to 2 kHz
+
+
+def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> dict:
+    """Effect parameters drawn within physical ranges."""
+    top = max(plan.speeds_rpm) * math.pi / 30
+    if effect == 'position_dependent_stiffness':
+        change = rng.uniform(0.08, 0.3)                  # amplitude change over the stroke
+        offset = rng.uniform(0.02, 0.1)                  # bearing distance beyond the stroke, m
+        far = bool(rng.integers(2))                      # bearing beyond the far end or before the start
+        length_end = offset if far else offset + plan.stroke
+        length_start = offset + plan.stroke if far else offset
+        # 1 + rho L_a/L_ref vs 1 + rho L_b/L_ref: solve rho (at the longer length) for the change.
+        long, short = max(length_start, length_end), min(length_start, length_end)
+        # (1 + rho_long) / (1 + rho_long short/long) = 1 / (1 - change)
+        rho_long = (1 / (1 - change) - 1) / (1 - (short / long) / (1 - change))
+        return {'free_length_start': length_start, 'free_length_end': length_end,
+                'ratio_long': rho_long, 'long_length': long, 'change': change}
+    if effect == 'resonance':
+        return {'top_ratio': rng.uniform(0.55, 0.9), 'damping_ratio': rng.uniform(0.02, 0.1), 'top_speed': top}
+    if effect == 'thermal_viscosity':
+        return {'rise': rng.uniform(8.0, 25.0), 'tau': rng.uniform(150.0, 600.0), 'beta': rng.uniform(0.02, 0.04)}
+    if effect == 'lubricant_depletion':
+        return {'fall': rng.uniform(0.08, 0.25)}
+    if effect == 'background_vibration':
+        return {'fraction': rng.uniform(*BACKGROUND_FRACTION_RANGE), 'tones': tuple(rng.uniform(60, 900, size=2))}
+    raise ValueError(effect)
+
+
+def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: SyntheticPlan | None = None,
+                    params: dict | None = None, order=None) -> tuple[WindowTable, dict]:
+    """A window table of ``plan.sessions`` sessions with ``effect`` hidden (None: none) and its truth.
+
+    ``order``: run order as indices into the condition list (default: random or plan order).
+    Returns ``(table, truth)``, truth with the effect, its parameters and the true theta per window.
+    """
+    plan = plan or SyntheticPlan()
+    params = dict(params) if params is not None else (_draw_effect(effect, rng, plan) if effect else {})
+    conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
+    if order is None:
+        order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
+                                else np.arange(len(conditions)) for _ in range(plan.sessions)])
+    rows = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run',
+                            'recording')}
+    theta_eff, spectra, a22_list = [], [], []
+    clock, revs, temp = 0.0, 0.0, plan.ambient
+    total_revs = sum(plan.stroke / plan.lead for _ in conditions)
+    per_session = max(len(order) // plan.sessions, 1)
+    for run, index in enumerate(order):
+        session = run // per_session
+        if run and run % per_session == 0:
+            revs, clock = 0.0, 0.0   # relubricated; a new recording starts
+            if effect == 'thermal_viscosity':
+                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / params['tau'])
+        speed, load = conditions[index]
+        nut_speed = plan.lead * speed / (2 * math.pi)
+        n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
+        run_gain = rng.normal(0.0, plan.run_noise)
+        for k in range(n_win):
+            clock += plan.window
+            revs += speed * plan.window / (2 * math.pi)
+            if effect == 'thermal_viscosity':
+                target = plan.ambient + params['rise']
+                temp = target + (temp - target) * math.exp(-plan.window / params['tau'])
+            position = (k + 0.5) * plan.window * nut_speed
+            theta = plan.theta
+            film = 1.0
+            if effect == 'lubricant_depletion':
+                theta *= float(depletion.theta_factor(revs, -math.log1p(-params['fall']) / total_revs))
+            if effect == 'thermal_viscosity':
+                film = float(thermal.film_factor(temp, plan.ambient, params['beta']))
+            a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
+            amplitude = a22
+            if effect == 'position_dependent_stiffness':
+                length = params['free_length_start'] + (params['free_length_end']
+                                                        - params['free_length_start']) * position / plan.stroke
+                contact = stiffness.contact_stiffness_at(load, params['ratio_long'] / params['long_length'],
+                                                         float(np.mean(plan.loads)))
+                amplitude *= float(stiffness.series_stiffness_amplification(contact, 1.0 / length))
+            elif effect == 'resonance':
+                r = params['top_ratio'] * speed / params['top_speed']
+                amplitude *= float(resonance.magnification(r, params['damping_ratio']))
+            noise = math.exp(run_gain + rng.normal(0.0, plan.window_noise))
+            amplitude *= noise
+            background = 0.0
+            if effect == 'background_vibration':
+                slow = min(plan.speeds_rpm) * math.pi / 30
+                reference = float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants))
+                background = params['fraction'] * reference
+                amplitude = float(background_vibration.total_amplitude(amplitude, background))
+            rows['speed'].append(speed * (1 + rng.normal(0, 0.002)))
+            rows['load'].append(load * (1 + rng.normal(0, 0.005)))
+            rows['rms'].append(amplitude)
+            rows['position'].append(position)
+            rows['revolutions'].append(revs)
+            rows['time'].append(clock)
+            rows['temperature'].append(temp + rng.normal(0, 0.05) if plan.record_temperature else math.nan)
+            rows['run'].append(run)
+            rows['recording'].append(session)
+            theta_eff.append(theta * film)
+            a22_list.append(a22)
+            if plan.spectrum_bins:
+                spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
+                                         params.get('tones', ()), rng))
+        clock += plan.rest
+        if effect == 'thermal_viscosity':
+            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / params['tau'])
+    resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
+    table = WindowTable(theta=plan.theta,
+                        spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
+    truth = {'effect': effect, 'params': params, 'theta_effective': np.array(theta_eff),
+             'amplitude_eq22': np.array(a22_list)}
+    return table, truth
+
+
+def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, background: float, tones,
+              rng: np.random.Generator) -> np.ndarray:
+    """PSD ((m/s^2)^2/Hz) of one window: order lines + broadband of the contacts, fixed tones + white background."""
+    bins = plan.spectrum_bins
+    df = 2000.0 / bins
+    freqs = np.arange(bins) * df
+    psd = np.zeros(bins)
+    rotation = speed / (2 * math.pi)
+
+    def line(freq, power):
+        if 0 < freq < 2000.0 - df:
+            width = max(0.4 * df, 0.005 * freq)
+            shape = np.exp(-0.5 * ((freqs - freq) / width) ** 2)
+            psd[:] += power * shape / (shape.sum() * df)
+
+    for order, share in ((10.0, 0.3), (20.0, 0.15), (33.0, 0.15)):
+        line(order * rotation, share * contact_power)
+    psd += 0.4 * contact_power / 2000.0
+    if background > 0:
+        for tone in tones:
+            line(tone, 0.35 * background ** 2)
+        psd += 0.3 * background ** 2 / 2000.0
+    return psd * rng.chisquare(8, size=bins) / 8

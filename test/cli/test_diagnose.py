@@ -1,0 +1,42 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""prsm-lube diagnose end to end on small recordings of the rig simulator."""
+import json
+
+import pytest
+
+from prsm_lube_ros.cli import main
+from prsm_lube_ros.experiments.diagnose_study import run_case
+from prsm_lube_ros.simulation.recordings import draw_effects, simulate_experiment
+from prsm_lube_ros.simulation.rig_config import ExperimentPlan
+
+
+def test_diagnose_command_writes_json_report_and_calibration(tmp_path, capsys):
+    plan = ExperimentPlan(stage_thetas=(1.0, 1.0))
+    effects = draw_effects(['position_dependent_stiffness'], seed=2, plan=plan)
+    bags = simulate_experiment(tmp_path / 'sim', plan=plan, seed=2, effects=effects, run_order='random')
+    out = tmp_path / 'diag.json'
+    status = main(['diagnose', *map(str, bags), '--json', str(out), '--report', str(tmp_path / 'report'),
+                   '--calibration-out', str(tmp_path / 'calib.yaml')])
+    assert status == 0
+    document = json.loads(out.read_text())
+    assert document['verdict'] == 'position_dependent_stiffness'
+    assert document['best']['cv_rmse'] < 0.7 * document['baseline']['cv_rmse']
+    assert (tmp_path / 'report' / 'index.html').is_file()
+    assert (tmp_path / 'report' / 'residual.png').stat().st_size > 1000
+    assert 'position_dependent_stiffness' in (tmp_path / 'calib.yaml').read_text()
+    assert 'verdict: position_dependent_stiffness' in capsys.readouterr().out
+
+
+def test_diagnose_missing_bag_is_one_line_error(tmp_path, capsys):
+    status = main(['diagnose', str(tmp_path / 'nothing.mcap'), '--json', str(tmp_path / 'x.json')])
+    assert status != 0
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'nothing.mcap' in err
+
+
+@pytest.mark.parametrize('effect', ['none', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
+                                    'background_vibration'])
+def test_rig_recordings_with_one_concealed_effect(effect):
+    record = run_case(('rig', effect, 5, 'random', 2))
+    assert record['verdict'] == (effect if effect != 'none' else 'adequate')

@@ -1,0 +1,40 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Fixtures shared across the test tree (which mirrors the package: physics/, recording/, ...).
+
+Helpers that tests import by name (``bagfactory``, ``polling``,
+``synthetic_inputs``) live in ``test/support/``, put on ``sys.path`` by the
+``pythonpath`` setting in ``setup.cfg``.
+"""
+from pathlib import Path
+import sys
+
+import pytest
+
+#: The repository root (package.xml, config/, msg/).
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope='session')
+def repo_root() -> Path:
+    """The repository root."""
+    return ROOT
+
+
+@pytest.fixture(scope='session')
+def paper_experiment(tmp_path_factory):
+    """The rig simulator's recordings of the paper's experiment (three stages, random run order, seed 11)."""
+    from prsm_lube_ros.cli import main
+    out = tmp_path_factory.mktemp('experiment')
+    assert main(['simulate', str(out), '--seed', '11', '--run-order', 'random']) == 0
+    return out
+
+
+@pytest.fixture
+def fake_daq(monkeypatch):
+    """The fake nidaqmx (``test/support/fake_nidaqmx.py``) in sys.modules for one test."""
+    import fake_nidaqmx
+    fake_nidaqmx.FakeTask.instances, fake_nidaqmx.FakeTask.fail_on = [], None
+    for name, module in fake_nidaqmx.fake_nidaqmx().items():
+        monkeypatch.setitem(sys.modules, name, module)
+    return fake_nidaqmx.FakeTask

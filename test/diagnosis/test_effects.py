@@ -1,0 +1,97 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Candidate effects: registry and each effect's equations against hand-worked values."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from prsm_lube_ros.diagnosis.effects import Effect, effect_ids, get_effect, register, registered
+from prsm_lube_ros.physics.effects.resonance import magnification
+from prsm_lube_ros.errors import InputError
+
+CONTRACT_IDS = {'position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
+                'background_vibration'}
+
+
+def covariates(**values):
+    base = dict(speed=np.array([10.0]), load=np.array([100.0]), position=np.array([0.0]),
+                revolutions=np.array([0.0]), temperature=np.array([30.0]), time=np.array([0.0]))
+    base.update({k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in values.items()})
+    return SimpleNamespace(**base)
+
+
+def test_registry_holds_the_contract_effects_and_rejects_unknown_ids():
+    assert CONTRACT_IDS <= set(effect_ids())
+    with pytest.raises(InputError, match='unknown effect'):
+        get_effect('gremlins')
+
+
+def test_a_new_effect_registers_without_touching_the_others():
+    before = set(registered())
+
+    @register
+    class Gremlins(Effect):
+        id = 'test_gremlins'
+
+    try:
+        assert set(registered()) == before | {'test_gremlins'}
+        assert get_effect('test_gremlins').id == 'test_gremlins'
+    finally:
+        from prsm_lube_ros.diagnosis.effects import base
+        base._REGISTRY.pop('test_gremlins')
+
+
+def test_resonance_magnification_hand_values():
+    # r = 0: static; r = 1: 1 / (2 zeta); r = 0.5, zeta = 0: 1 / 0.75.
+    assert magnification(0.0, 0.05) == pytest.approx(1.0)
+    assert magnification(1.0, 0.05) == pytest.approx(10.0)
+    assert magnification(0.5, 0.0) == pytest.approx(1 / 0.75)
+    effect = get_effect('resonance')
+    params = {'resonant_speed': 20.0, 'damping_ratio': 0.0, 'top_speed': 15.0}
+    assert effect.log_gain(params, covariates(speed=10.0), None)[0] == pytest.approx(-math.log(0.75))
+
+
+def test_position_stiffness_gain_follows_series_compliance():
+    effect = get_effect('position_dependent_stiffness')
+    params = {'ratio_at_start': 0.2, 'ratio_at_end': 0.1, 'reference_load': 100.0, 'stroke': 0.2}
+    gain = effect.log_gain(params, covariates(position=[0.0, 0.1, 0.2], load=[100.0] * 3), None)
+    assert np.allclose(gain, np.log([1.2, 1.15, 1.1]))
+    # k_c ~ F^(1/3): eight times the load doubles the ratio.
+    assert effect.log_gain(params, covariates(position=0.0, load=800.0), None)[0] == pytest.approx(math.log(1.4))
+    # Assessment removes the gain: A = A_22 * 1.15 maps back to A_22.
+    assert effect.eq22_amplitude(params, covariates(position=0.1), 1.15 * 0.5)[0] == pytest.approx(0.5)
+
+
+def test_thermal_film_factor_is_viscosity_ratio_to_the_068():
+    effect = get_effect('thermal_viscosity')
+    params = {'viscosity_temperature_coefficient': 0.03, 'reference_temperature': 30.0}
+    assert effect.film_factor(params, covariates(temperature=40.0))[0] == pytest.approx(math.exp(-0.68 * 0.3))
+    assert math.isnan(effect.assessment_film_factor(params, covariates(temperature=math.nan))[0])
+
+
+def test_depletion_factor_and_no_correction_in_assessment():
+    effect = get_effect('lubricant_depletion')
+    params = {'depletion_per_revolution': 1 / 500.0, 'revolution_scale': 1000.0}
+    assert effect.film_factor(params, covariates(revolutions=500.0))[0] == pytest.approx(math.exp(-1))
+    assert effect.assessment_film_factor(params, covariates(revolutions=500.0))[0] == 1.0
+
+
+def test_background_adds_in_power_and_is_removed_in_power():
+    effect = get_effect('background_vibration')
+    params = {'background_rms': 0.3, 'rms_scale': 0.5}
+    # A_22 = 0.4, B = 0.3: A = 0.5.
+    assert effect.log_gain(params, covariates(), np.log([0.4]))[0] == pytest.approx(math.log(0.5 / 0.4))
+    mapped = effect.eq22_amplitude(params, covariates(), [0.5, 0.2])
+    assert mapped == pytest.approx([0.4, math.nan], nan_ok=True)
+
+
+@pytest.mark.parametrize('effect_id', sorted(CONTRACT_IDS))
+def test_every_effect_describes_itself(effect_id):
+    effect = get_effect(effect_id)
+    assert effect.physics and effect.equations and effect.to_separate and effect.covariate
+    lo, hi = effect.bounds()
+    assert lo.size == hi.size == len(effect.parameter_names)
+    for start in effect.starts():
+        assert np.all(start >= lo) and np.all(start <= hi)

@@ -1,0 +1,60 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Locating the mismatch: covariate tests and fixed spectral lines on hand-made tables."""
+import numpy as np
+import pytest
+
+from prsm_lube_ros.diagnosis.locate import covariate_tests, locate, spectral_lines
+from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.diagnosis.table import WindowTable
+
+
+def table_with(n_runs=8, per_run=20, seed=0):
+    rng = np.random.default_rng(seed)
+    run = np.repeat(np.arange(n_runs), per_run)
+    position = np.tile(np.linspace(0.0, 0.17, per_run), n_runs)
+    speed = np.where(run % 2 == 0, 10.0, 20.0)
+    return WindowTable(speed=speed, load=np.where(run % 4 < 2, 100.0, 200.0), rms=np.ones(run.size),
+                       position=position, revolutions=np.arange(run.size) * 3.0, time=np.arange(run.size) * 1.0,
+                       temperature=np.full(run.size, np.nan), run=run, recording=np.zeros(run.size)), rng
+
+
+def test_within_run_position_trend_is_found_with_its_slope():
+    table, rng = table_with()
+    # Model minus measured: the amplitude falls 10 % per 0.1 m, i.e. residual +1.0 per m.
+    residual = 1.0 * table.position + rng.normal(0, 0.01, len(table))
+    tests = covariate_tests(table, residual)
+    assert tests[0].covariate == 'position'
+    assert tests[0].slope == pytest.approx(-1.0, rel=0.05)
+    assert tests[0].p_value < 1e-6
+    assert locate(table, residual).located == 'position'
+
+
+def test_run_offsets_do_not_count_as_a_position_trend():
+    table, rng = table_with()
+    # Each run shifted as a whole (a run-level scatter), no trend inside runs.
+    residual = rng.normal(0, 0.05, table.runs.size)[table.run] + rng.normal(0, 0.01, len(table))
+    position = next(t for t in covariate_tests(table, residual) if t.covariate == 'position')
+    assert position.p_value > 1e-3
+
+
+def test_pure_noise_locates_nothing():
+    table, rng = table_with(seed=4)
+    assert locate(table, rng.normal(0, 0.02, len(table))).located == 'none'
+
+
+def test_fixed_tones_are_found_and_rotation_orders_are_not():
+    plan = SyntheticPlan(spectrum_bins=128)
+    table, _ = synthetic_table(np.random.default_rng(1), 'background_vibration', plan,
+                               params={'fraction': 0.5, 'tones': (480.0, 870.0)})
+    lines = spectral_lines(table)
+    assert lines.testable
+    assert any(abs(f - 480) <= 2 * table.spectrum_resolution for f in lines.frequencies)
+    assert lines.share_at_lowest_speed > 0.01
+    clean, _ = synthetic_table(np.random.default_rng(1), None, plan)
+    assert spectral_lines(clean).frequencies == []
+
+
+def test_spectral_test_needs_spectra_and_two_speeds():
+    table, _ = table_with()
+    assert not spectral_lines(table).testable

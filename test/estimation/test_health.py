@@ -1,0 +1,143 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Diagnostic levels from theta_Oil: thresholds, hysteresis, NaN windows and staleness."""
+import math
+
+import pytest
+
+from prsm_lube_ros.errors import InputError
+from prsm_lube_ros.estimation.health import ERROR, format_value, HealthMonitor, HealthThresholds, OK, STALE, \
+    theta_level, WARN
+
+T = HealthThresholds(warn_below=0.85, error_below=0.70, hysteresis=0.03, stale_timeout=2.0,
+                     max_unassessed_windows=3)
+
+
+def levels(thetas, thresholds=T):
+    """Theta levels window after window, starting fresh."""
+    monitor = HealthMonitor(thresholds)
+    return [monitor.observe(theta) for theta in thetas]
+
+
+def test_levels_from_a_fresh_start_follow_the_thresholds():
+    assert levels([0.95]) == [OK]
+    assert levels([0.85]) == [OK]      # 'below 0.85' is WARN, 0.85 itself is not
+    assert levels([0.849]) == [WARN]
+    assert levels([0.70]) == [WARN]
+    assert levels([0.699]) == [ERROR]
+
+
+def test_worsening_is_immediate_and_recovery_needs_the_margin():
+    #        OK    WARN  ERROR  ERROR  ERROR  WARN   WARN  WARN  WARN  OK
+    thetas = [0.9, 0.84, 0.69, 0.72, 0.73, 0.731, 0.86, 0.88, 0.80, 0.881]
+    assert levels(thetas) == [OK, WARN, ERROR, ERROR, ERROR, WARN, WARN, WARN, WARN, OK]
+
+
+def test_a_theta_hovering_at_a_threshold_does_not_flicker():
+    assert levels([0.84, 0.86, 0.84, 0.87, 0.849]) == [WARN] * 5
+
+
+def test_a_big_recovery_jumps_straight_back_to_ok():
+    assert levels([0.5, 0.95]) == [ERROR, OK]
+    assert levels([0.5, 0.80]) == [ERROR, WARN]
+
+
+def test_theta_level_function_directly():
+    assert theta_level(0.80, None, T) == WARN
+    assert theta_level(0.80, ERROR, T) == WARN     # 0.80 > 0.70 + 0.03
+    assert theta_level(0.86, WARN, T) == WARN      # 0.86 <= 0.85 + 0.03
+    assert theta_level(0.86, OK, T) == OK
+
+
+def test_nan_windows_keep_the_level_and_say_why():
+    monitor = HealthMonitor(T)
+    monitor.note_input(0.0)
+    monitor.observe(0.80, 0.02)
+    assert monitor.observe(math.nan, reason='screw at rest', moving=False) == WARN
+    status = monitor.status(0.5)
+    assert status.level == WARN
+    assert status.message.startswith('not assessable: screw at rest')
+    assert '0.800' in status.message
+
+
+def test_many_nan_windows_at_rest_never_raise_the_level():
+    monitor = HealthMonitor(T)
+    monitor.note_input(0.0)
+    monitor.observe(0.95)
+    for _ in range(100):
+        monitor.observe(math.nan, reason='screw at rest', moving=False)
+    assert monitor.status(0.1).level == OK
+
+
+def test_nan_windows_while_moving_raise_warn_after_the_limit_and_clear_with_theta():
+    monitor = HealthMonitor(T)
+    monitor.note_input(0.0)
+    monitor.observe(0.95)
+    for _ in range(2):
+        monitor.observe(math.nan, reason='no axial load in the window')
+    assert monitor.status(0.1).level == OK
+    monitor.observe(math.nan, reason='no axial load in the window')
+    status = monitor.status(0.1)
+    assert status.level == WARN and 'not assessable for 3 windows' in status.message
+    assert 'no axial load' in status.message
+    monitor.observe(0.95)
+    assert monitor.status(0.1).level == OK
+
+
+def test_an_error_level_is_not_lowered_by_unassessable_windows():
+    monitor = HealthMonitor(T)
+    monitor.note_input(0.0)
+    monitor.observe(0.5)
+    for _ in range(5):
+        monitor.observe(math.nan, reason='blocks lost')
+    assert monitor.status(0.1).level == ERROR
+
+
+def test_a_rest_resets_the_count_of_unassessed_moving_windows():
+    monitor = HealthMonitor(T)
+    monitor.note_input(0.0)
+    for moving in (True, True, False, True, True):
+        monitor.observe(math.nan, reason='x', moving=moving)
+    assert monitor.status(0.1).level == OK
+
+
+def test_stale_before_the_first_input_and_after_inputs_stop():
+    monitor = HealthMonitor(T)
+    assert monitor.status(0.0).level == STALE
+    assert 'no vibration received yet' in monitor.status(0.0).message
+    monitor.note_input(10.0)
+    monitor.observe(0.6)
+    assert monitor.status(11.9).level == ERROR
+    status = monitor.status(12.5)
+    assert status.level == STALE
+    assert 'no vibration for 2.5 s' in status.message and '0.600 (ERROR)' in status.message
+    monitor.note_input(13.0)      # inputs come back: the theta level is still there
+    assert monitor.status(13.1).level == ERROR
+
+
+def test_new_thresholds_apply_from_the_next_window():
+    monitor = HealthMonitor(T)
+    assert monitor.observe(0.80) == WARN
+    monitor.set_thresholds(HealthThresholds(warn_below=0.75, error_below=0.5, hysteresis=0.0))
+    assert monitor.observe(0.80) == OK
+
+
+@pytest.mark.parametrize('kwargs, words', [
+    (dict(warn_below=0.7, error_below=0.7), 'error_below'),
+    (dict(warn_below=0.6, error_below=0.7), 'error_below'),
+    (dict(hysteresis=-0.01), 'hysteresis'),
+    (dict(hysteresis=0.2), 'hysteresis'),
+    (dict(stale_timeout=0.0), 'stale_timeout'),
+    (dict(warn_below=math.nan), 'warn_below'),
+    (dict(max_unassessed_windows=-1), 'max_unassessed_windows'),
+])
+def test_thresholds_that_cannot_order_levels_are_refused(kwargs, words):
+    with pytest.raises(InputError, match=words):
+        HealthThresholds(**kwargs)
+
+
+def test_key_value_formatting():
+    assert format_value(0.123456789) == '0.123457'
+    assert format_value(math.nan) == 'nan'
+    assert format_value(7) == '7'
+    assert format_value('x') == 'x'

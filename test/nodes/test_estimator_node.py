@@ -1,0 +1,641 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The lubrication_estimator node on a real ROS graph (rclpy + Fast DDS on loopback).
+
+Inputs are synthetic runs with a known RMS (a whole number of sine periods per
+window), so theta_Oil follows from Eq. 23 by hand; the node's answers are also
+checked against the offline WindowBuilder + Assessor on the same messages.
+"""
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+rclpy = pytest.importorskip('rclpy')
+pytest.importorskip('prsm_lube_ros.msg')
+
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from geometry_msgs.msg import WrenchStamped  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from sensor_msgs.msg import JointState, Temperature  # noqa: E402
+
+from prsm_lube_ros.estimation.assessment import Assessor  # noqa: E402
+from prsm_lube_ros.estimation.calibration import Calibration  # noqa: E402
+from prsm_lube_ros.estimation.calibration_file import load_calibration, save_calibration  # noqa: E402
+from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN  # noqa: E402
+from prsm_lube_ros.msg import LubricationState, VibrationBlock  # noqa: E402
+from prsm_lube_ros.nodes import ros_convert  # noqa: E402
+from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # noqa: E402
+from prsm_lube_ros.srv import Calibrate  # noqa: E402
+from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, film_speed_load_term, ModelConstants  # noqa
+from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings  # noqa: E402
+
+import synthetic_inputs  # noqa: E402
+from polling import stop_process, wait_for  # noqa: E402
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(60)]
+
+#: This module's own DDS domain (100..199), apart from other test modules'.
+DOMAIN_ID = (int(os.environ.get('ROS_DOMAIN_ID', '0') or 0) + 41) % 100 + 100
+T0 = synthetic_inputs.T0
+SPEED, LOAD = 10.0, 150.0                  # rad/s, N of the live runs
+#: Constants the node starts with: theta 0.9 for a sine of amplitude 2 at SPEED, LOAD.
+START = ModelConstants(c_sys=1.0, c_f=1e-3, c_lambda=0.3)
+START = ModelConstants(c_sys=math.sqrt(2.0) / float(acceleration_amplitude(SPEED, LOAD, 0.9, START)),
+                       c_f=1e-3, c_lambda=0.3)
+#: Constants of the reference recordings the calibrate service is asked to fit.
+TRUE = ModelConstants(c_sys=0.05, c_f=2e-3, c_lambda=0.5)
+
+
+def calibration(constants):
+    """A calibration with the given constants and small, plain uncertainties."""
+    return Calibration(constants=constants, covariance=np.diag([1e-6, 1e-12, 1e-6]), fit_rmse=0.0,
+                       residual_std=0.01, windows_used=6, reference_theta=1.0)
+
+
+def rms_for(theta, constants=START, speed=SPEED, load=LOAD):
+    """Window RMS (m/s^2) that Eq. 22 gives for theta at speed and load."""
+    return float(acceleration_amplitude(speed, load, theta, constants))
+
+
+# -- synthetic inputs ------------------------------------------------------------------------------
+def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, load_rate=20.0, freq=100.0):
+    """Messages ``(stamp, kind, msg)`` in stamp order for segments ``(seconds, rms, speed, load)``.
+
+    The vibration is a sine of ``freq`` Hz with the segment's RMS; 100 Hz puts
+    whole periods in every 0.05 s block, so any window of whole blocks has that RMS.
+    """
+    events = []
+    t = 0.0
+    angle = 0.0
+    n = int(round(block * rate))
+    for seconds, rms, speed, load in segments:
+        for b in range(int(round(seconds / block))):
+            start = t + b * block
+            samples = math.sqrt(2) * rms * np.sin(2 * math.pi * freq * (np.arange(n) / rate))
+            events.append((t0 + start, 'vibration', ros_convert.vibration_block_msg(t0 + start, rate, samples)))
+        for j in range(int(round(seconds * joint_rate))):
+            stamp = t + j / joint_rate
+            events.append((t0 + stamp, 'joint_states', ros_convert.joint_state_msg(t0 + stamp, angle, speed)))
+            angle += speed / joint_rate
+        for k in range(int(round(seconds * load_rate))):
+            stamp = t + k / load_rate
+            events.append((t0 + stamp, 'axial_load', ros_convert.wrench_msg(t0 + stamp, -load)))
+        t += seconds
+    events.sort(key=lambda e: e[0])
+    return events
+
+
+# -- the graph -------------------------------------------------------------------------------------
+class Graph:
+    """A context on this module's domain, an executor thread, a probe node and the estimators started."""
+
+    TYPES = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
+             'temperature': Temperature}
+
+    def __init__(self):
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=DOMAIN_ID)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.probe = rclpy.create_node('estimator_test_probe', context=self.context)
+        self.executor.add_node(self.probe)
+        self.errors = []
+        self.nodes = []
+        self.closing = False
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        try:
+            self.executor.spin()
+        except Exception as exc:      # a callback that raised: the node would have crashed
+            if not self.closing:
+                self.errors.append(exc)
+
+    def estimator(self, tmp_path, **params):
+        """Start an estimator with test defaults (calibration START in tmp_path) and ``params``."""
+        if 'calibration_file' not in params:
+            save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
+        values = dict(calibration_file=str(tmp_path / 'calibration_{actuator}.yaml'),
+                      recordings_dir=str(tmp_path), window_length=0.5, completion_delay=0.25,
+                      stale_timeout=1.0, diagnostics_period=0.2, qos_depth=2000)
+        values.update(params)
+        node = LubricationEstimator(context=self.context, parameter_overrides=[
+            Parameter(k, value=v) for k, v in values.items()])
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def collect(self, msg_type, topic):
+        """List that fills with the messages arriving on ``topic``."""
+        received = []
+        self.probe.create_subscription(msg_type, topic, received.append, 100)
+        return received
+
+    def publishers(self, namespace='/prsm'):
+        """Reliable publishers for the input topics of one actuator (compatible with best effort)."""
+        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        return {kind: self.probe.create_publisher(t, f'{namespace}/{kind}', qos) for kind, t in self.TYPES.items()}
+
+    def publish(self, publishers, events, speedup=4.0):
+        """Publish ``events`` in order, ``speedup`` times faster than their stamps advance.
+
+        Like a live sensor (only faster), so no topic runs seconds ahead of another in the
+        node's queues; bad events with odd stamps go out in their place in the list.
+        """
+        wait_for(lambda: all(p.get_subscription_count() > 0 for p in publishers.values()), 10,
+                 'estimator subscriptions discovered')
+        # The best-effort readers match the writers a little after the writers match them.
+        topics = {p.topic_name for p in publishers.values()}
+        readers = [s for node in self.nodes for s in node.subscriptions if s.topic_name in topics]
+        if readers:
+            wait_for(lambda: all(s.get_publisher_count() > 0 for s in readers), 10, 'writers discovered')
+        else:                                       # the estimator runs in another process
+            time.sleep(1.0)
+        start, first = time.monotonic(), events[0][0]
+        latest = first
+        for _, kind, msg in events:
+            latest = max(latest, _)
+            delay = start + (latest - first) / speedup - time.monotonic()
+            if delay > 0.002:
+                time.sleep(delay)
+            publishers[kind].publish(msg)
+
+    def close(self):
+        """Stop spinning, destroy every node, shut the context down."""
+        self.closing = True
+        self.executor.shutdown(timeout_sec=5)
+        self.thread.join(timeout=5)
+        for node in self.nodes + [self.probe]:
+            node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+@pytest.fixture
+def graph():
+    """A fresh ROS graph for one test, always torn down."""
+    g = Graph()
+    try:
+        yield g
+    finally:
+        g.close()
+    assert not g.errors, f'executor raised: {g.errors}'
+
+
+def call(graph, name, bag_paths, theta=1.0, persist=False, timeout=30):
+    """Call a Calibrate service from the probe; return the response."""
+    client = graph.probe.create_client(Calibrate, name)
+    assert client.wait_for_service(timeout_sec=10), f'{name} not offered'
+    request = Calibrate.Request(bag_paths=[str(p) for p in bag_paths], reference_theta=theta, persist=persist)
+    future = client.call_async(request)
+    wait_for(future.done, timeout, f'answer of {name}')
+    return future.result()
+
+
+def by_window(states):
+    """LubricationState messages keyed by window start (rounded to ms)."""
+    return {round(s.window_start - T0, 3): s for s in states}
+
+
+def status_of(array, name_part):
+    """The status whose name contains ``name_part`` in a DiagnosticArray."""
+    return next(s for s in array.status if name_part in s.name)
+
+
+def values_of(status):
+    """KeyValues of a status as a dict."""
+    return {kv.key: kv.value for kv in status.values}
+
+
+# -- tests -----------------------------------------------------------------------------------------
+def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
+    node = graph.estimator(tmp_path, window_length=1.0, completion_delay=0.5)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    streams = synthetic_inputs.run_streams()          # sine of amplitude 2 at 10 rad/s, 150 N
+    events = [(float(b.stamps[0]), kind, ros_convert.batch_messages(b)[0])
+              for kind, key in (('vibration', 'vibration'), ('joint_states', 'screw'), ('axial_load', 'load'),
+                                ('temperature', 'temperature')) for b in streams[key]]
+    events.sort(key=lambda e: e[0])
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), events)
+
+    # Offline: the same messages through the same builder and the Assessor.
+    builder = WindowBuilder(WindowSettings(window_length=1.0, completion_delay=0.5), lead=0.005)
+    offline = []
+    for batch in synthetic_inputs.interleave(streams):
+        builder.add(batch)
+        offline.extend(builder.pop_closed())
+    assessor = Assessor(calibration(START))
+    expected = {round(w.start - T0, 3): assessor.assess_window(w) for w in offline if w.steady}
+    assert len(expected) >= 8
+    wait_for(lambda: set(expected) <= set(by_window(states)), 15, 'a state for every steady window')
+    live = by_window(states)
+    for start, item in expected.items():
+        state = live[start]
+        assert state.theta_oil == pytest.approx(item.theta_oil, abs=0.01), (
+            start, state.message, node.channels[0].builder.problem_summary())
+        assert state.theta_oil == pytest.approx(0.9, abs=0.01)        # by construction of START
+        assert state.screw_speed == pytest.approx(SPEED, rel=1e-6)
+        assert state.axial_load == pytest.approx(LOAD, rel=1e-6)
+        assert state.vibration_rms == pytest.approx(math.sqrt(2), rel=1e-3)
+        assert state.temperature == pytest.approx(31.0)
+        assert state.actuator == '/prsm' and state.level == OK
+        assert state.header.stamp.sec + state.header.stamp.nanosec * 1e-9 == pytest.approx(T0 + start + 1.0)
+    resting = [s for s in states if s.screw_speed < 1.0]
+    assert resting and all(math.isnan(s.theta_oil) and 'at rest' in s.message for s in resting)
+
+
+def test_levels_fall_with_theta_recover_with_hysteresis_and_go_stale(graph, tmp_path):
+    graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    #          theta, level expected for its windows (warn 0.85, error 0.70, hysteresis 0.03)
+    schedule = [(0.90, OK), (0.80, WARN), (0.60, ERROR), (0.72, ERROR), (0.80, WARN), (0.87, WARN),
+                (0.95, OK)]
+    segments = [(1.0, rms_for(theta), SPEED, LOAD) for theta, _ in schedule] + [(1.0, rms_for(0.95), SPEED, LOAD)]
+    wait_for(lambda: len(diagnostics) > 0, 10, 'first diagnostics')
+    assert status_of(diagnostics[-1], '/prsm').level == bytes([STALE])     # no vibration yet
+    graph.publish(graph.publishers(), segments_stream(segments))
+    wait_for(lambda: len(by_window(states)) >= 2 * len(schedule), 15, 'states of the schedule')
+    live = by_window(states)
+    for i, (theta, level) in enumerate(schedule):
+        for half in (0.0, 0.5):
+            state = live[round(i + half, 3)]
+            assert state.theta_oil == pytest.approx(theta, abs=0.01), (i, half)
+            assert state.level == level, (i, half, state.message)
+    seen = [ros_convert.status_level(status_of(a, '/prsm')) for a in diagnostics]
+    order = [level for k, level in enumerate(seen) if k == 0 or level != seen[k - 1]]
+    assert order[:5] == [STALE, OK, WARN, ERROR, WARN]
+    status = status_of(diagnostics[-1], '/prsm')
+    assert status.name == 'prsm_lube_ros: /prsm lubrication' and status.hardware_id == 'prsm'
+    values = values_of(status)
+    assert {'theta_oil', 'theta_oil_std', 'vibration_rms', 'screw_speed', 'axial_load', 'window',
+            'calibration_file', 'problems'} <= set(values)
+    # Inputs stop: STALE within stale_timeout (1 s) + a diagnostics period, keeping the last theta.
+    wait_for(lambda: status_of(diagnostics[-1], '/prsm').level == bytes([STALE]), 5, 'STALE')
+    assert 'no vibration for' in status_of(diagnostics[-1], '/prsm').message
+
+
+def test_staleness_follows_the_node_clock_under_sim_time(graph, tmp_path):
+    """With use_sim_time, STALE comes from /clock time without vibration, not from wall time."""
+    from rosgraph_msgs.msg import Clock
+    node = graph.estimator(tmp_path, use_sim_time=True)
+    clock = graph.probe.create_publisher(Clock, '/clock', 10)
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+
+    def tick(seconds):
+        clock.publish(Clock(clock=ros_convert.time_msg(seconds)))
+
+    wait_for(lambda: clock.get_subscription_count() > 0, 10, '/clock subscribed')
+    tick(1000.0)
+    wait_for(lambda: node.now() == pytest.approx(1000.0), 10, 'node clock at 1000 s')
+    graph.publish(graph.publishers(), segments_stream([(1.5, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: node.channels[0].windows >= 2, 10, 'windows')
+    time.sleep(1.5)                                  # wall time passes, /clock does not
+    count = len(diagnostics)
+    tick(1000.4)
+    wait_for(lambda: len(diagnostics) > count, 10, 'diagnostics after a /clock step')
+    assert status_of(diagnostics[-1], '/prsm').level == bytes([OK])
+    assert diagnostics[-1].header.stamp.sec == 1000
+    tick(1001.6)                                     # 1.6 s of node clock without vibration > 1.0 s
+    wait_for(lambda: status_of(diagnostics[-1], '/prsm').level == bytes([STALE]), 10, 'STALE on /clock')
+    assert 'no vibration for 1.6 s' in status_of(diagnostics[-1], '/prsm').message
+
+
+def test_bad_inputs_are_left_out_and_the_node_keeps_publishing(graph, tmp_path):
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    rms = rms_for(0.9)
+    good = segments_stream([(2.0, rms, SPEED, LOAD)])
+    # Zero load for windows [2, 3); a gap of lost blocks in [3, 3.5); good again from 3.5 s on.
+    zero = segments_stream([(1.0, rms, SPEED, 0.0)], t0=T0 + 2.0)
+    after = [e for e in segments_stream([(3.0, rms, SPEED, LOAD)], t0=T0 + 3.0)
+             if not (e[1] == 'vibration' and e[0] < T0 + 3.4)]
+    bad = [
+        (T0 + 1.0, 'vibration', ros_convert.vibration_block_msg(T0 + 1.0, 2000.0, [np.nan, np.inf, 1.0])),
+        (T0 + 1.0, 'vibration', ros_convert.vibration_block_msg(T0 + 1.0, 2000.0, [])),
+        (T0 + 1.0, 'vibration', ros_convert.vibration_block_msg(T0 + 1.0, 0.0, [1.0, 2.0])),
+        (T0 + 1.0, 'vibration', ros_convert.vibration_block_msg(T0 + 1.0, -5.0, [1.0, 2.0])),
+        (T0 + 1.0, 'joint_states', ros_convert.joint_state_msg(T0 + 1.0, 0.0, 1.0, joint='motor')),
+        (T0 + 1.0, 'joint_states', JointState(header=ros_convert.joint_state_msg(T0 + 1.0, 0, 0).header,
+                                              name=['screw'])),  # screw without position/velocity
+        (T0 + 1.0, 'axial_load', WrenchStamped()),                   # header.stamp never set
+        (T0 + 1.0, 'axial_load', ros_convert.wrench_msg(T0 + 1.0, math.nan)),
+    ]
+    backwards = [(T0 + 4.0, 'vibration', ros_convert.vibration_block_msg(T0 + 0.1, 2000.0, np.ones(100))),
+                 (T0 + 4.0, 'joint_states', ros_convert.joint_state_msg(T0 + 0.1, 0.0, SPEED)),
+                 (T0 + 4.0, 'axial_load', ros_convert.wrench_msg(T0 + 0.1, 0.0))]
+    events = sorted(good + bad + zero + after + backwards, key=lambda e: e[0])
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: {5.0, 5.5} & set(by_window(states)), 15, 'states after the bad input')
+    live = by_window(states)
+    for start in (0.0, 0.5, 1.5, 3.5, 4.0, 4.5):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), (start, live[start].message)
+    for start in (2.0, 2.5):
+        assert math.isnan(live[start].theta_oil) and 'axial load' in live[start].message
+    assert math.isnan(live[3.0].theta_oil) and 'blocks lost' in live[3.0].message
+    assert live[3.5].level == OK
+    channel = node.channels[0]
+    assert set(channel.input_errors) == {'joint_states:InputError', 'axial_load:InputError'}
+    kinds = channel.builder.problem_summary()
+    for kind in ('vibration-nonfinite', 'vibration-empty', 'vibration-rate', 'vibration-late', 'screw-late'):
+        assert kinds.get(kind, 0) > 0, kind
+    wait_for(lambda: int(values_of(status_of(diagnostics[-1], '/prsm'))['problems']) > 5, 5, 'problem count')
+
+
+def test_joint_states_and_load_are_taken_while_vibration_is_silent(graph, tmp_path):
+    """Only vibration wakes the executor; when it stops, the other inputs are still taken (drain timer).
+
+    Vibration for 1.5 s, joint states and load for 5.5 s: once they are
+    stream_timeout (3 s) past the last block, vibration stops holding the windows
+    open and the silent ones close without theta (no vibration samples; the status goes STALE).
+    """
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    events = [e for e in segments_stream([(5.5, rms_for(0.9), SPEED, LOAD)])
+              if not (e[1] == 'vibration' and e[0] >= T0 + 1.5)]
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: 4.5 in by_window(states), 10, 'the windows after the vibration stopped')
+    live = by_window(states)
+    for start in (0.0, 0.5, 1.0):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), live[start].message
+    for start in (1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5):
+        assert math.isnan(live[start].theta_oil) and 'no vibration' in live[start].message, start
+        assert live[start].screw_speed == pytest.approx(SPEED, rel=1e-6)
+
+
+def test_parameters_are_validated_and_applied(graph, tmp_path):
+    node = graph.estimator(tmp_path)
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('format: something else\n')
+    refused = {
+        'error_below': 0.9,                            # above warn_below
+        'window_length': 0.0,                          # out of range
+        'hysteresis': 0.5,                             # wider than the WARN band
+        'calibration_file': str(broken),
+        'recordings_dir': str(tmp_path / 'missing'),
+    }
+    for name, value in refused.items():
+        result = node.set_parameters([Parameter(name, value=value)])[0]
+        assert not result.successful and result.reason, name
+    result = node.set_parameters([Parameter('actuators', value=['/x'])])[0]
+    assert not result.successful                        # read-only
+    assert node.set_parameters([Parameter('warn_below', value=0.95)])[0].successful
+    assert node.channels[0].monitor.thresholds.warn_below == 0.95
+    assert node.set_parameters([Parameter('window_length', value=0.25)])[0].successful
+    assert node.channels[0].builder.settings.window_length == 0.25
+    assert node.channels[0].assessor is not None       # the calibration survived every refusal
+
+
+def test_several_actuators_each_have_topics_status_and_service(graph, tmp_path):
+    left, right = '/ema_left/prsm', '/ema_right/prsm'
+    save_calibration(calibration(START), tmp_path / 'calibration_ema_left_prsm.yaml')
+    node = graph.estimator(tmp_path, actuators=[left, right], hardware_ids=['EMA-L 0042'],
+                           calibration_file=str(tmp_path / 'calibration_{actuator}.yaml'))
+    states = graph.collect(LubricationState, f'{left}/lubrication_state')
+    other = graph.collect(LubricationState, f'{right}/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(left), segments_stream([(3.0, rms_for(0.8), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 3, 15, 'left states')
+    assert all(s.actuator == left for s in states)
+    assert states[0].theta_oil == pytest.approx(0.8, abs=0.01)
+    assert not other
+    wait_for(lambda: status_of(diagnostics[-1], left).level == bytes([WARN]), 5, 'left WARN')
+    last = diagnostics[-1]
+    assert len(last.status) == 2
+    assert status_of(last, left).hardware_id == 'EMA-L 0042'
+    assert status_of(last, right).hardware_id == 'ema_right/prsm'
+    assert status_of(last, right).level == bytes([STALE])
+    assert 'no calibration yet' in values_of(status_of(last, right))['calibration']
+    for name in ('/prsm/calibrate', f'{left}/calibrate', f'{right}/calibrate'):
+        response = call(graph, name, [])
+        assert not response.success and 'bag_paths is empty' in response.message
+
+
+# -- calibration service ---------------------------------------------------------------------------
+def write_reference_bag(path, segments, namespace='/prsm', topics=('vibration', 'joint_states', 'axial_load')):
+    """A rosbag2 (mcap) of ``segments_stream(segments)`` written with rosbags and the contract typestore."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from prsm_lube_ros.contract import JOINT_STATE, VIBRATION_BLOCK, WRENCH_STAMPED
+    from prsm_lube_ros.recording.typestore import contract_typestore
+    store = contract_typestore()
+    types = {'vibration': VIBRATION_BLOCK, 'joint_states': JOINT_STATE, 'axial_load': WRENCH_STAMPED}
+    T = store.types
+
+    def header(msg):
+        return T['std_msgs/msg/Header'](stamp=T['builtin_interfaces/msg/Time'](
+            sec=msg.header.stamp.sec, nanosec=msg.header.stamp.nanosec), frame_id='')
+
+    def convert(kind, msg):
+        if kind == 'vibration':
+            return T[VIBRATION_BLOCK](header=header(msg), sample_rate=msg.sample_rate,
+                                      samples=np.array(msg.samples, np.float32))
+        if kind == 'joint_states':
+            return T[JOINT_STATE](header=header(msg), name=['screw'], position=np.array(msg.position),
+                                  velocity=np.array(msg.velocity), effort=np.zeros(0))
+        vector = T['geometry_msgs/msg/Vector3']
+        return T[WRENCH_STAMPED](header=header(msg), wrench=T['geometry_msgs/msg/Wrench'](
+            force=vector(x=0.0, y=0.0, z=msg.wrench.force.z), torque=vector(x=0.0, y=0.0, z=0.0)))
+
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connections = {kind: writer.add_connection(f'{namespace}/{kind}', types[kind], typestore=store)
+                       for kind in topics}
+        for stamp, kind, msg in segments_stream(segments):
+            if kind in connections:
+                writer.write(connections[kind], int(round(stamp * 1e9)),
+                             store.serialize_cdr(convert(kind, msg), types[kind]))
+    return path
+
+
+def reference_segments(theta=1.0, speeds=(8.0, 12.0, 16.0), loads=(100.0, 200.0)):
+    """3 speeds x 2 loads: rest 1 s, then 3 s steady, with the RMS of TRUE at ``theta``."""
+    segments = []
+    for load in loads:
+        for speed in speeds:
+            segments += [(1.0, 0.01, 0.0, load),
+                         (3.0, float(acceleration_amplitude(speed, load, theta, TRUE)), speed, load)]
+    return segments + [(1.0, 0.01, 0.0, loads[-1])]
+
+
+def test_bad_calibration_requests_answer_false_and_the_node_keeps_serving(graph, tmp_path):
+    node = graph.estimator(tmp_path)
+    before = node.channels[0].assessor
+    write_reference_bag(tmp_path / 'other_ns', reference_segments(), namespace='/other')
+    write_reference_bag(tmp_path / 'one_level', [(4.0, rms_for(1.0), SPEED, LOAD)])
+    write_reference_bag(tmp_path / 'no_load', reference_segments(), topics=('vibration', 'joint_states'))
+    outside = tmp_path.parent / 'outside_bag'
+    outside.mkdir(exist_ok=True)
+    cases = [
+        ([], 1.0, 'bag_paths is empty'),
+        ([tmp_path / 'nope'], 1.0, 'not found'),
+        ([outside], 1.0, 'outside the recordings folder'),
+        (['../outside_bag'], 1.0, 'outside the recordings folder'),
+        ([tmp_path / 'other_ns'], 1.0, '/prsm'),
+        ([tmp_path / 'no_load'], 1.0, 'no axial load'),
+        ([tmp_path / 'one_level'], 1.0, 'cannot identify'),
+        ([tmp_path / 'one_level'], -1.0, 'reference_theta'),
+    ]
+    for paths, theta, words in cases:
+        response = call(graph, '/prsm/calibrate', paths, theta)
+        assert not response.success, paths
+        assert words in response.message, (paths, response.message)
+    assert node.channels[0].assessor is before                 # nothing calibrated was lost
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 2, 10, 'states after the refusals')
+    assert states[0].theta_oil == pytest.approx(0.9, abs=0.01)
+
+
+def test_calibrate_fits_swaps_and_persists(graph, tmp_path):
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    file = tmp_path / 'calibration_prsm.yaml'
+    old_text = file.read_text()
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95, persist=False)
+    assert response.success, response.message
+    assert response.c_sys == pytest.approx(TRUE.c_sys, rel=0.01)
+    assert response.c_f == pytest.approx(TRUE.c_f, rel=0.01)
+    assert response.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
+    assert response.fit_rmse < 0.01 and response.windows_used >= 24
+    assert file.read_text() == old_text                                  # not persisted
+    # The live windows are now judged with TRUE: an RMS of TRUE at theta 0.75 reads 0.75.
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.75, TRUE), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 2, 10, 'states after the swap')
+    assert states[0].theta_oil == pytest.approx(0.75, abs=0.01)
+    assert states[0].level == WARN
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95, persist=True)
+    assert response.success and response.calibration_file == str(file)
+    saved = load_calibration(file)
+    assert saved.constants.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
+    assert not list(tmp_path.glob('.calibration_prsm.yaml.*'))          # no temporary file left
+
+
+def test_a_slow_fit_does_not_hold_up_the_inputs(graph, tmp_path, monkeypatch):
+    """While a calibration is being fitted (here: made to take 3 s) windows keep being assessed."""
+    from prsm_lube_ros.nodes import lubrication_estimator as module
+    release = threading.Event()
+
+    def slow_fit(*args, **kwargs):
+        release.wait(3.0)
+        raise module.InputError('calibrate: stopped on purpose')
+
+    monkeypatch.setattr(module, 'calibrate_from_request', slow_fit)
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    client = graph.probe.create_client(Calibrate, '/prsm/calibrate')
+    assert client.wait_for_service(timeout_sec=10)
+    future = client.call_async(Calibrate.Request(bag_paths=['x']))
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 2, 10, 'states while the fit runs')
+    assert not future.done()
+    release.set()
+    wait_for(future.done, 10, 'the answer')
+    assert not future.result().success and 'stopped on purpose' in future.result().message
+
+
+def test_the_estimator_runs_as_its_own_process(tmp_path):
+    """python -m ...lubrication_estimator: publishes, refuses a bad request, exits cleanly on SIGINT."""
+    save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID), PYTHONUNBUFFERED='1')
+    command = [sys.executable, '-m', 'prsm_lube_ros.nodes.lubrication_estimator', '--ros-args',
+               '-p', f'calibration_file:={tmp_path}/calibration_{{actuator}}.yaml',
+               '-p', f'recordings_dir:={tmp_path}', '-p', 'window_length:=0.5', '-p', 'completion_delay:=0.25',
+               '-p', 'diagnostics_period:=0.2']
+    process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    graph = Graph()
+    try:
+        states = graph.collect(LubricationState, '/prsm/lubrication_state')
+        diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+        wait_for(lambda: diagnostics or process.poll() is not None, 20, 'diagnostics from the process')
+        assert process.poll() is None
+        response = call(graph, '/prsm/calibrate', ['/etc'])
+        assert not response.success and 'outside the recordings folder' in response.message
+        wait_for(lambda: graph.probe.count_publishers('/prsm/lubrication_state') > 0, 10, 'state publisher')
+        graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+        wait_for(lambda: len(states) >= 2, 15, 'states from the process')
+        assert states[0].theta_oil == pytest.approx(0.9, abs=0.01)
+    finally:
+        graph.close()
+        stderr = stop_process(process)
+    assert process.returncode == 0, stderr
+    assert 'Traceback' not in stderr
+
+
+def test_a_bad_configuration_ends_with_one_line(tmp_path):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID))
+    command = [sys.executable, '-m', 'prsm_lube_ros.nodes.lubrication_estimator', '--ros-args',
+               '-p', 'warn_below:=0.5', '-p', 'error_below:=0.6', '-p', f'calibration_file:={tmp_path}/c.yaml']
+    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=30)
+    assert result.returncode == 2
+    assert 'error_below' in result.stderr and 'Traceback' not in result.stderr
+
+
+def test_the_live_inputs_follow_eq_22():
+    """Hand check of the inputs used above: RMS falls by exp(-C_lambda w^0.68 F^-0.073 d theta)."""
+    g = START.c_lambda * float(film_speed_load_term(SPEED, LOAD))
+    assert rms_for(0.6) / rms_for(0.9) == pytest.approx(math.exp(0.3 * g))
+    assert rms_for(0.9) == pytest.approx(math.sqrt(2))
+
+
+def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
+    """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply."""
+    config = tmp_path / 'estimator.yaml'
+    config.write_text('lubrication_estimator:\n  ros__parameters:\n    hardware_ids: [from-yaml]\n'
+                      '    actuators: [/runtest/prsm]\n    diagnostics_period: 0.2\n')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID), PYTHONUNBUFFERED='1')
+    command = [sys.executable, '-m', 'prsm_lube_ros.cli', 'run', '--no-bridge', '--config', str(config),
+               '-p', f'recordings_dir:={tmp_path}', '-p', f'calibration_file:={tmp_path}/c.yaml',
+               '-p', 'warn_below:=0.9']
+    process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    graph = Graph()
+    try:
+        diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+        wait_for(lambda: any('/runtest/prsm' in s.name for a in diagnostics for s in a.status)
+                 or process.poll() is not None, 20, 'diagnostics from prsm-lube run')
+        assert process.poll() is None
+        status = status_of(diagnostics[-1], '/runtest/prsm')
+        assert status.hardware_id == 'from-yaml'
+        response = call(graph, '/runtest/prsm/calibrate', ['missing_bag'])
+        assert not response.success and 'not found' in response.message
+    finally:
+        graph.close()
+        stderr = stop_process(process)
+    assert process.returncode == 0, stderr
+    assert 'Traceback' not in stderr
+
+
+def test_run_overrides_and_a_missing_parameter_file():
+    from prsm_lube_ros.cli import main
+    from prsm_lube_ros.cli.run import parse_override
+    assert parse_override('actuators:=[/a/prsm, /b/prsm]') == ('actuators', ['/a/prsm', '/b/prsm'])
+    assert parse_override('warn_below:=0.9') == ('warn_below', 0.9)
+    assert parse_override('calibration_file:=') == ('calibration_file', '')
+    assert main(['run', '--no-bridge', '--config', '/nonexistent/estimator.yaml']) == 2
+
+
+def test_the_launch_file_parses_and_starts_the_installed_executables():
+    import ast
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    tree = ast.parse((root / 'launch' / 'prsm_lube.launch.py').read_text())
+    functions = {node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)}
+    assert 'generate_launch_description' in functions
+    executables = {kw.value.value for node in ast.walk(tree) if isinstance(node, ast.Call)
+                   for kw in node.keywords if kw.arg == 'executable'}
+    installed = (root / 'CMakeLists.txt').read_text()
+    assert executables == {'sensor_bridge', 'lubrication_estimator'}
+    assert all(f'scripts/{name}' in installed for name in executables)

@@ -1,0 +1,130 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The package's layers import only downward, and only nodes/ and the ``run`` command touch ROS.
+
+Every import of every module is read with :mod:`ast` (module-level and the
+lazy ones inside functions), resolved to the package's subpackage, and checked
+against the layer table below.  The table is the architecture the README's
+module map describes; a change that needs an upward import must change it here,
+visibly.
+"""
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / 'prsm_lube_ros'
+
+#: Top-level modules that form the base layer (they import nothing of the package but each other).
+BASE = {'errors', 'contract', 'validation', 'config_file', 'figures', '__init__'}
+#: Which layers each layer may import (base is always allowed).
+ALLOWED = {
+    'base': set(),
+    'physics': set(),
+    'recording': set(),
+    'estimation': {'physics', 'recording'},
+    'diagnosis': {'physics', 'recording', 'estimation'},
+    'simulation': {'physics', 'recording', 'estimation', 'diagnosis'},
+    'experiments': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation'},
+    'nodes': {'physics', 'recording', 'estimation', 'simulation', 'msg', 'srv'},
+    'cli': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'experiments', 'nodes'},
+}
+#: ROS Python packages (the generated interfaces are checked as the layers 'msg' and 'srv').
+ROS_MODULES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'std_msgs', 'sensor_msgs', 'geometry_msgs',
+               'diagnostic_msgs', 'rosgraph_msgs', 'launch', 'launch_ros', 'ament_index_python', 'lifecycle_msgs'}
+
+
+def layer_of(parts):
+    """Layer of a module given its path parts below the package."""
+    if len(parts) == 1:
+        return 'base' if parts[0] in BASE else parts[0]
+    return parts[0]
+
+
+def modules():
+    for path in sorted(PACKAGE.rglob('*.py')):
+        parts = path.relative_to(PACKAGE).with_suffix('').parts
+        yield path, parts
+
+
+def imports(path, parts):
+    """(line, package-relative target parts or None, top-level external name or None) of each import."""
+    tree = ast.parse(path.read_text())
+    package_parts = list(parts[:-1]) if parts[-1] != '__init__' else list(parts[:-1])
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                top = alias.name.split('.')[0]
+                if top == 'prsm_lube_ros':
+                    yield node.lineno, alias.name.split('.')[1:], None
+                else:
+                    yield node.lineno, None, top
+        elif isinstance(node, ast.ImportFrom):
+            if node.level == 0:
+                top = (node.module or '').split('.')[0]
+                if top == 'prsm_lube_ros':
+                    base = node.module.split('.')[1:]
+                    for alias in node.names:
+                        yield node.lineno, base or [alias.name], None
+                else:
+                    yield node.lineno, None, top
+                continue
+            base = package_parts[:len(package_parts) - (node.level - 1)]
+            target = base + (node.module.split('.') if node.module else [])
+            if not target:  # from . import x at the package root
+                for alias in node.names:
+                    yield node.lineno, [alias.name], None
+            else:
+                yield node.lineno, target, None
+
+
+def test_every_layer_imports_only_downward():
+    wrong = []
+    for path, parts in modules():
+        layer = layer_of(parts)
+        assert layer in ALLOWED, f'{path}: subpackage {layer!r} is not in the layer table'
+        for line, target, _ in imports(path, parts):
+            if target is None:
+                continue
+            other = layer_of(target)
+            if other in ('base', layer) or other in ALLOWED[layer]:
+                continue
+            wrong.append(f'{path.relative_to(PACKAGE.parent)}:{line}: {layer} imports {".".join(target)} ({other})')
+    assert not wrong, 'upward or sideways imports:\n' + '\n'.join(wrong)
+
+
+def test_the_base_layer_imports_nothing_of_the_package_above_it():
+    for path, parts in modules():
+        if layer_of(parts) != 'base' or parts == ('__init__',):
+            continue
+        for line, target, _ in imports(path, parts):
+            assert target is None or layer_of(target) == 'base', f'{path}:{line} imports {target}'
+
+
+def test_only_nodes_and_the_run_command_import_ros():
+    wrong = []
+    for path, parts in modules():
+        if parts[0] == 'nodes' or parts == ('cli', 'run'):
+            continue
+        for line, target, external in imports(path, parts):
+            if external in ROS_MODULES or (target and target[0] in ('msg', 'srv')):
+                wrong.append(f'{path.relative_to(PACKAGE.parent)}:{line}')
+    assert not wrong, 'ROS imported outside nodes/: ' + ', '.join(wrong)
+
+
+@pytest.mark.parametrize('subpackage', sorted(p.name for p in PACKAGE.iterdir()
+                                              if p.is_dir() and (p / '__init__.py').is_file()))
+def test_every_subpackage_says_what_it_owns_and_what_it_may_import(subpackage):
+    doc = ast.get_docstring(ast.parse((PACKAGE / subpackage / '__init__.py').read_text())) or ''
+    assert 'Owns' in doc or 'owns' in doc, f'{subpackage}: the docstring does not say what it owns'
+    assert 'import' in doc, f'{subpackage}: the docstring does not say what it may import'
+
+
+def test_the_checker_sees_an_upward_import(tmp_path):
+    """The test above can fail: a physics module importing estimation is caught."""
+    fake = tmp_path / 'prsm_lube_ros' / 'physics'
+    fake.mkdir(parents=True)
+    (fake / 'bad.py').write_text('from ..estimation.calibration import Calibration\n')
+    found = [target for _, target, _ in imports(fake / 'bad.py', ('physics', 'bad'))]
+    assert found == [['estimation', 'calibration']]
+    assert layer_of(found[0]) not in ALLOWED['physics']
