@@ -30,6 +30,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..physics.vibration_model import film_speed_load_term, lubrication_index
+from ..validation import finite_or_none
 from .calibration import Calibration
 from .windowing import Window
 
@@ -70,12 +71,8 @@ class RunAssessment:
                 'screw_speed': self.screw_speed, 'axial_load': self.axial_load,
                 'vibration_rms': self.vibration_rms, 'theta_oil': self.theta_oil,
                 'theta_oil_std': self.theta_oil_std, 'run_index': self.run_index,
-                'windows': self.windows, 'temperature': _json_float(self.temperature),
+                'windows': self.windows, 'temperature': finite_or_none(self.temperature),
                 'reason': self.reason}
-
-
-def _json_float(value: float):
-    return value if math.isfinite(value) else None
 
 
 class Assessor:

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 from ..recording import reader as recording_reader
+from ..validation import finite_or_none
 from .assessment import Assessor, MIN_AXIAL_LOAD, RunAssessment, WindowAssessment
 from .calibration import Calibration, fit_windows
 from .windowing import Window, WindowBuilder, WindowSettings
@@ -111,12 +112,12 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
             w = item.window
             windows.append({'bag': rec.path, 'start': w.start, 'end': w.end, 'run_index': w.run_index,
                             'steady': w.steady,
-                            'screw_speed': _finite_or_none(w.screw_speed),
-                            'axial_load': _finite_or_none(w.axial_load),
-                            'vibration_rms': _finite_or_none(w.vibration_rms),
-                            'nut_position': _finite_or_none(w.nut_position),
-                            'theta_oil': _finite_or_none(item.theta_oil),
-                            'theta_oil_std': _finite_or_none(item.theta_oil_std), 'reason': item.reason})
+                            'screw_speed': finite_or_none(w.screw_speed),
+                            'axial_load': finite_or_none(w.axial_load),
+                            'vibration_rms': finite_or_none(w.vibration_rms),
+                            'nut_position': finite_or_none(w.nut_position),
+                            'theta_oil': finite_or_none(item.theta_oil),
+                            'theta_oil_std': finite_or_none(item.theta_oil_std), 'reason': item.reason})
     for run in unassessed:
         run['theta_oil'] = None
         run['theta_oil_std'] = None
@@ -125,7 +126,3 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
             'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
                             'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used},
             'problems': problems}
-
-
-def _finite_or_none(value: float):
-    return value if value == value and abs(value) != float('inf') else None

@@ -65,12 +65,19 @@ class WindowSettings:
                 raise InputError(f'window setting {name}={value!r} is out of range')
 
 
+#: Why a window is not steady, as codes (``Window.reason_kind``); the words are in ``Window.reason``.
+NO_VIBRATION, BLOCKS_LOST, NO_SPEED, AT_REST, SPEED_CHANGING, SPANS_RUNS, NO_LOAD = (
+    'no_vibration', 'blocks_lost', 'no_speed', 'at_rest', 'speed_changing', 'spans_runs', 'no_load')
+UNSTEADY_KINDS = (NO_VIBRATION, BLOCKS_LOST, NO_SPEED, AT_REST, SPEED_CHANGING, SPANS_RUNS, NO_LOAD)
+
+
 @dataclass(frozen=True)
 class Window:
     """One closed window of the inputs.
 
-    ``reason`` is empty for a steady window; otherwise it says in words why the
-    window is not steady (and so not assessable).
+    ``reason_kind`` is empty for a steady window; otherwise one of the
+    :data:`UNSTEADY_KINDS` codes, for code to branch on, and ``reason`` says the
+    same in words (with the numbers) for people.  :attr:`steady` derives from it.
     """
 
     start: float                # s since the epoch
@@ -85,10 +92,15 @@ class Window:
     nut_position: float         # m, mean nut travel since the run's motion start (NaN if unknown)
     revolutions: float          # screw revolutions turned since the builder started, at the window end
     run_index: int              # run counter (0 before the first motion)
-    steady: bool
+    reason_kind: str = ''       # '' when steady, else one of UNSTEADY_KINDS
     reason: str = ''
     spectrum: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan  # Hz per spectrum bin
+
+    @property
+    def steady(self) -> bool:
+        """True when the window is steady, i.e. has no unsteady reason."""
+        return not self.reason_kind
 
 
 # Columns of the open-window table (one row per open window, counts held exactly as float64).
@@ -507,10 +519,10 @@ class WindowBuilder:
         windows = []
         for (start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
              revolutions_k, run_k, steady_k, row, (spectrum, resolution)) in columns:
-            reason = '' if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
+            kind, reason = ('', '') if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
             # Positional, in field order (start ... spectrum_resolution): a third cheaper than keywords.
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
-                                  position_k, revolutions_k, run_k, not reason, reason, spectrum, resolution))
+                                  position_k, revolutions_k, run_k, kind, reason, spectrum, resolution))
         return windows
 
 
@@ -519,25 +531,26 @@ def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     return np.where(counts > 0, sums / counts, math.nan)
 
 
-def _unsteady_reason(s: WindowSettings, row: np.ndarray, coverage: float, speed: float, spread: float) -> str:
-    """Why a closed window (its open-table row and derived values) is not steady, in words; '' if it is."""
+def _unsteady_reason(s: WindowSettings, row: np.ndarray, coverage: float, speed: float,
+                     spread: float) -> tuple[str, str]:
+    """Why a closed window (its open-table row and derived values) is not steady: (kind, words); ('', '') if it is."""
     if row[_COUNT] == 0:
-        return 'no vibration samples in the window'
+        return NO_VIBRATION, 'no vibration samples in the window'
     if coverage < s.min_coverage:
-        return (f'vibration covers {100 * coverage:.0f}% of the window '
-                f'(< {100 * s.min_coverage:.0f}%): blocks lost')
+        return BLOCKS_LOST, (f'vibration covers {100 * coverage:.0f}% of the window '
+                             f'(< {100 * s.min_coverage:.0f}%): blocks lost')
     if row[_SPEED_N] == 0:
-        return 'no screw speed in the window (joint_states entry "screw")'
+        return NO_SPEED, 'no screw speed in the window (joint_states entry "screw")'
     if speed < s.min_speed:
-        return f'screw at rest or crawling ({speed:.3g} rad/s < min_speed {s.min_speed:.3g} rad/s)'
+        return AT_REST, f'screw at rest or crawling ({speed:.3g} rad/s < min_speed {s.min_speed:.3g} rad/s)'
     if spread > s.max_speed_spread:
-        return (f'screw speed not steady (varies {100 * spread:.1f}% > {100 * s.max_speed_spread:.1f}%):'
-                ' acceleration or deceleration')
+        return SPEED_CHANGING, (f'screw speed not steady (varies {100 * spread:.1f}% > '
+                                f'{100 * s.max_speed_spread:.1f}%): acceleration or deceleration')
     if row[_RUN_MIN] != row[_RUN_MAX]:
-        return 'window spans the end of one run and the start of the next'
+        return SPANS_RUNS, 'window spans the end of one run and the start of the next'
     if row[_LOAD_N] == 0:
-        return 'no axial load in the window'
-    return ''
+        return NO_LOAD, 'no axial load in the window'
+    return '', ''
 
 
 def _segment_sums(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

@@ -9,14 +9,14 @@ swaps the result in; everything wrong with a request comes out as one
 from __future__ import annotations
 
 from dataclasses import dataclass
-import math
 import os
 from pathlib import Path
 from typing import Callable, Sequence
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration
-from ..estimation.windowing import WindowSettings
+from ..estimation.windowing import AT_REST, WindowSettings
+from ..validation import reference_theta as checked_reference_theta
 
 
 def recordings_folder(folder: str) -> Path:
@@ -51,12 +51,7 @@ def resolve_bag_paths(bag_paths: Sequence[str], folder: str | Path) -> list[Path
 
 def reference_theta(value: float) -> float:
     """The request's ``reference_theta``: 0 means 1.0; must be positive and finite."""
-    value = float(value)
-    if value == 0.0:
-        return 1.0
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f'calibrate: reference_theta {value!r} must be a positive number (0 means 1.0)')
-    return value
+    return checked_reference_theta(value, 'calibrate: reference_theta (0 means 1.0)')
 
 
 @dataclass(frozen=True)
@@ -102,12 +97,13 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
 
 def _main_reason(windows) -> str:
     """The most frequent reason why windows of a moving screw were not steady, in words."""
-    reasons: dict[str, int] = {}
+    counts: dict[str, int] = {}
+    example: dict[str, str] = {}
     for window in windows:
-        if window.reason and not window.reason.startswith('screw at rest'):
-            key = window.reason.split(' (')[0]
-            reasons[key] = reasons.get(key, 0) + 1
-    if not reasons:
+        if window.reason_kind and window.reason_kind != AT_REST:
+            counts[window.reason_kind] = counts.get(window.reason_kind, 0) + 1
+            example.setdefault(window.reason_kind, window.reason)
+    if not counts:
         return 'the screw never turned faster than min_speed'
-    reason, count = max(reasons.items(), key=lambda item: item[1])
-    return f'{reason} ({count} of {len(windows)} windows)'
+    kind, count = max(counts.items(), key=lambda item: item[1])
+    return f'{example[kind]} ({count} of {len(windows)} windows)'

@@ -110,7 +110,7 @@ def test_bad_calibration_files_are_named_in_one_line(tmp_path, content, message)
 def window(speed, load, rms, steady=True, reason='', run=1, n=4000):
     return Window(start=0.0, end=1.0, vibration_rms=rms, sample_count=n, coverage=1.0, screw_speed=speed,
                   speed_spread=0.0, axial_load=load, temperature=30.0, nut_position=0.05, revolutions=3.0,
-                  run_index=run, steady=steady, reason=reason)
+                  run_index=run, reason_kind='' if steady else 'at_rest', reason=reason)
 
 
 def test_assessment_recovers_theta_and_its_uncertainty_covers_the_truth():
@@ -146,3 +146,10 @@ def test_no_floating_point_warnings_on_degenerate_windows():
     with np.errstate(all='raise'):
         for args in [(0.0, 100.0, 1.0), (10.0, 0.0, 1.0), (10.0, 100.0, 0.0), (math.inf, 100.0, 1.0)]:
             assert math.isnan(Assessor(cal).assess_window(window(*args)).theta_oil)
+
+
+def test_unsteady_windows_carry_a_code_and_steady_derives_from_it():
+    from prsm_lube_ros.estimation.windowing import AT_REST, UNSTEADY_KINDS
+    at_rest = window(0.01, 100.0, 1.0, steady=False, reason='screw at rest or crawling')
+    assert at_rest.reason_kind == AT_REST and AT_REST in UNSTEADY_KINDS and not at_rest.steady
+    assert window(10.0, 100.0, 1.0).steady

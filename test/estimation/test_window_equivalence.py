@@ -250,7 +250,7 @@ def test_windows_match_a_per_sample_reference(name, feeding):
 def _window(speed, load, rms, steady=True, reason='', run=1, count=4000):
     return Window(start=0.0, end=1.0, vibration_rms=rms, sample_count=count, coverage=1.0, screw_speed=speed,
                   speed_spread=0.0, axial_load=load, temperature=30.0 + run, nut_position=0.05, revolutions=3.0,
-                  run_index=run, steady=steady, reason=reason)
+                  run_index=run, reason_kind='' if steady else 'at_rest', reason=reason)
 
 
 def _calibration():

@@ -294,9 +294,9 @@ def test_corrupted_bytes_never_escape_as_tracebacks(tmp_path, truncation_source)
             damaged[position:position + 8] = rng.bytes(8)
         path = tmp_path / f'damaged_{trial}.mcap'
         path.write_bytes(bytes(damaged))
+        problems = []
         try:
             recording = open_recording(path)
-            problems = []
             for _ in recording.slices(on_problem=problems.append):
                 pass
         except InputError as error:
