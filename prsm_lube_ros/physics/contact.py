@@ -38,6 +38,7 @@ from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from ..errors import InputError
+from ..validation import require_all_positive
 from .actuator import Actuator
 
 #: Largest ellipticity a/b searched for; F(rho) closer to 1 than this allows is rejected.
@@ -157,9 +158,7 @@ def reduced_compliance(youngs_modulus_1: float, poisson_ratio_1: float,
         youngs_modulus_2 = youngs_modulus_1
     if poisson_ratio_2 is None:
         poisson_ratio_2 = poisson_ratio_1
-    for name, value in (('youngs_modulus_1', youngs_modulus_1), ('youngs_modulus_2', youngs_modulus_2)):
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f'{name} must be a positive number of Pa, got {value!r}')
+    require_all_positive('contact', youngs_modulus_1=youngs_modulus_1, youngs_modulus_2=youngs_modulus_2)
     for name, value in (('poisson_ratio_1', poisson_ratio_1), ('poisson_ratio_2', poisson_ratio_2)):
         if not (math.isfinite(value) and -1.0 < value < 0.5):
             raise InputError(f'{name} must lie in (-1, 0.5), got {value!r}')

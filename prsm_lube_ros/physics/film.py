@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
+from ..validation import require_positive
 from .actuator import Actuator
 from .contact import contact_deformation, contact_normal_force, load_sharing_factor, reduced_compliance, thread_contact
 from .kinematics import sliding_velocity_coefficient
@@ -181,8 +182,7 @@ def starved_film_thickness(full_film, theta_oil):
 
 def film_ratio(film, composite_roughness: float):
     """Eq. 11: film thickness ratio ``lambda = H_actual / sigma``; film and sigma in m."""
-    if not (math.isfinite(composite_roughness) and composite_roughness > 0):
-        raise InputError(f'composite_roughness must be positive m, got {composite_roughness!r}')
+    composite_roughness = require_positive('composite_roughness (m)', composite_roughness)
     return _out(np.asarray(film, dtype=float) / composite_roughness)
 
 

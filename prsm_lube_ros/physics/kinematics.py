@@ -17,16 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..validation import require_positive
 from .actuator import Actuator
-
-
-def _positive(name: str, value) -> float:
-    """Return ``value`` as float, or raise :class:`InputError` unless finite and > 0."""
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(f'{name} must be a positive number, got {value!r}')
-    return value
 
 
 def roller_revolution_speed(screw_speed, screw_diameter: float, roller_diameter: float):
@@ -35,8 +27,8 @@ def roller_revolution_speed(screw_speed, screw_diameter: float, roller_diameter:
     screw_speed omega_S in rad/s, screw_diameter d_S and roller_diameter d_R
     (thread mean diameters) in m; returns rad/s.
     """
-    d_s = _positive('screw_diameter', screw_diameter)
-    d_r = _positive('roller_diameter', roller_diameter)
+    d_s = require_positive('screw_diameter', screw_diameter)
+    d_r = require_positive('roller_diameter', roller_diameter)
     return d_s / (2.0 * (d_s + d_r)) * np.asarray(screw_speed, dtype=float)
 
 
@@ -45,8 +37,8 @@ def roller_rotation_speed(screw_speed, screw_diameter: float, roller_diameter: f
 
     screw_speed omega_S in rad/s, diameters d_S, d_R in m; returns rad/s.
     """
-    d_s = _positive('screw_diameter', screw_diameter)
-    d_r = _positive('roller_diameter', roller_diameter)
+    d_s = require_positive('screw_diameter', screw_diameter)
+    d_r = require_positive('roller_diameter', roller_diameter)
     return d_s * (d_s + 2.0 * d_r) / (2.0 * d_r * (d_s + d_r)) * np.asarray(screw_speed, dtype=float)
 
 
