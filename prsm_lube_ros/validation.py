@@ -32,14 +32,19 @@ def finite_or_none(value) -> Optional[float]:
     return value if math.isfinite(value) else None
 
 
+def _real(name: str, value, error: type[InputError], what: str) -> float:
+    """``value`` as a float, or ``error`` saying ``name must be <what>`` for bools and text."""
+    if isinstance(value, bool):
+        raise error(f'{name} must be {what}, got {value!r}')
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise error(f'{name} must be {what}, got {value!r}') from None
+
+
 def as_number(name: str, value, error: type[InputError] = ConfigError) -> float:
     """``value`` as a finite float; ``error`` naming ``name`` for bools, text, NaN and infinities."""
-    if isinstance(value, bool):
-        raise error(f'{name} must be a number, got {value!r}')
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise error(f'{name} must be a number, got {value!r}') from None
+    number = _real(name, value, error, 'a number')
     if not math.isfinite(number):
         raise error(f'{name} must be finite, got {value!r}')
     return number
@@ -47,12 +52,7 @@ def as_number(name: str, value, error: type[InputError] = ConfigError) -> float:
 
 def require_positive(name: str, value, error: type[InputError] = ConfigError) -> float:
     """``value`` as a float when it is a finite number > 0; else ``error`` naming ``name``."""
-    if isinstance(value, bool):
-        raise error(f'{name} must be a positive number, got {value!r}')
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise error(f'{name} must be a positive number, got {value!r}') from None
+    number = _real(name, value, error, 'a positive number')
     if not (math.isfinite(number) and number > 0):
         raise error(f'{name} must be a positive number, got {value!r}')
     return number

@@ -1,18 +1,10 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Vibration not from the thread contacts, adding in power: A^2 = A_22^2 + B^2.
+"""How to fit background vibration (the law: :mod:`prsm_lube_ros.physics.effects.background_vibration`).
 
-Physics: the accelerometer on the nut also picks up the motor and its drive,
-bearings, the frame and the sensor chain.  Their vibration is uncorrelated with
-the thread-contact excitation, so powers add:
-
-    A = sqrt(A_22^2 + B^2)
-
-B does not follow the screw speed, so it matters most at low speed where A_22
-(~omega^2) is small; in the spectrum it shows as energy at fixed frequencies
-that do not move with the rotation orders.  Parameter: B (m/s^2); internally
-B over the smallest RMS recorded.
-"""
+``A = sqrt(A_22^2 + B^2)``; B shows most at low speed and, in the spectrum, as
+lines at fixed frequencies.  Parameter: B (m/s^2); internally B over the
+smallest RMS recorded."""
 from __future__ import annotations
 
 import numpy as np

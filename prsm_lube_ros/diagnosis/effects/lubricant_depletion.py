@@ -1,20 +1,13 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Oil flung out of the contacts as the screw turns: theta_Oil decays with revolutions.
+"""How to fit lubricant depletion (the law: :mod:`prsm_lube_ros.physics.effects.lubricant_depletion`).
 
-Physics: the paper notes centrifugal loss of oil (Sec. 2.2); between
-lubrications the supply factor falls with the revolutions run,
-
-    theta_eff = theta_Oil exp(-N_rev / N_d)
-
-so the film term of Eq. 22 carries the factor ``exp(-N_rev / N_d)``.  N_rev
-counts screw revolutions since the start of each recording (taken as the last
-lubrication).  Parameter: the depletion rate 1/N_d per revolution; internally
-``N_max / N_d`` with N_max the most revolutions in one recording.
+N_rev counts screw revolutions since the start of each recording (taken as
+the last lubrication).  Parameter: the depletion rate 1/N_d per revolution;
+internally ``N_max / N_d`` with N_max the most revolutions in one recording.
 
 In assessment the fall of theta is real (it is what theta_Oil measures), so
-this extension corrects the constants, not theta: its assessment film factor is 1.
-"""
+this extension corrects the constants, not theta: its assessment film factor is 1."""
 from __future__ import annotations
 
 import numpy as np

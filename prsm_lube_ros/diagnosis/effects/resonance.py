@@ -1,19 +1,12 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Dynamic amplification of a lightly damped structural mode (Eq. 13 without the step to Eq. 14).
+"""How to fit a resonance (the law: :mod:`prsm_lube_ros.physics.effects.resonance`).
 
-Physics: Eq. 14 takes the quasi-static response ``X_0 = F_0 / K_0``, valid far
-below every natural frequency.  The thread-contact excitation runs at orders of
-the screw rotation, ``f = n omega_S / (2 pi)``; as it approaches a lightly
-damped mode at f_r the full solution of Eq. 13 applies:
-
-    X = (F_0 / K_0) |H(r)|,  |H(r)| = 1 / sqrt((1 - r^2)^2 + (2 zeta r)^2),  r = omega_S / omega_r
-
-so ``A = A_22 |H(r)|``.  Only the screw speed at which the excitation meets
-the mode, ``omega_r = 2 pi f_r / n`` (rad/s), can be identified from RMS values,
-not the order n and f_r separately.  Parameters: omega_r (rad/s) and the
-damping ratio zeta; internally r at the highest speed recorded.
-"""
+``A = A_22 |H(r)|`` with ``r = omega_S / omega_r``.  Only the screw speed at
+which the excitation meets the mode, ``omega_r = 2 pi f_r / n`` (rad/s), can
+be identified from RMS values, not the order n and f_r separately.
+Parameters: omega_r (rad/s) and the damping ratio zeta; internally r at the
+highest speed recorded."""
 from __future__ import annotations
 
 import numpy as np

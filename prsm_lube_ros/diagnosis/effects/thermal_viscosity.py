@@ -1,18 +1,10 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Oil viscosity falling with temperature, thinning the film of Eq. 9.
+"""How to fit the viscosity-temperature effect (the law: :mod:`prsm_lube_ros.physics.effects.thermal_viscosity`).
 
-Physics: Eq. 9 holds the viscosity at its reference value; in service the nut
-and oil warm and the viscosity follows ``eta(T) = eta_ref exp(-beta (T - T_ref))``
-(Reynolds).  The Hamrock-Dowson film grows with ``(eta u)^0.68`` (Eq. 8, U is
-proportional to eta), so the film ratio in the exponent of Eq. 22 scales by
-
-    f(T) = (eta(T) / eta_ref)^0.68 = exp(-0.68 beta (T - T_ref))
-
-i.e. ``theta_Oil C_lambda omega^0.68 F^-0.073`` becomes that times f(T).
-Parameter: beta (1/K); T_ref is the coldest recorded temperature (C_lambda refers
-to it).  Needs the contract's optional temperature topic.
-"""
+``theta_Oil C_lambda omega^0.68 F^-0.073`` times ``exp(-0.68 beta (T - T_ref))``.
+Parameter: beta (1/K); T_ref is the coldest recorded temperature (C_lambda
+refers to it).  Needs the contract's optional temperature topic."""
 from __future__ import annotations
 
 import numpy as np
