@@ -22,6 +22,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..estimation.windowing import usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 #: Columns every table has, in SI units (temperature in degC, time in s).
@@ -124,8 +125,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
     spectra, resolution = [], math.nan
     run_offset = 0
     for rec_index, windows in enumerate(windows_per_recording):
-        chosen = [w for w in windows if w.steady and _positive(w.vibration_rms) and _positive(w.screw_speed)
-                  and _positive(w.axial_load) and w.axial_load >= min_axial_load]
+        chosen = usable_windows(windows, min_axial_load)
         if not chosen:
             continue
         t0 = min(w.start for w in windows)
@@ -155,10 +155,6 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         spectrum_array = np.vstack(spectra)
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), **rows)
-
-
-def _positive(value) -> bool:
-    return value is not None and math.isfinite(value) and value > 0
 
 
 def _stroke_position(travel: np.ndarray, run_ids: np.ndarray) -> np.ndarray:

@@ -32,10 +32,7 @@ import numpy as np
 from ..physics.vibration_model import film_speed_load_term, lubrication_index
 from ..validation import finite_or_none
 from .calibration import Calibration
-from .windowing import Window
-
-#: Default smallest axial load, N, at which Eq. 23 is evaluated (the nut is unloaded below it).
-MIN_AXIAL_LOAD = 5.0
+from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
 
 
 @dataclass(frozen=True)
@@ -81,17 +78,6 @@ class Assessor:
     def __init__(self, calibration: Calibration, min_axial_load: float = MIN_AXIAL_LOAD):
         self.calibration = calibration
         self.min_axial_load = float(min_axial_load)
-
-    def _not_assessable(self, window_or_values) -> str:
-        speed, load, rms = window_or_values
-        if not (math.isfinite(rms) and rms > 0):
-            return 'no vibration: the RMS is zero or missing'
-        if not (math.isfinite(load) and load >= self.min_axial_load):
-            return (f'axial load {load:.3g} N is below {self.min_axial_load:.3g} N: Eq. 23 needs the nut '
-                    'under load')
-        if not (math.isfinite(speed) and speed > 0):
-            return 'screw at rest: Eq. 23 needs a screw speed'
-        return ''
 
     def theta(self, rms: float, speed: float, load: float, ln_rms_var: float) -> tuple[float, float]:
         """theta_Oil (Eq. 23) and its one-sigma uncertainty for one amplitude, speed and load.
@@ -146,15 +132,14 @@ class Assessor:
             speed = np.array([windows[i].screw_speed for i in steady], float)
             load = np.array([windows[i].axial_load for i in steady], float)
             rms = np.array([windows[i].vibration_rms for i in steady], float)
-            with np.errstate(invalid='ignore'):
-                assessable = (np.isfinite(rms) & (rms > 0) & np.isfinite(load) & (load >= self.min_axial_load)
-                              & np.isfinite(speed) & (speed > 0))
-            for j in np.flatnonzero(~assessable).tolist():
-                reasons[steady[j]] = self._not_assessable((float(speed[j]), float(load[j]), float(rms[j])))
-            rows = [steady[j] for j in np.flatnonzero(assessable).tolist()]
+            ok = assessable(speed, load, rms, self.min_axial_load)
+            for j in np.flatnonzero(~ok).tolist():
+                reasons[steady[j]] = not_assessable_reason(float(speed[j]), float(load[j]), float(rms[j]),
+                                                           self.min_axial_load)
+            rows = [steady[j] for j in np.flatnonzero(ok).tolist()]
             if rows:
                 amplitude, factor = self._through_extension([windows[i] for i in rows])
-                values, errors = self.thetas(amplitude, speed[assessable], load[assessable],
+                values, errors = self.thetas(amplitude, speed[ok], load[ok],
                                              np.full(len(rows), self.calibration.residual_std ** 2))
                 with np.errstate(divide='ignore', invalid='ignore'):
                     values, errors = values / factor, errors / np.abs(factor)
@@ -217,7 +202,7 @@ class Assessor:
             else:
                 ln_var = self.calibration.residual_std ** 2 / n
             pooled.append((rms, amplitude, factor, speed, load, temperature, ln_var,
-                           self._not_assessable((speed, load, rms))))
+                           not_assessable_reason(speed, load, rms, self.min_axial_load)))
             first = last
         rms, amplitude, factor, speed, load, temperature, ln_var, reasons = (list(c) for c in zip(*pooled))
         theta, std = self.thetas(np.array(amplitude), np.array(speed), np.array(load), np.array(ln_var))

@@ -70,6 +70,41 @@ NO_VIBRATION, BLOCKS_LOST, NO_SPEED, AT_REST, SPEED_CHANGING, SPANS_RUNS, NO_LOA
     'no_vibration', 'blocks_lost', 'no_speed', 'at_rest', 'speed_changing', 'spans_runs', 'no_load')
 UNSTEADY_KINDS = (NO_VIBRATION, BLOCKS_LOST, NO_SPEED, AT_REST, SPEED_CHANGING, SPANS_RUNS, NO_LOAD)
 
+#: Smallest axial load, N, at which Eq. 23 is evaluated and a window is fitted.
+MIN_AXIAL_LOAD = 5.0
+
+
+def assessable(speed, load, rms, min_axial_load: float = MIN_AXIAL_LOAD) -> np.ndarray:
+    """Where Eq. 23 can be evaluated: finite RMS > 0, speed > 0 and load >= ``min_axial_load`` (arrays, vectorised).
+
+    The one definition of "assessable", used by assessment, calibration and the diagnosis's window table.
+    """
+    speed, load, rms = (np.asarray(v, dtype=float) for v in (speed, load, rms))
+    with np.errstate(invalid='ignore'):
+        return (np.isfinite(rms) & (rms > 0) & np.isfinite(load) & (load >= min_axial_load)
+                & np.isfinite(speed) & (speed > 0))
+
+
+def not_assessable_reason(speed: float, load: float, rms: float, min_axial_load: float = MIN_AXIAL_LOAD) -> str:
+    """Why :func:`assessable` is false for one window, in words ('' when it is true)."""
+    if not (math.isfinite(rms) and rms > 0):
+        return 'no vibration: the RMS is zero or missing'
+    if not (math.isfinite(load) and load >= min_axial_load):
+        return f'axial load {load:.3g} N is below {min_axial_load:.3g} N: Eq. 23 needs the nut under load'
+    if not (math.isfinite(speed) and speed > 0):
+        return 'screw at rest: Eq. 23 needs a screw speed'
+    return ''
+
+
+def usable_windows(windows, min_axial_load: float = MIN_AXIAL_LOAD) -> list:
+    """The steady and assessable windows, in order: what calibration and diagnosis fit."""
+    windows = [w for w in windows if w.steady]
+    if not windows:
+        return []
+    keep = assessable([w.screw_speed for w in windows], [w.axial_load for w in windows],
+                      [w.vibration_rms for w in windows], min_axial_load)
+    return [w for w, ok in zip(windows, keep.tolist()) if ok]
+
 
 @dataclass(frozen=True)
 class Window:

@@ -153,3 +153,15 @@ def test_unsteady_windows_carry_a_code_and_steady_derives_from_it():
     at_rest = window(0.01, 100.0, 1.0, steady=False, reason='screw at rest or crawling')
     assert at_rest.reason_kind == AT_REST and AT_REST in UNSTEADY_KINDS and not at_rest.steady
     assert window(10.0, 100.0, 1.0).steady
+
+
+def test_one_assessable_rule_serves_assessment_calibration_and_diagnosis():
+    """Eq. 23's domain is defined once (estimation.windowing.assessable) and each user applies it."""
+    from prsm_lube_ros.estimation.windowing import assessable, not_assessable_reason, usable_windows
+    speed = np.array([10.0, 10.0, 0.0, 10.0, 10.0])
+    load = np.array([100.0, 1.0, 100.0, 100.0, np.nan])
+    rms = np.array([1.0, 1.0, 1.0, 0.0, 1.0])
+    assert assessable(speed, load, rms).tolist() == [True, False, False, False, False]
+    assert 'below' in not_assessable_reason(10.0, 1.0, 1.0) and 'rest' in not_assessable_reason(0.0, 100.0, 1.0)
+    windows = [window(s, f, a) for s, f, a in zip(speed, load, rms)] + [window(10.0, 100.0, 1.0, steady=False)]
+    assert usable_windows(windows) == windows[:1]

@@ -4,7 +4,8 @@
 
 ``A = sqrt(A_22^2 + B^2)``; B shows most at low speed and, in the spectrum, as
 lines at fixed frequencies.  Parameter: B (m/s^2); internally B over the
-smallest RMS recorded."""
+smallest RMS recorded.
+"""
 from __future__ import annotations
 
 import numpy as np

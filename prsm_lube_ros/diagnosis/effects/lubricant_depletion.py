@@ -7,7 +7,8 @@ the last lubrication).  Parameter: the depletion rate 1/N_d per revolution;
 internally ``N_max / N_d`` with N_max the most revolutions in one recording.
 
 In assessment the fall of theta is real (it is what theta_Oil measures), so
-this extension corrects the constants, not theta: its assessment film factor is 1."""
+this extension corrects the constants, not theta: its assessment film factor is 1.
+"""
 from __future__ import annotations
 
 import numpy as np

@@ -6,7 +6,8 @@
 which the excitation meets the mode, ``omega_r = 2 pi f_r / n`` (rad/s), can
 be identified from RMS values, not the order n and f_r separately.
 Parameters: omega_r (rad/s) and the damping ratio zeta; internally r at the
-highest speed recorded."""
+highest speed recorded.
+"""
 from __future__ import annotations
 
 import numpy as np

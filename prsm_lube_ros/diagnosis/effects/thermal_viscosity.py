@@ -4,7 +4,8 @@
 
 ``theta_Oil C_lambda omega^0.68 F^-0.073`` times ``exp(-0.68 beta (T - T_ref))``.
 Parameter: beta (1/K); T_ref is the coldest recorded temperature (C_lambda
-refers to it).  Needs the contract's optional temperature topic."""
+refers to it).  Needs the contract's optional temperature topic.
+"""
 from __future__ import annotations
 
 import numpy as np
