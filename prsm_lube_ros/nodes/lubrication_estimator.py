@@ -222,7 +222,8 @@ class LubricationEstimator(Node):
                          reliability=ReliabilityPolicy.BEST_EFFORT)
         hardware_ids = list(values['hardware_ids'])
         self.channels: list[ActuatorChannel] = []
-        self._services = []
+        # Not self._services: that is rclpy's own list (it holds the parameter services).
+        self._calibrate_services = []
         for i, name in enumerate(actuators):
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
             channel = ActuatorChannel(name=name, hardware_id=hw,
@@ -238,7 +239,7 @@ class LubricationEstimator(Node):
             if i == 0 and values['calibrate_service'] not in service_names:
                 service_names.insert(0, values['calibrate_service'])
             for service_name in service_names:
-                self._services.append(self.create_service(
+                self._calibrate_services.append(self.create_service(
                     Calibrate, service_name, self._calibrate_handler(channel),
                     callback_group=self._service_group))
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
