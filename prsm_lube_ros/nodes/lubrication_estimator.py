@@ -18,6 +18,9 @@ messages per second of a typical actuator, sit in a callback group executors
 never wait on: the vibration callback drains their queues with the block, and a
 steady-clock timer drains them every ``DRAIN_PERIOD`` s for an actuator whose
 vibration stopped, so queues stay bounded and silent windows still close.
+That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
+checks them at start-up; without them the node logs one warning and takes the
+auxiliary inputs through plain subscription callbacks (same windows, more CPU).
 
 The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
 the first actuator, ``<ns>/calibrate`` each one.  Fitting runs on a worker
@@ -64,6 +67,7 @@ from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recordings_folder
+from .fast_drain import FastDrain
 from .parameters import declare_parameter_table
 from .startup import build_node, EXIT_BAD_INPUT
 
@@ -217,7 +221,7 @@ class LubricationEstimator(Node):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
-        self._drained_group = DrainedCallbackGroup()
+        self._fast = FastDrain(self.get_logger())
         qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
                          reliability=ReliabilityPolicy.BEST_EFFORT)
         hardware_ids = list(values['hardware_ids'])
@@ -275,10 +279,14 @@ class LubricationEstimator(Node):
             msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
             callback_group=self._input_group)
         for key, (msg_type, convert) in converters.items():
+            if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
+                self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
+                                         qos, callback_group=self._input_group)
+                continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
             subscription = self.create_subscription(
-                msg_type, topics[key], _never_called, qos, callback_group=self._drained_group,
+                msg_type, topics[key], self._fast.never_called, qos, callback_group=self._fast.group,
                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
             channel.auxiliary.append((key, subscription, convert))
 
@@ -322,16 +330,23 @@ class LubricationEstimator(Node):
                 channel.monitor.note_input(self.now())
                 self._drain_auxiliary(channel)
                 self._take(channel, 'vibration', convert, msg)
-                for queued in _drain(subscriptions.get('vibration'), MAX_DRAIN):
+                for queued in self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN):
                     self._take(channel, 'vibration', convert, queued)
                 self._close_windows(channel)
+        return callback
+
+    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+        """Plain callback of one auxiliary input, used only when the fast drain is off."""
+        def callback(msg):
+            with self._lock:
+                self._take(channel, key, convert, msg)
         return callback
 
     def _drain_auxiliary(self, channel: ActuatorChannel):
         """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
         channel.last_drain = time.monotonic()
         for key, subscription, convert in channel.auxiliary:
-            messages = list(_drain(subscription, MAX_DRAIN))
+            messages = list(self._fast.drain(subscription, MAX_DRAIN))
             if messages:
                 self._take_queued(channel, key, convert, messages)
 
@@ -604,37 +619,12 @@ class LubricationEstimator(Node):
         return SetParametersResult(successful=True)
 
 
-class DrainedCallbackGroup(ReentrantCallbackGroup):
-    """Callback group whose entities the executor never waits on: the node takes their messages itself."""
-
-    def can_execute(self, entity) -> bool:
-        """Always False: executors leave the group's entities out of their wait sets."""
-        return False
-
-
 def join_batches(batches: list):
     """One input batch holding the entries of ``batches`` (all of one kind, one value per entry), in order."""
     if len(batches) == 1:
         return batches[0]
     first = batches[0]
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
-
-
-def _never_called(msg):
-    """Callback of a subscription in :class:`DrainedCallbackGroup` (its queue is drained, not spun)."""
-
-
-def _drain(subscription, limit: int):
-    """Messages already queued on ``subscription`` (at most ``limit``), oldest first."""
-    handle = getattr(subscription, 'handle', None)
-    if handle is None or not hasattr(handle, 'take_message'):
-        return
-    for _ in range(limit):
-        with handle:
-            taken = handle.take_message(subscription.msg_type, subscription.raw)
-        if taken is None:
-            return
-        yield taken[0]
 
 
 def spin_nodes(nodes, executor=None) -> int:

@@ -639,3 +639,30 @@ def test_the_launch_file_parses_and_starts_the_installed_executables():
     installed = (root / 'CMakeLists.txt').read_text()
     assert executables == {'sensor_bridge', 'lubrication_estimator'}
     assert all(f'scripts/{name}' in installed for name in executables)
+
+
+def test_without_the_private_drain_api_windows_still_come_out(graph, tmp_path, monkeypatch, capfd):
+    """rclpy without take_message: one loud warning, plain callbacks, the same theta per window."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.nodes import fast_drain
+    monkeypatch.setattr(fast_drain, '_rclpy', SimpleNamespace(Subscription=object))
+    node = graph.estimator(tmp_path)
+    assert not node._fast.enabled
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    events = segments_stream([(3.0, rms_for(0.9), SPEED, LOAD)])
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: {0.0, 0.5, 1.0, 1.5} <= set(by_window(states)), 15, 'windows through the fallback')
+    live = by_window(states)
+    for start in (0.0, 0.5, 1.0, 1.5):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), live[start].message
+        assert live[start].screw_speed == pytest.approx(SPEED, rel=1e-6)
+    warnings = [line for line in capfd.readouterr().err.splitlines() if 'FAST DRAIN OFF' in line]
+    assert len(warnings) == 1 and 'take_message' in warnings[0]
+
+
+def test_with_the_private_drain_api_the_fast_drain_is_on(graph, tmp_path):
+    """The rclpy this package runs on has what fast_drain needs (else the test above is the only path)."""
+    from prsm_lube_ros.nodes import fast_drain
+    assert fast_drain.missing_api() == ''
+    assert graph.estimator(tmp_path)._fast.enabled
