@@ -61,7 +61,7 @@ from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
-from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
 from ..estimation.windowing import WindowBuilder, WindowSettings
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
@@ -189,11 +189,13 @@ class ActuatorChannel:
     input_errors: dict = field(default_factory=dict)
     auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
     last_drain: float = -math.inf                    # time.monotonic() of the last auxiliary drain
+    node_name: str = STATUS_PREFIX
+    frame_id: str = ''                               # header.frame_id of the last vibration block
 
     @property
     def status_name(self) -> str:
-        """diagnostic_updater style status name."""
-        return f'{STATUS_PREFIX}: {self.name} lubrication'
+        """diagnostic_updater style status name: '<node name>: <actuator> lubrication'."""
+        return f'{self.node_name}: {self.name} lubrication'
 
     def problem_count(self) -> int:
         """Bad messages and samples left out so far."""
@@ -233,7 +235,8 @@ class LubricationEstimator(Node):
             channel = ActuatorChannel(name=name, hardware_id=hw,
                                       builder=WindowBuilder(self._settings, lead=self._lead),
                                       monitor=HealthMonitor(self._thresholds),
-                                      calibration_file=calibration_path(values['calibration_file'], name))
+                                      calibration_file=calibration_path(values['calibration_file'], name),
+                                      node_name=self.get_name())
             self._load_initial_calibration(channel)
             channel.publisher = self.create_publisher(
                 LubricationState, topic_name(name, values['state_topic']), 10)
@@ -328,6 +331,7 @@ class LubricationEstimator(Node):
         def callback(msg):
             with self._lock:
                 channel.monitor.note_input(self.now())
+                channel.frame_id = msg.header.frame_id or channel.frame_id
                 self._drain_auxiliary(channel)
                 self._take(channel, 'vibration', convert, msg)
                 for queued in self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN):
@@ -446,19 +450,25 @@ class LubricationEstimator(Node):
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
         channel.monitor.observe(theta, std, reason, moving=moving)
-        status = channel.monitor.status(self.now())
+        status = self._health(channel, self.now())
         channel.last_window = window
         channel.windows += 1
         if math.isfinite(theta):
             channel.last_theta, channel.last_theta_std = theta, std
         channel.publisher.publish(ros_convert.lubrication_state_msg(
-            channel.name, window, theta, std, status.level, status.message))
+            channel.name, window, theta, std, status.level, status.message,
+            frame_id=channel.frame_id or actuator_label(channel.name)))
         if status.level != channel.last_level:
             self._publish_diagnostics()
 
     # -- diagnostics -------------------------------------------------------------------------------
-    def _status(self, channel: ActuatorChannel, now: float):
+    def _health(self, channel: ActuatorChannel, now: float):
+        """The monitor's status; without calibration at best WARN 'not calibrated'."""
         status = channel.monitor.status(now)
+        return uncalibrated(status, channel.calibration_note) if channel.assessor is None else status
+
+    def _status(self, channel: ActuatorChannel, now: float):
+        status = self._health(channel, now)
         w = channel.last_window
         values = [
             ('theta_oil', channel.last_theta),

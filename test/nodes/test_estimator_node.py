@@ -219,6 +219,7 @@ def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
     node = graph.estimator(tmp_path, window_length=1.0, completion_delay=0.5)
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
     streams = synthetic_inputs.run_streams()          # sine of amplitude 2 at 10 rad/s, 150 N
+    synthetic_frame = ros_convert.batch_messages(streams['vibration'][0])[0].header.frame_id or 'prsm'
     events = [(float(b.stamps[0]), kind, ros_convert.batch_messages(b)[0])
               for kind, key in (('vibration', 'vibration'), ('joint_states', 'screw'), ('axial_load', 'load'),
                                 ('temperature', 'temperature')) for b in streams[key]]
@@ -247,6 +248,7 @@ def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
         assert state.vibration_rms == pytest.approx(math.sqrt(2), rel=1e-3)
         assert state.temperature == pytest.approx(31.0)
         assert state.actuator == '/prsm' and state.level == OK
+        assert state.header.frame_id == synthetic_frame
         assert state.header.stamp.sec + state.header.stamp.nanosec * 1e-9 == pytest.approx(T0 + start + 1.0)
     resting = [s for s in states if s.screw_speed < 1.0]
     assert resting and all(math.isnan(s.theta_oil) and 'at rest' in s.message for s in resting)
@@ -274,7 +276,7 @@ def test_levels_fall_with_theta_recover_with_hysteresis_and_go_stale(graph, tmp_
     order = [level for k, level in enumerate(seen) if k == 0 or level != seen[k - 1]]
     assert order[:5] == [STALE, OK, WARN, ERROR, WARN]
     status = status_of(diagnostics[-1], '/prsm')
-    assert status.name == 'prsm_lube_ros: /prsm lubrication' and status.hardware_id == 'prsm'
+    assert status.name == 'lubrication_estimator: /prsm lubrication' and status.hardware_id == 'prsm'
     values = values_of(status)
     assert {'theta_oil', 'theta_oil_std', 'vibration_rms', 'screw_speed', 'axial_load', 'window',
             'calibration_file', 'problems'} <= set(values)
@@ -484,6 +486,7 @@ def test_bad_calibration_requests_answer_false_and_the_node_keeps_serving(graph,
         ([tmp_path / 'no_load'], 1.0, 'no axial load'),
         ([tmp_path / 'one_level'], 1.0, 'cannot identify'),
         ([tmp_path / 'one_level'], -1.0, 'reference_theta'),
+        ([tmp_path / 'one_level', 'one_level'], 1.0, 'named twice'),     # absolute and relative: one bag
     ]
     for paths, theta, words in cases:
         response = call(graph, '/prsm/calibrate', paths, theta)
@@ -666,3 +669,18 @@ def test_with_the_private_drain_api_the_fast_drain_is_on(graph, tmp_path):
     from prsm_lube_ros.nodes import fast_drain
     assert fast_drain.missing_api() == ''
     assert graph.estimator(tmp_path)._fast.enabled
+
+
+def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
+    node = graph.estimator(tmp_path, calibration_file='')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 2, 10, 'states without calibration')
+    assert all(s.level == WARN and 'not calibrated' in s.message for s in states)
+    assert all(s.header.frame_id == 'prsm' for s in states)      # no vibration frame: the actuator
+    statuses = [status_of(a, '/prsm') for a in diagnostics]
+    assert bytes([OK]) not in [s.level for s in statuses]
+    assert any(s.level == bytes([WARN]) and 'not calibrated' in s.message for s in statuses)
+    assert statuses[-1].name == 'lubrication_estimator: /prsm lubrication'
