@@ -23,7 +23,17 @@ checks them at start-up; without them the node logs one warning and takes the
 auxiliary inputs through plain subscription callbacks (same windows, more CPU).
 
 The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
-the first actuator, ``<ns>/calibrate`` each one.  Fitting runs on a worker
+the first actuator, ``<ns>/calibrate`` each one.
+
+Namespaces: started in the root namespace the node watches ``/prsm`` (the
+default of ``actuators``).  Started in a namespace (``--ros-args -r
+__ns:=/ema_left``, or ``Node(namespace=...)``), the default ``/prsm`` means
+"this node's namespace": inputs, ``lubrication_state`` and ``calibrate`` are
+relative names (``/ema_left/vibration``, ``/ema_left/calibrate``), the actuator
+is called after the namespace (calibration file ``calibration_ema_left.yaml``),
+and ``/prsm/calibrate`` is not served.  Any other entry of ``actuators`` is used
+as given.  One estimator per namespace thus serves calibrate in its own
+namespace only.  ``/diagnostics`` stays absolute, as diagnostic aggregators expect.  Fitting runs on a worker
 thread: the service callback is a coroutine that awaits it, so subscriptions
 keep flowing with any executor; the new constants replace the old in one
 reference swap.  Bad input never stops the node: it is left out and reported
@@ -56,7 +66,7 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
-from ..contract import topic_name
+from ..contract import topic_name, topic_prefix
 from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
@@ -175,6 +185,7 @@ class ActuatorChannel:
 
     name: str
     hardware_id: str
+    prefix: str                  # what goes before the topic leaves ('' for relative names: see contract)
     builder: WindowBuilder
     monitor: HealthMonitor
     calibration_file: str
@@ -230,21 +241,28 @@ class LubricationEstimator(Node):
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
         self._calibrate_services = []
-        for i, name in enumerate(actuators):
+        node_namespace = self.get_namespace()
+        for i, entry in enumerate(actuators):
+            prefix = topic_prefix(entry, node_namespace)
+            name = entry if prefix else node_namespace
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
-            channel = ActuatorChannel(name=name, hardware_id=hw,
+            channel = ActuatorChannel(name=name, hardware_id=hw, prefix=prefix,
                                       builder=WindowBuilder(self._settings, lead=self._lead),
                                       monitor=HealthMonitor(self._thresholds),
                                       calibration_file=calibration_path(values['calibration_file'], name),
                                       node_name=self.get_name())
             self._load_initial_calibration(channel)
             channel.publisher = self.create_publisher(
-                LubricationState, topic_name(name, values['state_topic']), 10)
+                LubricationState, topic_name(prefix, values['state_topic']), 10)
             self._subscribe(channel, values, qos)
             self.channels.append(channel)
-            service_names = [topic_name(name, 'calibrate')]
-            if i == 0 and values['calibrate_service'] not in service_names:
-                service_names.insert(0, values['calibrate_service'])
+            service_names = [topic_name(prefix, 'calibrate')]
+            # The default /prsm/calibrate names the first actuator's own service: in a namespace that is <ns>/calibrate.
+            extra = values['calibrate_service']
+            if not prefix and extra == PARAMETERS['calibrate_service'][0]:
+                extra = service_names[0]
+            if i == 0 and extra not in service_names:
+                service_names.insert(0, extra)
             for service_name in service_names:
                 self._calibrate_services.append(self.create_service(
                     Calibrate, service_name, self._calibrate_handler(channel),
@@ -268,7 +286,7 @@ class LubricationEstimator(Node):
     def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
         """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
         joint = values['screw_joint']
-        topics = {key: topic_name(channel.name, values[f'{key}_topic'])
+        topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
         converters = {
             'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),

@@ -597,12 +597,12 @@ def test_the_live_inputs_follow_eq_22():
 def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
     """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply."""
     config = tmp_path / 'estimator.yaml'
-    config.write_text('lubrication_estimator:\n  ros__parameters:\n    hardware_ids: [from-yaml]\n'
+    config.write_text("'/**/lubrication_estimator':\n  ros__parameters:\n    hardware_ids: [from-yaml]\n"
                       '    actuators: [/runtest/prsm]\n    diagnostics_period: 0.2\n')
     env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID), PYTHONUNBUFFERED='1')
     command = [sys.executable, '-m', 'prsm_lube_ros.cli', 'run', '--no-bridge', '--config', str(config),
                '-p', f'recordings_dir:={tmp_path}', '-p', f'calibration_file:={tmp_path}/c.yaml',
-               '-p', 'warn_below:=0.9']
+               '-p', 'warn_below:=0.9', '--ros-args', '-r', '__ns:=/runns']    # the file still applies
     process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     graph = Graph()
     try:
@@ -684,3 +684,46 @@ def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
     assert bytes([OK]) not in [s.level for s in statuses]
     assert any(s.level == bytes([WARN]) and 'not calibrated' in s.message for s in statuses)
     assert statuses[-1].name == 'lubrication_estimator: /prsm lubrication'
+
+
+def test_estimators_in_two_namespaces_each_serve_their_own_topics_and_calibrate(graph, tmp_path):
+    """``__ns`` moves every name: /ema_left/..., /ema_right/..., nothing under /prsm."""
+    nodes = {}
+    for side in ('ema_left', 'ema_right'):
+        node = LubricationEstimator(context=graph.context, cli_args=['--ros-args', '-r', f'__ns:=/{side}'],
+                                    parameter_overrides=[
+                                        Parameter('calibration_file', value=str(tmp_path / 'cal_{actuator}.yaml')),
+                                        Parameter('recordings_dir', value=str(tmp_path))])
+        graph.nodes.append(node)
+        graph.executor.add_node(node)
+        nodes[side] = node
+        assert node.channels[0].name == f'/{side}'
+        assert node.channels[0].calibration_file == str(tmp_path / f'cal_{side}.yaml')
+    for side, node in nodes.items():
+        wait_for(lambda: f'/{side}/calibrate' in {n for n, _ in graph.probe.get_service_names_and_types()}, 10,
+                 f'/{side}/calibrate')
+        response = call(graph, f'/{side}/calibrate', [])
+        assert not response.success and 'bag_paths is empty' in response.message
+        own = {name for name, _ in node.get_service_names_and_types_by_node(node.get_name(), f'/{side}')}
+        assert f'/{side}/calibrate' in own and f'/{side}/{node.get_name()}/get_parameters' in own
+        assert not any(name.startswith('/prsm') for name in own), own
+        wait_for(lambda: graph.probe.count_subscribers(f'/{side}/vibration') >= 1, 10, f'/{side}/vibration')
+        assert node.channels[0].publisher.topic_name == f'/{side}/lubrication_state'
+    services = {name for name, _ in graph.probe.get_service_names_and_types()}
+    assert '/prsm/calibrate' not in services
+    assert graph.probe.count_subscribers('/prsm/vibration') == 0
+
+
+def test_a_bridge_in_a_namespace_publishes_there():
+    from prsm_lube_ros.nodes.sensor_bridge import SensorBridge
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=DOMAIN_ID)
+    try:
+        bridge = SensorBridge(context=context, cli_args=['--ros-args', '-r', '__ns:=/ema_left'],
+                              parameter_overrides=[Parameter('source', value='simulator')])
+        try:
+            assert set(bridge.topics.values()) == {f'/ema_left/{k}' for k in Graph.TYPES}
+        finally:
+            bridge.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
