@@ -676,10 +676,14 @@ def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
     diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
     wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
-    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+    events = segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)])
+    for _, kind, msg in events:
+        if kind == 'vibration':
+            msg.header.frame_id = 'nut_accelerometer'
+    graph.publish(graph.publishers(), events)
     wait_for(lambda: len(states) >= 2, 10, 'states without calibration')
     assert all(s.level == WARN and 'not calibrated' in s.message for s in states)
-    assert all(s.header.frame_id == 'prsm' for s in states)      # no vibration frame: the actuator
+    assert all(s.header.frame_id == 'nut_accelerometer' for s in states)      # the vibration's frame
     statuses = [status_of(a, '/prsm') for a in diagnostics]
     assert bytes([OK]) not in [s.level for s in statuses]
     assert any(s.level == bytes([WARN]) and 'not calibrated' in s.message for s in statuses)
