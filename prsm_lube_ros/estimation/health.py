@@ -24,7 +24,7 @@ STALE=3.  The rules:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 
 from ..errors import InputError
@@ -177,6 +177,13 @@ class HealthMonitor:
             if self._theta_level is not None:
                 message += f'; last theta_oil {self._theta:.3f} ({LEVEL_NAMES[self._theta_level]})'
         return HealthStatus(level, message, self._theta_level, self._unassessed)
+
+
+def uncalibrated(status: HealthStatus, note: str) -> HealthStatus:
+    """``status`` of an actuator without calibration: never OK (WARN 'not calibrated: <note>')."""
+    if status.level != OK:
+        return status
+    return replace(status, level=WARN, message=f'not calibrated: {note}' if note else 'not calibrated')
 
 
 def format_value(value) -> str:

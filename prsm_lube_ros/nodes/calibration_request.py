@@ -28,7 +28,8 @@ def resolve_bag_paths(bag_paths: Sequence[str], folder: str | Path) -> list[Path
     """Bag paths of a request, resolved inside ``folder`` (relative paths are taken from it).
 
     Raises :class:`InputError` for no paths, a path outside the folder (also
-    through ``..`` or symbolic links) or a recording that does not exist.
+    through ``..`` or symbolic links), a recording that does not exist or one
+    named twice (also as a relative and an absolute path).
     """
     root = recordings_folder(str(folder))
     if not bag_paths:
@@ -45,6 +46,8 @@ def resolve_bag_paths(bag_paths: Sequence[str], folder: str | Path) -> list[Path
                              '(parameter recordings_dir); only recordings inside it are read')
         if not path.exists():
             raise InputError(f'calibrate: {raw}: recording not found (looked at {path})')
+        if path in resolved:         # the same recording twice would weigh its windows double in the fit
+            raise InputError(f'calibrate: {raw} is named twice in bag_paths (as {path}); name each recording once')
         resolved.append(path)
     return resolved
 

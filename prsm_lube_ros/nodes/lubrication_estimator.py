@@ -18,9 +18,22 @@ messages per second of a typical actuator, sit in a callback group executors
 never wait on: the vibration callback drains their queues with the block, and a
 steady-clock timer drains them every ``DRAIN_PERIOD`` s for an actuator whose
 vibration stopped, so queues stay bounded and silent windows still close.
+That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
+checks them at start-up; without them the node logs one warning and takes the
+auxiliary inputs through plain subscription callbacks (same windows, more CPU).
 
 The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
-the first actuator, ``<ns>/calibrate`` each one.  Fitting runs on a worker
+the first actuator, ``<ns>/calibrate`` each one.
+
+Namespaces: started in the root namespace the node watches ``/prsm`` (the
+default of ``actuators``).  Started in a namespace (``--ros-args -r
+__ns:=/ema_left``, or ``Node(namespace=...)``), the default ``/prsm`` means
+"this node's namespace": inputs, ``lubrication_state`` and ``calibrate`` are
+relative names (``/ema_left/vibration``, ``/ema_left/calibrate``), the actuator
+is called after the namespace (calibration file ``calibration_ema_left.yaml``),
+and ``/prsm/calibrate`` is not served.  Any other entry of ``actuators`` is used
+as given.  One estimator per namespace thus serves calibrate in its own
+namespace only.  ``/diagnostics`` stays absolute, as diagnostic aggregators expect.  Fitting runs on a worker
 thread: the service callback is a coroutine that awaits it, so subscriptions
 keep flowing with any executor; the new constants replace the old in one
 reference swap.  Bad input never stops the node: it is left out and reported
@@ -53,17 +66,18 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
-from ..contract import topic_name
+from ..contract import topic_name, topic_prefix
 from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
-from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
 from ..estimation.windowing import WindowBuilder, WindowSettings
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recordings_folder
+from .fast_drain import FastDrain
 from .parameters import declare_parameter_table
 from .startup import build_node, EXIT_BAD_INPUT
 
@@ -171,6 +185,7 @@ class ActuatorChannel:
 
     name: str
     hardware_id: str
+    prefix: str                  # what goes before the topic leaves ('' for relative names: see contract)
     builder: WindowBuilder
     monitor: HealthMonitor
     calibration_file: str
@@ -185,11 +200,13 @@ class ActuatorChannel:
     input_errors: dict = field(default_factory=dict)
     auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
     last_drain: float = -math.inf                    # time.monotonic() of the last auxiliary drain
+    node_name: str = STATUS_PREFIX
+    frame_id: str = ''                               # header.frame_id of the last vibration block
 
     @property
     def status_name(self) -> str:
-        """diagnostic_updater style status name."""
-        return f'{STATUS_PREFIX}: {self.name} lubrication'
+        """diagnostic_updater style status name: '<node name>: <actuator> lubrication'."""
+        return f'{self.node_name}: {self.name} lubrication'
 
     def problem_count(self) -> int:
         """Bad messages and samples left out so far."""
@@ -217,28 +234,37 @@ class LubricationEstimator(Node):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
-        self._drained_group = DrainedCallbackGroup()
+        self._fast = FastDrain(self.get_logger())
         qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
                          reliability=ReliabilityPolicy.BEST_EFFORT)
         hardware_ids = list(values['hardware_ids'])
         self.channels: list[ActuatorChannel] = []
-        self._services = []
-        for i, name in enumerate(actuators):
+        # Not self._services: that is rclpy's own list (it holds the parameter services).
+        self._calibrate_services = []
+        node_namespace = self.get_namespace()
+        for i, entry in enumerate(actuators):
+            prefix = topic_prefix(entry, node_namespace)
+            name = entry if prefix else node_namespace
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
-            channel = ActuatorChannel(name=name, hardware_id=hw,
+            channel = ActuatorChannel(name=name, hardware_id=hw, prefix=prefix,
                                       builder=WindowBuilder(self._settings, lead=self._lead),
                                       monitor=HealthMonitor(self._thresholds),
-                                      calibration_file=calibration_path(values['calibration_file'], name))
+                                      calibration_file=calibration_path(values['calibration_file'], name),
+                                      node_name=self.get_name())
             self._load_initial_calibration(channel)
             channel.publisher = self.create_publisher(
-                LubricationState, topic_name(name, values['state_topic']), 10)
+                LubricationState, topic_name(prefix, values['state_topic']), 10)
             self._subscribe(channel, values, qos)
             self.channels.append(channel)
-            service_names = [topic_name(name, 'calibrate')]
-            if i == 0 and values['calibrate_service'] not in service_names:
-                service_names.insert(0, values['calibrate_service'])
+            service_names = [topic_name(prefix, 'calibrate')]
+            # The default /prsm/calibrate names the first actuator's own service: in a namespace that is <ns>/calibrate.
+            extra = values['calibrate_service']
+            if not prefix and extra == PARAMETERS['calibrate_service'][0]:
+                extra = service_names[0]
+            if i == 0 and extra not in service_names:
+                service_names.insert(0, extra)
             for service_name in service_names:
-                self._services.append(self.create_service(
+                self._calibrate_services.append(self.create_service(
                     Calibrate, service_name, self._calibrate_handler(channel),
                     callback_group=self._service_group))
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
@@ -260,7 +286,7 @@ class LubricationEstimator(Node):
     def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
         """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
         joint = values['screw_joint']
-        topics = {key: topic_name(channel.name, values[f'{key}_topic'])
+        topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
         converters = {
             'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),
@@ -274,10 +300,14 @@ class LubricationEstimator(Node):
             msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
             callback_group=self._input_group)
         for key, (msg_type, convert) in converters.items():
+            if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
+                self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
+                                         qos, callback_group=self._input_group)
+                continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
             subscription = self.create_subscription(
-                msg_type, topics[key], _never_called, qos, callback_group=self._drained_group,
+                msg_type, topics[key], self._fast.never_called, qos, callback_group=self._fast.group,
                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
             channel.auxiliary.append((key, subscription, convert))
 
@@ -319,18 +349,26 @@ class LubricationEstimator(Node):
         def callback(msg):
             with self._lock:
                 channel.monitor.note_input(self.now())
+                channel.frame_id = msg.header.frame_id or channel.frame_id
                 self._drain_auxiliary(channel)
                 self._take(channel, 'vibration', convert, msg)
-                for queued in _drain(subscriptions.get('vibration'), MAX_DRAIN):
+                for queued in self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN):
                     self._take(channel, 'vibration', convert, queued)
                 self._close_windows(channel)
+        return callback
+
+    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+        """Plain callback of one auxiliary input, used only when the fast drain is off."""
+        def callback(msg):
+            with self._lock:
+                self._take(channel, key, convert, msg)
         return callback
 
     def _drain_auxiliary(self, channel: ActuatorChannel):
         """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
         channel.last_drain = time.monotonic()
         for key, subscription, convert in channel.auxiliary:
-            messages = list(_drain(subscription, MAX_DRAIN))
+            messages = list(self._fast.drain(subscription, MAX_DRAIN))
             if messages:
                 self._take_queued(channel, key, convert, messages)
 
@@ -430,19 +468,25 @@ class LubricationEstimator(Node):
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
         channel.monitor.observe(theta, std, reason, moving=moving)
-        status = channel.monitor.status(self.now())
+        status = self._health(channel, self.now())
         channel.last_window = window
         channel.windows += 1
         if math.isfinite(theta):
             channel.last_theta, channel.last_theta_std = theta, std
         channel.publisher.publish(ros_convert.lubrication_state_msg(
-            channel.name, window, theta, std, status.level, status.message))
+            channel.name, window, theta, std, status.level, status.message,
+            frame_id=channel.frame_id or actuator_label(channel.name)))
         if status.level != channel.last_level:
             self._publish_diagnostics()
 
     # -- diagnostics -------------------------------------------------------------------------------
-    def _status(self, channel: ActuatorChannel, now: float):
+    def _health(self, channel: ActuatorChannel, now: float):
+        """The monitor's status; without calibration at best WARN 'not calibrated'."""
         status = channel.monitor.status(now)
+        return uncalibrated(status, channel.calibration_note) if channel.assessor is None else status
+
+    def _status(self, channel: ActuatorChannel, now: float):
+        status = self._health(channel, now)
         w = channel.last_window
         values = [
             ('theta_oil', channel.last_theta),
@@ -603,37 +647,12 @@ class LubricationEstimator(Node):
         return SetParametersResult(successful=True)
 
 
-class DrainedCallbackGroup(ReentrantCallbackGroup):
-    """Callback group whose entities the executor never waits on: the node takes their messages itself."""
-
-    def can_execute(self, entity) -> bool:
-        """Always False: executors leave the group's entities out of their wait sets."""
-        return False
-
-
 def join_batches(batches: list):
     """One input batch holding the entries of ``batches`` (all of one kind, one value per entry), in order."""
     if len(batches) == 1:
         return batches[0]
     first = batches[0]
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
-
-
-def _never_called(msg):
-    """Callback of a subscription in :class:`DrainedCallbackGroup` (its queue is drained, not spun)."""
-
-
-def _drain(subscription, limit: int):
-    """Messages already queued on ``subscription`` (at most ``limit``), oldest first."""
-    handle = getattr(subscription, 'handle', None)
-    if handle is None or not hasattr(handle, 'take_message'):
-        return
-    for _ in range(limit):
-        with handle:
-            taken = handle.take_message(subscription.msg_type, subscription.raw)
-        if taken is None:
-            return
-        yield taken[0]
 
 
 def spin_nodes(nodes, executor=None) -> int:

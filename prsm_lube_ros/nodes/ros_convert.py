@@ -163,10 +163,14 @@ def batch_messages(batch):
 
 # -- results -> outputs ------------------------------------------------------------------------------
 def lubrication_state_msg(actuator: str, window, theta: float, theta_std: float, level: int,
-                          message: str) -> LubricationState:
-    """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.estimation.windowing.Window`)."""
+                          message: str, frame_id: str = '') -> LubricationState:
+    """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.estimation.windowing.Window`).
+
+    ``frame_id``: the frame of the vibration the window was measured in.
+    """
     msg = LubricationState()
     msg.header.stamp = time_msg(window.end)
+    msg.header.frame_id = frame_id
     msg.theta_oil = float(theta)
     msg.theta_oil_std = float(theta_std)
     msg.vibration_rms = float(window.vibration_rms)

@@ -23,7 +23,10 @@ Parameter ``source`` (read-only) chooses where the data come from:
   line and status 2.
 
 Topics are ``<namespace>/vibration``, ``/joint_states``, ``/axial_load`` and
-``/temperature`` (CONTRACT.md).  Publishers are RELIABLE / KEEP_LAST by
+``/temperature`` (CONTRACT.md).  In a node started in a namespace (``-r
+__ns:=/ema_left``) the default ``namespace`` ``/prsm`` means the node's own
+namespace: the topics are relative names (``/ema_left/vibration``), and the
+bag's actuator (``bag_namespace`` left empty) is looked up under that namespace.  Publishers are RELIABLE / KEEP_LAST by
 default: a reliable writer serves best-effort readers (the estimator's
 sensor-data subscriptions) and reliable ones (``ros2 bag record``) alike,
 whereas a best-effort writer would be silently ignored by a reliable reader;
@@ -46,7 +49,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, Temperature
 
-from ..contract import topic_name
+from ..contract import topic_name, topic_prefix
 from ..errors import InputError
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
@@ -147,7 +150,10 @@ class SensorBridge(Node):
         self.source = str(values['source']).strip()
         if self.source not in SOURCES:
             raise InputError(f'parameter source: {self.source!r} is not one of {", ".join(SOURCES)}')
-        self.namespace = str(values['namespace']).strip() or '/prsm'
+        namespace = str(values['namespace']).strip() or '/prsm'
+        # The default /prsm in a node started in a namespace means that namespace (relative names; contract).
+        self._prefix = topic_prefix(namespace, self.get_namespace())
+        self.namespace = self._prefix or self.get_namespace()
         self.frame_id = str(values['frame_id'])
         self.finished = threading.Event()
         self.exit_status = 0
@@ -170,8 +176,9 @@ class SensorBridge(Node):
             kinds = ['vibration']
         types = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
                  'temperature': Temperature}
-        self.topics = {kind: topic_name(self.namespace, kind) for kind in kinds}
-        self._outputs = {kind: self.create_publisher(types[kind], topic, qos) for kind, topic in self.topics.items()}
+        self._outputs = {kind: self.create_publisher(types[kind], topic_name(self._prefix, kind), qos)
+                         for kind in kinds}
+        self.topics = {kind: publisher.topic_name for kind, publisher in self._outputs.items()}
         wants_clock = self.source == 'playback' and values['publish_clock']
         self._clock_publisher = self.create_publisher(Clock, '/clock', QoSProfile(depth=10)) if wants_clock else None
         self._relays = []
@@ -212,7 +219,7 @@ class SensorBridge(Node):
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
         joint = str(values['relay_joint']).strip()
         if values['relay_joint_states']:
-            out = self.create_publisher(JointState, topic_name(self.namespace, 'joint_states'), qos)
+            out = self.create_publisher(JointState, topic_name(self._prefix, 'joint_states'), qos)
 
             def relay_joints(msg):
                 if joint and joint in msg.name:
@@ -223,7 +230,7 @@ class SensorBridge(Node):
             self._relays.append(self.create_subscription(JointState, values['relay_joint_states'], relay_joints,
                                                          sensor_qos))
         if values['relay_axial_load']:
-            out_load = self.create_publisher(WrenchStamped, topic_name(self.namespace, 'axial_load'), qos)
+            out_load = self.create_publisher(WrenchStamped, topic_name(self._prefix, 'axial_load'), qos)
             self._relays.append(self.create_subscription(WrenchStamped, values['relay_axial_load'],
                                                          out_load.publish, sensor_qos))
 

@@ -219,6 +219,7 @@ def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
     node = graph.estimator(tmp_path, window_length=1.0, completion_delay=0.5)
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
     streams = synthetic_inputs.run_streams()          # sine of amplitude 2 at 10 rad/s, 150 N
+    synthetic_frame = ros_convert.batch_messages(streams['vibration'][0])[0].header.frame_id or 'prsm'
     events = [(float(b.stamps[0]), kind, ros_convert.batch_messages(b)[0])
               for kind, key in (('vibration', 'vibration'), ('joint_states', 'screw'), ('axial_load', 'load'),
                                 ('temperature', 'temperature')) for b in streams[key]]
@@ -247,6 +248,7 @@ def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
         assert state.vibration_rms == pytest.approx(math.sqrt(2), rel=1e-3)
         assert state.temperature == pytest.approx(31.0)
         assert state.actuator == '/prsm' and state.level == OK
+        assert state.header.frame_id == synthetic_frame
         assert state.header.stamp.sec + state.header.stamp.nanosec * 1e-9 == pytest.approx(T0 + start + 1.0)
     resting = [s for s in states if s.screw_speed < 1.0]
     assert resting and all(math.isnan(s.theta_oil) and 'at rest' in s.message for s in resting)
@@ -274,7 +276,7 @@ def test_levels_fall_with_theta_recover_with_hysteresis_and_go_stale(graph, tmp_
     order = [level for k, level in enumerate(seen) if k == 0 or level != seen[k - 1]]
     assert order[:5] == [STALE, OK, WARN, ERROR, WARN]
     status = status_of(diagnostics[-1], '/prsm')
-    assert status.name == 'prsm_lube_ros: /prsm lubrication' and status.hardware_id == 'prsm'
+    assert status.name == 'lubrication_estimator: /prsm lubrication' and status.hardware_id == 'prsm'
     values = values_of(status)
     assert {'theta_oil', 'theta_oil_std', 'vibration_rms', 'screw_speed', 'axial_load', 'window',
             'calibration_file', 'problems'} <= set(values)
@@ -484,6 +486,7 @@ def test_bad_calibration_requests_answer_false_and_the_node_keeps_serving(graph,
         ([tmp_path / 'no_load'], 1.0, 'no axial load'),
         ([tmp_path / 'one_level'], 1.0, 'cannot identify'),
         ([tmp_path / 'one_level'], -1.0, 'reference_theta'),
+        ([tmp_path / 'one_level', 'one_level'], 1.0, 'named twice'),     # absolute and relative: one bag
     ]
     for paths, theta, words in cases:
         response = call(graph, '/prsm/calibrate', paths, theta)
@@ -594,12 +597,12 @@ def test_the_live_inputs_follow_eq_22():
 def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
     """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply."""
     config = tmp_path / 'estimator.yaml'
-    config.write_text('lubrication_estimator:\n  ros__parameters:\n    hardware_ids: [from-yaml]\n'
+    config.write_text("'/**/lubrication_estimator':\n  ros__parameters:\n    hardware_ids: [from-yaml]\n"
                       '    actuators: [/runtest/prsm]\n    diagnostics_period: 0.2\n')
     env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID), PYTHONUNBUFFERED='1')
     command = [sys.executable, '-m', 'prsm_lube_ros.cli', 'run', '--no-bridge', '--config', str(config),
                '-p', f'recordings_dir:={tmp_path}', '-p', f'calibration_file:={tmp_path}/c.yaml',
-               '-p', 'warn_below:=0.9']
+               '-p', 'warn_below:=0.9', '--ros-args', '-r', '__ns:=/runns']    # the file still applies
     process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     graph = Graph()
     try:
@@ -639,3 +642,92 @@ def test_the_launch_file_parses_and_starts_the_installed_executables():
     installed = (root / 'CMakeLists.txt').read_text()
     assert executables == {'sensor_bridge', 'lubrication_estimator'}
     assert all(f'scripts/{name}' in installed for name in executables)
+
+
+def test_without_the_private_drain_api_windows_still_come_out(graph, tmp_path, monkeypatch, capfd):
+    """rclpy without take_message: one loud warning, plain callbacks, the same theta per window."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.nodes import fast_drain
+    monkeypatch.setattr(fast_drain, '_rclpy', SimpleNamespace(Subscription=object))
+    node = graph.estimator(tmp_path)
+    assert not node._fast.enabled
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    events = segments_stream([(3.0, rms_for(0.9), SPEED, LOAD)])
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: {0.0, 0.5, 1.0, 1.5} <= set(by_window(states)), 15, 'windows through the fallback')
+    live = by_window(states)
+    for start in (0.0, 0.5, 1.0, 1.5):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), live[start].message
+        assert live[start].screw_speed == pytest.approx(SPEED, rel=1e-6)
+    warnings = [line for line in capfd.readouterr().err.splitlines() if 'FAST DRAIN OFF' in line]
+    assert len(warnings) == 1 and 'take_message' in warnings[0]
+
+
+def test_with_the_private_drain_api_the_fast_drain_is_on(graph, tmp_path):
+    """The rclpy this package runs on has what fast_drain needs (else the test above is the only path)."""
+    from prsm_lube_ros.nodes import fast_drain
+    assert fast_drain.missing_api() == ''
+    assert graph.estimator(tmp_path)._fast.enabled
+
+
+def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
+    node = graph.estimator(tmp_path, calibration_file='')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    events = segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)])
+    for _, kind, msg in events:
+        if kind == 'vibration':
+            msg.header.frame_id = 'nut_accelerometer'
+    graph.publish(graph.publishers(), events)
+    wait_for(lambda: len(states) >= 2, 10, 'states without calibration')
+    assert all(s.level == WARN and 'not calibrated' in s.message for s in states)
+    assert all(s.header.frame_id == 'nut_accelerometer' for s in states)      # the vibration's frame
+    statuses = [status_of(a, '/prsm') for a in diagnostics]
+    assert bytes([OK]) not in [s.level for s in statuses]
+    assert any(s.level == bytes([WARN]) and 'not calibrated' in s.message for s in statuses)
+    assert statuses[-1].name == 'lubrication_estimator: /prsm lubrication'
+
+
+def test_estimators_in_two_namespaces_each_serve_their_own_topics_and_calibrate(graph, tmp_path):
+    """``__ns`` moves every name: /ema_left/..., /ema_right/..., nothing under /prsm."""
+    nodes = {}
+    for side in ('ema_left', 'ema_right'):
+        node = LubricationEstimator(context=graph.context, cli_args=['--ros-args', '-r', f'__ns:=/{side}'],
+                                    parameter_overrides=[
+                                        Parameter('calibration_file', value=str(tmp_path / 'cal_{actuator}.yaml')),
+                                        Parameter('recordings_dir', value=str(tmp_path))])
+        graph.nodes.append(node)
+        graph.executor.add_node(node)
+        nodes[side] = node
+        assert node.channels[0].name == f'/{side}'
+        assert node.channels[0].calibration_file == str(tmp_path / f'cal_{side}.yaml')
+    for side, node in nodes.items():
+        wait_for(lambda: f'/{side}/calibrate' in {n for n, _ in graph.probe.get_service_names_and_types()}, 10,
+                 f'/{side}/calibrate')
+        response = call(graph, f'/{side}/calibrate', [])
+        assert not response.success and 'bag_paths is empty' in response.message
+        own = {name for name, _ in node.get_service_names_and_types_by_node(node.get_name(), f'/{side}')}
+        assert f'/{side}/calibrate' in own and f'/{side}/{node.get_name()}/get_parameters' in own
+        assert not any(name.startswith('/prsm') for name in own), own
+        wait_for(lambda: graph.probe.count_subscribers(f'/{side}/vibration') >= 1, 10, f'/{side}/vibration')
+        assert node.channels[0].publisher.topic_name == f'/{side}/lubrication_state'
+    services = {name for name, _ in graph.probe.get_service_names_and_types()}
+    assert '/prsm/calibrate' not in services
+    assert graph.probe.count_subscribers('/prsm/vibration') == 0
+
+
+def test_a_bridge_in_a_namespace_publishes_there():
+    from prsm_lube_ros.nodes.sensor_bridge import SensorBridge
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=DOMAIN_ID)
+    try:
+        bridge = SensorBridge(context=context, cli_args=['--ros-args', '-r', '__ns:=/ema_left'],
+                              parameter_overrides=[Parameter('source', value='simulator')])
+        try:
+            assert set(bridge.topics.values()) == {f'/ema_left/{k}' for k in Graph.TYPES}
+        finally:
+            bridge.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)

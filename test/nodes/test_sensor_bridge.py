@@ -386,7 +386,8 @@ def test_the_shipped_parameter_file_lists_every_parameter_with_its_default():
     import yaml
     from prsm_lube_ros.cli import run as run_cli
     from prsm_lube_ros.nodes.sensor_bridge import create_node, PARAMETERS
-    values = yaml.safe_load((ROOT / 'config' / 'sensor_bridge.yaml').read_text())['sensor_bridge']['ros__parameters']
+    shipped = yaml.safe_load((ROOT / 'config' / 'sensor_bridge.yaml').read_text())
+    values = shipped['/**/sensor_bridge']['ros__parameters']     # any namespace (-r __ns:=...)
     assert set(values) == set(PARAMETERS)
     assert {name: value for name, value in values.items() if value != PARAMETERS[name][0]} == {}
     assert run_cli._bridge_factory() is create_node          # prsm-lube run starts this bridge
