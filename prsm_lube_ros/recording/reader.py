@@ -130,10 +130,27 @@ class _McapSource:
             return f'has message encoding {message_encoding!r}, not cdr'
         return check_layout(kind, msgtype, encoding, text)
 
+    def _horizons(self) -> List[tuple]:
+        """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
+
+        Chunks may be written out of log time order (e.g. topic after topic);
+        a slice can be handed out only once no chunk still to come starts
+        before its end.  Memory then stays bounded by how far back chunks go.
+        """
+        per_file = [mcap_file.start_times(mcap.path, mcap.size) for mcap in self.files]
+        later = np.iinfo(np.int64).max
+        horizons: List[tuple] = []
+        for offsets, times in reversed(per_file):
+            suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
+            suffix = np.append(np.minimum(suffix, later), later)
+            horizons.append((offsets, suffix))
+            later = int(suffix[0])
+        return horizons[::-1]
+
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         total = sum(f.size for f in self.files) or 1
         done = 0
-        for mcap in self.files:
+        for mcap, (offsets, suffix) in zip(self.files, self._horizons()):
             summary = mcap_file.Summary()
             if mcap.summary is not None:
                 summary.channels.update(mcap.summary.channels)
@@ -143,7 +160,10 @@ class _McapSource:
                     channel = summary.channels.get(channel_id)
                     if channel is not None and channel.topic in topics:
                         groups[channel.topic] = group
-                yield _RawChunk(chunk.start_time, chunk.buffer, groups, (done + chunk.file_offset) / total)
+                # nothing from this chunk on is earlier than the horizon
+                horizon = int(suffix[np.searchsorted(offsets, chunk.file_offset, 'left')])
+                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer, groups,
+                                (done + chunk.file_offset) / total)
             done += mcap.size
 
 
@@ -540,3 +560,24 @@ def bare_read(path) -> int:
     for chunk in source.raw_chunks(list(source.topics), lambda line: None):
         count += sum(group.data_offsets.size for group in chunk.groups.values())
     return count
+
+
+def list_topics(path) -> Dict[str, TopicInfo]:
+    """Every topic of a recording with its type and message count, by name; InputError if it is unusable."""
+    return _open_source(Path(path)).topics
+
+
+def raw_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+    """Every message of a bare ``.mcap`` file in file order: ``(topic, sequence, log_time, data)``, undecoded.
+
+    ``topic`` is None for a message on a channel defined nowhere in the file.
+    Raises :class:`InputError` (one line naming the file) when it cannot be read at all.
+    """
+    path = Path(path)
+    try:
+        for channel, sequence, log_time, data in mcap_file.raw_messages(path, on_problem or (lambda line: None)):
+            yield (channel.topic if channel else None), sequence, log_time, data
+    except mcap_file.McapProblem as problem:
+        raise InputError(f'{path}: {problem}') from None
+    except OSError as err:
+        raise InputError(f'{path}: cannot be read ({err.strerror or err})') from None
