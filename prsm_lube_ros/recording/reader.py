@@ -48,7 +48,7 @@ import yaml
 
 from . import mcap_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
-from ..errors import InputError
+from ..errors import ConfigError, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
 
@@ -101,9 +101,9 @@ class _McapSource:
                     summary, problems = mcap.scan()
                     self.problems.extend(problems)
             except mcap_file.McapProblem as problem:
-                raise InputError(f'{path}: {problem}') from None
+                raise RecordingError(f'{path}: {problem}') from None
             except OSError as err:
-                raise InputError(f'{path}: cannot be read ({err.strerror or err})') from None
+                raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(mcap)
             self._add_listing(summary)
 
@@ -221,7 +221,7 @@ class _RosbagsSource:
                 self.start_time = reader.start_time if count else None
                 self.end_time = reader.end_time - 1 if count else None
         except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
-            raise InputError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
+            raise RecordingError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
 
     def layout_problem(self, topic: str, kind: str) -> Optional[str]:
         return check_layout(kind, *self.definitions[topic])
@@ -258,7 +258,7 @@ def _reason(err: BaseException) -> str:
 def _open_source(path: Path):
     """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
     if not path.exists():
-        raise InputError(f'{path}: no such file or directory')
+        raise RecordingError(f'{path}: no such file or directory')
     if path.is_file():
         if path.name == 'metadata.yaml':
             return _open_source(path.parent)
@@ -266,29 +266,29 @@ def _open_source(path: Path):
             magic = stream.read(len(mcap_file.MAGIC))
         if magic != mcap_file.MAGIC:
             if magic.startswith(b'SQLite format'):
-                raise InputError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
-                                 '(with metadata.yaml) instead')
-            raise InputError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
+                raise RecordingError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
+                                     '(with metadata.yaml) instead')
+            raise RecordingError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
         return _McapSource(str(path), [path])
     metadata_path = path / 'metadata.yaml'
     if not metadata_path.is_file():
         mcaps = sorted(path.glob('*.mcap'))
         if len(mcaps) == 1:
             return _McapSource(str(path), mcaps)
-        raise InputError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
+        raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
     try:
         info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
     except Exception as err:
-        raise InputError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
+        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
-        raise InputError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
+        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
     if storage == 'mcap' and compression in ('', 'none'):
         return _McapSource(str(path), files)
     if storage not in ('mcap', 'sqlite3'):
-        raise InputError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
+        raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
 
 
@@ -429,19 +429,19 @@ class Recording:
     def _validate(self):
         label = self._source.label
         if not self.topics:
-            raise InputError(f'{label}: holds no topics' + self._problem_hint())
+            raise RecordingError(f'{label}: holds no topics' + self._problem_hint())
         vibration = topic_name(self.namespace, VIBRATION)
         if VIBRATION not in self.selected:
             others = ', '.join(f'{t.name} ({t.msgtype})' for t in self.topics.values())
             hint = (f'; actuators found: {", ".join(self.actuators)} (choose one as namespace)'
                     if self.actuators else '')
-            raise InputError(f'{label}: no {vibration} topic; it has {others}{hint}' + self._problem_hint())
+            raise RecordingError(f'{label}: no {vibration} topic; it has {others}{hint}' + self._problem_hint())
         for kind, topic in self.selected.items():
             problem = self.topics[topic].layout_problem
             if problem:
-                raise InputError(f'{label}: topic {topic} {problem}')
+                raise RecordingError(f'{label}: topic {topic} {problem}')
         if self.topics[vibration].message_count == 0:
-            raise InputError(f'{label}: no messages on {vibration}' + self._problem_hint())
+            raise RecordingError(f'{label}: no messages on {vibration}' + self._problem_hint())
 
     def _problem_hint(self) -> str:
         return f' ({self.problems[-1]})' if self.problems else ''
@@ -482,7 +482,7 @@ class Recording:
         if engine not in ('fast', 'rosbags'):
             raise ValueError(f'engine must be fast or rosbags, not {engine!r}')
         if not slice_seconds > 0 or not math.isfinite(slice_seconds):
-            raise InputError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
+            raise ConfigError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
         sink = on_problem or (lambda line: line in self.problems or self.problems.append(line))
         problems: List[str] = []
         kinds = [kind for kind in KINDS if kind in self.selected]
@@ -578,6 +578,6 @@ def raw_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tup
         for channel, sequence, log_time, data in mcap_file.raw_messages(path, on_problem or (lambda line: None)):
             yield (channel.topic if channel else None), sequence, log_time, data
     except mcap_file.McapProblem as problem:
-        raise InputError(f'{path}: {problem}') from None
+        raise RecordingError(f'{path}: {problem}') from None
     except OSError as err:
-        raise InputError(f'{path}: cannot be read ({err.strerror or err})') from None
+        raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from prsm_lube_ros.errors import InputError
+from prsm_lube_ros.errors import RecordingError
 from prsm_lube_ros.recording.reader import list_topics, raw_messages
 
 CONFORMANCE = Path('/work/shared/conformance/mcap')
@@ -39,7 +39,7 @@ def test_every_conformance_file_reads_its_messages_or_is_refused_in_one_line():
         try:
             got = list(raw_messages(path))
             topics = list_topics(path)
-        except InputError as err:
+        except RecordingError as err:
             assert '\n' not in str(err) and str(path) in str(err)
             wrong.append(f'{path.name}: refused: {err}')
             continue
