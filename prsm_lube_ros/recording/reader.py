@@ -372,6 +372,8 @@ class _Slicer:
                 return
             earliest = min(heads)
             if self.origin is None:
+                if safe is not None and safe < earliest:
+                    return      # a message still to come may start the grid earlier
                 self.origin = earliest
             end = self.origin + ((earliest - self.origin) // self.slice_ns + 1) * self.slice_ns
             if safe is not None and end > safe:

@@ -19,24 +19,31 @@ PLAN = ExperimentPlan(speeds=(100 * RPM, 150 * RPM, 200 * RPM), loads=(100.0, 20
                       stroke=0.03, ramp_travel=0.004, stage_pause=0.0)
 
 
-def regroup_by_topic(source, target, chunk_size=64 * 1024):
-    """Rewrite ``source`` with all messages of one topic before the next (chunk start times go back)."""
+def regroup_by_topic(source, target, chunk_size=64 * 1024, block_ns=None):
+    """Rewrite ``source`` with all messages of one topic before the next (chunk start times go back).
+
+    With ``block_ns``, topic after topic within each block of that much log time (a bounded horizon).
+    """
     with open(source, 'rb') as stream:
         reader = make_reader(stream)
         summary = reader.get_summary()
         by_channel = {}
         for _, channel, message in reader.iter_messages(log_time_order=False):
-            by_channel.setdefault(channel.id, []).append(message)
+            block = message.log_time // block_ns if block_ns else 0
+            by_channel.setdefault((block, channel.id), []).append(message)
     with open(target, 'wb') as stream:
         writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.NONE)
         writer.start()
         schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in summary.schemas.items()}
-        for channel_id, messages in by_channel.items():
-            channel = summary.channels[channel_id]
-            new_id = writer.register_channel(channel.topic, channel.message_encoding,
-                                             schema_ids.get(channel.schema_id, 0), channel.metadata)
+        new_ids = {}
+        for (_, channel_id), messages in sorted(by_channel.items(), key=lambda item: item[0]):
+            if channel_id not in new_ids:
+                channel = summary.channels[channel_id]
+                new_ids[channel_id] = writer.register_channel(channel.topic, channel.message_encoding,
+                                                              schema_ids.get(channel.schema_id, 0), channel.metadata)
             for message in messages:
-                writer.add_message(new_id, message.log_time, message.data, message.publish_time, message.sequence)
+                writer.add_message(new_ids[channel_id], message.log_time, message.data, message.publish_time,
+                                   message.sequence)
         writer.finish()
 
 
@@ -80,3 +87,26 @@ def test_chunks_going_back_in_time_give_the_same_windows_and_constants(plain_and
     want, have = calibrate_recordings([expected]), calibrate_recordings([got])
     assert len(have.speed_levels) == len(want.speed_levels) == 3
     assert have.constants == want.constants
+
+
+def test_a_bounded_horizon_keeps_streaming(plain_and_grouped, tmp_path):
+    """Chunks going back at most 2 s: same slices, and they are handed out while the file is still being read."""
+    plain = plain_and_grouped[0]
+    blocked = tmp_path / 'blocked.mcap'
+    regroup_by_topic(plain, blocked, chunk_size=16 * 1024, block_ns=2 * 10**9)
+    with open(blocked, 'rb') as stream:
+        starts = [index.message_start_time for index in make_reader(stream).get_summary().chunk_indexes]
+    assert any(b < a for a, b in zip(starts, starts[1:]))
+    expected = list(open_recording(plain).slices(slice_seconds=1.0))
+    read = [0.0]
+    seen_at = []
+    got = []
+    for batches in open_recording(blocked).slices(progress=lambda f: read.__setitem__(0, f), slice_seconds=1.0):
+        seen_at.append(read[0])
+        got.append(batches)
+    assert len(got) == len(expected) > 4
+    for want, have in zip(expected, got):
+        for a, b in zip(want, have):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name])
+    assert seen_at[len(seen_at) // 2] < 0.8     # not everything held until the end
