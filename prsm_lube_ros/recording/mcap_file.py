@@ -184,12 +184,12 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
                 from rosbags.rosbag2.storage_mcap import zstd
                 out = zstd.decompress(bytes(data))
             elif partial:
-                out = _zstandard.ZstdDecompressor().decompressobj().decompress(bytes(data))
+                out = _zstd_prefix(data, size)
             else:
                 out = _zstandard.ZstdDecompressor().decompress(bytes(data), max_output_size=size)
         elif compression == 'lz4':
             if partial:
-                out = lz4.frame.LZ4FrameDecompressor().decompress(bytes(data))
+                out = lz4.frame.LZ4FrameDecompressor().decompress(bytes(data), max_length=size)
             else:
                 out = lz4.frame.decompress(bytes(data))
         else:
@@ -203,6 +203,23 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
     if not partial and len(out) != size:
         raise McapProblem(f'chunk decompressed to {len(out)} bytes, its header says {size}')
     return out[:size]
+
+
+def _zstd_prefix(data, size: int) -> bytes:
+    """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
+    pieces: List[bytes] = []
+    got = 0
+    reader = _zstandard.ZstdDecompressor().stream_reader(bytes(data))
+    try:
+        while got < size:
+            piece = reader.read(min(size - got, 1 << 20))
+            if not piece:
+                break
+            pieces.append(piece)
+            got += len(piece)
+    except _zstandard.ZstdError:
+        pass
+    return b''.join(pieces)
 
 
 # -- splitting chunk records ------------------------------------------------------------------------
