@@ -7,6 +7,9 @@ import pytest
 
 import bagfactory as bf
 from prsm_lube_ros.cli import main
+from prsm_lube_ros.estimation.calibration import Calibration
+from prsm_lube_ros.estimation.calibration_file import save_calibration
+from prsm_lube_ros.physics.vibration_model import ModelConstants
 
 
 def standstill(entries):
@@ -34,3 +37,16 @@ def test_no_usable_window_says_why_in_one_line(tmp_path, capsys, case, needle):
     last = err.strip().splitlines()[-1]
     assert 'no usable window' in last and needle in last and str(bag) in last
     assert not (tmp_path / 'c.yaml').exists()
+
+
+def test_assess_of_a_standstill_recording_is_not_zero_runs_with_status_zero(tmp_path, capsys):
+    calibration = tmp_path / 'c.yaml'
+    save_calibration(Calibration(ModelConstants(1e-3, 1e-3, 0.5), np.eye(3) * 1e-4, 0.01, 0.01, 10, 1.0),
+                     calibration)
+    bag = bf.write_rosbag2(tmp_path / 'still', standstill(bf.contract_entries(seconds=6.0)))
+    status = main(['assess', str(bag), '--calibration', str(calibration), '--json', str(tmp_path / 'a.json')])
+    captured = capsys.readouterr()
+    assert status != 0 and '0 runs' not in captured.out
+    last = captured.err.strip().splitlines()[-1]
+    assert 'no usable window' in last and 'standstill' in last and str(bag) in last
+    assert not (tmp_path / 'a.json').exists()
