@@ -17,9 +17,14 @@ ending in ``/`` or ``_`` is used as a plain prefix (``/rig/left_`` reads
 recording that carry a vibration topic.
 
 Slices are consecutive spans of ``slice_seconds`` of log time on a grid
-starting at the first chunk; each holds one batch per topic that has data in
+starting at the first message; each holds one batch per topic that has data in
 it, with values taken from the header stamps.  Memory stays at about one MCAP
-chunk plus one slice, however long the recording.
+chunk plus one slice, however long the recording.  Chunks may go back in log
+time (e.g. written topic after topic): a cheap pre-scan of the chunk headers
+says, for every chunk, the earliest log time still to come, and a slice is
+handed out only once nothing later in the file can fall into it -- the
+result is that of the plainly written file, and memory grows only by how far
+back the chunks go.
 
 MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file` and decoded in
 bulk by :mod:`prsm_lube_ros.recording.cdr`; sqlite3 (and file- or
