@@ -354,6 +354,10 @@ class _Slicer:
         self.slice_ns = slice_ns
         self.origin: Optional[int] = None
         self.pending: Dict[str, List[Decoded]] = {kind: [] for kind in kinds}
+        #: end of the last slice handed out, ns; messages before it can no longer be placed
+        self.handed_out: Optional[int] = None
+        #: messages left out because they came after their slice was handed out, by kind
+        self.too_late: Dict[str, int] = dict.fromkeys(kinds, 0)
 
     def add(self, kind: str, decoded: Decoded):
         """Queue decoded messages; parts are kept in log time order."""
@@ -362,6 +366,12 @@ class _Slicer:
             return
         if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
             decoded = _merge([decoded], kind)
+        if self.handed_out is not None and decoded.log_times[0] < self.handed_out:
+            late = int(np.searchsorted(decoded.log_times, self.handed_out, 'left'))
+            self.too_late[kind] += late
+            decoded = _cut(decoded, late)[1]
+            if not decoded.log_times.size:
+                return
         parts = self.pending[kind]
         if parts and decoded.log_times[0] < parts[-1].log_times[-1]:
             parts[:] = [_merge(parts + [decoded], kind)]     # overlapping chunks: rare
@@ -397,6 +407,7 @@ class _Slicer:
                         break
                 if pieces:
                     batches.append(_batch(kind, pieces))
+            self.handed_out = end
             yield batches
 
 
@@ -512,6 +523,10 @@ class Recording:
         yield from slicer.flush(None)
         if progress is not None:
             progress(1.0)
+        for kind, count in slicer.too_late.items():
+            if count:
+                problems.append(f'{self.selected[kind]}: {count} message(s) found after their time slice was '
+                                'handed out (a chunk states a later start time than its messages) left out')
         for kind, count in undecodable.items():
             if count:
                 problems.append(f'{self.selected[kind]}: {count} message(s) could not be decoded and were '

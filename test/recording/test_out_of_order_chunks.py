@@ -110,3 +110,21 @@ def test_a_bounded_horizon_keeps_streaming(plain_and_grouped, tmp_path):
             for name, value in vars(a).items():
                 np.testing.assert_array_equal(value, vars(b)[name])
     assert seen_at[len(seen_at) // 2] < 0.8     # not everything held until the end
+
+
+def test_a_chunk_stating_a_later_start_than_its_messages_is_reported_in_one_line(plain_and_grouped, tmp_path):
+    small = tmp_path / 'small_chunks.mcap'
+    regroup_by_topic(plain_and_grouped[0], small, chunk_size=16 * 1024, block_ns=10**6)   # in time order
+    data = bytearray(small.read_bytes())
+    with open(small, 'rb') as stream:
+        chunks = make_reader(stream).get_summary().chunk_indexes
+    assert len(chunks) > 3
+    at = chunks[len(chunks) // 2].chunk_start_offset + 9                   # its message_start_time field
+    end = int.from_bytes(data[at + 8:at + 16], 'little')
+    data[at:at + 8] = (end + 1).to_bytes(8, 'little')                      # claims to start after its last message
+    lying = tmp_path / 'lying.mcap'
+    lying.write_bytes(bytes(data))
+    problems = []
+    list(open_recording(lying).slices(on_problem=problems.append, slice_seconds=0.25))
+    late = [line for line in problems if 'later start time than its messages' in line]
+    assert late and len(late) == len(set(late)) and all('\n' not in line for line in late)
