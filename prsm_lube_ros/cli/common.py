@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 import sys
 
-from ..errors import ConfigError
+from ..errors import ConfigError, NotIdentifiable
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -62,11 +62,13 @@ def read_recordings(paths, args, *, spectra: bool = False):
     for path in paths:
         bar = progress_bar(100, Path(path).name)
         try:
-            recordings.append(recording_windows(path, lead=actuator.lead, settings=settings,
-                                                namespace=args.namespace, on_problem=warn,
-                                                progress=percent_updater(bar)))
+            recording = recording_windows(path, lead=actuator.lead, settings=settings, namespace=args.namespace,
+                                          on_problem=warn, progress=percent_updater(bar))
         finally:
             bar.close()
+        if not any(window.steady for window in recording.windows):
+            raise NotIdentifiable(f'{path}: no usable window: {recording.why_no_window(settings)}')
+        recordings.append(recording)
     return recordings, actuator
 
 

@@ -18,7 +18,7 @@ import numpy as np
 import yaml
 
 from ..config_file import read_yaml
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
 
@@ -51,7 +51,7 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
     """Inverse of :func:`calibration_to_dict`; raises :class:`InputError` naming ``origin``."""
     try:
         if data.get('format') != FORMAT:
-            raise InputError(f'{origin}: not a prsm_lube_ros calibration (format: {data.get("format")!r})')
+            raise ConfigError(f'{origin}: not a prsm_lube_ros calibration (format: {data.get("format")!r})')
         const = data['constants']
         constants = ModelConstants(float(const['c_sys']), float(const['c_f']), float(const['c_lambda']))
         covariance = np.array(data['covariance_ln_csys_cf_clambda'], dtype=float).reshape(3, 3)
@@ -69,11 +69,11 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise InputError(f'{origin}: malformed calibration ({exc.__class__.__name__}: {exc})') from None
+        raise ConfigError(f'{origin}: malformed calibration ({exc.__class__.__name__}: {exc})') from None
     if not (constants.c_sys > 0 and math.isfinite(constants.c_f) and math.isfinite(constants.c_lambda)):
-        raise InputError(f'{origin}: constants must be finite with C_sys > 0, got {constants}')
+        raise ConfigError(f'{origin}: constants must be finite with C_sys > 0, got {constants}')
     if constants.c_lambda == 0:
-        raise InputError(f'{origin}: C_lambda is 0, theta_Oil (Eq. 23) cannot be computed')
+        raise ConfigError(f'{origin}: C_lambda is 0, theta_Oil (Eq. 23) cannot be computed')
     return calibration
 
 
@@ -95,14 +95,14 @@ def save_calibration(calibration: Calibration, path: str | Path) -> Path:
                 os.unlink(tmp)
             raise
     except OSError as exc:
-        raise InputError(f'{path}: cannot write calibration ({exc.strerror or exc})') from None
+        raise ConfigError(f'{path}: cannot write calibration ({exc.strerror or exc})') from None
     return path
 
 
 def load_calibration(path: str | Path) -> Calibration:
-    """Read a calibration file; one-line :class:`InputError` naming the file for anything wrong."""
+    """Read a calibration file; one-line :class:`ConfigError` naming the file for anything wrong."""
     path = Path(path)
     data = read_yaml(path, 'calibration file')
     if not isinstance(data, dict):
-        raise InputError(f'{path}: not a prsm_lube_ros calibration (expected a mapping)')
+        raise ConfigError(f'{path}: not a prsm_lube_ros calibration (expected a mapping)')
     return calibration_from_dict(data, str(path))

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
+import numpy as np
+
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
 from .assessment import Assessor, MIN_AXIAL_LOAD, RunAssessment, WindowAssessment
@@ -33,6 +35,29 @@ class RecordingWindows:
     path: str
     windows: list[Window]
     problems: list[str] = field(default_factory=list)
+    #: messages read per batch kind (``VibrationBatch``, ``ScrewStateBatch``, ...), and the fastest screw speed
+    messages_read: dict[str, int] = field(default_factory=dict)
+    max_speed: float = 0.0
+
+    def why_no_window(self, settings: WindowSettings | None = None) -> str:
+        """Why the recording gave no window, in a few words (for a recording with messages on its topics)."""
+        settings = settings or WindowSettings()
+        names = {'VibrationBatch': 'vibration', 'ScrewStateBatch': 'joint_states', 'AxialLoadBatch': 'axial_load'}
+        missing = [topic for kind, topic in names.items() if not self.messages_read.get(kind)]
+        if missing:
+            return 'no message could be read on ' + ', '.join(missing)
+        if not self.max_speed >= settings.min_speed:
+            return (f'the screw never turned at {settings.min_speed:g} rad/s or faster '
+                    f'(fastest {self.max_speed:.3g} rad/s; standstill only?)')
+        reasons: dict[str, int] = {}
+        for window in self.windows:
+            reasons[window.reason] = reasons.get(window.reason, 0) + 1
+        reason = (f'no stretch of {settings.window_length:g} s at steady speed and load with vibration '
+                  'and load data covering it')
+        if reasons:
+            common = max(reasons, key=reasons.get)
+            reason += f' (none of {len(self.windows)} windows steady; most: {common})'
+        return reason + (f'; {self.problems[-1]}' if self.problems else '')
 
 
 def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings | None = None,
@@ -58,8 +83,15 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     builder = WindowBuilder(settings, lead=lead)
     windows: list[Window] = []
     recording = recording_reader.open_recording(path, namespace=namespace)
+    messages_read: dict[str, int] = {}
+    max_speed = 0.0
     for batches in recording.slices(on_problem=report, progress=progress, slice_seconds=slice_seconds):
         for batch in batches:
+            kind = type(batch).__name__
+            messages_read[kind] = messages_read.get(kind, 0) + len(batch.stamps)
+            speeds = getattr(batch, 'speeds', None)
+            if speeds is not None and speeds.size and np.isfinite(speeds).any():
+                max_speed = max(max_speed, float(np.nanmax(np.abs(speeds))))
             builder.add(batch)
         windows.extend(builder.pop_closed())
         for line in builder.take_problems():
@@ -67,7 +99,7 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     windows.extend(builder.finish())
     for line in builder.take_problems():
         report(line)
-    return RecordingWindows(str(path), windows, problems)
+    return RecordingWindows(str(path), windows, problems, messages_read, max_speed)
 
 
 def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 1.0,

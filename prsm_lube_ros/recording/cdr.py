@@ -110,6 +110,7 @@ def check_layout(kind: str, msgtype: str, encoding: str, text: str) -> Optional[
     name must be the contract's (any package for VibrationBlock).
     """
     expected = KINDS[kind]
+    msgtype, encoding, text = msgtype or '(no type name)', encoding or '', text or ''
     if not text.strip():
         if msgtype == expected or (kind == VIBRATION and msgtype.endswith('/VibrationBlock')):
             return None

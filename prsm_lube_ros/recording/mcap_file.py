@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import struct
+import zlib
 from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
 
 import lz4.frame
@@ -100,6 +101,19 @@ class Summary:
     start_time: Optional[int] = None
     end_time: Optional[int] = None
     complete: bool = False              # True when read from an intact summary section
+    schema_count: int = 0               # as the Statistics record says
+    channel_count: int = 0
+
+    def lacks_definitions(self) -> bool:
+        """True when the statistics count more schemas/channels than the summary repeats, or one is missing."""
+        wanted = {c.schema_id for c in self.channels.values() if c.schema_id} - set(self.schemas)
+        return (len(self.channels) < self.channel_count or len(self.schemas) < self.schema_count
+                or bool(wanted) or bool(set(self.message_counts) - set(self.channels)))
+
+
+def signed(time: int) -> int:
+    """A uint64 log time as the int64 the arrays hold (a corrupt time past 2**63 becomes negative)."""
+    return time - (1 << 64) if time >= 1 << 63 else time
 
 
 # -- record field parsing ---------------------------------------------------------------------------
@@ -170,12 +184,12 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
                 from rosbags.rosbag2.storage_mcap import zstd
                 out = zstd.decompress(bytes(data))
             elif partial:
-                out = _zstandard.ZstdDecompressor().decompressobj().decompress(bytes(data))
+                out = _zstd_prefix(data, size)
             else:
                 out = _zstandard.ZstdDecompressor().decompress(bytes(data), max_output_size=size)
         elif compression == 'lz4':
             if partial:
-                out = lz4.frame.LZ4FrameDecompressor().decompress(bytes(data))
+                out = lz4.frame.LZ4FrameDecompressor().decompress(bytes(data), max_length=size)
             else:
                 out = lz4.frame.decompress(bytes(data))
         else:
@@ -189,6 +203,23 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
     if not partial and len(out) != size:
         raise McapProblem(f'chunk decompressed to {len(out)} bytes, its header says {size}')
     return out[:size]
+
+
+def _zstd_prefix(data, size: int) -> bytes:
+    """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
+    pieces: List[bytes] = []
+    got = 0
+    reader = _zstandard.ZstdDecompressor().stream_reader(bytes(data))
+    try:
+        while got < size:
+            piece = reader.read(min(size - got, 1 << 20))
+            if not piece:
+                break
+            pieces.append(piece)
+            got += len(piece)
+    except _zstandard.ZstdError:
+        pass
+    return b''.join(pieces)
 
 
 # -- splitting chunk records ------------------------------------------------------------------------
@@ -224,7 +255,7 @@ def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -
                 continue
             channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
             per_channel.setdefault(channel_id, []).append(
-                (begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, log_time))
+                (begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
         else:
             on_record(opcode, memoryview(buf)[begin:end])
     groups = {}
@@ -259,10 +290,12 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
     uint64_at = np.ndarray((size - 7,), '<u8', data, 0, (1,))
     uint16_at = np.ndarray((size - 1,), '<u2', data, 0, (1,))
     lengths = uint64_at[offsets + 1].view(np.int64)
-    ends = offsets + RECORD_PREFIX + lengths
     channels = np.repeat(np.array(ids, np.int64), counts)
+    if lengths.min() < MESSAGE_HEADER or lengths.max() > size:
+        return None
+    ends = offsets + RECORD_PREFIX + lengths
     if (np.any(data[offsets] != OP_MESSAGE) or np.any(uint16_at[offsets + 9] != channels)
-            or lengths.min() < MESSAGE_HEADER or ends.max() > size):
+            or ends.max() > size):
         return None
     # Sorted separately, starts and ends pair up exactly when no two records overlap.
     starts_sorted, ends_sorted = np.sort(offsets, kind='stable'), np.sort(ends, kind='stable')
@@ -307,6 +340,20 @@ class McapFile:
             if stream.read(len(MAGIC)) != MAGIC:
                 raise McapProblem('not an MCAP file (no MCAP magic at its start)')
             self.summary = self._read_summary(stream)
+        if self.summary is not None and self.summary.lacks_definitions():
+            self._definitions_from_data(self.summary)
+
+    def _definitions_from_data(self, summary: Summary):
+        """Schemas and channels the summary does not repeat (``noRepeatedChannels``), from the data section."""
+        found = Summary()
+        for _ in self.chunks(lambda line: None, found):
+            if not Summary(found.schemas, found.channels, summary.message_counts, schema_count=summary.schema_count,
+                           channel_count=summary.channel_count).lacks_definitions():
+                break
+        for key, schema in found.schemas.items():
+            summary.schemas.setdefault(key, schema)
+        for key, channel in found.channels.items():
+            summary.channels.setdefault(key, channel)
 
     # summary ------------------------------------------------------------------------------------
     def _read_summary(self, stream: BinaryIO) -> Optional[Summary]:
@@ -339,8 +386,8 @@ class McapFile:
                 elif opcode == OP_STATISTICS:
                     fields = _Fields(content)
                     fields.u64()
-                    fields.u16()
-                    fields.u32()
+                    summary.schema_count = fields.u16()
+                    summary.channel_count = fields.u32()
                     fields.u32()
                     fields.u32()
                     fields.u32()
@@ -474,13 +521,16 @@ class McapFile:
         start_time = fields.u64()
         fields.u64()
         size = fields.u64()
-        fields.u32()
+        crc = fields.u32()
         compression = fields.string()
         compressed_size = fields.u64()
         if compressed_size > len(content) - fields.pos:
             raise McapProblem('compressed data runs past its chunk record')
         compressed = memoryview(content)[fields.pos:fields.pos + compressed_size]
-        return [decompress(compressed, compression, size), start_time, {}, pos]
+        records = decompress(compressed, compression, size)
+        if crc and zlib.crc32(records) != crc:
+            raise McapProblem(f'its records do not match their CRC ({size} bytes, corrupt)')
+        return [records, signed(start_time), {}, pos]
 
     def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
                       on_record) -> RawChunk:
@@ -494,7 +544,7 @@ class McapFile:
     @staticmethod
     def _loose_chunk(loose: List[bytes], pos: int, on_record) -> RawChunk:
         buf = b''.join(loose)
-        start_time = min((_MESSAGE.unpack_from(record, RECORD_PREFIX)[2] for record in loose
+        start_time = min((signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2]) for record in loose
                           if record[0] == OP_MESSAGE and len(record) >= RECORD_PREFIX + MESSAGE_HEADER),
                          default=0)
         chunk, _ = split_sequential(buf, start_time, pos, on_record)
@@ -517,8 +567,60 @@ class McapFile:
             records = decompress(memoryview(content)[fields.pos:], compression, size, partial=True)
         except McapProblem:
             return None
-        chunk, _ = split_sequential(records, start_time, cut, on_record)
+        chunk, _ = split_sequential(records, signed(start_time), cut, on_record)
         return chunk if chunk.message_count() else None
+
+
+def start_times(path, size: int) -> Tuple[np.ndarray, np.ndarray]:
+    """File offsets and earliest log times of the chunks and unchunked messages of a data section.
+
+    Reads only record headers (seeking over chunk data), so it is cheap; a
+    damaged record ends the list quietly (:meth:`McapFile.chunks` reports it).
+    """
+    offsets: List[int] = []
+    times: List[int] = []
+    with open(path, 'rb') as stream:
+        pos = len(MAGIC)
+        stream.seek(pos)
+        while True:
+            head = stream.read(RECORD_PREFIX + MESSAGE_HEADER)
+            if len(head) < RECORD_PREFIX:
+                break
+            opcode, length = _RECORD.unpack_from(head, 0)
+            if length > size - pos - RECORD_PREFIX or opcode in (OP_DATA_END, OP_FOOTER):
+                break
+            if opcode == OP_CHUNK and length >= 8 and len(head) >= RECORD_PREFIX + 8:
+                offsets.append(pos)
+                times.append(_U64.unpack_from(head, RECORD_PREFIX)[0])
+            elif opcode == OP_MESSAGE and length >= MESSAGE_HEADER and len(head) == RECORD_PREFIX + MESSAGE_HEADER:
+                offsets.append(pos)
+                times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
+            pos += RECORD_PREFIX + length
+            stream.seek(pos)
+    return np.array(offsets, np.int64), np.array([signed(t) for t in times], np.int64)
+
+
+def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:
+    """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
+
+    ``channel`` is None for a message whose channel is nowhere defined.
+    Problems go to ``on_problem`` as in :meth:`McapFile.chunks`.
+    """
+    mcap = McapFile(path)
+    summary = Summary()
+    if mcap.summary is not None:
+        summary.channels.update(mcap.summary.channels)
+    for chunk in mcap.chunks(on_problem, summary):
+        ids = np.concatenate([np.full(g.data_offsets.size, key, np.int64) for key, g in chunk.groups.items()]
+                             + [np.zeros(0, np.int64)])
+        starts = np.concatenate([g.data_offsets for g in chunk.groups.values()] + [np.zeros(0, np.int64)])
+        lengths = np.concatenate([g.data_lengths for g in chunk.groups.values()] + [np.zeros(0, np.int64)])
+        buffer = chunk.buffer
+        for index in np.argsort(starts, kind='stable'):
+            begin = int(starts[index])
+            sequence, log_time = struct.unpack_from('<IQ', buffer, begin - MESSAGE_HEADER + 2)
+            yield (summary.channels.get(int(ids[index])), sequence, log_time,
+                   bytes(buffer[begin:begin + int(lengths[index])]))
 
 
 def bare_read(path) -> Tuple[int, int]:

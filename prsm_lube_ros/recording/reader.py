@@ -17,9 +17,14 @@ ending in ``/`` or ``_`` is used as a plain prefix (``/rig/left_`` reads
 recording that carry a vibration topic.
 
 Slices are consecutive spans of ``slice_seconds`` of log time on a grid
-starting at the first chunk; each holds one batch per topic that has data in
+starting at the first message; each holds one batch per topic that has data in
 it, with values taken from the header stamps.  Memory stays at about one MCAP
-chunk plus one slice, however long the recording.
+chunk plus one slice, however long the recording.  Chunks may go back in log
+time (e.g. written topic after topic): a cheap pre-scan of the chunk headers
+says, for every chunk, the earliest log time still to come, and a slice is
+handed out only once nothing later in the file can fall into it -- the
+result is that of the plainly written file, and memory grows only by how far
+back the chunks go.
 
 MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file` and decoded in
 bulk by :mod:`prsm_lube_ros.recording.cdr`; sqlite3 (and file- or
@@ -48,7 +53,7 @@ import yaml
 
 from . import mcap_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
-from ..errors import InputError
+from ..errors import ConfigError, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
 
@@ -101,9 +106,9 @@ class _McapSource:
                     summary, problems = mcap.scan()
                     self.problems.extend(problems)
             except mcap_file.McapProblem as problem:
-                raise InputError(f'{path}: {problem}') from None
+                raise RecordingError(f'{path}: {problem}') from None
             except OSError as err:
-                raise InputError(f'{path}: cannot be read ({err.strerror or err})') from None
+                raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(mcap)
             self._add_listing(summary)
 
@@ -130,10 +135,27 @@ class _McapSource:
             return f'has message encoding {message_encoding!r}, not cdr'
         return check_layout(kind, msgtype, encoding, text)
 
+    def _horizons(self) -> List[tuple]:
+        """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
+
+        Chunks may be written out of log time order (e.g. topic after topic);
+        a slice can be handed out only once no chunk still to come starts
+        before its end.  Memory then stays bounded by how far back chunks go.
+        """
+        per_file = [mcap_file.start_times(mcap.path, mcap.size) for mcap in self.files]
+        later = np.iinfo(np.int64).max
+        horizons: List[tuple] = []
+        for offsets, times in reversed(per_file):
+            suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
+            suffix = np.append(np.minimum(suffix, later), later)
+            horizons.append((offsets, suffix))
+            later = int(suffix[0])
+        return horizons[::-1]
+
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         total = sum(f.size for f in self.files) or 1
         done = 0
-        for mcap in self.files:
+        for mcap, (offsets, suffix) in zip(self.files, self._horizons()):
             summary = mcap_file.Summary()
             if mcap.summary is not None:
                 summary.channels.update(mcap.summary.channels)
@@ -143,7 +165,10 @@ class _McapSource:
                     channel = summary.channels.get(channel_id)
                     if channel is not None and channel.topic in topics:
                         groups[channel.topic] = group
-                yield _RawChunk(chunk.start_time, chunk.buffer, groups, (done + chunk.file_offset) / total)
+                # nothing from this chunk on is earlier than the horizon
+                horizon = int(suffix[np.searchsorted(offsets, chunk.file_offset, 'left')])
+                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer, groups,
+                                (done + chunk.file_offset) / total)
             done += mcap.size
 
 
@@ -201,7 +226,7 @@ class _RosbagsSource:
                 self.start_time = reader.start_time if count else None
                 self.end_time = reader.end_time - 1 if count else None
         except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
-            raise InputError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
+            raise RecordingError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
 
     def layout_problem(self, topic: str, kind: str) -> Optional[str]:
         return check_layout(kind, *self.definitions[topic])
@@ -238,7 +263,7 @@ def _reason(err: BaseException) -> str:
 def _open_source(path: Path):
     """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
     if not path.exists():
-        raise InputError(f'{path}: no such file or directory')
+        raise RecordingError(f'{path}: no such file or directory')
     if path.is_file():
         if path.name == 'metadata.yaml':
             return _open_source(path.parent)
@@ -246,29 +271,29 @@ def _open_source(path: Path):
             magic = stream.read(len(mcap_file.MAGIC))
         if magic != mcap_file.MAGIC:
             if magic.startswith(b'SQLite format'):
-                raise InputError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
-                                 '(with metadata.yaml) instead')
-            raise InputError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
+                raise RecordingError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
+                                     '(with metadata.yaml) instead')
+            raise RecordingError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
         return _McapSource(str(path), [path])
     metadata_path = path / 'metadata.yaml'
     if not metadata_path.is_file():
         mcaps = sorted(path.glob('*.mcap'))
         if len(mcaps) == 1:
             return _McapSource(str(path), mcaps)
-        raise InputError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
+        raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
     try:
         info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
     except Exception as err:
-        raise InputError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
+        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
-        raise InputError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
+        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
     if storage == 'mcap' and compression in ('', 'none'):
         return _McapSource(str(path), files)
     if storage not in ('mcap', 'sqlite3'):
-        raise InputError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
+        raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
 
 
@@ -329,6 +354,10 @@ class _Slicer:
         self.slice_ns = slice_ns
         self.origin: Optional[int] = None
         self.pending: Dict[str, List[Decoded]] = {kind: [] for kind in kinds}
+        #: end of the last slice handed out, ns; messages before it can no longer be placed
+        self.handed_out: Optional[int] = None
+        #: messages left out because they came after their slice was handed out, by kind
+        self.too_late: Dict[str, int] = dict.fromkeys(kinds, 0)
 
     def add(self, kind: str, decoded: Decoded):
         """Queue decoded messages; parts are kept in log time order."""
@@ -337,6 +366,12 @@ class _Slicer:
             return
         if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
             decoded = _merge([decoded], kind)
+        if self.handed_out is not None and decoded.log_times[0] < self.handed_out:
+            late = int(np.searchsorted(decoded.log_times, self.handed_out, 'left'))
+            self.too_late[kind] += late
+            decoded = _cut(decoded, late)[1]
+            if not decoded.log_times.size:
+                return
         parts = self.pending[kind]
         if parts and decoded.log_times[0] < parts[-1].log_times[-1]:
             parts[:] = [_merge(parts + [decoded], kind)]     # overlapping chunks: rare
@@ -352,6 +387,8 @@ class _Slicer:
                 return
             earliest = min(heads)
             if self.origin is None:
+                if safe is not None and safe < earliest:
+                    return      # a message still to come may start the grid earlier
                 self.origin = earliest
             end = self.origin + ((earliest - self.origin) // self.slice_ns + 1) * self.slice_ns
             if safe is not None and end > safe:
@@ -370,6 +407,7 @@ class _Slicer:
                         break
                 if pieces:
                     batches.append(_batch(kind, pieces))
+            self.handed_out = end
             yield batches
 
 
@@ -409,19 +447,19 @@ class Recording:
     def _validate(self):
         label = self._source.label
         if not self.topics:
-            raise InputError(f'{label}: holds no topics' + self._problem_hint())
+            raise RecordingError(f'{label}: holds no topics' + self._problem_hint())
         vibration = topic_name(self.namespace, VIBRATION)
         if VIBRATION not in self.selected:
             others = ', '.join(f'{t.name} ({t.msgtype})' for t in self.topics.values())
             hint = (f'; actuators found: {", ".join(self.actuators)} (choose one as namespace)'
                     if self.actuators else '')
-            raise InputError(f'{label}: no {vibration} topic; it has {others}{hint}' + self._problem_hint())
+            raise RecordingError(f'{label}: no {vibration} topic; it has {others}{hint}' + self._problem_hint())
         for kind, topic in self.selected.items():
             problem = self.topics[topic].layout_problem
             if problem:
-                raise InputError(f'{label}: topic {topic} {problem}')
+                raise RecordingError(f'{label}: topic {topic} {problem}')
         if self.topics[vibration].message_count == 0:
-            raise InputError(f'{label}: no messages on {vibration}' + self._problem_hint())
+            raise RecordingError(f'{label}: no messages on {vibration}' + self._problem_hint())
 
     def _problem_hint(self) -> str:
         return f' ({self.problems[-1]})' if self.problems else ''
@@ -462,7 +500,7 @@ class Recording:
         if engine not in ('fast', 'rosbags'):
             raise ValueError(f'engine must be fast or rosbags, not {engine!r}')
         if not slice_seconds > 0 or not math.isfinite(slice_seconds):
-            raise InputError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
+            raise ConfigError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
         sink = on_problem or (lambda line: line in self.problems or self.problems.append(line))
         problems: List[str] = []
         kinds = [kind for kind in KINDS if kind in self.selected]
@@ -485,6 +523,10 @@ class Recording:
         yield from slicer.flush(None)
         if progress is not None:
             progress(1.0)
+        for kind, count in slicer.too_late.items():
+            if count:
+                problems.append(f'{self.selected[kind]}: {count} message(s) found after their time slice was '
+                                'handed out (a chunk states a later start time than its messages) left out')
         for kind, count in undecodable.items():
             if count:
                 problems.append(f'{self.selected[kind]}: {count} message(s) could not be decoded and were '
@@ -540,3 +582,24 @@ def bare_read(path) -> int:
     for chunk in source.raw_chunks(list(source.topics), lambda line: None):
         count += sum(group.data_offsets.size for group in chunk.groups.values())
     return count
+
+
+def list_topics(path) -> Dict[str, TopicInfo]:
+    """Every topic of a recording with its type and message count, by name; InputError if it is unusable."""
+    return _open_source(Path(path)).topics
+
+
+def raw_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+    """Every message of a bare ``.mcap`` file in file order: ``(topic, sequence, log_time, data)``, undecoded.
+
+    ``topic`` is None for a message on a channel defined nowhere in the file.
+    Raises :class:`InputError` (one line naming the file) when it cannot be read at all.
+    """
+    path = Path(path)
+    try:
+        for channel, sequence, log_time, data in mcap_file.raw_messages(path, on_problem or (lambda line: None)):
+            yield (channel.topic if channel else None), sequence, log_time, data
+    except mcap_file.McapProblem as problem:
+        raise RecordingError(f'{path}: {problem}') from None
+    except OSError as err:
+        raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None

@@ -1,0 +1,111 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Seeded, time-bounded mutation fuzzing of small MCAP files: success or one InputError line, nothing else."""
+
+from pathlib import Path
+import random
+import struct
+import time
+import zlib
+
+import pytest
+
+import bagfactory as bf
+from prsm_lube_ros.errors import ConfigError, InputError
+from prsm_lube_ros.estimation.calibration_file import load_calibration
+from prsm_lube_ros.recording import mcap_file
+from prsm_lube_ros.recording.cdr import check_layout
+from prsm_lube_ros.recording.reader import list_topics, open_recording, raw_messages
+
+CONFORMANCE = Path('/work/shared/conformance/mcap')
+MUTATIONS = 300
+SECONDS = 60.0
+
+
+def mutate(data: bytes, rng: random.Random) -> bytes:
+    """One of: flipped bytes, a truncation, or an overwritten uint64/uint32 (a length, mostly)."""
+    data = bytearray(data)
+    how = rng.randrange(4)
+    if how == 0:
+        for _ in range(rng.randint(1, 4)):
+            data[rng.randrange(len(data))] ^= 1 << rng.randrange(8)
+    elif how == 1:
+        del data[rng.randrange(len(data)):]
+    elif how == 2 and len(data) > 8:
+        value = rng.choice([0, 1, 2**63 - 1, 2**63, 2**64 - 1, len(data), len(data) - rng.randrange(64),
+                            rng.getrandbits(64)])
+        data[rng.randrange(len(data) - 8):][:8] = struct.pack('<Q', value)
+    elif len(data) > 4:
+        at = rng.randrange(len(data) - 4)
+        data[at:at + 4] = struct.pack('<I', rng.choice([0, 2**32 - 1, 2**31, rng.getrandbits(32)]))
+    return bytes(data)
+
+
+def exercise(path: Path, contract: bool):
+    """Everything a command does with a recording; returns normally or raises InputError."""
+    list(raw_messages(path))
+    list_topics(path)
+    if contract:
+        recording = open_recording(path)
+        recording.describe()
+        for _ in recording.slices(on_problem=lambda line: None):
+            pass
+
+
+def test_mutated_mcap_files_give_data_or_one_input_error_line(tmp_path):
+    seeds = [(bf.write_bare_mcap(tmp_path / 'contract.mcap', bf.contract_entries(seconds=2.0, block=100)), True),
+             (bf.write_mcap_library(tmp_path / 'lib.mcap', bf.contract_entries(seconds=2.0, block=100),
+                                    compression='lz4', chunk_size=4096), True)]
+    seeds = seeds * 10 + [(path, False) for path in sorted(CONFORMANCE.glob('*/*.mcap'))[::20]]
+    rng = random.Random(20261123)
+    deadline = time.monotonic() + SECONDS
+    target = tmp_path / 'mutant.mcap'
+    done = 0
+    while done < MUTATIONS and time.monotonic() < deadline:
+        source, contract = seeds[done % len(seeds)]
+        mutant = mutate(source.read_bytes(), rng)
+        target.write_bytes(mutant)
+        try:
+            exercise(target, contract)
+        except InputError as err:
+            assert '\n' not in str(err)
+        except Exception as err:  # pragma: no cover - the failure report
+            pytest.fail(f'mutation {done} of {source.name} (crc {zlib.crc32(mutant)}): '
+                        f'{type(err).__name__}: {err}')
+        done += 1
+    assert done >= min(MUTATIONS, 50)
+
+
+def test_corrupt_lengths_in_unindexed_records_are_left_out_not_raised():
+    bad = [struct.pack('<BQ', mcap_file.OP_MESSAGE, 2**64 - 1) + b'x' * 30,
+           struct.pack('<BQ', mcap_file.OP_MESSAGE, 22) + struct.pack('<HIQQ', 1, 1, 2**64 - 1, 0),
+           struct.pack('<BQ', mcap_file.OP_MESSAGE, 2**63) + b'x' * 40]
+    for buf in bad:
+        chunk, used = mcap_file.split_sequential(buf, 0, 0, lambda *args: None)
+        assert 0 <= used <= len(buf)
+
+
+def test_a_chunk_whose_crc_does_not_match_is_left_out_in_one_line(tmp_path):
+    path = bf.write_mcap_library(tmp_path / 'crc.mcap', bf.contract_entries(seconds=2.0, block=100),
+                                 compression='none', chunk_size=4096)
+    data = bytearray(path.read_bytes())
+    first = data.index(bytes([mcap_file.OP_CHUNK]), 8)
+    data[first + 9 + 8 + 8 + 8 + 4 + 4 + 8 + 40] ^= 0xFF     # a byte of the first chunk's records
+    path.write_bytes(bytes(data))
+    problems = []
+    list(open_recording(path).slices(on_problem=problems.append))
+    assert any('CRC' in line for line in problems)
+
+
+def test_check_layout_without_definitions_is_a_reason_not_an_exception():
+    assert 'without a stored definition' in check_layout('vibration', None, None, None)
+    assert 'without a stored definition' in check_layout('axial_load', 'x/Y', None, None)
+
+
+def test_a_calibration_file_of_random_bytes_is_one_config_error(tmp_path):
+    rng = random.Random(7)
+    for index, data in enumerate([bytes(rng.getrandbits(8) for _ in range(300)), b'abc', b'[1, 2]', b'{a: 1}']):
+        path = tmp_path / f'{index}.yaml'
+        path.write_bytes(data)
+        with pytest.raises(ConfigError, match=str(path)):
+            load_calibration(path)

@@ -1,0 +1,130 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""MCAP files whose chunks go back in log time (written topic after topic) read like the plain recording."""
+
+import math
+
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+import numpy as np
+import pytest
+
+from prsm_lube_ros.estimation.pipeline import calibrate_recordings, recording_windows
+from prsm_lube_ros.recording.reader import open_recording
+from prsm_lube_ros.simulation.recordings import simulate_experiment
+from prsm_lube_ros.simulation.rig_config import ExperimentPlan
+
+RPM = 2 * math.pi / 60
+PLAN = ExperimentPlan(speeds=(100 * RPM, 150 * RPM, 200 * RPM), loads=(100.0, 200.0), stage_thetas=(1.0,),
+                      stroke=0.03, ramp_travel=0.004, stage_pause=0.0)
+
+
+def regroup_by_topic(source, target, chunk_size=64 * 1024, block_ns=None):
+    """Rewrite ``source`` with all messages of one topic before the next (chunk start times go back).
+
+    With ``block_ns``, topic after topic within each block of that much log time (a bounded horizon).
+    """
+    with open(source, 'rb') as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        by_channel = {}
+        for _, channel, message in reader.iter_messages(log_time_order=False):
+            block = message.log_time // block_ns if block_ns else 0
+            by_channel.setdefault((block, channel.id), []).append(message)
+    with open(target, 'wb') as stream:
+        writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.NONE)
+        writer.start()
+        schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in summary.schemas.items()}
+        new_ids = {}
+        for (_, channel_id), messages in sorted(by_channel.items(), key=lambda item: item[0]):
+            if channel_id not in new_ids:
+                channel = summary.channels[channel_id]
+                new_ids[channel_id] = writer.register_channel(channel.topic, channel.message_encoding,
+                                                              schema_ids.get(channel.schema_id, 0), channel.metadata)
+            for message in messages:
+                writer.add_message(new_ids[channel_id], message.log_time, message.data, message.publish_time,
+                                   message.sequence)
+        writer.finish()
+
+
+@pytest.fixture(scope='module')
+def plain_and_grouped(tmp_path_factory):
+    out = tmp_path_factory.mktemp('ooo')
+    plain = simulate_experiment(out / 'sim', plan=PLAN, seed=4, storage='mcap-file')[0]
+    grouped = out / 'grouped.mcap'
+    regroup_by_topic(plain, grouped)
+    return plain, grouped
+
+
+def test_the_grouped_file_really_has_chunks_going_back_in_time(plain_and_grouped):
+    with open(plain_and_grouped[1], 'rb') as stream:
+        starts = [index.message_start_time for index in make_reader(stream).get_summary().chunk_indexes]
+    assert len(starts) > 3 and any(b < a for a, b in zip(starts, starts[1:]))
+
+
+def test_chunks_going_back_in_time_give_the_same_slices(plain_and_grouped):
+    plain, grouped = plain_and_grouped
+    expected = list(open_recording(plain).slices(slice_seconds=2.0))
+    problems = []
+    got = list(open_recording(grouped).slices(on_problem=problems.append, slice_seconds=2.0))
+    assert problems == []
+    assert len(got) == len(expected)
+    for want, have in zip(expected, got):
+        assert [type(b) for b in want] == [type(b) for b in have]
+        for a, b in zip(want, have):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name])
+
+
+def test_chunks_going_back_in_time_give_the_same_windows_and_constants(plain_and_grouped):
+    plain, grouped = plain_and_grouped
+    expected = recording_windows(plain, lead=0.0, slice_seconds=2.0)
+    got = recording_windows(grouped, lead=0.0, slice_seconds=2.0)
+    assert got.problems == expected.problems == []
+    assert len(got.windows) == len(expected.windows) > 0
+    for a, b in zip(expected.windows, got.windows):
+        assert a == b or repr(a) == repr(b)
+    want, have = calibrate_recordings([expected]), calibrate_recordings([got])
+    assert len(have.speed_levels) == len(want.speed_levels) == 3
+    assert have.constants == want.constants
+
+
+def test_a_bounded_horizon_keeps_streaming(plain_and_grouped, tmp_path):
+    """Chunks going back at most 2 s: same slices, and they are handed out while the file is still being read."""
+    plain = plain_and_grouped[0]
+    blocked = tmp_path / 'blocked.mcap'
+    regroup_by_topic(plain, blocked, chunk_size=16 * 1024, block_ns=2 * 10**9)
+    with open(blocked, 'rb') as stream:
+        starts = [index.message_start_time for index in make_reader(stream).get_summary().chunk_indexes]
+    assert any(b < a for a, b in zip(starts, starts[1:]))
+    expected = list(open_recording(plain).slices(slice_seconds=1.0))
+    read = [0.0]
+    seen_at = []
+    got = []
+    for batches in open_recording(blocked).slices(progress=lambda f: read.__setitem__(0, f), slice_seconds=1.0):
+        seen_at.append(read[0])
+        got.append(batches)
+    assert len(got) == len(expected) > 4
+    for want, have in zip(expected, got):
+        for a, b in zip(want, have):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name])
+    assert seen_at[len(seen_at) // 2] < 0.8     # not everything held until the end
+
+
+def test_a_chunk_stating_a_later_start_than_its_messages_is_reported_in_one_line(plain_and_grouped, tmp_path):
+    small = tmp_path / 'small_chunks.mcap'
+    regroup_by_topic(plain_and_grouped[0], small, chunk_size=16 * 1024, block_ns=10**6)   # in time order
+    data = bytearray(small.read_bytes())
+    with open(small, 'rb') as stream:
+        chunks = make_reader(stream).get_summary().chunk_indexes
+    assert len(chunks) > 3
+    at = chunks[len(chunks) // 2].chunk_start_offset + 9                   # its message_start_time field
+    end = int.from_bytes(data[at + 8:at + 16], 'little')
+    data[at:at + 8] = (end + 1).to_bytes(8, 'little')                      # claims to start after its last message
+    lying = tmp_path / 'lying.mcap'
+    lying.write_bytes(bytes(data))
+    problems = []
+    list(open_recording(lying).slices(on_problem=problems.append, slice_seconds=0.25))
+    late = [line for line in problems if 'later start time than its messages' in line]
+    assert late and len(late) == len(set(late)) and all('\n' not in line for line in late)
