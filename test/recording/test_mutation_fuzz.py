@@ -17,7 +17,7 @@ from prsm_lube_ros.recording import mcap_file
 from prsm_lube_ros.recording.cdr import check_layout
 from prsm_lube_ros.recording.reader import list_topics, open_recording, raw_messages
 
-CONFORMANCE = Path('/work/shared/conformance/mcap')
+CONFORMANCE = Path(__file__).resolve().parents[1] / 'data' / 'conformance' / 'mcap'
 MUTATIONS = 300
 SECONDS = 60.0
 
