@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Every MCAP conformance file (test/data/conformance, copied from ../shared/conformance) reads as its JSON says, or is refused in one line."""
+"""Every MCAP conformance file (test/data/conformance) reads as its JSON says, or is refused in one line."""
 
 import json
 from pathlib import Path
