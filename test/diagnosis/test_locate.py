@@ -58,3 +58,20 @@ def test_fixed_tones_are_found_and_rotation_orders_are_not():
 def test_spectral_test_needs_spectra_and_two_speeds():
     table, _ = table_with()
     assert not spectral_lines(table).testable
+
+
+def test_an_arch_in_nut_position_is_located_with_its_shape():
+    table, rng = table_with()
+    u = table.position / 0.17
+    # Amplitude highest mid-travel, lowest at both ends, in every run (residual is model minus measured).
+    residual = -0.12 * 4 * u * (1 - u) + rng.normal(0, 0.01, len(table))
+    location = locate(table, residual)
+    assert location.located == 'position'
+    binned = next(t for t in location.tests if t.covariate == 'position' and t.kind == 'binned means')
+    assert binned.p_value < 1e-3
+    assert binned.shape.startswith('an arch')
+    assert 'mid-travel' in binned.shape and 'the same in 8 of 8 runs' in binned.shape
+    assert max(binned.bin_amplitudes) - binned.bin_amplitudes[0] > 0.05
+    # A straight line sees nothing: the arch is symmetric.
+    linear = next(t for t in location.tests if t.covariate == 'position' and t.kind == 'within-run trend')
+    assert linear.p_value > 1e-3
