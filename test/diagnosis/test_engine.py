@@ -95,6 +95,8 @@ def test_run_order_confounded_with_speed_is_reported_not_passed_as_adequate():
     result, _ = diagnose('lubricant_depletion', 3, plan=plan, params={'fall': 0.2})
     assert result.verdict == 'lubricant_depletion'
     assert any('confounded with speed' in note for note in result.notes)
+    assert any(c.variable == 'speed' for c in result.confounding)
+    assert result.as_json()['confounding'][0]['variable'] in ('speed', 'load')
     # Nothing hidden: the paper's model fits, but adequacy is not claimed on a confounded plan.
     result, _ = diagnose(None, 3, plan=plan)
     assert result.verdict == AMBIGUOUS
