@@ -2,6 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
 
+An effect with several forms (:meth:`.effects.Effect.variants`, e.g. the
+shaft compliance of each bearing arrangement) is fitted in each; the form with
+the lowest BIC stands for it.
+
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
 :mod:`.fitting`) by :data:`BIC_MARGIN` or more **and** lowers the held-out
@@ -211,7 +215,8 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     reason = effect.applicable(table)
     if reason:
         return Candidate(effect, None, 'not testable', reason)
-    fit = fit_model(table, effect, folds)
+    fits = [(fit_model(table, form, folds), form) for form in effect.variants()]
+    fit, effect = min(fits, key=lambda pair: _delta_bic(pair[0], baseline))
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)

@@ -101,3 +101,15 @@ def test_run_order_confounded_with_speed_is_reported_not_passed_as_adequate():
     result, _ = diagnose(None, 3, plan=plan)
     assert result.verdict == AMBIGUOUS
     assert 'random order' in result.what_to_record
+
+
+def test_fixed_fixed_arch_in_position_is_named_stiffness_with_the_arched_form():
+    # Shaft held at both ends 20 mm beyond the stroke: softest mid-travel, amplitude ~15 % higher there.
+    params = {'arrangement': 'fixed-fixed', 'bearing_before': 0.02, 'bearing_after': 0.02, 'contact_ratio': 4.7}
+    result, _ = diagnose('position_dependent_stiffness', 12, params=params)
+    assert result.location.located == 'position'
+    assert result.verdict == 'position_dependent_stiffness'
+    assert result.chosen.fit.params['ratio_arch'] > 0
+    assert result.chosen.fit.cv_rmse < 0.7 * result.baseline.cv_rmse
+    assert 'fixed-fixed' in result.chosen.effect.describe(result.chosen.fit.params)
+    assert result.as_json()['confident'] is True
