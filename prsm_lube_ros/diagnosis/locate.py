@@ -23,7 +23,11 @@ tested for *any* shape: residual means in :data:`BINS` quantile bins, their
 equality tested by a Wald test with a run-clustered (sandwich) covariance and
 the small-sample Hotelling correction ``F = W (G - q) / (q (G - 1))`` on
 ``(q, G - q)`` degrees of freedom, G runs and q = bins - 1, so the runs, not
-the windows, are the units of evidence.  The bin profile is reported as the
+the windows, are the units of evidence.  A covariate that moves mostly between
+runs (revolutions, time and temperature usually do) puts few runs in a bin,
+which makes that covariance far too small; it is tested on run means instead,
+binned by run (up to :data:`BINS` bins of at least three runs), with a one-way
+ANOVA F on ``(bins - 1, runs - bins)`` degrees of freedom.  The bin profile is reported as the
 amplitude relative to its mean per bin, with its shape in words (an arch, a
 trough, a steady rise or fall, or a step) and, for nut position, in how many
 runs the same shape is seen.
@@ -180,10 +184,46 @@ def _shape_words(name: str, amplitude: np.ndarray) -> str:
             f'{int(np.argmax(amplitude)) + 1} of {amplitude.size}')
 
 
+def _binned_run_means(residual, covariate, groups, name) -> CovariateTest | None:
+    """Any-shape test of a covariate that moves between runs: one-way ANOVA of run means over run bins."""
+    ok = np.isfinite(residual) & np.isfinite(covariate)
+    y, x, g = residual[ok], covariate[ok], groups[ok]
+    labels, g_index = np.unique(g, return_inverse=True)
+    counts = np.bincount(g_index).astype(float)
+    ry = np.bincount(g_index, weights=y) / counts
+    rx = np.bincount(g_index, weights=x) / counts
+    n_runs = labels.size
+    b = max(2, min(BINS, n_runs // 3))
+    if n_runs < 6 or np.unique(rx).size < b:
+        return None
+    index = np.minimum((np.argsort(np.argsort(rx, kind='stable')) * b) // n_runs, b - 1)
+    sizes = np.bincount(index, minlength=b).astype(float)
+    means = np.bincount(index, weights=ry, minlength=b) / sizes
+    within = float(np.sum((ry - means[index]) ** 2))
+    between = float(np.sum(sizes * (means - ry.mean()) ** 2))
+    if within <= 0:
+        return None
+    f = (between / (b - 1)) / (within / (n_runs - b))
+    p = float(stats.f.sf(f, b - 1, n_runs - b))
+    amplitude = -(means - ry.mean())
+    centres = [float(np.median(rx[index == i])) for i in range(b)]
+    return CovariateTest(name, 'binned means', between / (between + within), f, p,
+                         shape=_shape_words(name, amplitude) + f' (run means in {b} bins of runs)',
+                         bin_centres=centres, bin_amplitudes=[float(v) for v in amplitude])
+
+
 def _binned_means(residual, covariate, groups, name, within_run: bool) -> CovariateTest | None:
     """Any-shape test: equal residual means over quantile bins, run-clustered Wald test (see module doc)."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
+    if y.size < 2 * BINS:
+        return None
+    if not within_run:
+        spread = np.array([np.ptp(x[g == label]) for label in np.unique(g)])
+        if np.median(spread) < 0.25 * np.ptp(x):
+            # The covariate moves mostly between runs: the runs are the units (few runs per bin would
+            # make the clustered covariance far too small).
+            return _binned_run_means(residual, covariate, groups, name)
     labels, g_index = np.unique(g, return_inverse=True)
     if y.size < 2 * BINS or np.unique(x).size < 3:
         return None
