@@ -216,7 +216,10 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     if reason:
         return Candidate(effect, None, 'not testable', reason)
     fits = [(fit_model(table, form, folds), form) for form in effect.variants()]
-    fit, effect = min(fits, key=lambda pair: _delta_bic(pair[0], baseline))
+    # Forms compared on one effective sample size: each fit's own would favour the form that leaves the
+    # more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
+    n_common = min(f.n_eff for f, _ in fits)
+    fit, effect = min(fits, key=lambda pair: bic(pair[0].log_residual, pair[0].n_params, n_common))
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)

@@ -113,3 +113,12 @@ def test_fixed_fixed_arch_in_position_is_named_stiffness_with_the_arched_form():
     assert result.chosen.fit.cv_rmse < 0.7 * result.baseline.cv_rmse
     assert 'fixed-fixed' in result.chosen.effect.describe(result.chosen.fit.params)
     assert result.as_json()['confident'] is True
+
+
+def test_an_off_centre_fixed_fixed_arch_still_chooses_the_arched_form():
+    # Bearings 20 mm and 100 mm beyond the stroke ends: a weak, lopsided arch.
+    params = {'arrangement': 'fixed-fixed', 'bearing_before': 0.02, 'bearing_after': 0.1, 'contact_ratio': 4.0}
+    result, _ = diagnose('position_dependent_stiffness', 44, plan=SyntheticPlan(), params=params)
+    assert result.verdict == 'position_dependent_stiffness'
+    assert result.chosen.fit.params['ratio_arch'] > 0
+    assert result.as_json()['confident'] is True
