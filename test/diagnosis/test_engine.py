@@ -37,6 +37,10 @@ def test_concealed_effect_is_named_and_cuts_the_held_out_error(effect, params):
     assert result.verdict == effect
     assert result.chosen.effect.id == effect
     assert result.chosen.fit.cv_rmse < 0.7 * result.baseline.cv_rmse
+    # The named model fits within the noise: confidence is backed by its lack-of-fit test.
+    document = result.as_json()
+    assert document['confident'] is True and document['adequacy']['chosen']['significant'] is False
+    assert document['adequacy']['baseline']['significant'] is True
 
 
 def test_depletion_rate_is_recovered():
