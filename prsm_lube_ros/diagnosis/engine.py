@@ -2,6 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
 
+An effect with several forms (:meth:`.effects.Effect.variants`, e.g. the
+shaft compliance of each bearing arrangement) is fitted in each; the form with
+the lowest BIC stands for it.
+
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
 :mod:`.fitting`) by :data:`BIC_MARGIN` or more **and** lowers the held-out
@@ -16,7 +20,16 @@ favours one (a background shows fixed spectral lines, or the spectra could
 show them and do not); otherwise the verdict is ``ambiguous`` with both listed
 and what to record to separate them.
 
-Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters);
+Adequacy is tested, not assumed: :func:`.adequacy.lack_of_fit` separates the
+window scatter around smooth within-run trends (pure error) from what the
+model misses (lack of fit).  ``adequate`` needs no candidate to earn its
+parameters, no material lack of fit *and* no covariate left carrying the
+residual; otherwise, with no candidate, the verdict is ``unexplained`` with
+where the residual lives and its relative size.  ``confident`` is true only
+when the chosen model (the paper's for ``adequate``) passes the lack-of-fit
+test; the statistics are in the JSON under ``adequacy``.
+
+Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters and the model fits within the noise);
 ``ambiguous`` (tied candidates in ``tied``, or none earns its parameters but
 the run order is confounded with speed or load, so adequacy cannot be
 confirmed); ``unexplained`` (the residual is
@@ -32,6 +45,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration, check_identifiable, operating_levels
+from .adequacy import lack_of_fit, LackOfFit
 from .combined import CombinedEffect
 from .effects import Effect, registered
 from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log
@@ -48,8 +62,6 @@ EVIDENCE_TOLERANCE = 0.02
 TIE_RATIO = 0.5
 #: |Spearman| over runs from which two covariates count as confounded.
 CONFOUNDED = 0.9
-#: p-value below which a located covariate without an explaining candidate makes the verdict 'unexplained'.
-UNEXPLAINED_P = 1e-8
 
 ADEQUATE, AMBIGUOUS, UNEXPLAINED = 'adequate', 'ambiguous', 'unexplained'
 
@@ -96,6 +108,17 @@ class Diagnosis:
     notes: list = field(default_factory=list)
     what_to_record: str = ''
     table: WindowTable | None = None
+    confounding: list = field(default_factory=list)   # Confounding findings
+    baseline_fit_test: LackOfFit | None = None
+    chosen_fit_test: LackOfFit | None = None
+
+    @property
+    def confident(self) -> bool:
+        """A named effect or adequacy backed by the final model passing the lack-of-fit test."""
+        if self.verdict in (AMBIGUOUS, UNEXPLAINED):
+            return False
+        test = self.chosen_fit_test if self.chosen is not None else self.baseline_fit_test
+        return test is None or not test.significant
 
     @property
     def chosen(self) -> Candidate | None:
@@ -128,7 +151,9 @@ class Diagnosis:
                     'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
                     'status': self.best.status}
         table = self.table
-        return {'verdict': self.verdict, 'confident': self.verdict not in (AMBIGUOUS, UNEXPLAINED),
+        adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
+                    'chosen': self.chosen_fit_test.as_json() if self.chosen_fit_test else None}
+        return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy,
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
                              'cv_run_rmse': _num(base.cv_run_rmse),
@@ -136,6 +161,7 @@ class Diagnosis:
                              'unphysical': base.unphysical(), 'effective_windows': _num(base.n_eff)},
                 'best': best, 'candidates': [cand.as_json() for cand in self.candidates],
                 'location': self.location.as_json(), 'notes': list(self.notes),
+                'confounding': [c.as_json() for c in self.confounding],
                 'data': {'windows': len(table), 'runs': int(table.runs.size),
                          'recordings': int(np.unique(table.recording).size),
                          'speed_levels': operating_levels(table.speed), 'load_levels': operating_levels(table.load),
@@ -189,7 +215,11 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     reason = effect.applicable(table)
     if reason:
         return Candidate(effect, None, 'not testable', reason)
-    fit = fit_model(table, effect, folds)
+    fits = [(fit_model(table, form, folds), form) for form in effect.variants()]
+    # Forms compared on one effective sample size: each fit's own would favour the form that leaves the
+    # more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
+    n_common = min(f.n_eff for f, _ in fits)
+    fit, effect = min(fits, key=lambda pair: bic(pair[0].log_residual, pair[0].n_params, n_common))
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
@@ -243,8 +273,29 @@ def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> 
     return None
 
 
-def confounding(table: WindowTable) -> list[str]:
-    """Run-level covariates that move together (|Spearman| >= :data:`CONFOUNDED`), in words."""
+@dataclass(frozen=True)
+class Confounding:
+    """Two run-level covariates that move together: an operating variable and a drift covariate."""
+
+    variable: str       # 'speed' or 'load'
+    follows: str        # 'revolutions', 'time' or 'temperature'
+    spearman: float     # over runs
+
+    @property
+    def note(self) -> str:
+        """The finding in words, with what to record instead."""
+        trend = 'rises' if self.spearman > 0 else 'falls'
+        return (f'run order is confounded with {self.variable}: {self.follows} {trend} with {self.variable} '
+                f'(Spearman {self.spearman:+.2f} over runs), so effects that follow {self.follows} look like '
+                f'effects of {self.variable}; record the runs in random order')
+
+    def as_json(self) -> dict:
+        """Plain mapping."""
+        return {'variable': self.variable, 'follows': self.follows, 'spearman': _num(self.spearman)}
+
+
+def confounding(table: WindowTable) -> list[Confounding]:
+    """Run-level covariates that move together (|Spearman| >= :data:`CONFOUNDED`)."""
     from scipy.stats import spearmanr
     names = ['speed', 'load', 'revolutions', 'time'] + (['temperature'] if table.has_temperature else [])
     means = {name: table.run_means(name) for name in names}
@@ -252,7 +303,7 @@ def confounding(table: WindowTable) -> list[str]:
         levels = np.array(operating_levels(means[name]))
         means[name] = levels[np.argmin(np.abs(means[name][:, None] - levels[None, :]), axis=1)]
     found = []
-    for i, a in enumerate(names[:2]):
+    for a in names[:2]:
         for b in names[2:]:
             x, y = means[a], means[b]
             ok = np.isfinite(x) & np.isfinite(y)
@@ -260,9 +311,7 @@ def confounding(table: WindowTable) -> list[str]:
                 continue
             rho = float(spearmanr(x[ok], y[ok]).statistic)
             if abs(rho) >= CONFOUNDED:
-                found.append(f'run order is confounded with {a}: {b} {"rises" if rho > 0 else "falls"} with {a} '
-                             f'(Spearman {rho:+.2f} over runs), so effects that follow {b} look like effects of '
-                             f'{a}; record the runs in random order')
+                found.append(Confounding(a, b, rho))
     return found
 
 
@@ -279,12 +328,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         raise InputError(f'diagnose: {len(folds)} run(s) can be held out with the constants still identifiable; '
                          'record each speed and load in two runs or more (6 runs or more in all)')
     baseline = fit_model(table, None, folds)
+    baseline_test = lack_of_fit(table, baseline.log_residual, baseline.n_params)
     location = locate(table, baseline.log_residual)
     notes = []
     if baseline.unphysical():
         notes.append('the paper\'s model fits with unphysical constants (' + '; '.join(baseline.unphysical())
                      + '): evidence that its form misses something')
-    notes.extend(confounding(table))
+    confounded_with = confounding(table)
+    notes.extend(c.note for c in confounded_with)
     if len(folds) < table.runs.size:
         notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
                      'would not be identifiable')
@@ -329,12 +380,15 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                              'neither adds anything given the other: the recording cannot tell them apart')
                 break
     else:
-        strong = [t for t in location.tests if t.p_value < UNEXPLAINED_P]
-        if strong or baseline.unphysical():
+        pattern = location.located not in ('none', 'spectrum')
+        if baseline_test.significant or pattern or baseline.unphysical():
             verdict = UNEXPLAINED
             advice = 'a candidate for the located mismatch is missing from the catalogue'
-            notes.append(f'the mismatch is real ({location.summary}) but no candidate explains it')
-    confounded = any(note.startswith('run order is confounded') for note in notes)
+            size = (f'the paper\'s model misses by {100 * baseline_test.residual_rms:.1f} % RMS, '
+                    f'{100 * baseline_test.excess_rms:.1f} % beyond the {100 * baseline_test.pure_error_rms:.1f} % '
+                    f'window scatter (lack of fit F = {baseline_test.statistic:.3g}, p = {baseline_test.p_value:.2g})')
+            notes.append(f'the mismatch is real ({location.summary}; {size}) but no candidate explains it')
+    confounded = bool(confounded_with)
     if verdict == AMBIGUOUS and confounded:
         advice = 'runs in random order of speed and load; ' + advice
     if verdict == ADEQUATE and confounded:
@@ -343,5 +397,12 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
                      'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
                      'adequacy cannot be confirmed')
+    chosen_test = None
+    if best is not None and verdict == best.effect.id:
+        chosen_test = lack_of_fit(table, best.fit.log_residual, best.fit.n_params)
+        if chosen_test.significant:
+            notes.append(f'{best.effect.id} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
+                         f'(p = {chosen_test.p_value:.2g}): it explains part of the mismatch, not all')
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
-                     tied=tied, notes=notes, what_to_record=advice, table=table)
+                     tied=tied, notes=notes, what_to_record=advice, table=table,
+                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test)

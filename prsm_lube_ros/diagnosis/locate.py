@@ -17,6 +17,21 @@ Trends use a cluster-robust (by run) standard error and a t test with
 ``runs - 1`` degrees of freedom; level means use an F test with the effective
 sample size of :func:`~.fitting.effective_sample_size`.
 
+A straight line misses arches, steps and curvature, so every continuous
+covariate (position within runs, revolutions, time, temperature) is also
+tested for *any* shape: residual means in :data:`BINS` quantile bins, their
+equality tested by a Wald test with a run-clustered (sandwich) covariance and
+the small-sample Hotelling correction ``F = W (G - q) / (q (G - 1))`` on
+``(q, G - q)`` degrees of freedom, G runs and q = bins - 1, so the runs, not
+the windows, are the units of evidence.  A covariate that moves mostly between
+runs (revolutions, time and temperature usually do) puts few runs in a bin,
+which makes that covariance far too small; it is tested on run means instead,
+binned by run (up to :data:`BINS` bins of at least three runs), with a one-way
+ANOVA F on ``(bins - 1, runs - bins)`` degrees of freedom.  The bin profile is reported as the
+amplitude relative to its mean per bin, with its shape in words (an arch, a
+trough, a steady rise or fall, or a step) and, for nut position, in how many
+runs the same shape is seen.
+
 The spectral test looks for lines at fixed frequencies: narrow peaks standing
 out of their neighbourhood at the same frequency at the two lowest screw
 speeds at least (so not rotation orders, which move with speed) whose power
@@ -39,6 +54,8 @@ from .table import WindowTable
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
+#: Quantile bins of the flexible (any-shape) covariate tests.
+BINS = 6
 #: A spectral line stands out when it exceeds its neighbourhood's median by this factor at every speed.
 LINE_PROMINENCE = 4.0
 #: Half width, bins, of the neighbourhood a line is compared with.
@@ -62,12 +79,19 @@ class CovariateTest:
     statistic: float          # t or F
     p_value: float
     slope: float = math.nan   # relative amplitude change per unit covariate (trends)
+    shape: str = ''           # the binned profile in words (binned means)
+    bin_centres: list = field(default_factory=list)      # covariate median per bin
+    bin_amplitudes: list = field(default_factory=list)   # amplitude / mean amplitude - 1 per bin
 
     def as_json(self) -> dict:
         """Plain mapping."""
-        return {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
-                'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
-                'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
+        out = {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
+               'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
+               'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
+        if self.kind == 'binned means':
+            out.update({'shape': self.shape, 'bin_centres': [_finite(v) for v in self.bin_centres],
+                        'bin_amplitudes': [_finite(v) for v in self.bin_amplitudes]})
+        return out
 
 
 @dataclass
@@ -134,6 +158,118 @@ def _cluster_trend(residual, covariate, groups, name, kind) -> CovariateTest | N
     return CovariateTest(name, kind, r2, t, p, -slope)
 
 
+_WHERE = {'position': 'mid-travel', 'revolutions': 'at intermediate revolutions', 'time': 'mid-recording',
+          'temperature': 'at intermediate temperatures'}
+
+
+def _shape_words(name: str, amplitude: np.ndarray) -> str:
+    """An amplitude profile over ordered bins (relative, mean 0) in words."""
+    ends = max(amplitude[0], amplitude[-1]), min(amplitude[0], amplitude[-1])
+    inner = amplitude[1:-1]
+    where = _WHERE.get(name, f'at intermediate {name}')
+    steps = np.diff(amplitude)
+    spread = float(np.max(amplitude) - np.min(amplitude))
+    if inner.size and inner.max() > ends[0] and inner.max() - ends[0] > 0.5 * spread:
+        return f'an arch: amplitude {100 * (inner.max() - ends[0]):.1f} % higher {where} than at both ends'
+    if inner.size and inner.min() < ends[1] and ends[1] - inner.min() > 0.5 * spread:
+        return f'a trough: amplitude {100 * (ends[1] - inner.min()):.1f} % lower {where} than at both ends'
+    if np.max(np.abs(steps)) > 0.6 * spread:
+        k = int(np.argmax(np.abs(steps)))
+        return (f'a step: amplitude {"rises" if steps[k] > 0 else "falls"} by {100 * abs(steps[k]):.1f} % '
+                f'between bins {k + 1} and {k + 2} of {amplitude.size} in {name}')
+    if np.all(steps >= 0) or np.all(steps <= 0):
+        return (f'a steady {"rise" if steps.sum() > 0 else "fall"}: amplitude changes by '
+                f'{100 * (amplitude[-1] - amplitude[0]):+.1f} % from the lowest to the highest {name}')
+    return (f'amplitude varies by {100 * spread:.1f} % over {name}, highest in bin '
+            f'{int(np.argmax(amplitude)) + 1} of {amplitude.size}')
+
+
+def _binned_run_means(residual, covariate, groups, name) -> CovariateTest | None:
+    """Any-shape test of a covariate that moves between runs: one-way ANOVA of run means over run bins."""
+    ok = np.isfinite(residual) & np.isfinite(covariate)
+    y, x, g = residual[ok], covariate[ok], groups[ok]
+    labels, g_index = np.unique(g, return_inverse=True)
+    counts = np.bincount(g_index).astype(float)
+    ry = np.bincount(g_index, weights=y) / counts
+    rx = np.bincount(g_index, weights=x) / counts
+    n_runs = labels.size
+    b = max(2, min(BINS, n_runs // 3))
+    if n_runs < 6 or np.unique(rx).size < b:
+        return None
+    index = np.minimum((np.argsort(np.argsort(rx, kind='stable')) * b) // n_runs, b - 1)
+    sizes = np.bincount(index, minlength=b).astype(float)
+    means = np.bincount(index, weights=ry, minlength=b) / sizes
+    within = float(np.sum((ry - means[index]) ** 2))
+    between = float(np.sum(sizes * (means - ry.mean()) ** 2))
+    if within <= 0:
+        return None
+    f = (between / (b - 1)) / (within / (n_runs - b))
+    p = float(stats.f.sf(f, b - 1, n_runs - b))
+    amplitude = -(means - ry.mean())
+    centres = [float(np.median(rx[index == i])) for i in range(b)]
+    return CovariateTest(name, 'binned means', between / (between + within), f, p,
+                         shape=_shape_words(name, amplitude) + f' (run means in {b} bins of runs)',
+                         bin_centres=centres, bin_amplitudes=[float(v) for v in amplitude])
+
+
+def _binned_means(residual, covariate, groups, name, within_run: bool) -> CovariateTest | None:
+    """Any-shape test: equal residual means over quantile bins, run-clustered Wald test (see module doc)."""
+    ok = np.isfinite(residual) & np.isfinite(covariate)
+    y, x, g = residual[ok], covariate[ok], groups[ok]
+    if y.size < 2 * BINS:
+        return None
+    if not within_run:
+        spread = np.array([np.ptp(x[g == label]) for label in np.unique(g)])
+        if np.median(spread) < 0.25 * np.ptp(x):
+            # The covariate moves mostly between runs: the runs are the units (few runs per bin would
+            # make the clustered covariance far too small).
+            return _binned_run_means(residual, covariate, groups, name)
+    labels, g_index = np.unique(g, return_inverse=True)
+    if y.size < 2 * BINS or np.unique(x).size < 3:
+        return None
+    edges = np.unique(np.quantile(x, np.linspace(0, 1, BINS + 1)[1:-1]))
+    index = np.searchsorted(edges, x, side='right')
+    used = np.unique(index)
+    index = np.searchsorted(used, index)
+    b = used.size
+    q, n_groups = b - 1, labels.size
+    if b < 3 or n_groups <= q + 1:
+        return None
+    counts = np.bincount(index, minlength=b).astype(float)
+    means = np.bincount(index, weights=y, minlength=b) / counts
+    e = y - means[index]
+    scores = np.zeros((n_groups, b))
+    np.add.at(scores, (g_index, index), e)
+    scores /= counts[None, :]
+    cov = scores.T @ scores * n_groups / (n_groups - 1)
+    contrast = np.hstack([-np.ones((q, 1)), np.eye(q)])
+    d = contrast @ means
+    wald = float(d @ np.linalg.pinv(contrast @ cov @ contrast.T) @ d)
+    f = wald * (n_groups - q) / (q * (n_groups - 1))
+    p = float(stats.f.sf(f, q, n_groups - q))
+    yc = y - y.mean()
+    total = float(yc @ yc)
+    r2 = 1 - float(e @ e) / total if total > 0 else 0.0
+    amplitude = -(means - np.sum(counts * means) / counts.sum())   # residual is ln A_model - ln A
+    shape = _shape_words(name, amplitude)
+    if within_run:
+        same = 0
+        for k in range(n_groups):
+            sel = g_index == k
+            mine = np.bincount(index[sel], weights=-y[sel], minlength=b)
+            n_k = np.bincount(index[sel], minlength=b)
+            have = n_k > 0
+            if have.sum() >= 3:
+                mine = mine[have] / n_k[have]
+                ref = amplitude[have]
+                if np.ptp(mine) > 0 and np.corrcoef(mine, ref)[0, 1] > 0:
+                    same += 1
+        shape += f', the same in {same} of {n_groups} runs'
+    centres = [float(np.median(x[index == i])) for i in range(b)]
+    return CovariateTest(name, 'binned means', r2, f, p, shape=shape, bin_centres=centres,
+                         bin_amplitudes=[float(v) for v in amplitude])
+
+
 def _level_means(residual, values, groups, name) -> CovariateTest | None:
     """F test of residual means per operating level, with the effective sample size."""
     levels = operating_levels(values)
@@ -156,7 +292,7 @@ def _level_means(residual, values, groups, name) -> CovariateTest | None:
 
 
 def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateTest]:
-    """Every test the table supports, strongest evidence first."""
+    """Every test the table supports: trends and level means, then binned means, strongest evidence first."""
     residual = np.asarray(residual, dtype=float)
     tests = []
     centred_r = residual - table.run_means(residual)[np.searchsorted(table.runs, table.run)]
@@ -168,7 +304,12 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
         tests.append(_level_means(residual, getattr(table, name), table.run, name))
     tests = [t for t in tests if t is not None]
     tests.sort(key=lambda t: (t.p_value, -t.r_squared))
-    return tests
+    flexible = [_binned_means(centred_r, table.position, table.run, 'position', True)]
+    for name in ('revolutions', 'time', 'temperature'):
+        flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
+    flexible = [t for t in flexible if t is not None]
+    flexible.sort(key=lambda t: (t.p_value, -t.r_squared))
+    return tests + flexible
 
 
 def spectral_lines(table: WindowTable) -> SpectralLines:
@@ -233,6 +374,8 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
         located = top.covariate
         summary = (f'the mismatch follows {top.covariate} ({top.kind}): it carries '
                    f'{100 * top.r_squared:.0f} % of the residual variance, p = {top.p_value:.2g}')
+        if top.shape:
+            summary += f'; {top.shape}'
     else:
         located = 'none'
         summary = 'no covariate carries a significant part of the residual'

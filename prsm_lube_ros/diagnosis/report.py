@@ -150,7 +150,13 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
         lines += [f'**Verdict: `{diagnosis.verdict}`**{tied}']
     if diagnosis.what_to_record:
         lines += ['', f'**What to record:** {diagnosis.what_to_record}']
-    lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.', '']
+    lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.']
+    for label, test in (('paper\'s model', diagnosis.baseline_fit_test), ('chosen model', diagnosis.chosen_fit_test)):
+        if test is not None:
+            lines += ['', f'**Lack of fit, {label}:** {100 * test.excess_rms:.1f} % beyond the '
+                      f'{100 * test.pure_error_rms:.1f} % window scatter (F = {test.statistic:.3g}, '
+                      f'p = {test.p_value:.2g}): {"significant" if test.significant else "within the noise"}.']
+    lines.append('')
     for note in diagnosis.notes:
         lines.append(f'- {note}')
     lines += ['', '| candidate | status | held-out error | gain | ΔBIC | why |', '|---|---|---|---|---|---|',
@@ -162,9 +168,10 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
         else:
             lines.append(f'| {cand.effect.id} | {cand.status} | {100 * cand.fit.cv_rmse:.2f} % | '
                          f'{100 * cand.gain:+.0f} % | {cand.delta_bic:+.0f} | {cand.reason} |')
-    lines += ['', '| covariate | test | share of residual variance | p |', '|---|---|---|---|']
+    lines += ['', '| covariate | test | share of residual variance | p | shape |', '|---|---|---|---|---|']
     for test in diagnosis.location.tests:
-        lines.append(f'| {test.covariate} | {test.kind} | {100 * test.r_squared:.0f} % | {test.p_value:.2g} |')
+        lines.append(f'| {test.covariate} | {test.kind} | {100 * test.r_squared:.0f} % | {test.p_value:.2g} | '
+                     f'{test.shape or "—"} |')
     lines.append('')
     for figure in figures:
         lines += [f'![{figure}]({figure})', '']

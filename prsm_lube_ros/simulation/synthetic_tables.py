@@ -80,6 +80,9 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
 
     ``order``: run order as indices into the condition list (default: random or plan order).
     Returns ``(table, truth)``, truth with the effect, its parameters and the true theta per window.
+    position_dependent_stiffness with ``params`` ``{'arrangement': 'fixed-fixed' (or 'fixed-supported'),
+    'bearing_before': m, 'bearing_after': m, 'contact_ratio': k_c / (E A) in 1/m}`` uses the law's
+    arrangement (drawn parameters keep the fixed-free form).
     """
     plan = plan or SyntheticPlan()
     params = dict(params) if params is not None else (_draw_effect(effect, rng, plan) if effect else {})
@@ -118,7 +121,13 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
                 film = float(thermal.film_factor(temp, plan.ambient, params['beta']))
             a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
             amplitude = a22
-            if effect == 'position_dependent_stiffness':
+            if effect == 'position_dependent_stiffness' and params.get('arrangement', 'fixed-free') != 'fixed-free':
+                # Any arrangement through the law: EA = 1, contact_ratio = k_c / (E A) in 1/m.
+                shaft = stiffness.shaft_stiffness_for(params['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
+                                                      plan.stroke, params['bearing_before'], params['bearing_after'])
+                contact = stiffness.contact_stiffness_at(load, params['contact_ratio'], float(np.mean(plan.loads)))
+                amplitude *= float(stiffness.series_stiffness_amplification(contact, shaft))
+            elif effect == 'position_dependent_stiffness':
                 length = params['free_length_start'] + (params['free_length_end']
                                                         - params['free_length_start']) * position / plan.stroke
                 contact = stiffness.contact_stiffness_at(load, params['ratio_long'] / params['long_length'],

@@ -25,7 +25,11 @@ def test_diagnose_command_writes_json_report_and_calibration(tmp_path, capsys):
     assert (tmp_path / 'report' / 'index.html').is_file()
     assert (tmp_path / 'report' / 'residual.png').stat().st_size > 1000
     assert 'position_dependent_stiffness' in (tmp_path / 'calib.yaml').read_text()
-    assert 'verdict: position_dependent_stiffness' in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert 'verdict: position_dependent_stiffness' in printed
+    assert 'lack of fit:' in printed and 'significant' in printed
+    assert document['adequacy']['baseline']['significant'] is True
+    assert 'Lack of fit, paper' in (tmp_path / 'report' / 'index.html').read_text()
 
 
 def test_diagnose_missing_bag_is_one_line_error(tmp_path, capsys):

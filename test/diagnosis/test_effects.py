@@ -95,3 +95,22 @@ def test_every_effect_describes_itself(effect_id):
     assert lo.size == hi.size == len(effect.parameter_names)
     for start in effect.starts():
         assert np.all(start >= lo) and np.all(start <= hi)
+
+
+def test_fixed_fixed_shaft_is_softest_mid_travel_and_fixed_free_is_monotone():
+    from prsm_lube_ros.physics.effects import position_dependent_stiffness as law
+    x = np.linspace(0.0, 0.17, 9)
+    both = law.shaft_stiffness_for('fixed-fixed', 2.1e11, 0.01, x, 0.17, 0.02, 0.02)
+    assert np.argmin(both) == 4 and both[0] == pytest.approx(both[-1])
+    area = np.pi * 0.01 ** 2 / 4
+    assert both[4] == pytest.approx(2.1e11 * area * 2 / 0.105)
+    one = law.shaft_stiffness_for('fixed-free', 2.1e11, 0.01, x, 0.17, 0.02, 0.5)
+    assert np.all(np.diff(one) < 0)
+    # The quadratic profile is exact for fixed-fixed: c a b / (a + b) with c = k_c / (E A).
+    c, s, o1, o2 = 3.0, 0.17, 0.02, 0.05
+    a, b = x + o1, s + o2 - x
+    exact = c * a * b / (a + b)
+    total = s + o1 + o2
+    profile = law.compliance_ratio_profile(x / s, c * o1 * (s + o2) / total, c * o2 * (s + o1) / total,
+                                           c * s ** 2 / 4 / total)
+    assert profile == pytest.approx(exact)

@@ -37,6 +37,10 @@ def test_concealed_effect_is_named_and_cuts_the_held_out_error(effect, params):
     assert result.verdict == effect
     assert result.chosen.effect.id == effect
     assert result.chosen.fit.cv_rmse < 0.7 * result.baseline.cv_rmse
+    # The named model fits within the noise: confidence is backed by its lack-of-fit test.
+    document = result.as_json()
+    assert document['confident'] is True and document['adequacy']['chosen']['significant'] is False
+    assert document['adequacy']['baseline']['significant'] is True
 
 
 def test_depletion_rate_is_recovered():
@@ -95,7 +99,30 @@ def test_run_order_confounded_with_speed_is_reported_not_passed_as_adequate():
     result, _ = diagnose('lubricant_depletion', 3, plan=plan, params={'fall': 0.2})
     assert result.verdict == 'lubricant_depletion'
     assert any('confounded with speed' in note for note in result.notes)
+    assert any(c.variable == 'speed' for c in result.confounding)
+    assert result.as_json()['confounding'][0]['variable'] in ('speed', 'load')
     # Nothing hidden: the paper's model fits, but adequacy is not claimed on a confounded plan.
     result, _ = diagnose(None, 3, plan=plan)
     assert result.verdict == AMBIGUOUS
     assert 'random order' in result.what_to_record
+
+
+def test_fixed_fixed_arch_in_position_is_named_stiffness_with_the_arched_form():
+    # Shaft held at both ends 20 mm beyond the stroke: softest mid-travel, amplitude ~15 % higher there.
+    params = {'arrangement': 'fixed-fixed', 'bearing_before': 0.02, 'bearing_after': 0.02, 'contact_ratio': 4.7}
+    result, _ = diagnose('position_dependent_stiffness', 12, params=params)
+    assert result.location.located == 'position'
+    assert result.verdict == 'position_dependent_stiffness'
+    assert result.chosen.fit.params['ratio_arch'] > 0
+    assert result.chosen.fit.cv_rmse < 0.7 * result.baseline.cv_rmse
+    assert 'fixed-fixed' in result.chosen.effect.describe(result.chosen.fit.params)
+    assert result.as_json()['confident'] is True
+
+
+def test_an_off_centre_fixed_fixed_arch_still_chooses_the_arched_form():
+    # Bearings 20 mm and 100 mm beyond the stroke ends: a weak, lopsided arch.
+    params = {'arrangement': 'fixed-fixed', 'bearing_before': 0.02, 'bearing_after': 0.1, 'contact_ratio': 4.0}
+    result, _ = diagnose('position_dependent_stiffness', 44, plan=SyntheticPlan(), params=params)
+    assert result.verdict == 'position_dependent_stiffness'
+    assert result.chosen.fit.params['ratio_arch'] > 0
+    assert result.as_json()['confident'] is True

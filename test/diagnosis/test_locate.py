@@ -58,3 +58,43 @@ def test_fixed_tones_are_found_and_rotation_orders_are_not():
 def test_spectral_test_needs_spectra_and_two_speeds():
     table, _ = table_with()
     assert not spectral_lines(table).testable
+
+
+def test_an_arch_in_nut_position_is_located_with_its_shape():
+    table, rng = table_with()
+    u = table.position / 0.17
+    # Amplitude highest mid-travel, lowest at both ends, in every run (residual is model minus measured).
+    residual = -0.12 * 4 * u * (1 - u) + rng.normal(0, 0.01, len(table))
+    location = locate(table, residual)
+    assert location.located == 'position'
+    binned = next(t for t in location.tests if t.covariate == 'position' and t.kind == 'binned means')
+    assert binned.p_value < 1e-3
+    assert binned.shape.startswith('an arch')
+    assert 'mid-travel' in binned.shape and 'the same in 8 of 8 runs' in binned.shape
+    assert max(binned.bin_amplitudes) - binned.bin_amplitudes[0] > 0.05
+    # A straight line sees nothing: the arch is symmetric.
+    linear = next(t for t in location.tests if t.covariate == 'position' and t.kind == 'within-run trend')
+    assert linear.p_value > 1e-3
+
+
+def test_run_scatter_is_not_a_shape_in_revolutions_or_time():
+    # Set-up scatter per run, nothing else: with few runs per bin a window-level clustered test
+    # would call it a shape; run means are the units for covariates that move between runs.
+    # Under no effect p < 1e-3 happens once in a thousand tests: 20 tables allow one chance hit
+    # (revolutions and time are the same column here, so one hit shows twice).
+    hits = 0
+    for seed in range(20):
+        table, rng = table_with(n_runs=12, seed=seed)
+        residual = rng.normal(0, 0.03, table.runs.size)[table.run] + rng.normal(0, 0.02, len(table))
+        hits += any(t.p_value < 1e-3 for t in covariate_tests(table, residual) if t.kind == 'binned means')
+    assert hits <= 1
+
+
+def test_a_step_between_runs_is_a_shape_in_time():
+    table, rng = table_with(n_runs=12)
+    late = table.time > np.median(table.time)
+    residual = np.where(late, -0.1, 0.0) + rng.normal(0, 0.01, table.runs.size)[table.run]
+    residual = residual + rng.normal(0, 0.02, len(table))
+    binned = next(t for t in covariate_tests(table, residual) if t.covariate == 'time' and t.kind == 'binned means')
+    assert binned.p_value < 1e-3
+    assert 'step' in binned.shape or 'rise' in binned.shape

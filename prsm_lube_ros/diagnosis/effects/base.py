@@ -75,6 +75,10 @@ class Effect(Extension):
         """The fitted effect in words, with its size."""
         return self.physics
 
+    def variants(self) -> Sequence['Effect']:
+        """Alternative forms of this effect (same id), each fitted; the engine keeps the lowest BIC."""
+        return [self]
+
     def independent_evidence(self, table, location) -> str:
         """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none."""
         return ''

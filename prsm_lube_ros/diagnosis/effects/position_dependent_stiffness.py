@@ -19,7 +19,15 @@ Parameters: rho_0 and rho_1, the contact-to-shaft stiffness ratio at the start
 and the end of the stroke (>= 0).  A fixed bearing beyond the far end gives
 rho_1 < rho_0 (amplitude falls along the stroke, as in the paper's Fig. 4),
 one at the near end rho_1 > rho_0; the bearing's distance from the start of the
-stroke is ``stroke rho_0 / (rho_0 - rho_1)``.
+stroke is ``stroke rho_0 / (rho_0 - rho_1)``.  That is the fixed-free (and
+fixed-supported) arrangement.
+
+A shaft held axially at both ends (fixed-fixed) has ``k_s = E A (1/a + 1/b)``
+with a, b the free lengths on each side of the nut: the compliance is an arch,
+largest mid-travel, and the law adds ``4 rho_arch u (1 - u)`` (u = x / stroke)
+to rho (see the law module).  Both forms are fitted
+(:meth:`PositionDependentStiffness.variants`); the engine keeps the one with the
+lower BIC, so the fit chooses the arrangement.
 """
 from __future__ import annotations
 
@@ -85,6 +93,47 @@ class PositionDependentStiffness(Effect, law.Extension):
         elif b > a and b > 0:
             where = (f'; fixed bearing about {params["stroke"] * a / (b - a) * 1e3:.0f} mm before the '
                      'stroke start')
-        return (f'Contact-to-shaft stiffness ratio k_c/k_s {a:.3g} at the stroke start and {b:.3g} at its end '
+        return (f'Bearing arrangement fixed-free or fixed-supported: contact-to-shaft stiffness ratio k_c/k_s '
+                f'{a:.3g} at the stroke start and {b:.3g} at its end '
                 f'(at {params["reference_load"]:.0f} N): the amplitude changes by {100 * change:+.1f} % '
                 f'along the {params["stroke"] * 1e3:.0f} mm stroke{where}. ' + self.physics)
+
+    def variants(self):
+        """The linear (fixed-free, fixed-supported) and the arched (fixed-fixed) compliance."""
+        return [self, FixedFixedStiffness()]
+
+
+class FixedFixedStiffness(PositionDependentStiffness):
+    """The shaft held axially at both ends: compliance ``a b / (E A (a + b))``, an arch along the stroke."""
+
+    equations = ('A = A_22 (1 + rho(x) (F/F_ref)^(1/3)), rho(u) = rho_0 (1 - u) + rho_1 u + 4 rho_arch u (1 - u), '
+                 'u = x / stroke; fixed-fixed: k_s = E A (1/a + 1/b), a, b the free lengths either side of the nut')
+    parameter_names = ('ratio_at_start', 'ratio_at_end', 'ratio_arch')
+
+    def bounds(self):
+        """All three ratios in :data:`RATIO_RANGE`."""
+        return np.full(3, RATIO_RANGE[0]), np.full(3, RATIO_RANGE[1])
+
+    def starts(self):
+        """Arches of several heights over flat, falling and rising ends."""
+        return [np.array([0.05, 0.05, 0.1]), np.array([0.1, 0.1, 0.3]), np.array([0.2, 0.05, 0.1]),
+                np.array([0.05, 0.2, 0.1])]
+
+    def to_params(self, p, scales):
+        """ratio_at_start, ratio_at_end, ratio_arch with reference_load (N) and stroke (m)."""
+        return {'ratio_at_start': float(p[0]), 'ratio_at_end': float(p[1]), 'ratio_arch': float(p[2]), **scales}
+
+    def variants(self):
+        """Only itself."""
+        return [self]
+
+    def describe(self, params):
+        """Amplitude mid-travel against the ends."""
+        a, b, c = params['ratio_at_start'], params['ratio_at_end'], params['ratio_arch']
+        mid = 0.5 * (a + b) + c
+        rise = (1 + mid) / (1 + max(a, b)) - 1
+        return (f'Bearing arrangement fixed-fixed: contact-to-shaft stiffness ratio k_c/k_s {a:.3g} at the '
+                f'stroke start, {mid:.3g} mid-travel and {b:.3g} at its end (at {params["reference_load"]:.0f} N): '
+                f'the amplitude is {100 * rise:+.1f} % higher mid-travel than at the ends of the '
+                f'{params["stroke"] * 1e3:.0f} mm stroke, where the shaft, held at both ends, is softest. '
+                + self.physics)

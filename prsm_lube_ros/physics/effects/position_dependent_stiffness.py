@@ -9,6 +9,23 @@ with L the free shaft length.  The series stiffness
 K = k_c k_s / (k_c + k_s) replaces K_0 in Eq. 14, so
 
     X_0 = F_0 / K = (F_0 / k_c) (1 + k_c / k_s(x)),   A = A_22 (1 + k_c(F) / k_s(x)).
+
+How k_s depends on the nut position x depends on the bearing arrangement:
+
+* fixed-free, the fixed bearing at either end (and fixed-supported, whose
+  support bearing carries no axial load): ``k_s = E A / L(x)``, L the shaft
+  length between nut and fixed bearing: the compliance is linear in x,
+  monotone along the stroke;
+* fixed-fixed: the two shaft segments of lengths a = x + o_1 and
+  b = s + o_2 - x (bearings o_1 before the stroke start and o_2 beyond its end,
+  stroke s) carry the load in parallel, ``k_s = E A (1/a + 1/b)``: the
+  compliance ``a b / (E A (a + b))`` is an arch, largest mid-travel.
+
+Both compliance profiles are quadratics in ``u = x / s``:
+``rho(u) = rho_0 (1 - u) + rho_1 u + 4 rho_arch u (1 - u)`` with rho = k_c/k_s,
+``rho_arch = 0`` for fixed-free and ``rho_arch = c s^2 / 4`` for fixed-fixed,
+``rho_0 = c o_1 (s + o_2)``, ``rho_1 = c o_2 (s + o_1)``, ``c = k_c / (E A (s + o_1 + o_2))``
+(:func:`compliance_ratio_profile`).
 """
 from __future__ import annotations
 
@@ -32,6 +49,49 @@ def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float, free_leng
     """
     area = math.pi * root_diameter ** 2 / 4.0
     return youngs_modulus * area / np.asarray(free_length, dtype=float)
+
+
+def fixed_fixed_shaft_stiffness(youngs_modulus: float, root_diameter: float, length_before, length_after):
+    """Axial stiffness of a shaft held axially at both ends, ``k_s = E A (1/a + 1/b)`` in N/m.
+
+    length_before a and length_after b, m, are the free lengths between the nut
+    and each bearing; the two segments carry the load in parallel.
+    """
+    area = math.pi * root_diameter ** 2 / 4.0
+    a = np.maximum(np.asarray(length_before, dtype=float), MIN_FREE_LENGTH)
+    b = np.maximum(np.asarray(length_after, dtype=float), MIN_FREE_LENGTH)
+    return youngs_modulus * area * (1.0 / a + 1.0 / b)
+
+
+#: Bearing arrangements and how the shaft stiffness follows the nut (see module doc).
+ARRANGEMENTS = ('fixed-free', 'fixed-supported', 'fixed-fixed')
+
+
+def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: float, nut_position,
+                        stroke: float, bearing_before: float, bearing_after: float):
+    """Shaft stiffness k_s(x), N/m, for a bearing arrangement (one of :data:`ARRANGEMENTS`).
+
+    Bearings sit ``bearing_before`` m before the stroke start and ``bearing_after``
+    m beyond its end; for fixed-free and fixed-supported the fixed bearing is the
+    nearer one, the other end is free or only radially supported.
+    """
+    x = np.asarray(nut_position, dtype=float)
+    before, after = x + bearing_before, stroke + bearing_after - x
+    if arrangement == 'fixed-fixed':
+        return fixed_fixed_shaft_stiffness(youngs_modulus, root_diameter, before, after)
+    if arrangement not in ARRANGEMENTS:
+        raise ValueError(f'unknown bearing arrangement {arrangement!r}; known: {", ".join(ARRANGEMENTS)}')
+    length = before if bearing_before <= bearing_after else after
+    return shaft_axial_stiffness(youngs_modulus, root_diameter, np.maximum(length, MIN_FREE_LENGTH))
+
+
+def compliance_ratio_profile(u, ratio_at_start: float, ratio_at_end: float, ratio_arch: float = 0.0):
+    """``rho(u) = rho_0 (1 - u) + rho_1 u + 4 rho_arch u (1 - u)``, k_c/k_s along the stroke (u = x / stroke).
+
+    Exact for every arrangement: ``ratio_arch = 0`` fixed-free or fixed-supported, ``> 0`` fixed-fixed.
+    """
+    u = np.asarray(u, dtype=float)
+    return ratio_at_start * (1 - u) + ratio_at_end * u + 4.0 * ratio_arch * u * (1 - u)
 
 
 def series_stiffness_amplification(contact_stiffness, shaft_stiffness):
@@ -81,13 +141,17 @@ Law = PositionDependentStiffness
 
 
 class Extension(EffectExtension):
-    """Eq. 22 times ``1 + rho(x) (F/F_ref)^(1/3)``, rho(x) linear from ``ratio_at_start`` to ``ratio_at_end``."""
+    """Eq. 22 times ``1 + rho(x) (F/F_ref)^(1/3)``, rho(x) from :func:`compliance_ratio_profile`.
+
+    ``ratio_arch`` absent or 0: linear from ``ratio_at_start`` to ``ratio_at_end`` (fixed-free).
+    """
 
     id = 'position_dependent_stiffness'
 
     def log_gain(self, params, covariates, ln_a22):
         """``ln(1 + rho(x) (F/F_ref)^(1/3))``."""
         x = np.nan_to_num(np.asarray(covariates.position, dtype=float)) / params['stroke']
-        ratio = params['ratio_at_start'] + (params['ratio_at_end'] - params['ratio_at_start']) * x
+        ratio = compliance_ratio_profile(x, params['ratio_at_start'], params['ratio_at_end'],
+                                         params.get('ratio_arch', 0.0))
         contact_ratio = contact_stiffness_at(covariates.load, 1.0, params['reference_load'])
         return np.log(series_stiffness_amplification(np.maximum(ratio, 0.0) * contact_ratio, 1.0))
