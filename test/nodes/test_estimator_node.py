@@ -15,13 +15,13 @@ import time
 
 import numpy as np
 import pytest
+from spinning import SpinningContext
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState, Temperature  # noqa: E402
@@ -94,30 +94,14 @@ def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, l
 
 
 # -- the graph -------------------------------------------------------------------------------------
-class Graph:
+class Graph(SpinningContext):
     """A context on this module's domain, an executor thread, a probe node and the estimators started."""
 
     TYPES = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
              'temperature': Temperature}
 
     def __init__(self):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=DOMAIN_ID)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.probe = rclpy.create_node('estimator_test_probe', context=self.context)
-        self.executor.add_node(self.probe)
-        self.errors = []
-        self.nodes = []
-        self.closing = False
-        self.thread = threading.Thread(target=self._spin, daemon=True)
-        self.thread.start()
-
-    def _spin(self):
-        try:
-            self.executor.spin()
-        except Exception as exc:      # a callback that raised: the node would have crashed
-            if not self.closing:
-                self.errors.append(exc)
+        super().__init__(DOMAIN_ID, 'estimator_test_probe')
 
     def estimator(self, tmp_path, **params):
         """Start an estimator with test defaults (calibration START in tmp_path) and ``params``."""
@@ -167,15 +151,6 @@ class Graph:
             if delay > 0.002:
                 time.sleep(delay)
             publishers[kind].publish(msg)
-
-    def close(self):
-        """Stop spinning, destroy every node, shut the context down."""
-        self.closing = True
-        self.executor.shutdown(timeout_sec=5)
-        self.thread.join(timeout=5)
-        for node in self.nodes + [self.probe]:
-            node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
 
 
 @pytest.fixture

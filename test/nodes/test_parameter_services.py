@@ -10,6 +10,7 @@ import os
 import threading
 
 import pytest
+from spinning import SpinningContext
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
@@ -17,7 +18,6 @@ pytest.importorskip('prsm_lube_ros.msg')
 from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import (DescribeParameters, GetParameters, ListParameters,  # noqa: E402
                                 SetParameters)
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
 from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # noqa: E402
@@ -30,30 +30,11 @@ DOMAIN_ID = (int(os.environ.get('ROS_DOMAIN_ID', '0') or 0) + 67) % 100 + 100
 TIMEOUT = 10.0
 
 
-class Side:
+class Side(SpinningContext):
     """One context with an executor thread: the node side or the probe side."""
 
     def __init__(self):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=DOMAIN_ID)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.nodes = []
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-
-    def add(self, node):
-        """Spin ``node`` on this side."""
-        self.nodes.append(node)
-        self.executor.add_node(node)
-        return node
-
-    def close(self):
-        """Stop spinning, destroy the nodes, shut the context down."""
-        self.executor.shutdown(timeout_sec=5)
-        self.thread.join(timeout=5)
-        for node in self.nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
+        super().__init__(DOMAIN_ID)
 
 
 @pytest.fixture

@@ -13,16 +13,15 @@ import os
 from pathlib import Path
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
 import pytest
+from spinning import SpinningContext
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import QoSCompatibility, qos_check_compatible, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
@@ -98,24 +97,11 @@ def assert_live_equals_offline(states, stage):
     assert abs(np.median(thetas) - 0.8) < 0.1      # and it is the stage's theta, not some constant
 
 
-class Graph:
+class Graph(SpinningContext):
     """A context on this module's domain, an executor thread, a probe node, and the nodes started in it."""
 
     def __init__(self):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=DOMAIN_ID)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.probe = rclpy.create_node('bridge_test_probe', context=self.context)
-        self.executor.add_node(self.probe)
-        self.nodes = []
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-
-    def add(self, node):
-        """Spin ``node`` in this graph."""
-        self.nodes.append(node)
-        self.executor.add_node(node)
-        return node
+        super().__init__(DOMAIN_ID, 'bridge_test_probe')
 
     def bridge(self, **params):
         """A SensorBridge in this process."""
@@ -133,14 +119,6 @@ class Graph:
         received = []
         self.probe.create_subscription(msg_type, topic, received.append, qos)
         return received
-
-    def close(self):
-        """Stop spinning, destroy every node, shut the context down."""
-        self.executor.shutdown(timeout_sec=5)
-        self.thread.join(timeout=5)
-        for node in self.nodes + [self.probe]:
-            node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
 
 
 @pytest.fixture

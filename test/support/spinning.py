@@ -1,0 +1,52 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""A private ROS graph side for tests: its own rclpy context, an executor spinning in a thread, torn down whole."""
+import threading
+
+
+class SpinningContext:
+    """An rclpy context on ``domain_id`` whose nodes a SingleThreadedExecutor spins in a background thread.
+
+    ``probe_name`` adds a plain node for test publishers and subscriptions.
+    Exceptions a callback raises while spinning are kept in ``errors`` (a
+    node would have crashed); :meth:`close` stops spinning, destroys every
+    node and shuts the context down.
+    """
+
+    def __init__(self, domain_id: int, probe_name: str = ''):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes = []
+        self.errors = []
+        self.closing = False
+        self.probe = rclpy.create_node(probe_name, context=self.context) if probe_name else None
+        if self.probe is not None:
+            self.executor.add_node(self.probe)
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        try:
+            self.executor.spin()
+        except Exception as exc:      # a callback that raised: the node would have crashed
+            if not self.closing:
+                self.errors.append(exc)
+
+    def add(self, node):
+        """Spin ``node`` in this context (destroyed on close)."""
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def close(self):
+        """Stop spinning, destroy every node, shut the context down."""
+        import rclpy
+        self.closing = True
+        self.executor.shutdown(timeout_sec=5)
+        self.thread.join(timeout=5)
+        for node in self.nodes + ([self.probe] if self.probe is not None else []):
+            node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
