@@ -15,6 +15,7 @@ file here.  Imports only numpy, :mod:`..vibration_model` and the base layer.
 """
 from __future__ import annotations
 
+from functools import lru_cache
 import importlib
 import pkgutil
 
@@ -25,8 +26,9 @@ CONTRACT_ORDER = ('position_dependent_stiffness', 'resonance', 'thermal_viscosit
                   'background_vibration')
 
 
+@lru_cache(maxsize=1)
 def effect_ids() -> tuple[str, ...]:
-    """IDs of the effects (the modules of this package), contract order first."""
+    """IDs of the effects (the modules of this package), contract order first; listed once per process."""
     names = {module.name for module in pkgutil.iter_modules(__path__) if not module.name.startswith('_')}
     return tuple(n for n in CONTRACT_ORDER if n in names) + tuple(sorted(names - set(CONTRACT_ORDER)))
 
