@@ -18,6 +18,7 @@ law of :mod:`prsm_lube_ros.physics.effects`).  May import the base layer,
 """
 from __future__ import annotations
 
+from ..estimation.windowing import MIN_AXIAL_LOAD
 from .effects import Effect, effect_ids, get_effect, register, registered
 from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
 from .table import table_from_windows, WindowTable
@@ -27,7 +28,7 @@ __all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Ef
            'table_from_windows', 'write_report']
 
 
-def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = 5.0) -> Diagnosis:
+def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = MIN_AXIAL_LOAD) -> Diagnosis:
     """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``."""
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
                                sources=[rec.path for rec in recordings])

@@ -22,7 +22,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.windowing import usable_windows
+from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 #: Columns every table has, in SI units (temperature in degC, time in s).
@@ -115,7 +115,7 @@ class WindowTable:
 
 
 def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: float = 1.0,
-                       min_axial_load: float = 5.0, sources: Sequence[str] = ()) -> WindowTable:
+                       min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = ()) -> WindowTable:
     """Build a :class:`WindowTable` from lists of windows (``estimation.windowing.Window``), one per recording.
 
     Keeps steady windows with a finite positive RMS, speed and load of at least

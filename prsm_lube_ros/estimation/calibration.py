@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
-from .windowing import usable_windows
+from .windowing import MIN_AXIAL_LOAD, usable_windows
 
 #: Relative tolerance within which two speeds or loads count as one operating level.
 LEVEL_TOLERANCE = 0.05
@@ -142,7 +142,7 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
                        load_levels=tuple(load_levels), sources=tuple(str(s) for s in sources))
 
 
-def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = 5.0, sources=()) -> Calibration:
+def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=()) -> Calibration:
     """Fit on the steady windows (see :mod:`.windowing`) whose load is at least ``min_axial_load``."""
     chosen = usable_windows(windows, min_axial_load)
     return fit_constants([w.screw_speed for w in chosen], [w.axial_load for w in chosen],

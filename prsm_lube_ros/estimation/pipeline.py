@@ -16,9 +16,9 @@ import numpy as np
 
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
-from .assessment import Assessor, MIN_AXIAL_LOAD, RunAssessment, WindowAssessment
+from .assessment import Assessor, RunAssessment, WindowAssessment
 from .calibration import Calibration, fit_windows
-from .windowing import Window, WindowBuilder, WindowSettings
+from .windowing import MIN_AXIAL_LOAD, Window, WindowBuilder, WindowSettings
 
 ProblemSink = Callable[[str], None]
 
