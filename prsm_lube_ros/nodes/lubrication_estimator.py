@@ -72,7 +72,7 @@ from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
 from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
-from ..estimation.windowing import WindowBuilder, WindowSettings
+from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
@@ -115,7 +115,7 @@ PARAMETERS = {
                          'before the window is closed (covers jitter between topics)', (0.0, 30.0), False),
     'stream_timeout': (3.0, _DOUBLE, 's of header-stamp time after which a silent input stops holding '
                        'windows open (its windows then close with a reason)', (0.1, 3600.0), False),
-    'min_axial_load': (5.0, _DOUBLE, 'smallest axial load in N at which theta_oil is evaluated',
+    'min_axial_load': (MIN_AXIAL_LOAD, _DOUBLE, 'smallest axial load in N at which theta_oil is evaluated',
                        (0.0, 1.0e7), False),
     'warn_below': (0.85, _DOUBLE, 'theta_oil below this is WARN', (0.0, 2.0), False),
     'error_below': (0.70, _DOUBLE, 'theta_oil below this is ERROR', (0.0, 2.0), False),
