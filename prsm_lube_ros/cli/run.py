@@ -104,12 +104,13 @@ def cmd_run(args) -> int:
 
     import rclpy
     from rclpy.parameter import Parameter
-    from ..nodes.lubrication_estimator import LubricationEstimator, spin_nodes
+    from ..nodes.lubrication_estimator import LubricationEstimator
+    from ..nodes.startup import init_ros, spin_until_stopped
 
     ros_args = ['--ros-args']
     for path in configs:
         ros_args += ['--params-file', str(path)]
-    rclpy.init(args=['prsm-lube'] + ros_args + [a for a in args.ros_args if a != '--ros-args'])
+    init_ros(['prsm-lube'] + ros_args + [a for a in args.ros_args if a != '--ros-args'])
     nodes = []
     try:
         parameters = [Parameter(name, value=value) for name, value in overrides]
@@ -124,4 +125,5 @@ def cmd_run(args) -> int:
             node.destroy_node()
         rclpy.try_shutdown()
         raise
-    return spin_nodes(nodes)
+    spin_until_stopped(nodes)
+    return 0

@@ -54,12 +54,10 @@ from typing import Callable
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
-import rclpy
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -79,7 +77,7 @@ from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recordings_folder
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table
-from .startup import build_node, EXIT_BAD_INPUT
+from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -655,35 +653,14 @@ def join_batches(batches: list):
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
 
 
-def spin_nodes(nodes, executor=None) -> int:
-    """Spin ``nodes`` until Ctrl-C or shutdown; destroy them; return 0.
-
-    One thread is enough: the input callbacks drain their queues, so topics
-    stay level whatever their rates, and the calibration service fits on a
-    worker thread of its own.
-    """
-    executor = executor or SingleThreadedExecutor()
-    for node in nodes:
-        executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
-
-
 def main(args=None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
-    rclpy.init(args=args)
+    init_ros(args)
     node = build_node(LubricationEstimator, NODE_NAME)
     if node is None:
         return EXIT_BAD_INPUT
-    return spin_nodes([node])
+    spin_until_stopped([node])
+    return 0
 
 
 if __name__ == '__main__':

@@ -41,9 +41,7 @@ import time
 import traceback
 
 from geometry_msgs.msg import WrenchStamped
-import rclpy
 from rcl_interfaces.msg import ParameterType, SetParametersResult
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -59,7 +57,7 @@ from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .parameters import declare_parameter_table
 from .ros_convert import joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg, wrench_msg
-from .startup import build_node, EXIT_BAD_INPUT
+from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
 
 NODE_NAME = 'sensor_bridge'
 SOURCES = ('playback', 'simulator', 'hardware')
@@ -379,24 +377,12 @@ def main(args=None) -> int:
     Playback without ``loop`` ends with status 0 after the last message
     (``exit_at_end``); an acquisition that fails while running ends with 1.
     """
-    rclpy.init(args=args)
+    init_ros(args)
     node = build_node(SensorBridge, NODE_NAME)
     if node is None:
         return EXIT_BAD_INPUT
     exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-            if node.finished.is_set() and (exit_at_end or node.exit_status):
-                break
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_stopped([node], done=lambda: node.finished.is_set() and bool(exit_at_end or node.exit_status))
     return node.exit_status
 
 

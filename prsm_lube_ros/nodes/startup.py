@@ -1,17 +1,54 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Starting a node from an entry point: bad configuration is one line on stderr, never a traceback."""
+"""Starting and stopping a node process: bad configuration is one line, Ctrl-C a clean exit.
+
+rclpy's own signal handlers shut the context down from a thread of their
+own while the executor may be inside a callback (taking or publishing a
+message); that race ends a node with SIGSEGV now and then (seen on Kilted in
+CI: exit -11 after Ctrl-C, and reported upstream against rclpy).  The node
+processes therefore start rclpy with ``SignalHandlerOptions.NO`` and catch
+SIGINT and SIGTERM themselves: the handler only sets a flag, the spin loop
+(``spin_once`` with a short timeout) sees it between callbacks, and the
+executor, the nodes and the context are torn down in that order, on the main
+thread, with nothing else running.
+"""
 from __future__ import annotations
 
+import signal
 import sys
-from typing import Callable, Optional
+import threading
+from typing import Callable, Optional, Sequence
 
 import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 from ..errors import InputError
 
 #: Exit status of a node whose configuration or source cannot be used.
 EXIT_BAD_INPUT = 2
+#: Longest wait of the spin loop before it looks at the stop flag again [s].
+STOP_POLL_PERIOD = 0.1
+
+_stop_requested = threading.Event()
+
+
+def init_ros(args: Optional[Sequence[str]] = None) -> None:
+    """``rclpy.init`` without rclpy's signal handlers; SIGINT/SIGTERM set the stop flag instead.
+
+    Off the main thread (a node started inside a test or another program)
+    signals stay with whoever owns them.
+    """
+    _stop_requested.clear()
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _request_stop)
+
+
+def _request_stop(signum, frame) -> None:
+    """Signal handler: ask the spin loop to stop (nothing else: it may run between any two bytecodes)."""
+    _stop_requested.set()
 
 
 def build_node(factory: Callable[[], object], node_name: str) -> Optional[object]:
@@ -22,3 +59,24 @@ def build_node(factory: Callable[[], object], node_name: str) -> Optional[object
         print(f'{node_name}: error: {exc}', file=sys.stderr)
         rclpy.try_shutdown()
         return None
+
+
+def spin_until_stopped(nodes, done: Callable[[], bool] = lambda: False, executor=None) -> None:
+    """Spin ``nodes`` until a stop signal, ``done()``, or shutdown; then tear everything down in order.
+
+    The executor is shut down first (no callback runs after it), then each
+    node is destroyed, then the context; all on the calling thread.
+    """
+    executor = executor or SingleThreadedExecutor()
+    for node in nodes:
+        executor.add_node(node)
+    try:
+        while rclpy.ok() and not _stop_requested.is_set() and not done():
+            executor.spin_once(timeout_sec=STOP_POLL_PERIOD)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown()

@@ -8,6 +8,7 @@ checked against the offline WindowBuilder + Assessor on the same messages.
 """
 import math
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -570,7 +571,10 @@ def test_the_live_inputs_follow_eq_22():
 
 
 def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
-    """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply."""
+    """prsm-lube run --no-bridge --config FILE -p NAME:=VALUE: the file and the overrides both apply.
+
+    Stopped with SIGTERM (what ``ros2 launch`` sends after SIGINT): status 0 too.
+    """
     config = tmp_path / 'estimator.yaml'
     config.write_text("'/**/lubrication_estimator':\n  ros__parameters:\n    hardware_ids: [from-yaml]\n"
                       '    actuators: [/runtest/prsm]\n    diagnostics_period: 0.2\n')
@@ -591,7 +595,7 @@ def test_prsm_lube_run_starts_the_estimator_with_a_parameter_file(tmp_path):
         assert not response.success and 'not found' in response.message
     finally:
         graph.close()
-        stderr = stop_process(process)
+        stderr = stop_process(process, signal.SIGTERM)
     assert process.returncode == 0, stderr
     assert 'Traceback' not in stderr
 

@@ -28,10 +28,10 @@ def settle(items, quiet=1.0, timeout=20.0):
             return
 
 
-def stop_process(process):
-    """SIGINT, then the process's stderr (killed if it hangs)."""
+def stop_process(process, signum=signal.SIGINT):
+    """``signum`` (Ctrl-C by default), then the process's stderr (killed if it hangs)."""
     if process.poll() is None:
-        process.send_signal(signal.SIGINT)
+        process.send_signal(signum)
     try:
         _, stderr = process.communicate(timeout=15)
     except subprocess.TimeoutExpired:
