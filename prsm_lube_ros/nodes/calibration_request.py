@@ -11,12 +11,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 import os
 from pathlib import Path
+import re
 from typing import Callable, Sequence
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration
 from ..estimation.windowing import AT_REST, WindowSettings
 from ..validation import reference_theta as checked_reference_theta
+
+_NAMESPACE = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*[/_]?')
 
 
 def recordings_folder(folder: str) -> Path:
@@ -50,6 +53,21 @@ def resolve_bag_paths(bag_paths: Sequence[str], folder: str | Path) -> list[Path
             raise InputError(f'calibrate: {raw} is named twice in bag_paths (as {path}); name each recording once')
         resolved.append(path)
     return resolved
+
+
+def recording_namespace(requested: str, live: str) -> str:
+    """The namespace to read in the request's recordings: ``requested`` when given, else ``live``.
+
+    Raises :class:`InputError` for a name ROS could not have recorded (characters
+    other than letters, digits, ``_`` and ``/``, or ``//``).
+    """
+    name = (requested or '').strip()
+    if not name:
+        return live
+    if not _NAMESPACE.fullmatch(name) or '//' in name:
+        raise InputError(f'calibrate: recording_namespace {requested!r} is not a ROS namespace or topic prefix '
+                         "(letters, digits, '_' and '/', e.g. /rig/left)")
+    return name if name.startswith('/') else '/' + name
 
 
 def reference_theta(value: float) -> float:

@@ -74,7 +74,7 @@ from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
-from .calibration_request import calibrate_from_request, recordings_folder
+from .calibration_request import calibrate_from_request, recording_namespace, recordings_folder
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table
 from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
@@ -530,10 +530,11 @@ class LubricationEstimator(Node):
         done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
         request_paths = list(request.bag_paths)
         theta, persist = float(request.reference_theta), bool(request.persist)
+        requested_namespace = str(getattr(request, 'recording_namespace', ''))
 
         def work():
             try:
-                done.set_result(self._run_calibration(channel, request_paths, theta, persist))
+                done.set_result(self._run_calibration(channel, request_paths, theta, persist, requested_namespace))
             except BaseException as exc:   # never lose the answer: the request gets success=false
                 done.set_result(exc)
 
@@ -563,8 +564,10 @@ class LubricationEstimator(Node):
         self.get_logger().info(f'{channel.name}: {message}')
         return response
 
-    def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool):
+    def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool,
+                         requested_namespace: str = ''):
         """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message)."""
+        namespace = recording_namespace(requested_namespace, channel.name)
         with self._fit_lock:
             with self._lock:
                 settings, folder = self._settings, self._recordings_dir
@@ -578,7 +581,7 @@ class LubricationEstimator(Node):
 
             started = time.monotonic()
             outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
-                                             namespace=channel.name, min_axial_load=min_load,
+                                             namespace=namespace, min_axial_load=min_load,
                                              on_problem=on_problem)
             calibration = outcome.calibration
             written = ''
@@ -592,7 +595,8 @@ class LubricationEstimator(Node):
                 self._swap_calibration(channel, calibration)
             return calibration, (
                 f'fitted on {calibration.windows_used} windows of {len(outcome.recordings)} recording(s) '
-                f'({len(calibration.speed_levels)} speeds x {len(calibration.load_levels)} loads), relative '
+                + (f'under {namespace} ' if namespace != channel.name else '')
+                + f'({len(calibration.speed_levels)} speeds x {len(calibration.load_levels)} loads), relative '
                 f'RMS error {100 * calibration.fit_rmse:.2f} %, in {time.monotonic() - started:.1f} s; '
                 f'swapped in{written}' + (f'; {len(outcome.problems)} problem(s) in the recordings'
                                           if outcome.problems else ''))

@@ -165,11 +165,12 @@ def graph():
     assert not g.errors, f'executor raised: {g.errors}'
 
 
-def call(graph, name, bag_paths, theta=1.0, persist=False, timeout=30):
+def call(graph, name, bag_paths, theta=1.0, persist=False, timeout=30, recording_namespace=''):
     """Call a Calibrate service from the probe; return the response."""
     client = graph.probe.create_client(Calibrate, name)
     assert client.wait_for_service(timeout_sec=10), f'{name} not offered'
-    request = Calibrate.Request(bag_paths=[str(p) for p in bag_paths], reference_theta=theta, persist=persist)
+    request = Calibrate.Request(bag_paths=[str(p) for p in bag_paths], reference_theta=theta, persist=persist,
+                                recording_namespace=recording_namespace)
     future = client.call_async(request)
     wait_for(future.done, timeout, f'answer of {name}')
     return future.result()
@@ -500,6 +501,20 @@ def test_calibrate_fits_swaps_and_persists(graph, tmp_path):
     saved = load_calibration(file)
     assert saved.constants.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
     assert not list(tmp_path.glob('.calibration_prsm.yaml.*'))          # no temporary file left
+
+
+def test_calibrate_reads_the_namespace_the_request_names(graph, tmp_path):
+    """A reference recorded as /rig/left (another rig's naming) calibrates the live /prsm actuator."""
+    graph.estimator(tmp_path)
+    write_reference_bag(tmp_path / 'left', reference_segments(), namespace='/rig/left')
+    refused = call(graph, '/prsm/calibrate', ['left'])
+    assert not refused.success and '/prsm' in refused.message
+    bad = call(graph, '/prsm/calibrate', ['left'], recording_namespace='rig left!')
+    assert not bad.success and 'recording_namespace' in bad.message
+    response = call(graph, '/prsm/calibrate', ['left'], recording_namespace='/rig/left')
+    assert response.success, response.message
+    assert 'under /rig/left' in response.message
+    assert response.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
 
 
 def test_a_slow_fit_does_not_hold_up_the_inputs(graph, tmp_path, monkeypatch):
