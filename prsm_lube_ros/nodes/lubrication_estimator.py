@@ -123,6 +123,8 @@ PARAMETERS = {
                       (0.1, 3600.0), False),
     'max_unassessed_windows': (30, _INTEGER, 'consecutive windows without theta_oil while the screw moves '
                                'after which the status is at least WARN (0: never)', (0, 1000000), False),
+    'level_smoothing': (8, _INTEGER, 'assessed windows whose mean theta_oil sets the diagnostic level (1: each '
+                        'window alone; the per-window theta_oil is published unsmoothed)', (1, 1000), False),
     'diagnostics_period': (1.0, _DOUBLE, 's of node clock between /diagnostics messages', (0.05, 60.0), True),
     'vibration_topic': ('vibration', _STRING, 'vibration topic below each actuator namespace', None, True),
     'joint_states_topic': ('joint_states', _STRING, 'joint states topic below each actuator namespace',
@@ -148,7 +150,8 @@ DRAIN_PERIOD = 0.1
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
                      'stream_timeout')
-HEALTH_PARAMETERS = ('warn_below', 'error_below', 'hysteresis', 'stale_timeout', 'max_unassessed_windows')
+HEALTH_PARAMETERS = ('warn_below', 'error_below', 'hysteresis', 'stale_timeout', 'max_unassessed_windows',
+                     'level_smoothing')
 
 
 def actuator_label(actuator: str) -> str:
@@ -174,7 +177,8 @@ def health_thresholds(values: dict) -> HealthThresholds:
     """HealthThresholds from parameter values (InputError when inconsistent)."""
     return HealthThresholds(warn_below=values['warn_below'], error_below=values['error_below'],
                             hysteresis=values['hysteresis'], stale_timeout=values['stale_timeout'],
-                            max_unassessed_windows=int(values['max_unassessed_windows']))
+                            max_unassessed_windows=int(values['max_unassessed_windows']),
+                            level_smoothing=int(values['level_smoothing']))
 
 
 @dataclass

@@ -3,14 +3,16 @@
 """Diagnostic levels from theta_Oil: thresholds, hysteresis, NaN windows and staleness."""
 import math
 
+import numpy as np
 import pytest
 
 from prsm_lube_ros.errors import InputError
 from prsm_lube_ros.estimation.health import ERROR, format_value, HealthMonitor, HealthThresholds, OK, STALE, \
     theta_level, WARN
 
+#: Each window judged alone (level_smoothing 1): the rules below are per judged theta.
 T = HealthThresholds(warn_below=0.85, error_below=0.70, hysteresis=0.03, stale_timeout=2.0,
-                     max_unassessed_windows=3)
+                     max_unassessed_windows=3, level_smoothing=1)
 
 
 def levels(thetas, thresholds=T):
@@ -35,6 +37,41 @@ def test_worsening_is_immediate_and_recovery_needs_the_margin():
 
 def test_a_theta_hovering_at_a_threshold_does_not_flicker():
     assert levels([0.84, 0.86, 0.84, 0.87, 0.849]) == [WARN] * 5
+
+
+def level_changes(thetas, thresholds):
+    """How often the level changes over ``thetas`` (from the first window's level)."""
+    judged = levels(thetas, thresholds)
+    return sum(a != b for a, b in zip(judged, judged[1:]))
+
+
+@pytest.mark.parametrize('threshold', [0.70, 0.85])
+def test_scatter_at_a_threshold_does_not_flap_the_level_with_the_default_smoothing(threshold):
+    """155 windows at the threshold with the per-window scatter of real data (0.02): at most one change.
+
+    Judged window by window (level_smoothing 1) the same thetas flip the level again and again.
+    """
+    rng = np.random.default_rng(7)
+    smoothed = HealthThresholds(warn_below=0.85, error_below=0.70, hysteresis=0.03)
+    for _ in range(20):
+        thetas = threshold + 0.02 * rng.standard_normal(155)
+        assert level_changes(thetas, smoothed) <= 1
+    assert level_changes(threshold + 0.02 * rng.standard_normal(155), T) >= 3
+
+
+def test_a_real_step_is_followed_after_six_windows_with_the_default_smoothing():
+    smoothed = HealthThresholds(warn_below=0.85, error_below=0.70, hysteresis=0.03)
+    assert levels([0.95] * 8 + [0.6] * 7, smoothed) == [OK] * 8 + [OK, OK, WARN, WARN, WARN, ERROR, ERROR]
+    monitor = HealthMonitor(smoothed)
+    monitor.note_input(0.0)
+    for theta in (0.95, 0.94, 0.96):
+        monitor.observe(theta)
+    assert 'mean of the last 3 windows 0.950' in monitor.status(0.0).message
+
+
+def test_level_smoothing_must_be_a_positive_integer():
+    with pytest.raises(InputError, match='level_smoothing'):
+        HealthThresholds(level_smoothing=0)
 
 
 def test_a_big_recovery_jumps_straight_back_to_ok():

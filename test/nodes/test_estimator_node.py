@@ -232,7 +232,8 @@ def test_theta_matches_the_offline_assessor_and_the_hand_value(graph, tmp_path):
 
 
 def test_levels_fall_with_theta_recover_with_hysteresis_and_go_stale(graph, tmp_path):
-    graph.estimator(tmp_path)
+    """Each window judged alone (level_smoothing 1); the smoothing itself is tested in test_health."""
+    graph.estimator(tmp_path, level_smoothing=1)
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
     diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
     #          theta, level expected for its windows (warn 0.85, error 0.70, hysteresis 0.03)
