@@ -327,7 +327,7 @@ class WindowBuilder:
         if (bad_rate & good).any():
             n = int((bad_rate & good).sum())
             self._report('vibration-rate', f'vibration: {n} block(s) with sample_rate '
-                         f'{rates[bad_rate & good][0]!r} Hz (must be > 0) left out', n)
+                         f'{float(rates[bad_rate & good][0]):g} Hz (must be > 0) left out', n)
         empty = counts == 0
         if (empty & good).any():
             n = int((empty & good).sum())

@@ -100,6 +100,7 @@ def test_blocks_with_a_rate_that_is_not_positive_are_left_out(rate):
     windows, builder = build_live(streams)
     problems = builder.take_problems()
     assert len(problems) == 1 and 'sample_rate' in problems[0] and 'must be > 0' in problems[0]
+    assert f'sample_rate {rate:g} Hz' in problems[0] and 'np.' not in problems[0]     # a number, not a repr
     w = next(w for w in windows if w.start <= bad.stamps[0] < w.end)
     assert w.sample_count == 3600 and w.steady  # 90% coverage is above the default 80%
 
