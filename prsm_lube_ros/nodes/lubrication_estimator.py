@@ -59,7 +59,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
@@ -141,6 +141,10 @@ PARAMETERS = {
                   'states, load and temperature are taken once per vibration block (at most every 0.2 s without '
                   'vibration), so it must hold what a topic brings meanwhile', (1, 100000), True),
 }
+
+#: LubricationState: reliable, and transient local so that a dashboard or logger started late gets the last
+#: states at once (volatile subscribers, e.g. ``ros2 topic echo``, match it as before).
+STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 #: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
 MAX_DRAIN = 5000
@@ -255,7 +259,7 @@ class LubricationEstimator(Node):
                                       node_name=self.get_name())
             self._load_initial_calibration(channel)
             channel.publisher = self.create_publisher(
-                LubricationState, topic_name(prefix, values['state_topic']), 10)
+                LubricationState, topic_name(prefix, values['state_topic']), STATE_QOS)
             self._subscribe(channel, values, qos)
             self.channels.append(channel)
             service_names = [topic_name(prefix, 'calibrate')]

@@ -39,7 +39,7 @@ from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, film_s
 from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings  # noqa: E402
 
 import synthetic_inputs  # noqa: E402
-from polling import stop_process, wait_for  # noqa: E402
+from polling import settle, stop_process, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(60)]
 
@@ -664,6 +664,22 @@ def test_with_the_private_drain_api_the_fast_drain_is_on(graph, tmp_path):
     from prsm_lube_ros.nodes import fast_drain
     assert fast_drain.missing_api() == ''
     assert graph.estimator(tmp_path)._fast.enabled
+
+
+def test_a_late_subscriber_gets_the_last_states(graph, tmp_path):
+    """LubricationState is transient local: a subscriber started after the windows still receives them."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    node = graph.estimator(tmp_path)
+    early = graph.collect(LubricationState, '/prsm/lubrication_state')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: len(early) >= 2, 10, 'states')
+    settle(early)
+    late = []
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    graph.probe.create_subscription(LubricationState, '/prsm/lubrication_state', late.append, qos)
+    wait_for(lambda: len(late) >= min(len(early), 10), 10, 'the last states for the late subscriber')
+    assert [s.window_start for s in late] == [s.window_start for s in early[-len(late):]]
 
 
 def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
