@@ -90,6 +90,7 @@ class ImuBlockAssembler:
         self.problems = {kind: 0 for kind in PROBLEM_KINDS}
         self.lost_samples = 0
         self.dropped_samples = 0
+        self.last_problem = ''
         self.samples_in = 0
         self._rate_checked = False
         self._last_stamp: Optional[int] = None
@@ -180,6 +181,7 @@ class ImuBlockAssembler:
 
     def _report(self, kind: str, line: str) -> str:
         self.problems[kind] += 1
+        self.last_problem = f'{kind}: {line}'
         if self.problems[kind] == 1 and self.on_problem is not None:
             self.on_problem(kind, line)
         return kind
