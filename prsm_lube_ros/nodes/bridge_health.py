@@ -7,7 +7,8 @@
 gives the level the bridge puts on ``/diagnostics``:
 
 - ERROR: the source failed (acquisition stopped, bag unreadable mid-way);
-- STALE: no block for ``stale_timeout`` s (or none yet);
+- STALE: no block for ``stale_timeout`` s (or none yet), or the bridge is
+  not active (managed bridge between configure and activate);
 - WARN: the block rate over the last :data:`RATE_SPAN` s is below
   ``1 - RATE_SLACK`` of the expected one, or samples/blocks were lost within
   the last :data:`RATE_SPAN` s;
@@ -53,6 +54,7 @@ class SourceHealth:
         self.dropped_blocks = 0
         self.last_error = ''
         self.failed = False
+        self.active = True                                  # False: publishing halted on purpose
         self._first_block: Optional[float] = None
         self._last_block: Optional[float] = None
         self._block_times: deque = deque()
@@ -118,6 +120,8 @@ class SourceHealth:
                       ('dropped blocks', self.dropped_blocks), ('last error', self.last_error or 'none')]
             if self.failed:
                 return SourceStatus(ERROR, f'source {self.source} failed: {self.last_error}', values)
+            if not self.active:
+                return SourceStatus(STALE, 'not active: the source is open, publishing is halted', values)
             if self._last_block is None:
                 return SourceStatus(STALE, 'no block published yet', values)
             silent = now - self._last_block

@@ -64,6 +64,7 @@ import traceback
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterType, SetParametersResult
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -199,7 +200,7 @@ class BridgeCore:
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._values = values
-        self._recording = self._generator = self._daq = self._assembler = None
+        self._recording = self._generator = self._daq = self._assembler = self._pacer = None
         self._thread = self._imu_subscription = self._timer = None
         self._outputs, self._relays, self._clock_publisher = {}, [], None
         self.health = None
@@ -208,7 +209,7 @@ class BridgeCore:
 
     def _open(self) -> None:
         """Open the source (InputError, nothing published, when it cannot be used), then the publishers."""
-        values = self._values
+        values = self._values = {name: self.get_parameter(name).value for name in PARAMETERS}
         self.frame_id = str(values['frame_id'])
         qos = publisher_qos(str(values['reliability']), values['qos_depth'])
         kinds = ['vibration', 'joint_states', 'axial_load', 'temperature']
@@ -241,13 +242,17 @@ class BridgeCore:
     def _start(self) -> None:
         """Start publishing: the worker thread, or (imu) the subscription."""
         self._stop = threading.Event()
+        self.health.active = True
         if self.source == 'imu':
             self._imu_subscription = self.create_subscription(Imu, self._imu_topic, self._on_imu,
                                                               self._imu_qos)
             return
-        if getattr(self, '_pacer', None) is not None:
+        if self._pacer is not None:
             self._pacer.stop = self._stop
+            self._pacer.restart()
         self.finished.clear()
+        if self._daq is not None:
+            self._daq.start()
         self._thread = threading.Thread(target=self._work, name='sensor_bridge source', daemon=True)
         self._thread.start()
 
@@ -259,9 +264,14 @@ class BridgeCore:
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
             thread.join(timeout=5.0)
         self._thread = None
+        daq = getattr(self, '_daq', None)
+        if daq is not None:
+            daq.stop()
         subscription, self._imu_subscription = getattr(self, '_imu_subscription', None), None
         if subscription is not None:
             self.destroy_subscription(subscription)
+        if getattr(self, 'health', None) is not None:
+            self.health.active = False
 
     def _close(self) -> None:
         """Halt, close the source, and remove the publishers, relays and diagnostics."""
@@ -269,7 +279,7 @@ class BridgeCore:
         daq, self._daq = getattr(self, '_daq', None), None
         if daq is not None:
             daq.close()
-        self._recording = self._generator = self._assembler = None
+        self._recording = self._generator = self._assembler = self._pacer = None
         extras = [getattr(self, name, None) for name in ('_clock_publisher', '_diagnostics')]
         for publisher in list(getattr(self, '_outputs', {}).values()) + extras:
             if publisher is not None:
@@ -307,7 +317,7 @@ class BridgeCore:
                                block_size=max(size, 1), sensitivity=float(values['sensitivity']),
                                iepe_current=float(values['iepe_current']), range_g=float(values['range_g']),
                                buffer_seconds=float(values['buffer_seconds']))
-        self._daq = NiDaqAccelerometer(settings)
+        self._daq = NiDaqAccelerometer(settings, start=False)      # started by _start
 
     def _open_imu(self, values):
         self._imu_axis = check_axis(values['imu_axis'])
@@ -383,6 +393,7 @@ class BridgeCore:
         self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
         self.status_name = f'{self.get_name()}: {self.namespace} sensor source'
         self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
+        self.health.active = False                          # until _start
         self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
         self._timer = self.create_timer(float(values['diagnostics_period']), self.publish_diagnostics)
 
@@ -514,13 +525,13 @@ class BridgeCore:
                 return SetParametersResult(successful=False, reason='playback_rate applies to source playback only')
         for parameter in parameters:
             value = parameter.value
-            if parameter.name in SIMULATOR_PARAMETERS:
+            if parameter.name in SIMULATOR_PARAMETERS and self._generator is not None:  # else: read at configure
                 with self._lock:
                     setter = {'speed': self._generator.set_speed, 'load': self._generator.set_load,
                               'theta_oil': self._generator.set_theta}[parameter.name]
                     setter(float(value))
                 self.get_logger().info(f'simulator: {parameter.name} set to {value:g}')
-            elif parameter.name == 'playback_rate':
+            elif parameter.name == 'playback_rate' and self._pacer is not None:
                 self._pacer.rate = float(value)
                 self._pacer.restart()
         return SetParametersResult(successful=True)
@@ -548,6 +559,69 @@ class SensorBridge(BridgeCore, Node):
         return super().destroy_node()
 
 
+class ManagedSensorBridge(BridgeCore, LifecycleNode):
+    """The bridge as a lifecycle (managed) node: each step of :class:`BridgeCore` on a transition.
+
+    Constructed unconfigured (parameters declared and checked).  configure
+    opens the source (the bag, the rig simulator, the DAQ task set up but not
+    started, the IMU settings), creates the publishers and the status on
+    /diagnostics; activate starts publishing (worker thread, acquisition or
+    IMU subscription); deactivate stops it (the source stays open); cleanup
+    and shutdown close the source and remove the publishers.  A source that
+    cannot be opened fails configure with one log line (the node stays
+    unconfigured); the simulator and playback resume where they stopped.
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        self._read_parameters()
+
+    def _step(self, what: str, action) -> TransitionCallbackReturn:
+        try:
+            action()
+        except InputError as exc:
+            self.get_logger().error(f'{what} failed: {exc}')
+            return TransitionCallbackReturn.FAILURE
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Open the source and create the publishers (FAILURE, all closed again, when it cannot be used)."""
+        result = self._step('configure', self._open)
+        if result != TransitionCallbackReturn.SUCCESS:
+            self._close()
+        return result
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Start publishing."""
+        result = self._step('activate', self._start)
+        return super().on_activate(state) if result == TransitionCallbackReturn.SUCCESS else result
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Stop publishing; the source stays open."""
+        self._halt()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Close the source and remove the publishers."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """As cleanup, from any state."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """A transition raised: close everything and go back to unconfigured."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def destroy_node(self):
+        """Stop and close before the node goes."""
+        self._close()
+        return super().destroy_node()
+
+
 def create_node(**kwargs) -> SensorBridge:
     """The bridge node (``prsm-lube run`` starts it beside the estimator)."""
     return SensorBridge(**kwargs)
@@ -567,6 +641,21 @@ def main(args=None) -> int:
     exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
     spin_until_stopped([node], done=lambda: node.finished.is_set() and bool(exit_at_end or node.exit_status))
     return node.exit_status
+
+
+def main_managed(args=None) -> int:
+    """Entry point of ``ros2 run prsm_lube_ros sensor_bridge_managed``: the lifecycle bridge, unconfigured.
+
+    Drive it with ``ros2 lifecycle set <node> configure | activate | deactivate
+    | cleanup | shutdown``; it runs until Ctrl-C.  Bad parameters: one line,
+    status 2.
+    """
+    init_ros(args)
+    node = build_node(ManagedSensorBridge, NODE_NAME)
+    if node is None:
+        return EXIT_BAD_INPUT
+    spin_until_stopped([node])
+    return 0
 
 
 if __name__ == '__main__':

@@ -8,19 +8,13 @@ samples and stamps, and each gap must close a block while only the first is
 logged (read back from /rosout).
 """
 import os
-import time
 
 import numpy as np
 import pytest
-from spinning import SpinningContext
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
-from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
-from rcl_interfaces.msg import Log  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN  # noqa: E402
@@ -28,83 +22,30 @@ from prsm_lube_ros.errors import InputError  # noqa: E402
 from prsm_lube_ros.msg import VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes.ros_convert import status_level  # noqa: E402
 from prsm_lube_ros.nodes.sensor_bridge import SensorBridge  # noqa: E402
+from bridge_graph import BridgeGraph, block_stamp, MS, publish_at_1khz, T0  # noqa: E402
 from polling import wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
 DOMAIN_ID = (int(os.environ.get('ROS_DOMAIN_ID', '0') or 0) + 57) % 100 + 100
-T0 = 1_767_225_600 * 10**9          # 2026-01-01, ns
-MS = 10**6
-RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
-class Graph(SpinningContext):
-    """A context on this module's domain with a probe node; bridges started in it are torn down with it."""
-
-    def __init__(self):
-        super().__init__(DOMAIN_ID, 'imu_test_probe')
+class Graph(BridgeGraph):
+    """This module's graph: SensorBridge nodes by name."""
 
     def bridge(self, name, **params):
-        """A SensorBridge named ``name`` in this process."""
-        return self.add(SensorBridge(name, context=self.context, parameter_overrides=[
-            Parameter(k, value=v) for k, v in params.items()]))
-
-    def collect(self, msg_type, topic, qos=RELIABLE):
-        """List that fills with the messages arriving on ``topic``."""
-        received = []
-        self.probe.create_subscription(msg_type, topic, received.append, qos)
-        return received
-
-    def log_lines(self, node_name):
-        """List that fills with the /rosout messages of ``node_name``."""
-        lines = []
-        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.probe.create_subscription(Log, '/rosout', lambda m: lines.append(m) if m.name == node_name else None,
-                                       qos)
-        return lines
-
-    def statuses(self, status_name):
-        """List that fills with the DiagnosticStatus named ``status_name`` from /diagnostics."""
-        found = []
-        self.probe.create_subscription(DiagnosticArray, '/diagnostics', lambda a: found.extend(
-            s for s in a.status if s.name == status_name), 100)
-        return found
+        """A SensorBridge named ``name``."""
+        return super().bridge(SensorBridge, name, **params)
 
 
 @pytest.fixture
 def graph():
     """A fresh ROS graph for one test, always torn down."""
-    g = Graph()
+    g = Graph(DOMAIN_ID, 'imu_test_probe')
     try:
         yield g
     finally:
         g.close()
-
-
-def imu_message(k, frame_id='imu_link'):
-    """Sample k: stamp T0 + k ms, linear_acceleration y = k / 100 m/s^2 (x and z other values)."""
-    msg = Imu()
-    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(T0 + k * MS, 10**9)
-    msg.header.frame_id = frame_id
-    msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = -1.0, k / 100.0, 9.81
-    return msg
-
-
-def publish_at_1khz(publisher, indices):
-    """Publish the samples ``indices`` at about 1 kHz of wall time (ten every 10 ms)."""
-    start = time.monotonic()
-    for n, k in enumerate(indices):
-        publisher.publish(imu_message(int(k)))
-        if n % 10 == 9:
-            delay = start + (n + 1) * 1e-3 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-
-
-def block_stamp(block):
-    """Header stamp of a block as int ns."""
-    return block.header.stamp.sec * 10**9 + block.header.stamp.nanosec
 
 
 def test_imu_samples_become_vibration_blocks_and_a_gap_closes_a_block_logged_once(graph):
