@@ -83,7 +83,7 @@ from .imu_blocks import check_axis, ImuBlockAssembler
 from .parameters import declare_parameter_table
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
-from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
+from .startup import run_node
 
 NODE_NAME = 'sensor_bridge'
 SOURCES = ('playback', 'simulator', 'hardware', 'imu')
@@ -634,13 +634,10 @@ def main(args=None) -> int:
     Playback without ``loop`` ends with status 0 after the last message
     (``exit_at_end``); an acquisition that fails while running ends with 1.
     """
-    init_ros(args)
-    node = build_node(SensorBridge, NODE_NAME)
-    if node is None:
-        return EXIT_BAD_INPUT
-    exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
-    spin_until_stopped([node], done=lambda: node.finished.is_set() and bool(exit_at_end or node.exit_status))
-    return node.exit_status
+    def finished(node):
+        exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
+        return node.finished.is_set() and bool(exit_at_end or node.exit_status)
+    return run_node(SensorBridge, NODE_NAME, args, done=finished, exit_status=lambda node: node.exit_status)
 
 
 def main_managed(args=None) -> int:
@@ -650,12 +647,7 @@ def main_managed(args=None) -> int:
     | cleanup | shutdown``; it runs until Ctrl-C.  Bad parameters: one line,
     status 2.
     """
-    init_ros(args)
-    node = build_node(ManagedSensorBridge, NODE_NAME)
-    if node is None:
-        return EXIT_BAD_INPUT
-    spin_until_stopped([node])
-    return 0
+    return run_node(ManagedSensorBridge, NODE_NAME, args)
 
 
 if __name__ == '__main__':

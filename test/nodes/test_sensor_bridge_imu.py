@@ -41,11 +41,8 @@ class Graph(BridgeGraph):
 @pytest.fixture
 def graph():
     """A fresh ROS graph for one test, always torn down."""
-    g = Graph(DOMAIN_ID, 'imu_test_probe')
-    try:
+    with Graph(DOMAIN_ID, 'imu_test_probe') as g:
         yield g
-    finally:
-        g.close()
 
 
 def test_imu_samples_become_vibration_blocks_and_a_gap_closes_a_block_logged_once(graph):

@@ -66,11 +66,8 @@ class Graph(BridgeGraph):
 @pytest.fixture
 def graph():
     """A fresh ROS graph for one test, always torn down."""
-    g = Graph(DOMAIN_ID, 'lifecycle_test_probe')
-    try:
+    with Graph(DOMAIN_ID, 'lifecycle_test_probe') as g:
         yield g
-    finally:
-        g.close()
 
 
 def test_imu_bridge_follows_configure_activate_deactivate_cleanup(graph):

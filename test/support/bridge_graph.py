@@ -19,7 +19,13 @@ RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 class BridgeGraph(SpinningContext):
-    """A context on ``domain_id`` with a probe node; bridges started in it are torn down with it."""
+    """A context on ``domain_id`` with a probe node; bridges started in it are torn down with it (``with``)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def bridge(self, node_class, name, **params):
         """A ``node_class`` (SensorBridge or ManagedSensorBridge) named ``name`` in this process."""
