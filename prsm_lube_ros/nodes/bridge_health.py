@@ -3,14 +3,14 @@
 """The sensor bridge's own health (its source, not the lubrication), as a diagnostic level and values; no ROS.
 
 :class:`SourceHealth` is told of every published vibration block, every loss
-(lost samples, dropped blocks) and a failure of the source; :meth:`SourceHealth.status`
+of samples and a failure of the source; :meth:`SourceHealth.status`
 gives the level the bridge puts on ``/diagnostics``:
 
 - ERROR: the source failed (acquisition stopped, bag unreadable mid-way);
 - STALE: no block for ``stale_timeout`` s (or none yet), or the bridge is
   not active (managed bridge between configure and activate);
 - WARN: the block rate over the last :data:`RATE_SPAN` s is below
-  ``1 - RATE_SLACK`` of the expected one, or samples/blocks were lost within
+  ``1 - RATE_SLACK`` of the expected one, or samples were lost within
   the last :data:`RATE_SPAN` s;
 - OK otherwise.
 
@@ -51,7 +51,6 @@ class SourceHealth:
         self.blocks = 0
         self.sample_rate = math.nan
         self.lost_samples = 0
-        self.dropped_blocks = 0
         self.last_error = ''
         self.failed = False
         self.active = True                                  # False: publishing halted on purpose
@@ -72,13 +71,12 @@ class SourceHealth:
             self._block_times.append(now)
             self._forget(now)
 
-    def loss(self, now: float, samples: int = 0, blocks: int = 0, why: str = '') -> None:
-        """``samples`` samples and ``blocks`` blocks lost at ``now``; ``why`` becomes the last error."""
-        if samples <= 0 and blocks <= 0:
+    def loss(self, now: float, samples: int, why: str = '') -> None:
+        """``samples`` samples lost (never published) at ``now``; ``why`` becomes the last error."""
+        if samples <= 0:
             return
         with self._lock:
             self.lost_samples += int(samples)
-            self.dropped_blocks += int(blocks)
             self._loss_times.append(now)
             if why:
                 self.last_error = why
@@ -117,7 +115,7 @@ class SourceHealth:
             values = [('source', self.source), ('blocks published', self.blocks),
                       ('block rate [1/s]', rate), ('expected block rate [1/s]', expected or math.nan),
                       ('sample rate [Hz]', self.sample_rate), ('lost samples', self.lost_samples),
-                      ('dropped blocks', self.dropped_blocks), ('last error', self.last_error or 'none')]
+                      ('last error', self.last_error or 'none')]
             if self.failed:
                 return SourceStatus(ERROR, f'source {self.source} failed: {self.last_error}', values)
             if not self.active:

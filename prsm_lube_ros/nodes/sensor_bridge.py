@@ -38,10 +38,11 @@ The bridge reports its own health on ``/diagnostics`` (absolute, as
 diagnostic aggregators expect) every ``diagnostics_period`` s: one status
 named ``<node name>: <namespace> sensor source`` with ``hardware_id`` (the
 DAQ channel, bag, IMU topic or ``rig simulator`` unless set), the blocks
-published, block and sample rate, lost samples and dropped blocks, and the
-last error; OK, WARN (block rate below the expected one, data lost in the
-last 10 s), ERROR (the source failed) or STALE (no block for
-``stale_timeout`` s) (:mod:`.bridge_health`).
+published, block and sample rate, lost samples, and the last error; OK,
+WARN (block rate below the expected one, data lost in the last 10 s),
+ERROR (the source failed) or STALE (no block for ``stale_timeout`` s)
+(:mod:`.bridge_health`).  ``sensor_bridge_managed`` is the lifecycle
+variant (:class:`ManagedSensorBridge`).
 
 Topics are ``<namespace>/vibration``, ``/joint_states``, ``/axial_load`` and
 ``/temperature`` (CONTRACT.md).  In a node started in a namespace (``-r
@@ -513,6 +514,7 @@ class BridgeCore:
 
     def _problem(self, line: str):
         self.get_logger().warning(f'{self._values["bag"]}: {line}')
+        self.health.note(line)
 
     # -- parameters --------------------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -569,7 +571,9 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
     IMU subscription); deactivate stops it (the source stays open); cleanup
     and shutdown close the source and remove the publishers.  A source that
     cannot be opened fails configure with one log line (the node stays
-    unconfigured); the simulator and playback resume where they stopped.
+    unconfigured).  Activate after deactivate replays a bag from its start
+    again; the simulator goes on in its own time (its stamps then trail the
+    wall clock by the time it was inactive).
     """
 
     def __init__(self, node_name: str = NODE_NAME, **kwargs):
