@@ -124,3 +124,11 @@ def test_hardware_id_parameter_and_bad_imu_settings(graph):
         graph.bridge('bridge_imu_e', source='imu', imu_axis='q')
     with pytest.raises(InputError, match='imu_topic: empty'):
         graph.bridge('bridge_imu_f', source='imu', imu_topic=' ')
+
+
+def test_in_a_namespace_the_imu_topic_blocks_and_status_move_with_it(graph):
+    bridge = graph.add(SensorBridge('bridge_imu_g', context=graph.context,
+                                    cli_args=['--ros-args', '-r', '__ns:=/ema_x', '-p', 'source:=imu']))
+    assert bridge._imu_topic == '/ema_x/imu/data' and bridge.topics == {'vibration': '/ema_x/vibration'}
+    assert bridge.status_name == 'bridge_imu_g: /ema_x sensor source' and bridge.hardware_id == '/ema_x/imu/data'
+    wait_for(lambda: graph.probe.count_subscribers('/ema_x/imu/data') == 1, 20, 'the IMU subscription')
