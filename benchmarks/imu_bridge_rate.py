@@ -8,7 +8,8 @@ For each rate the bridge runs as its own process (``scripts/sensor_bridge``,
 Imu messages with exact stamps ``k / rate`` for ``--seconds`` of wall time
 (in 5 ms bursts) and counts the samples that come back in VibrationBlocks.
 Reported per rate: the publish rate achieved, the share of samples delivered
-in blocks, the bridge's lost-sample count (from its /diagnostics status) and
+in blocks (of those that fill whole blocks: the last, open block is not
+published), the bridge's lost-sample count (from its /diagnostics status) and
 the CPU the bridge process used (share of one core, from /proc).  Results go
 to ``benchmarks/results/imu_bridge_rate.{json,md}``.
 
@@ -75,6 +76,7 @@ def measure(rate: float, seconds: float) -> dict:
         msg = Imu()
         msg.header.frame_id = 'imu_link'
         burst = max(1, int(round(rate * 0.005)))
+        block = max(1, int(round(0.1 * rate)))          # the bridge's default block_length, 0.1 s
         cpu_start, start = cpu_seconds(bridge.pid), time.monotonic()
         sent = 0
         while time.monotonic() - start < seconds:
@@ -100,7 +102,7 @@ def measure(rate: float, seconds: float) -> dict:
         node.destroy_node()
         rclpy.try_shutdown(context=context)
     return {'rate_hz': rate, 'published': sent, 'publish_rate_hz': sent / elapsed,
-            'delivered_share': received[0] / sent if sent else 0.0,
+            'delivered_share': received[0] / (sent - sent % block) if sent >= block else 0.0,
             'lost_samples': int(values.get('lost samples', -1)), 'bridge_cpu_share': cpu / (elapsed + 2.0)}
 
 

@@ -80,6 +80,7 @@ from ..simulation.signal import RigSignalGenerator
 from .bridge_health import SourceHealth
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
+from .fast_drain import FastDrain, missing_api
 from .imu_blocks import check_axis, ImuBlockAssembler
 from .parameters import declare_parameter_table
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
@@ -166,6 +167,8 @@ PARAMETERS = {
                          '<namespace>/axial_load (empty: none)', None, True),
 }
 SIMULATOR_PARAMETERS = ('speed', 'load', 'theta_oil')
+#: Most IMU messages taken from the queue per callback (the rest wait for the next one).
+MAX_IMU_DRAIN = 10000
 
 
 def publisher_qos(reliability: str, depth: int) -> QoSProfile:
@@ -333,6 +336,9 @@ class BridgeCore:
                                             float(values['rate_tolerance']), float(values['jitter_tolerance']),
                                             on_problem=self._imu_problem)
         self._imu_unusable = 0
+        # Each IMU callback also takes the messages queued behind it (fast_drain.py): one executor wake-up per
+        # burst instead of per sample.  Without that rclpy API: one callback per message.
+        self._imu_drain = FastDrain(self.get_logger()) if not missing_api() else None
 
     def _create_relays(self, values, qos):
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -355,6 +361,13 @@ class BridgeCore:
 
     # -- imu ----------------------------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
+        """IMU callback: this sample and those queued behind it."""
+        self._take_imu(msg)
+        if self._imu_drain is not None:
+            for queued in self._imu_drain.drain(self._imu_subscription, MAX_IMU_DRAIN):
+                self._take_imu(queued)
+
+    def _take_imu(self, msg: Imu) -> None:
         """One IMU sample: into the current block; publish the blocks it completes."""
         assembler = self._assembler
         if assembler is None:
