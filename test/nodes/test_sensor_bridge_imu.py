@@ -22,7 +22,7 @@ from prsm_lube_ros.errors import InputError  # noqa: E402
 from prsm_lube_ros.msg import VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes.ros_convert import status_level  # noqa: E402
 from prsm_lube_ros.nodes.sensor_bridge import SensorBridge  # noqa: E402
-from bridge_graph import BridgeGraph, block_stamp, MS, publish_at_1khz, T0  # noqa: E402
+from bridge_graph import BridgeGraph, block_stamp, imu_message, MS, publish_at_1khz, T0  # noqa: E402
 from polling import wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
@@ -132,3 +132,21 @@ def test_in_a_namespace_the_imu_topic_blocks_and_status_move_with_it(graph):
     assert bridge._imu_topic == '/ema_x/imu/data' and bridge.topics == {'vibration': '/ema_x/vibration'}
     assert bridge.status_name == 'bridge_imu_g: /ema_x sensor source' and bridge.hardware_id == '/ema_x/imu/data'
     wait_for(lambda: graph.probe.count_subscribers('/ema_x/imu/data') == 1, 20, 'the IMU subscription')
+
+
+def test_messages_without_linear_acceleration_are_dropped_counted_and_logged_once(graph):
+    """REP 145: linear_acceleration_covariance[0] = -1 means the IMU does not measure it."""
+    name = 'bridge_imu_h'
+    logs = graph.log_lines(name)
+    blocks = graph.collect(VibrationBlock, '/no_accel/vibration')
+    bridge = graph.bridge(name, source='imu', namespace='/no_accel', imu_topic='/imu_test_h/data',
+                          sample_rate=1000.0, block_length=0.01)
+    publisher = graph.probe.create_publisher(Imu, '/imu_test_h/data', 1000)
+    wait_for(lambda: publisher.get_subscription_count() >= 1, 20, 'the bridge subscribed to the IMU')
+    for k in range(30):
+        msg = imu_message(k)
+        msg.linear_acceleration_covariance[0] = -1.0
+        publisher.publish(msg)
+    wait_for(lambda: bridge.health.lost_samples == 30, 20, 'thirty samples counted lost')
+    wait_for(lambda: any('not measured' in m.msg for m in logs), 10, 'the log line')
+    assert len([m for m in logs if 'not measured' in m.msg]) == 1 and blocks == []
