@@ -39,6 +39,7 @@ setup(
         'console_scripts': [
             'prsm-lube = prsm_lube_ros.cli:main',
             'sensor_bridge = prsm_lube_ros.nodes.sensor_bridge:main',
+            'sensor_bridge_managed = prsm_lube_ros.nodes.sensor_bridge:main_managed',
             'lubrication_estimator = prsm_lube_ros.nodes.lubrication_estimator:main',
         ],
     },

@@ -91,8 +91,10 @@ def _member(enum, *names):
 class NiDaqAccelerometer:
     """A started continuous acquisition on one IEPE accelerometer channel; see the module docstring."""
 
-    def __init__(self, settings: DaqSettings, clock_ns: Callable[[], int] = time.time_ns):
+    def __init__(self, settings: DaqSettings, clock_ns: Callable[[], int] = time.time_ns, start: bool = True):
+        """Set the channel up and (``start``) start acquiring; InputError (one line) when it cannot."""
         self.settings = settings
+        self._clock_ns = clock_ns
         nidaqmx = import_nidaqmx()
         self._task = None
         try:
@@ -111,14 +113,35 @@ class NiDaqAccelerometer:
                 channel.ai_coupling = constants.Coupling.AC
             task.timing.cfg_samp_clk_timing(settings.sample_rate, sample_mode=constants.AcquisitionType.CONTINUOUS,
                                             samps_per_chan=settings.buffer_size)
-            task.start()
-            self.start_ns = int(clock_ns())
         except Exception as exc:     # driver missing, no such device, unsupported setting: one line
             self.close()
             raise InputError(f'source hardware: NI-DAQmx cannot acquire from {settings.channel}: '
                              f'{_one_line(exc)}') from None
-        self.samples_read = 0
+        self.start_ns, self.samples_read, self.running = 0, 0, False
         self._timeout = max(2.0, 4.0 * settings.block_size / settings.sample_rate)
+        if start:
+            self.start()
+
+    def start(self) -> None:
+        """Start (or restart) the acquisition; stamps count samples from now.  InputError when it cannot."""
+        if self._task is None:
+            raise InputError(f'source hardware: the acquisition from {self.settings.channel} was closed')
+        try:
+            self._task.start()
+        except Exception as exc:
+            self.close()
+            raise InputError(f'source hardware: NI-DAQmx cannot acquire from {self.settings.channel}: '
+                             f'{_one_line(exc)}') from None
+        self.start_ns, self.samples_read, self.running = int(self._clock_ns()), 0, True
+
+    def stop(self) -> None:
+        """Stop acquiring (the task stays set up; :meth:`start` again to resume)."""
+        if self._task is not None and self.running:
+            try:
+                self._task.stop()
+            except Exception:        # stopping a task that failed: nothing more to do
+                pass
+        self.running = False
 
     def read_block(self) -> Tuple[int, np.ndarray]:
         """The next block: ``(stamp_ns of its first sample, samples in m/s^2 as float32)``.
@@ -142,6 +165,7 @@ class NiDaqAccelerometer:
     def close(self) -> None:
         """Stop and release the task (safe to call twice)."""
         task, self._task = self._task, None
+        self.running = False
         if task is None:
             return
         for step in ('stop', 'close'):

@@ -21,6 +21,28 @@ Parameter ``source`` (read-only) chooses where the data come from:
   optionally relayed from ``relay_joint_states`` / ``relay_axial_load`` onto the
   contract names.  Without the nidaqmx package, the driver or the card: one
   line and status 2.
+- ``imu``: one axis (``imu_axis``) of ``linear_acceleration`` of the
+  ``sensor_msgs/Imu`` messages on ``imu_topic`` (any IMU or accelerometer
+  driver; a relative name, sensor-data QoS), grouped into VibrationBlocks of
+  ``block_length`` s by :class:`~.imu_blocks.ImuBlockAssembler`: each block
+  is stamped with its first sample and carries ``sample_rate`` (0: the rate
+  measured from the stamps).  A gap, jitter beyond ``jitter_tolerance``,
+  stamps going back, or stamps whose rate differs from ``sample_rate`` by
+  more than ``rate_tolerance`` close the block early; each kind is logged
+  once in one line and counted on ``/diagnostics``.  header.frame_id is the
+  IMU's (``frame_id`` when the IMU leaves it empty).  Only vibration is
+  published: speed and load come from the control stack's own topics (or
+  the relays below).
+
+The bridge reports its own health on ``/diagnostics`` (absolute, as
+diagnostic aggregators expect) every ``diagnostics_period`` s: one status
+named ``<node name>: <namespace> sensor source`` with ``hardware_id`` (the
+DAQ channel, bag, IMU topic or ``rig simulator`` unless set), the blocks
+published, block and sample rate, lost samples, and the last error; OK,
+WARN (block rate below the expected one, data lost in the last 10 s),
+ERROR (the source failed) or STALE (no block for ``stale_timeout`` s)
+(:mod:`.bridge_health`).  ``sensor_bridge_managed`` is the lifecycle
+variant (:class:`ManagedSensorBridge`).
 
 Topics are ``<namespace>/vibration``, ``/joint_states``, ``/axial_load`` and
 ``/temperature`` (CONTRACT.md).  In a node started in a namespace (``-r
@@ -40,27 +62,33 @@ import threading
 import time
 import traceback
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterType, SetParametersResult
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_sensor_data, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState, Temperature
+from sensor_msgs.msg import Imu, JointState, Temperature
 
-from ..contract import topic_name, topic_prefix
+from ..contract import DIAGNOSTICS_TOPIC, topic_name, topic_prefix
 from ..errors import InputError
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
 from ..simulation.rig_config import load_rig_config
 from ..simulation.signal import RigSignalGenerator
+from .bridge_health import SourceHealth
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
+from .fast_drain import FastDrain, missing_api
+from .imu_blocks import check_axis, ImuBlockAssembler
 from .parameters import declare_parameter_table
-from .ros_convert import joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg, wrench_msg
-from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
+from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
+                          wrench_msg)
+from .startup import run_node
 
 NODE_NAME = 'sensor_bridge'
-SOURCES = ('playback', 'simulator', 'hardware')
+SOURCES = ('playback', 'simulator', 'hardware', 'imu')
 
 _BOOL = ParameterType.PARAMETER_BOOL
 _DOUBLE = ParameterType.PARAMETER_DOUBLE
@@ -70,14 +98,21 @@ _STRING = ParameterType.PARAMETER_STRING
 #: name: (default, type, description, range (low, high) or None, read_only)
 PARAMETERS = {
     'source': ('simulator', _STRING, 'where the data come from: playback (a recorded bag), simulator (the rig '
-               'simulator in real time) or hardware (NI-DAQmx accelerometer)', None, True),
+               'simulator in real time), hardware (NI-DAQmx accelerometer) or imu (a sensor_msgs/Imu topic)', None,
+               True),
     'namespace': ('/prsm', _STRING, 'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature '
                   '(a namespace ending in / or _ is a plain prefix)', None, True),
     'reliability': ('reliable', _STRING, 'QoS of the publishers: reliable (serves best-effort and reliable '
                     'readers) or best_effort', None, True),
     'qos_depth': (100, _INTEGER, 'KEEP_LAST depth of the publishers', (1, 100000), True),
     'frame_id': ('nut_accelerometer', _STRING, 'header.frame_id of the VibrationBlocks (playback, hardware; the '
-                 'simulator uses its rig file\'s)', None, True),
+                 'simulator uses its rig file\'s, imu the IMU\'s when it sets one)', None, True),
+    'hardware_id': ('', _STRING, 'diagnostic hardware_id of the source status (empty: the DAQ channel, bag, IMU '
+                    'topic or rig simulator)', None, True),
+    'stale_timeout': (2.0, _DOUBLE, 's without a published vibration block before the source status is STALE',
+                      (0.01, 3600.0), True),
+    'diagnostics_period': (1.0, _DOUBLE, 's between the source status messages on /diagnostics', (0.05, 60.0),
+                           True),
     # playback
     'bag': ('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', None, True),
     'bag_namespace': ('', _STRING, 'playback: actuator namespace inside the bag (empty: namespace)', None, True),
@@ -104,9 +139,10 @@ PARAMETERS = {
     # hardware
     'daq_channel': ('Dev1/ai0', _STRING, 'hardware: NI-DAQmx physical channel of the nut accelerometer', None,
                     True),
-    'sample_rate': (4000.0, _DOUBLE, 'hardware: samples per second (paper: 4 kHz)', (1.0, 1.0e6), True),
-    'block_length': (0.1, _DOUBLE, 'hardware: s per VibrationBlock (rounded to whole samples)', (0.001, 10.0),
-                     True),
+    'sample_rate': (4000.0, _DOUBLE, 'hardware: samples per second (paper: 4 kHz); imu: the IMU\'s expected rate, '
+                    '0 = the rate measured from the stamps', (0.0, 1.0e6), True),
+    'block_length': (0.1, _DOUBLE, 'hardware, imu: s per VibrationBlock (rounded to whole samples)',
+                     (0.001, 10.0), True),
     'sensitivity': (100.0, _DOUBLE, 'hardware: accelerometer sensitivity in mV/g (paper: 100 mV/g)',
                     (0.001, 1.0e5), True),
     'iepe_current': (0.004, _DOUBLE, 'hardware: IEPE excitation current in A (0: no excitation)', (0.0, 0.1),
@@ -114,14 +150,25 @@ PARAMETERS = {
     'range_g': (50.0, _DOUBLE, 'hardware: measurement range +/- g', (0.001, 1.0e5), True),
     'buffer_seconds': (10.0, _DOUBLE, 'hardware: ring buffer of the continuous acquisition in s', (0.1, 3600.0),
                        True),
-    'relay_joint_states': ('', _STRING, 'hardware: JointState topic of the EMA stack to republish on '
+    # imu
+    'imu_topic': ('imu/data', _STRING, 'imu: sensor_msgs/Imu topic (relative: in the node\'s namespace)', None,
+                  True),
+    'imu_axis': ('z', _STRING, 'imu: axis of linear_acceleration along the screw: x, y or z', None, True),
+    'rate_tolerance': (0.05, _DOUBLE, 'imu: largest relative difference between the rate of the stamps and '
+                       'sample_rate before the measured rate is used (reported once)', (0.001, 0.5), True),
+    'jitter_tolerance': (0.25, _DOUBLE, 'imu: largest deviation of one stamp interval from the sample period, '
+                         'as a fraction of it, before the block is closed early', (0.01, 0.49), True),
+    # hardware and imu
+    'relay_joint_states': ('', _STRING, 'hardware, imu: JointState topic of the EMA stack to republish on '
                            '<namespace>/joint_states (empty: the stack publishes there itself)', None, True),
-    'relay_joint': ('', _STRING, 'hardware: name of the screw joint in the relayed JointState, renamed to screw '
+    'relay_joint': ('', _STRING, 'hardware, imu: name of the screw joint in the relayed JointState, renamed to screw '
                     '(empty: already named screw)', None, True),
-    'relay_axial_load': ('', _STRING, 'hardware: WrenchStamped topic of the EMA stack to republish on '
+    'relay_axial_load': ('', _STRING, 'hardware, imu: WrenchStamped topic of the EMA stack to republish on '
                          '<namespace>/axial_load (empty: none)', None, True),
 }
 SIMULATOR_PARAMETERS = ('speed', 'load', 'theta_oil')
+#: Most IMU messages taken from the queue per callback (the rest wait for the next one).
+MAX_IMU_DRAIN = 10000
 
 
 def publisher_qos(reliability: str, depth: int) -> QoSProfile:
@@ -133,17 +180,15 @@ def publisher_qos(reliability: str, depth: int) -> QoSProfile:
                       durability=DurabilityPolicy.VOLATILE)
 
 
-class SensorBridge(Node):
-    """The bridge node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`.
+class BridgeCore:
+    """The bridge's source and publishers, opened, started, halted and closed; mixed into a ROS node class.
 
-    Raises :class:`InputError` at construction when the source cannot be used
-    (nothing is published then).  A worker thread paces and publishes; it sets
-    :attr:`finished` when the source ends (playback done, acquisition failed),
-    with :attr:`exit_status` 0 or 1.
+    :class:`SensorBridge` opens and starts at construction;
+    :class:`ManagedSensorBridge` does each step on a lifecycle transition.
     """
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs):
-        super().__init__(node_name, **kwargs)
+    def _read_parameters(self) -> dict:
+        """Declare the parameters; check the source; the values by name."""
         values = declare_parameter_table(self, PARAMETERS)
         self.source = str(values['source']).strip()
         if self.source not in SOURCES:
@@ -152,7 +197,6 @@ class SensorBridge(Node):
         # The default /prsm in a node started in a namespace means that namespace (relative names; contract).
         self._prefix = topic_prefix(namespace, self.get_namespace())
         self.namespace = self._prefix or self.get_namespace()
-        self.frame_id = str(values['frame_id'])
         self.finished = threading.Event()
         self.exit_status = 0
         self.messages_published = 0
@@ -160,17 +204,32 @@ class SensorBridge(Node):
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._values = values
-        self._recording = self._generator = self._daq = None
+        self._recording = self._generator = self._daq = self._assembler = self._pacer = None
+        self._thread = self._imu_subscription = self._timer = None
+        self._outputs, self._relays, self._clock_publisher = {}, [], None
+        self.health = None
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        return values
+
+    def _open(self) -> None:
+        """Open the source (InputError, nothing published, when it cannot be used), then the publishers."""
+        values = self._values = {name: self.get_parameter(name).value for name in PARAMETERS}
+        self.frame_id = str(values['frame_id'])
         qos = publisher_qos(str(values['reliability']), values['qos_depth'])
-        # Open the source first: if it cannot be used, the node ends before publishing anything.
         kinds = ['vibration', 'joint_states', 'axial_load', 'temperature']
+        expected_rate = None
         if self.source == 'playback':
             self._open_playback(values)
             kinds = list(self._recording.selected)
         elif self.source == 'simulator':
-            self._open_simulator(values)
-        else:
+            rig = self._open_simulator(values)
+            expected_rate = 1.0 / rig.vibration_block
+        elif self.source == 'hardware':
             self._open_hardware(values)
+            expected_rate = self._daq.settings.sample_rate / self._daq.settings.block_size
+            kinds = ['vibration']
+        else:
+            self._open_imu(values)
             kinds = ['vibration']
         types = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
                  'temperature': Temperature}
@@ -180,11 +239,61 @@ class SensorBridge(Node):
         wants_clock = self.source == 'playback' and values['publish_clock']
         self._clock_publisher = self.create_publisher(Clock, '/clock', QoSProfile(depth=10)) if wants_clock else None
         self._relays = []
-        if self.source == 'hardware':
+        if self.source in ('hardware', 'imu'):
             self._create_relays(values, qos)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._open_diagnostics(values, expected_rate)
+
+    def _start(self) -> None:
+        """Start publishing: the worker thread, or (imu) the subscription."""
+        self._stop = threading.Event()
+        self.health.active = True
+        if self.source == 'imu':
+            self._imu_subscription = self.create_subscription(Imu, self._imu_topic, self._on_imu,
+                                                              self._imu_qos)
+            return
+        if self._pacer is not None:
+            self._pacer.stop = self._stop
+            self._pacer.restart()
+        self.finished.clear()
+        if self._daq is not None:
+            self._daq.start()
         self._thread = threading.Thread(target=self._work, name='sensor_bridge source', daemon=True)
         self._thread.start()
+
+    def _halt(self) -> None:
+        """Stop publishing (the worker ends, the IMU subscription goes); the source stays open."""
+        stop, thread = getattr(self, '_stop', None), getattr(self, '_thread', None)
+        if stop is not None:
+            stop.set()
+        if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+            thread.join(timeout=5.0)
+        self._thread = None
+        daq = getattr(self, '_daq', None)
+        if daq is not None:
+            daq.stop()
+        subscription, self._imu_subscription = getattr(self, '_imu_subscription', None), None
+        if subscription is not None:
+            self.destroy_subscription(subscription)
+        if getattr(self, 'health', None) is not None:
+            self.health.active = False
+
+    def _close(self) -> None:
+        """Halt, close the source, and remove the publishers, relays and diagnostics."""
+        self._halt()
+        daq, self._daq = getattr(self, '_daq', None), None
+        if daq is not None:
+            daq.close()
+        self._recording = self._generator = self._assembler = self._pacer = None
+        extras = [getattr(self, name, None) for name in ('_clock_publisher', '_diagnostics')]
+        for publisher in list(getattr(self, '_outputs', {}).values()) + extras:
+            if publisher is not None:
+                self.destroy_publisher(publisher)
+        for relay in getattr(self, '_relays', []):
+            self.destroy_subscription(relay)
+        timer, self._timer = getattr(self, '_timer', None), None
+        if timer is not None:
+            self.destroy_timer(timer)
+        self._outputs, self._relays, self._clock_publisher, self._diagnostics = {}, [], None, None
 
     # -- sources -----------------------------------------------------------------------------------
     def _open_playback(self, values):
@@ -204,6 +313,7 @@ class SensorBridge(Node):
         self.frame_id = rig.vibration_frame_id
         self._load_frame, self._temperature_frame = rig.load_frame_id, rig.temperature_frame_id
         self._pacer = Pacer(1.0, self._stop)
+        return rig
 
     def _open_hardware(self, values):
         size = int(round(values['block_length'] * values['sample_rate']))
@@ -211,7 +321,24 @@ class SensorBridge(Node):
                                block_size=max(size, 1), sensitivity=float(values['sensitivity']),
                                iepe_current=float(values['iepe_current']), range_g=float(values['range_g']),
                                buffer_seconds=float(values['buffer_seconds']))
-        self._daq = NiDaqAccelerometer(settings)
+        self._daq = NiDaqAccelerometer(settings, start=False)      # started by _start
+
+    def _open_imu(self, values):
+        self._imu_axis = check_axis(values['imu_axis'])
+        topic = str(values['imu_topic']).strip()
+        if not topic:
+            raise InputError('parameter imu_topic: empty; name the sensor_msgs/Imu topic of the accelerometer')
+        self._imu_topic = self.resolve_topic_name(topic)
+        self._imu_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
+                                   reliability=qos_profile_sensor_data.reliability,
+                                   durability=qos_profile_sensor_data.durability)
+        self._assembler = ImuBlockAssembler(float(values['block_length']), float(values['sample_rate']),
+                                            float(values['rate_tolerance']), float(values['jitter_tolerance']),
+                                            on_problem=self._imu_problem)
+        self._imu_unusable = 0
+        # Each IMU callback also takes the messages queued behind it (fast_drain.py): one executor wake-up per
+        # burst instead of per sample.  Without that rclpy API: one callback per message.
+        self._imu_drain = FastDrain(self.get_logger()) if not missing_api() else None
 
     def _create_relays(self, values, qos):
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -232,6 +359,71 @@ class SensorBridge(Node):
             self._relays.append(self.create_subscription(WrenchStamped, values['relay_axial_load'],
                                                          out_load.publish, sensor_qos))
 
+    # -- imu ----------------------------------------------------------------------------------------
+    def _on_imu(self, msg: Imu) -> None:
+        """IMU callback: this sample and those queued behind it."""
+        self._take_imu(msg)
+        if self._imu_drain is not None:
+            for queued in self._imu_drain.drain(self._imu_subscription, MAX_IMU_DRAIN):
+                self._take_imu(queued)
+
+    def _take_imu(self, msg: Imu) -> None:
+        """One IMU sample: into the current block; publish the blocks it completes."""
+        assembler = self._assembler
+        if assembler is None:
+            return
+        now = time.monotonic()
+        if msg.linear_acceleration_covariance[0] == -1.0:       # REP 145: no linear acceleration in this message
+            self._imu_unusable += 1
+            if self._imu_unusable == 1:
+                self._imu_problem('no data', 'the IMU marks linear_acceleration as not measured '
+                                  '(linear_acceleration_covariance[0] = -1); its samples are dropped')
+            self.health.loss(now, samples=1, why='linear_acceleration not measured')
+            return
+        lost_before = assembler.lost_samples + assembler.dropped_samples
+        blocks = assembler.push(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+                                getattr(msg.linear_acceleration, self._imu_axis))
+        lost = assembler.lost_samples + assembler.dropped_samples - lost_before
+        if lost:
+            self.health.loss(now, samples=lost, why=assembler.last_problem)
+        frame_id = msg.header.frame_id or self.frame_id
+        vibration = self._outputs['vibration']
+        for block in blocks:
+            vibration.publish(vibration_block_msg(time_from_ns(block.stamp_ns), block.sample_rate, block.samples,
+                                                  frame_id))
+            self.messages_published += 1
+            self.health.block(now, block.sample_rate)
+            self.health.expected_block_rate = assembler.sample_rate / assembler.block_size
+
+    def _imu_problem(self, kind: str, line: str) -> None:
+        """First problem of a kind: one log line (later ones are counted on /diagnostics)."""
+        self.get_logger().warning(f'{self._imu_topic}: {kind}: {line} (logged once; counted on /diagnostics)')
+        self.health.note(f'{kind}: {line}')
+
+    # -- diagnostics --------------------------------------------------------------------------------
+    def _open_diagnostics(self, values, expected_block_rate) -> None:
+        defaults = {'playback': str(values['bag']).strip(), 'simulator': 'rig simulator',
+                    'hardware': str(values['daq_channel']), 'imu': getattr(self, '_imu_topic', '')}
+        self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
+        self.status_name = f'{self.get_name()}: {self.namespace} sensor source'
+        self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
+        self.health.active = False                          # until _start
+        self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
+        self._timer = self.create_timer(float(values['diagnostics_period']), self.publish_diagnostics)
+
+    def source_status(self):
+        """The source's :class:`~.bridge_health.SourceStatus` now."""
+        return self.health.status(time.monotonic())
+
+    def publish_diagnostics(self) -> None:
+        """One DiagnosticArray with the source status on /diagnostics."""
+        status = self.source_status()
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [diagnostic_status(self.status_name, self.hardware_id, status.level, status.message,
+                                          status.values)]
+        self._diagnostics.publish(array)
+
     # -- the worker thread -------------------------------------------------------------------------
     def _work(self):
         try:
@@ -243,10 +435,12 @@ class SensorBridge(Node):
                 self._acquire()
         except InputError as exc:
             self.get_logger().error(str(exc))
+            self.health.fail(str(exc))
             self.exit_status = 1
         except Exception as exc:      # a bug, not bad input: say so with the traceback
             self.get_logger().error(f'internal error (please report): '
                                     f'{"".join(traceback.format_exception(exc)).strip()}')
+            self.health.fail(f'internal error: {exc}')
             self.exit_status = 1
         finally:
             self.finished.set()
@@ -310,8 +504,10 @@ class SensorBridge(Node):
                 block = vibration_block_msg(time_from_ns(stamp_ns), settings.sample_rate, samples, self.frame_id)
                 vibration.publish(block)
                 self.messages_published += 1
+                self.health.block(time.monotonic(), settings.sample_rate)
         finally:
-            daq.close()
+            if not self._stop.is_set():      # a failed read: the acquisition is over (halted: it stays open)
+                daq.close()
 
     def _publish(self, kind: str, stamp_ns: int, payload: tuple):
         if kind == 'vibration':
@@ -326,9 +522,12 @@ class SensorBridge(Node):
         if publisher is not None:
             publisher.publish(msg)
             self.messages_published += 1
+            if kind == 'vibration':
+                self.health.block(time.monotonic(), payload[0])
 
     def _problem(self, line: str):
         self.get_logger().warning(f'{self._values["bag"]}: {line}')
+        self.health.note(line)
 
     # -- parameters --------------------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -341,27 +540,102 @@ class SensorBridge(Node):
                 return SetParametersResult(successful=False, reason='playback_rate applies to source playback only')
         for parameter in parameters:
             value = parameter.value
-            if parameter.name in SIMULATOR_PARAMETERS:
+            if parameter.name in SIMULATOR_PARAMETERS and self._generator is not None:  # else: read at configure
                 with self._lock:
                     setter = {'speed': self._generator.set_speed, 'load': self._generator.set_load,
                               'theta_oil': self._generator.set_theta}[parameter.name]
                     setter(float(value))
                 self.get_logger().info(f'simulator: {parameter.name} set to {value:g}')
-            elif parameter.name == 'playback_rate':
+            elif parameter.name == 'playback_rate' and self._pacer is not None:
                 self._pacer.rate = float(value)
                 self._pacer.restart()
         return SetParametersResult(successful=True)
 
+
+class SensorBridge(BridgeCore, Node):
+    """The bridge node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`.
+
+    Raises :class:`InputError` at construction when the source cannot be used
+    (nothing is published then).  A worker thread paces and publishes (imu: the
+    subscription's callback); it sets :attr:`finished` when the source ends
+    (playback done, acquisition failed), with :attr:`exit_status` 0 or 1.
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        self._read_parameters()
+        self._open()
+        self._start()
+
     def destroy_node(self):
         """Stop the worker (and the acquisition) before the node goes."""
         # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
-        stop, thread, daq = (getattr(self, name, None) for name in ('_stop', '_thread', '_daq'))
-        if stop is not None:
-            stop.set()
-        if thread is not None and thread.is_alive() and thread is not threading.current_thread():
-            thread.join(timeout=5.0)
-        if daq is not None:
-            daq.close()
+        self._close()
+        return super().destroy_node()
+
+
+class ManagedSensorBridge(BridgeCore, LifecycleNode):
+    """The bridge as a lifecycle (managed) node: each step of :class:`BridgeCore` on a transition.
+
+    Constructed unconfigured (parameters declared and checked).  configure
+    opens the source (the bag, the rig simulator, the DAQ task set up but not
+    started, the IMU settings), creates the publishers and the status on
+    /diagnostics; activate starts publishing (worker thread, acquisition or
+    IMU subscription); deactivate stops it (the source stays open); cleanup
+    and shutdown close the source and remove the publishers.  A source that
+    cannot be opened fails configure with one log line (the node stays
+    unconfigured).  Activate after deactivate replays a bag from its start
+    again; the simulator goes on in its own time (its stamps then trail the
+    wall clock by the time it was inactive).
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        self._read_parameters()
+
+    def _step(self, what: str, action) -> TransitionCallbackReturn:
+        try:
+            action()
+        except InputError as exc:
+            self.get_logger().error(f'{what} failed: {exc}')
+            return TransitionCallbackReturn.FAILURE
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Open the source and create the publishers (FAILURE, all closed again, when it cannot be used)."""
+        result = self._step('configure', self._open)
+        if result != TransitionCallbackReturn.SUCCESS:
+            self._close()
+        return result
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Start publishing."""
+        result = self._step('activate', self._start)
+        return super().on_activate(state) if result == TransitionCallbackReturn.SUCCESS else result
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Stop publishing; the source stays open."""
+        self._halt()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Close the source and remove the publishers."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """As cleanup, from any state."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """A transition raised: close everything and go back to unconfigured."""
+        self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def destroy_node(self):
+        """Stop and close before the node goes."""
+        self._close()
         return super().destroy_node()
 
 
@@ -377,13 +651,20 @@ def main(args=None) -> int:
     Playback without ``loop`` ends with status 0 after the last message
     (``exit_at_end``); an acquisition that fails while running ends with 1.
     """
-    init_ros(args)
-    node = build_node(SensorBridge, NODE_NAME)
-    if node is None:
-        return EXIT_BAD_INPUT
-    exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
-    spin_until_stopped([node], done=lambda: node.finished.is_set() and bool(exit_at_end or node.exit_status))
-    return node.exit_status
+    def finished(node):
+        exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
+        return node.finished.is_set() and bool(exit_at_end or node.exit_status)
+    return run_node(SensorBridge, NODE_NAME, args, done=finished, exit_status=lambda node: node.exit_status)
+
+
+def main_managed(args=None) -> int:
+    """Entry point of ``ros2 run prsm_lube_ros sensor_bridge_managed``: the lifecycle bridge, unconfigured.
+
+    Drive it with ``ros2 lifecycle set <node> configure | activate | deactivate
+    | cleanup | shutdown``; it runs until Ctrl-C.  Bad parameters: one line,
+    status 2.
+    """
+    return run_node(ManagedSensorBridge, NODE_NAME, args)
 
 
 if __name__ == '__main__':

@@ -61,6 +61,22 @@ def build_node(factory: Callable[[], object], node_name: str) -> Optional[object
         return None
 
 
+def run_node(factory: Callable[[], object], node_name: str, args: Optional[Sequence[str]] = None,
+             done: Callable[[object], bool] = lambda node: False,
+             exit_status: Callable[[object], int] = lambda node: 0) -> int:
+    """A node process from start to end: :func:`init_ros`, :func:`build_node`, :func:`spin_until_stopped`.
+
+    Returns :data:`EXIT_BAD_INPUT` when the node cannot be built, else
+    ``exit_status(node)`` once a stop signal or ``done(node)`` ended it.
+    """
+    init_ros(args)
+    node = build_node(factory, node_name)
+    if node is None:
+        return EXIT_BAD_INPUT
+    spin_until_stopped([node], done=lambda: done(node))
+    return exit_status(node)
+
+
 def spin_until_stopped(nodes, done: Callable[[], bool] = lambda: False, executor=None) -> None:
     """Spin ``nodes`` until a stop signal, ``done()``, or shutdown; then tear everything down in order.
 

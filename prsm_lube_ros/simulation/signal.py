@@ -261,8 +261,15 @@ class RigSignalGenerator:
 
     Speed changes ramp at ``rig.live_acceleration`` (rad/s^2), load changes over
     ``rig.load_ramp_time`` per 200 N (a step if that time is 0).
-    Changes act from the next block on.
+    Changes act from the next block on.  The nut starts at one end of its
+    stroke (``rig.actuator.nut_travel``) and reverses at both ends, as the
+    rig does: the speed ramps from the commanded speed to its opposite so
+    that it passes zero where the nut reaches the end (the load stays as
+    commanded).
     """
+
+    #: Instants per block at which the stroke ends are looked for.
+    REVERSAL_STEPS = 200
 
     def __init__(self, rig: RigConfig | None = None, *, seed: int = 0, effects: Effects | None = None,
                  theta_oil: float = 1.0, start_stamp_ns: int | None = None):
@@ -273,6 +280,9 @@ class RigSignalGenerator:
         self._stream = RigStream(self.rig, self._program, seed=seed, effects=effects,
                                  origin_ns=start_stamp_ns)
         self._block = 0
+        self._target_speed = 0.0
+        # Screw angles of the stroke ends (rad): nut travel 0 .. nut_travel (Eq. of CONTRACT.md, inverted).
+        self._angle_limits = (0.0, 2.0 * math.pi * self.rig.actuator.nut_travel / self.rig.actuator.lead)
 
     @property
     def now(self) -> float:
@@ -281,8 +291,9 @@ class RigSignalGenerator:
 
     def set_speed(self, speed: float) -> None:
         """Command the screw speed in rad/s (signed)."""
+        self._target_speed = as_number('speed', speed)
         self._program.forget_before(self.now)
-        self._program.command_speed(self.now, as_number('speed', speed), self.rig.live_acceleration)
+        self._program.command_speed(self.now, self._target_speed, self.rig.live_acceleration)
 
     def set_load(self, load: float) -> None:
         """Command the applied axial load in N."""
@@ -300,8 +311,34 @@ class RigSignalGenerator:
             self.set_theta(theta_oil)
         self._stream.relubricate()
 
+    def _reverse_at_stroke_ends(self) -> None:
+        """Command the opposite speed at the first instant of the next block where braking must begin.
+
+        Braking at ``live_acceleration`` a from speed w takes w^2 / (2 a) rad;
+        the reversal is commanded when that distance reaches the stroke end
+        the screw is heading for, looked for on a grid of
+        :attr:`REVERSAL_STEPS` instants (the nut overshoots by at most one
+        grid step of travel).
+        """
+        if self._target_speed == 0.0:
+            return
+        acceleration = self.rig.live_acceleration
+        times = self.now + np.linspace(0.0, self.rig.vibration_block, self.REVERSAL_STEPS + 1)
+        angles, speeds = self._program.motion(times)
+        stops = angles + np.sign(speeds) * speeds ** 2 / (2.0 * acceleration)
+        low, high = self._angle_limits
+        heading = np.sign(self._target_speed)
+        beyond = stops >= high if heading > 0 else stops <= low
+        beyond &= np.sign(speeds) != -heading
+        if not beyond.any():
+            return
+        when = float(times[int(np.argmax(beyond))])
+        self._target_speed = -self._target_speed
+        self._program.command_speed(when, self._target_speed, acceleration)
+
     def next_block(self) -> RigBlock:
         """The next vibration block and the sensor data of its time span."""
+        self._reverse_at_stroke_ends()
         chunk = self._stream.advance(self._block, self._block + 1, self.theta_oil)
         self._block += 1
         return RigBlock(stamp=int(chunk.block_stamps[0]) * 1e-9, sample_rate=chunk.sample_rate,

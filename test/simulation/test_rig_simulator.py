@@ -474,3 +474,31 @@ def test_live_generator_stays_continuous_through_many_commands():
     steps = np.diff(joint_angles)
     np.testing.assert_allclose(steps, 0.01 * (joint[1:] + joint[:-1]) / 2, atol=1e-9)
     assert angles[0] == 0.0 and np.all(np.abs(speeds) <= 5.0)
+
+
+def test_live_generator_reverses_at_both_stroke_ends():
+    """Commanded 40 rad/s for 16 s: the nut runs 0 .. 0.18 m and back, never beyond the stroke (issue 8)."""
+    generator = RigSignalGenerator(seed=3)
+    generator.set_speed(40.0)
+    blocks = [generator.next_block() for _ in range(160)]
+    angles = np.concatenate([b.topics.joint_angles for b in blocks])
+    speeds = np.concatenate([b.topics.joint_speeds for b in blocks])
+    positions = RIG.actuator.nut_travel_from_angle(angles, 0.0)
+    stroke = RIG.actuator.nut_travel
+    overshoot = 40.0 * RIG.vibration_block / RigSignalGenerator.REVERSAL_STEPS * RIG.actuator.lead / (2 * np.pi)
+    assert positions.min() >= -overshoot and positions.max() <= stroke + overshoot
+    top = int(np.argmax(positions))
+    assert positions[top] > stroke - 0.002                       # it does reach the far end ...
+    assert positions[top:].min() < 0.002                         # ... and comes back to the near one
+    assert np.sum(np.diff(np.sign(speeds[np.abs(speeds) > 1.0])) != 0) >= 2   # two reversals
+    assert np.abs(speeds).max() <= 40.0 + 1e-9
+    # Braking at live_acceleration passes zero at the end: standstill there lasts no longer than one ramp.
+    assert np.all(np.abs(np.diff(speeds)) <= RIG.live_acceleration * 0.01 + 1e-9)
+
+
+def test_live_generator_at_the_start_end_turns_a_backward_command_around():
+    generator = RigSignalGenerator(seed=3)
+    generator.set_speed(-20.0)
+    blocks = [generator.next_block() for _ in range(20)]
+    angles = np.concatenate([b.topics.joint_angles for b in blocks])
+    assert angles.min() >= -1e-9 and blocks[-1].speed == pytest.approx(20.0)

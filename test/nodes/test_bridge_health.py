@@ -1,0 +1,61 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The bridge's own health level: STALE before and after blocks, WARN on losses and a low rate, ERROR on failure."""
+import math
+
+import pytest
+
+from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN
+from prsm_lube_ros.nodes.bridge_health import RATE_SPAN, SourceHealth
+
+
+def run(health, start, stop, period, sample_rate=4000.0):
+    """Blocks every ``period`` s from ``start`` to ``stop``; returns the last block time."""
+    t = start
+    while t < stop:
+        health.block(t, sample_rate)
+        t += period
+    return t - period
+
+
+def test_levels_follow_the_blocks():
+    health = SourceHealth('hardware', stale_timeout=2.0, expected_block_rate=10.0)
+    assert health.status(0.0).level == STALE and health.status(0.0).message == 'no block published yet'
+    last = run(health, 0.0, 20.0, 0.1)
+    status = health.status(last + 0.05)
+    assert status.level == OK
+    values = dict(status.values)
+    assert values['blocks published'] == 200 and values['sample rate [Hz]'] == 4000.0
+    assert values['block rate [1/s]'] == pytest.approx(10.0, rel=0.02)
+    assert health.status(last + 2.5).level == STALE
+
+
+def test_a_rate_below_the_expected_one_warns_once_settled():
+    health = SourceHealth('imu', stale_timeout=2.0, expected_block_rate=10.0)
+    last = run(health, 0.0, 5.0, 0.2)                 # half the expected rate, but less than RATE_SPAN in
+    assert health.status(last).level == OK
+    last = run(health, last + 0.2, RATE_SPAN + 5.0, 0.2)
+    status = health.status(last)
+    assert status.level == WARN and 'expected 10' in status.message
+
+
+def test_losses_warn_for_a_while_and_failure_is_an_error():
+    health = SourceHealth('imu', stale_timeout=2.0)
+    last = run(health, 0.0, 3.0, 0.1)
+    health.loss(last, samples=50, why='gap of 0.05 s')
+    status = health.status(last)
+    assert status.level == WARN and 'gap of 0.05 s' in status.message
+    assert dict(status.values)['lost samples'] == 50
+    last = run(health, last + 0.1, last + RATE_SPAN + 1.0, 0.1)
+    assert health.status(last).level == OK                          # the loss is no longer recent
+    assert dict(health.status(last).values)['last error'] == 'gap of 0.05 s'
+    health.fail('reading Dev1/ai0 failed: overrun')
+    assert health.status(last).level == ERROR
+    assert health.status(last).message == 'source imu failed: reading Dev1/ai0 failed: overrun'
+
+
+def test_no_expected_rate_never_warns_on_rate():
+    health = SourceHealth('playback', stale_timeout=2.0)
+    last = run(health, 0.0, 30.0, 1.0)
+    assert health.status(last).level == OK
+    assert math.isnan(dict(health.status(last).values)['expected block rate [1/s]'])
