@@ -47,6 +47,19 @@ DIAGNOSTICS_TOPIC = '/diagnostics'
 SCREW_JOINT = 'screw'
 
 
+#: Tasks of the diagnostic statuses on ``/diagnostics`` (see :func:`status_name`).
+LUBRICATION_TASK = 'lubrication'
+SOURCE_TASK = 'sensor source'
+
+
+def status_name(node_name: str, namespace: str, task: str) -> str:
+    """diagnostic_updater style status name ``'<node name>: <namespace> <task>'``.
+
+    ``config/diagnostic_aggregator.yaml`` claims the statuses by ``' <task>'``.
+    """
+    return f'{node_name}: {namespace} {task}'
+
+
 def topic_name(namespace: str, leaf: str) -> str:
     """Topic ``leaf`` of the actuator in ``namespace`` (see the module's rules)."""
     if leaf.startswith('/'):

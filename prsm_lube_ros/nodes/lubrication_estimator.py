@@ -64,7 +64,7 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
-from ..contract import topic_name, topic_prefix
+from ..contract import LUBRICATION_TASK, status_name, topic_name, topic_prefix
 from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
@@ -77,7 +77,7 @@ from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace, recordings_folder
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table
-from .startup import build_node, EXIT_BAD_INPUT, init_ros, spin_until_stopped
+from .startup import run_node
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -212,7 +212,7 @@ class ActuatorChannel:
     @property
     def status_name(self) -> str:
         """diagnostic_updater style status name: '<node name>: <actuator> lubrication'."""
-        return f'{self.node_name}: {self.name} lubrication'
+        return status_name(self.node_name, self.name, LUBRICATION_TASK)
 
     def problem_count(self) -> int:
         """Bad messages and samples left out so far."""
@@ -667,12 +667,7 @@ def join_batches(batches: list):
 
 def main(args=None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
-    init_ros(args)
-    node = build_node(LubricationEstimator, NODE_NAME)
-    if node is None:
-        return EXIT_BAD_INPUT
-    spin_until_stopped([node])
-    return 0
+    return run_node(LubricationEstimator, NODE_NAME, args)
 
 
 if __name__ == '__main__':

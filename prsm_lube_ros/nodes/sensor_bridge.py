@@ -71,7 +71,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_s
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState, Temperature
 
-from ..contract import DIAGNOSTICS_TOPIC, topic_name, topic_prefix
+from ..contract import DIAGNOSTICS_TOPIC, SOURCE_TASK, status_name, topic_name, topic_prefix
 from ..errors import InputError
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
@@ -405,7 +405,7 @@ class BridgeCore:
         defaults = {'playback': str(values['bag']).strip(), 'simulator': 'rig simulator',
                     'hardware': str(values['daq_channel']), 'imu': getattr(self, '_imu_topic', '')}
         self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
-        self.status_name = f'{self.get_name()}: {self.namespace} sensor source'
+        self.status_name = status_name(self.get_name(), self.namespace, SOURCE_TASK)
         self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
         self.health.active = False                          # until _start
         self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)

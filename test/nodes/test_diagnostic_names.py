@@ -17,6 +17,7 @@ import yaml
 pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
+from prsm_lube_ros.contract import LUBRICATION_TASK, SOURCE_TASK, status_name  # noqa: E402
 from prsm_lube_ros.nodes.lubrication_estimator import ActuatorChannel  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[2] / 'config' / 'diagnostic_aggregator.yaml'
@@ -48,9 +49,18 @@ def test_every_analyzer_is_a_generic_analyzer_with_a_path():
         assert analyzer['type'] == 'diagnostic_aggregator/GenericAnalyzer' and analyzer['path']
 
 
-@pytest.mark.parametrize('node_name, actuator', [
-    ('lubrication_estimator', '/prsm'), ('lubrication_estimator', '/ema_left'),
-    ('estimator_lubrication_rig', '/lubrication/prsm'), ('lube', '/sensor/source')])
+NAMES = [('lubrication_estimator', '/prsm'), ('lubrication_estimator', '/ema_left'),
+         ('estimator_lubrication_rig', '/lubrication/prsm'), ('lube', '/sensor/source'), ('sensor_bridge', '/')]
+
+
+@pytest.mark.parametrize('node_name, actuator', NAMES)
 def test_an_estimator_status_is_claimed_by_the_lubrication_analyzer_only(node_name, actuator):
     name = estimator_status_name(node_name, actuator)
+    assert name == status_name(node_name, actuator, LUBRICATION_TASK)
     assert [key for key, a in analyzers().items() if claims(a, name)] == ['lubrication']
+
+
+@pytest.mark.parametrize('node_name, namespace', NAMES)
+def test_a_bridge_status_is_claimed_by_the_sensor_analyzer_only(node_name, namespace):
+    name = status_name(node_name, namespace, SOURCE_TASK)
+    assert [key for key, a in analyzers().items() if claims(a, name)] == ['sensor_sources']
