@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 import sys
 
-from ..errors import ConfigError, NotIdentifiable
+from ..errors import ConfigError
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -51,7 +51,7 @@ def warn(line: str) -> None:
 
 def read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
-    from ..estimation.pipeline import recording_windows
+    from ..estimation.pipeline import recording_windows, require_usable
     from ..estimation.windowing import WindowSettings
     from ..physics.actuator import load_actuator
     from ..validation import require_positive
@@ -66,9 +66,7 @@ def read_recordings(paths, args, *, spectra: bool = False):
                                           on_problem=warn, progress=percent_updater(bar))
         finally:
             bar.close()
-        if not any(window.steady for window in recording.windows):
-            raise NotIdentifiable(f'{path}: no usable window: {recording.why_no_window(settings)}')
-        recordings.append(recording)
+        recordings.append(require_usable(recording, settings))
     return recordings, actuator
 
 
