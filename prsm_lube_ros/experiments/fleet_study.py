@@ -1,0 +1,132 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Study: is each actuator's forecast warn crossing inside its stated interval, against the simulator's truth.
+
+A fleet is simulated (:mod:`prsm_lube_ros.simulation.fleet`: ``--actuators``
+actuators, one short recording a day for ``--days`` days, depletion and
+relubrications at known times), calibrated on its reference recording,
+assessed into a Parquet history (serially, ``--jobs`` processes or
+``--scheduler``) and forecast per actuator with relubrications detected from
+the recordings.  Each actuator's true warn crossing (its last lubrication
+cycle, usage continued past the last day) is compared with the forecast
+interval.  Writes ``results.json`` and ``coverage.md`` to ``--out``.
+
+    python -m prsm_lube_ros.experiments.fleet_study --out out/fleet_study [--actuators 20] [--days 10]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+import sys
+import time
+
+
+def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, jobs: int = 1,
+                        scheduler: str | None = None, storage: str = 'mcap') -> dict:
+    """Simulate the fleet into ``out/fleet``, calibrate, assess into ``out/history``; return timings and counts."""
+    from ..estimation.calibration_file import save_calibration
+    from ..estimation.pipeline import calibrate_recordings, recording_windows
+    from ..fleet.history import add_assessment, calibration_id
+    from ..fleet.parallel import assess_bags, BagJob
+    from ..physics.actuator import load_actuator
+    from ..recording.writer import bag_path
+    from ..simulation.fleet import FleetPlan, simulate_fleet
+    fleet_dir, history = out / 'fleet', out / 'history'
+    started = time.perf_counter()
+    paths = simulate_fleet(fleet_dir, fleet=FleetPlan(actuators=actuators, days=days), seed=seed, storage=storage)
+    simulated = time.perf_counter()
+    lead = load_actuator(None).lead
+    calibration = calibrate_recordings([recording_windows(bag_path(fleet_dir, 'reference', storage), lead=lead)])
+    calibration_path = save_calibration(calibration, out / 'calibration.yaml')
+    outcomes = assess_bags(paths, BagJob(calibration, lead, hash_content=True), jobs=jobs, scheduler=scheduler)
+    failed = [o.error for o in outcomes if o.error]
+    identifier = calibration_id(calibration_path)
+    for outcome in outcomes:
+        if outcome.assessment is not None:
+            add_assessment(history, outcome.assessment, actuator_id=Path(outcome.path).parent.name,
+                           content=outcome.content, calibration=identifier)
+    return {'recordings': len(paths), 'failed': failed, 'simulate_s': simulated - started,
+            'assess_s': time.perf_counter() - simulated}
+
+
+def compare_with_truth(history: Path, truth_path: Path, level: float | None = None) -> list[dict]:
+    """Per actuator: the forecast crossing of ``level`` (default the truth's first threshold) against the truth."""
+    from ..fleet.forecast import forecast_history
+    truth = json.loads(Path(truth_path).read_text())
+    level = truth['thresholds'][0] if level is None else level
+    forecasts = {f.actuator: f for f in forecast_history(history, levels=(level,))}
+    rows = []
+    for actuator in truth['actuators']:
+        forecast = forecasts.get(actuator['actuator_id'])
+        true_time = actuator['crossings'][f'{level:g}']['time']
+        crossing = forecast.crossing(level) if forecast is not None and not forecast.reason else None
+        low = crossing.low if crossing else None
+        high = crossing.high if crossing else None
+        inside = (crossing is not None and true_time is not None and low is not None
+                  and low <= true_time <= (high if high is not None else math.inf))
+        last = forecast.last_recording if forecast is not None else math.nan
+        rows.append({'actuator': actuator['actuator_id'], 'true': true_time,
+                     'forecast': crossing.time if crossing else None, 'low': low, 'high': high,
+                     'inside': bool(inside), 'ahead': true_time is not None and true_time > last,
+                     'true_relubrications': len(actuator['relubrications']),
+                     'found_relubrications': len(forecast.relubrications) if forecast else 0,
+                     'reason': forecast.reason if forecast else 'not in the history'})
+    return rows
+
+
+def _days(value, origin):
+    return f'{(value - origin) / 86400.0:7.2f}' if value is not None else '  never'
+
+
+def coverage_table(rows: list[dict], origin: float) -> str:
+    """Markdown: one line per actuator (days since the fleet's epoch) and the coverage."""
+    lines = ['| actuator | true crossing d | forecast d | interval d | inside | ahead of data | relubrications '
+             'true/found |', '|---|---|---|---|---|---|---|']
+    for row in rows:
+        lines.append(f'| {row["actuator"]} | {_days(row["true"], origin)} | {_days(row["forecast"], origin)} | '
+                     f'{_days(row["low"], origin)} .. {_days(row["high"], origin)} | '
+                     f'{"yes" if row["inside"] else "NO"} | {"yes" if row["ahead"] else "no"} | '
+                     f'{row["true_relubrications"]}/{row["found_relubrications"]} |')
+    return '\n'.join(lines)
+
+
+def main(argv=None) -> int:
+    """Command line of the study."""
+    parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.fleet_study',
+                                     description=__doc__.split('\n')[0])
+    parser.add_argument('--out', default='out/fleet_study')
+    parser.add_argument('--actuators', type=int, default=20)
+    parser.add_argument('--days', type=int, default=10)
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--jobs', type=int, default=1)
+    parser.add_argument('--scheduler', default=None)
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    run = simulate_and_assess(out, actuators=args.actuators, days=args.days, seed=args.seed, jobs=args.jobs,
+                              scheduler=args.scheduler)
+    truth = json.loads((out / 'fleet' / 'truth.json').read_text())
+    rows = compare_with_truth(out / 'history', out / 'fleet' / 'truth.json')
+    inside = sum(row['inside'] for row in rows)
+    ahead = [row for row in rows if row['ahead']]
+    arguments = sys.argv[1:] if argv is None else argv
+    command = 'python -m prsm_lube_ros.experiments.fleet_study ' + ' '.join(arguments)
+    summary = (f'{args.actuators} actuators, {run["recordings"]} recordings ({len(run["failed"])} failed), '
+               f'seed {args.seed}: warn crossing ({truth["thresholds"][0]:g}) inside the forecast 95 % interval '
+               f'for {inside}/{len(rows)} actuators ({100.0 * inside / len(rows):.0f} %); of the '
+               f'{len(ahead)} whose crossing lies after their last recording: '
+               f'{sum(row["inside"] for row in ahead)}/{len(ahead)}.')
+    text = (f'# Fleet forecast against truth\n\n`{command}`\n\n{summary}\n\n'
+            f'Days since {truth["actuators"][0]["recordings"][0]["start_utc"][:10]} 00:00 UTC.\n\n'
+            + coverage_table(rows, truth['epoch']) + '\n')
+    out.mkdir(parents=True, exist_ok=True)
+    (out / 'coverage.md').write_text(text)
+    (out / 'results.json').write_text(json.dumps({'command': command, 'run': run, 'rows': rows,
+                                                  'inside': inside, 'actuators': len(rows)}, indent=1))
+    print(text)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,361 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""theta_Oil over service time per actuator: depletion fit and when it will cross the warn and error levels.
+
+Law.  Oil is flung out as the screw turns (``physics.effects.lubricant_depletion``,
+theta = theta_r exp(-N_rev / N_d)); at a steady usage rate of r revolutions a
+day, N_rev = r (t - t_r), so between relubrications
+
+    theta_Oil(t) = a_c exp(-t / tau)            (tau = N_d / r, days)
+
+with one level ``a_c`` per lubrication cycle ``c`` (it absorbs the unknown
+moment of the relubrication and the oil put in) and one time constant ``tau``
+shared by the cycles of an actuator.  ``ln theta = ln a_c - t / tau`` is
+linear in (ln a_c, 1/tau); it is fitted by weighted least squares to one point
+per recording (the runs' theta_Oil averaged with inverse-variance weights),
+each with the relative one-sigma ``theta_oil_std / theta_oil``.  Scatter
+beyond the stated uncertainty (day-to-day usage, unmodelled drift) scales the
+covariance by the reduced chi-square when that exceeds 1.
+
+Relubrications are given, or found as a jump up in theta_Oil between two
+consecutive recordings larger than ``min_jump`` and than ``jump_sigmas`` times
+their combined uncertainty (placed half-way between them).
+
+Forecast.  The last cycle crosses level L at t_L = tau (ln a_last - ln L).  Its
+interval comes from parameter draws: Student-t with the fit's degrees of
+freedom when the covariance was scaled, normal otherwise; a draw with a
+non-positive 1/tau never crosses (interval open upwards, ``None``).  The
+default levels are the estimator's ``warn_below`` and ``error_below``
+(:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).
+
+:func:`forecast_summary` is the one call for a single actuator from a history
+folder (what the estimator's diagnostics show).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import datetime
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..estimation.health import HealthThresholds
+
+DAY = 86400.0            # s
+#: probability inside the stated forecast interval
+INTERVAL = 0.95
+#: parameter draws for the interval (seeded: a forecast is reproducible)
+DRAWS = 4000
+
+
+@dataclass(frozen=True)
+class RecordingPoint:
+    """One recording's theta_Oil: time of its first run (s since the epoch), value and one-sigma."""
+
+    time: float
+    theta_oil: float
+    theta_oil_std: float
+    recording_path: str = ''
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """When theta_Oil crosses ``level``: estimate and interval in s since the epoch (None: not within reach)."""
+
+    level: float
+    time: float | None
+    low: float | None
+    high: float | None
+
+    def as_json(self) -> dict:
+        """Mapping with UTC strings beside the epoch seconds."""
+        result = {'level': self.level}
+        for name in ('time', 'low', 'high'):
+            value = getattr(self, name)
+            result[name] = value
+            result[f'{name}_utc'] = _utc(value)
+        return result
+
+
+@dataclass
+class ActuatorForecast:
+    """Depletion fit of one actuator and its threshold crossings."""
+
+    actuator: str
+    points: list[RecordingPoint]
+    relubrications: list[float]                    # s since the epoch
+    tau_days: float = math.nan                     # depletion time constant
+    tau_days_std: float = math.nan
+    theta_now: float = math.nan                    # the law at the last recording
+    last_recording: float = math.nan
+    crossings: list[Crossing] = field(default_factory=list)
+    reason: str = ''                               # why there is no forecast
+    fit_rmse: float = math.nan                     # RMS of ln theta residuals
+    parameters: np.ndarray | None = None           # ln a_c per cycle, then 1/tau (1/s)
+    covariance: np.ndarray | None = None
+
+    def crossing(self, level: float) -> Crossing | None:
+        """The crossing of ``level``, if forecast."""
+        return next((c for c in self.crossings if math.isclose(c.level, level)), None)
+
+    def law(self, times: np.ndarray) -> np.ndarray:
+        """The fitted last-cycle law at ``times`` (s since the epoch)."""
+        return np.exp(self.parameters[-2] - self.parameters[-1] * np.asarray(times, float))
+
+    def as_json(self) -> dict:
+        """Plain mapping for the trend JSON."""
+        return {'actuator': self.actuator, 'reason': self.reason, 'tau_days': _finite(self.tau_days),
+                'tau_days_std': _finite(self.tau_days_std), 'theta_now': _finite(self.theta_now),
+                'last_recording': _finite(self.last_recording), 'last_recording_utc': _utc(self.last_recording),
+                'fit_rmse_ln': _finite(self.fit_rmse), 'recordings': len(self.points),
+                'relubrications': [{'time': t, 'time_utc': _utc(t)} for t in self.relubrications],
+                'crossings': [c.as_json() for c in self.crossings],
+                'points': [{'time': p.time, 'theta_oil': p.theta_oil, 'theta_oil_std': p.theta_oil_std,
+                            'recording_path': p.recording_path} for p in self.points]}
+
+
+def _finite(value):
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
+def _utc(seconds):
+    if seconds is None or not math.isfinite(seconds):
+        return None
+    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='minutes')
+
+
+def recording_points(runs) -> dict[str, list[RecordingPoint]]:
+    """One point per recording and actuator from a history ``runs`` table, in time order.
+
+    A recording's value is the inverse-variance mean of its assessed runs; its
+    one-sigma is the larger of that mean's and the runs' scatter about it over
+    sqrt(n).
+    """
+    columns = {name: runs.column(name).to_pylist()
+               for name in ('actuator', 'recording_path', 'start', 'theta_oil', 'theta_oil_std')}
+    grouped: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
+    for actuator, path, start, theta, std in zip(*columns.values()):
+        if theta is None or std is None or not theta > 0 or not std > 0 or start is None:
+            continue
+        grouped.setdefault((actuator, path), []).append((start.timestamp(), theta, std))
+    points: dict[str, list[RecordingPoint]] = {}
+    for (actuator, path), rows in grouped.items():
+        times, thetas, stds = (np.array(v, float) for v in zip(*rows))
+        weights = 1.0 / stds ** 2
+        mean = float(np.sum(weights * thetas) / np.sum(weights))
+        std = math.sqrt(1.0 / np.sum(weights))
+        if thetas.size > 1:
+            std = max(std, float(np.std(thetas, ddof=1)) / math.sqrt(thetas.size))
+        points.setdefault(actuator, []).append(RecordingPoint(float(times.min()), mean, std, path))
+    return {actuator: sorted(items, key=lambda p: p.time) for actuator, items in sorted(points.items())}
+
+
+def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float = 0.05,
+                          jump_sigmas: float = 4.0) -> list[float]:
+    """Times (s since the epoch) of jumps up in theta_Oil between consecutive recordings."""
+    found = []
+    for before, after in zip(points, points[1:]):
+        rise = after.theta_oil - before.theta_oil
+        if rise > min_jump and rise > jump_sigmas * math.hypot(before.theta_oil_std, after.theta_oil_std):
+            found.append(0.5 * (before.time + after.time))
+    return found
+
+
+def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
+                  levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                  seed: int = 0) -> ActuatorForecast:
+    """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
+
+    ``relubrications`` (s since the epoch) are detected from jumps when None.
+    A forecast that cannot be made has ``reason`` set and no crossings.
+    """
+    points = sorted(points, key=lambda p: p.time)
+    relubrications = sorted(detect_relubrications(points) if relubrications is None else relubrications)
+    result = ActuatorForecast(actuator, list(points), list(relubrications))
+    if not points:
+        result.reason = 'no assessed recording'
+        return result
+    times = np.array([p.time for p in points])
+    cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
+    used = np.unique(cycles)
+    index = np.searchsorted(used, cycles)
+    result.last_recording = float(times[-1])
+    if len(points) < used.size + 2:
+        result.reason = (f'{len(points)} recordings in {used.size} lubrication cycles: need at least '
+                         f'{used.size + 2} to fit the depletion')
+        return result
+    y = np.log([p.theta_oil for p in points])
+    sigma = np.array([p.theta_oil_std / p.theta_oil for p in points])
+    origin = times[0]
+    design = np.zeros((len(points), used.size + 1))
+    design[np.arange(len(points)), index] = 1.0
+    design[:, -1] = -(times - origin) / DAY
+    weights = 1.0 / sigma
+    solution, *_ = np.linalg.lstsq(design * weights[:, None], y * weights, rcond=None)
+    residual = y - design @ solution
+    dof = len(points) - design.shape[1]
+    chi2 = float(np.sum((residual * weights) ** 2))
+    covariance = np.linalg.pinv((design * weights[:, None]).T @ (design * weights[:, None]))
+    scaled = chi2 / dof > 1.0
+    if scaled:
+        covariance = covariance * (chi2 / dof)
+    rate = solution[-1]                                  # 1/day
+    # back to absolute time: ln a_c = b_c + rate * origin / DAY
+    result.parameters = np.concatenate((solution[:-1] + solution[-1] * origin / DAY, [rate / DAY]))
+    result.covariance = covariance
+    result.fit_rmse = float(np.sqrt(np.mean(residual ** 2)))
+    rate_std = math.sqrt(covariance[-1, -1])
+    result.tau_days = 1.0 / rate if rate > 0 else math.inf
+    result.tau_days_std = rate_std / rate ** 2 if rate > 0 else math.inf
+    last = index[-1]
+    last_level = solution[last]                          # ln a_last at t = origin
+    result.theta_now = float(math.exp(last_level - rate * (times[-1] - origin) / DAY))
+    rng = np.random.default_rng(seed)
+    pair = np.array([last, design.shape[1] - 1])
+    block = covariance[np.ix_(pair, pair)]
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(block + 1e-18 * np.eye(2)).T
+    if scaled:
+        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
+    draws = np.array([last_level, rate]) + normal
+    walk = drift_and_diffusion(times / DAY, y, sigma, cycles)
+    tail = (1.0 - INTERVAL) / 2.0
+    for level in levels:
+        if y[-1] > math.log(level) and walk is not None:
+            estimate, low, high = _first_passage(walk, y[-1], sigma[-1], math.log(level), rng, tail)
+            result.crossings.append(Crossing(float(level), *(float(times[-1] + v * DAY) if math.isfinite(v)
+                                                             else None for v in (estimate, low, high))))
+            continue
+        bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
+        if bracket is not None:
+            result.crossings.append(Crossing(float(level), *bracket))
+            continue
+        with np.errstate(divide='ignore', invalid='ignore'):
+            days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
+        low, high = np.quantile(days, [tail, 1.0 - tail])
+        estimate = (last_level - math.log(level)) / rate if rate > 0 else math.inf
+        result.crossings.append(Crossing(float(level), *(float(origin + v * DAY) if math.isfinite(v) else None
+                                                         for v in (estimate, low, high))))
+    return result
+
+
+def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0):
+    """A crossing of ``level`` already seen in the last cycle: interpolated time and bracketing interval.
+
+    The interval runs from the last recording clearly above the level
+    (``sigmas`` one-sigmas) to the first one clearly below it after that.
+    None when the last cycle has no recording above the level.
+    """
+    last = np.flatnonzero(cycles == cycles[-1])
+    above = [j for j in last if y[j] > level]
+    if not above:
+        return None
+    first_below = next((j for j in last if j > above[0] and y[j] <= level), None)
+    if first_below is None:
+        return None
+    before = first_below - 1
+    share = (y[before] - level) / (y[before] - y[first_below])
+    estimate = times[before] + (times[first_below] - times[before]) * share
+    sure_above = [j for j in last if y[j] - sigmas * sigma[j] > level and j <= before]
+    sure_below = [j for j in last if y[j] + sigmas * sigma[j] < level and j >= first_below]
+    if not sure_above:
+        return None
+    low = times[sure_above[-1]]
+    high = times[sure_below[0]] if sure_below else times[last[-1]]
+    return float(estimate), float(min(low, estimate)), float(max(high, estimate))
+
+
+def drift_and_diffusion(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray
+                        ) -> tuple[float, float, float] | None:
+    """Depletion as a random walk: ln theta falls by ``k dt`` plus noise of variance ``q dt`` (usage scatter).
+
+    Fitted to the increments between consecutive recordings of the same cycle,
+    whose covariance adds the recordings' own variances (``sigma``, relative)
+    with the -sigma^2 correlation of neighbours sharing a recording: ``k`` by
+    generalised least squares for each ``q`` on a grid, ``q`` by maximum
+    likelihood.  Returns (k 1/day, variance of k, q 1/day, degrees of
+    freedom) or None with fewer than two increments.
+    """
+    pairs = [j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1]]
+    if len(pairs) < 2:
+        return None
+    pairs = np.array(pairs)
+    increments, steps = y[pairs + 1] - y[pairs], days[pairs + 1] - days[pairs]
+    measurement = np.diag(sigma[pairs] ** 2 + sigma[pairs + 1] ** 2)
+    for a in range(len(pairs) - 1):
+        if pairs[a + 1] == pairs[a] + 1:
+            measurement[a, a + 1] = measurement[a + 1, a] = -sigma[pairs[a + 1]] ** 2
+    best = None
+    for q in np.concatenate(([0.0], np.logspace(-9, -2, 57))):
+        covariance = measurement + np.diag(q * steps)
+        inverse = np.linalg.inv(covariance)
+        information = float(steps @ inverse @ steps)
+        k = -float(steps @ inverse @ increments) / information
+        residual = increments + k * steps
+        _, logdet = np.linalg.slogdet(covariance)
+        likelihood = -0.5 * (logdet + float(residual @ inverse @ residual))
+        if best is None or likelihood > best[0]:
+            best = (likelihood, k, 1.0 / information, q)
+    return best[1:] + (max(len(pairs) - 2, 1),)
+
+
+def _first_passage(walk, y_last: float, sigma_last: float, level: float, rng, tail: float):
+    """Days from the last recording until ln theta first falls to ``level``: estimate and interval.
+
+    The walk's first passage at distance D with drift k and diffusion q is
+    inverse Gaussian (mean D/k, shape D^2/q); D and k are drawn from their
+    uncertainty (k Student-t; a draw with k <= 0 never crosses).
+    """
+    k, k_variance, q, dof = walk
+    rates = k + math.sqrt(k_variance) * rng.standard_t(dof, DRAWS)
+    distance = np.maximum(y_last + sigma_last * rng.standard_normal(DRAWS) - level, 1e-12)
+    days = np.full(DRAWS, math.inf)
+    falling = rates > 0
+    mean = distance[falling] / rates[falling]
+    days[falling] = rng.wald(mean, distance[falling] ** 2 / q) if q > 0 else mean
+    low, high = np.quantile(days, [tail, 1.0 - tail])
+    return ((y_last - level) / k if k > 0 else math.inf), low, high
+
+
+def urgency_key(forecast: ActuatorForecast):
+    """Sort key: earliest warn crossing first, then error crossing; no forecast last."""
+    times = [c.time if c.time is not None else math.inf for c in forecast.crossings] or [math.inf]
+    return (bool(forecast.reason), times[0], times[-1], forecast.actuator)
+
+
+def forecast_history(history, *, actuator: str | None = None, relubrications: dict | None = None,
+                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below)
+                     ) -> list[ActuatorForecast]:
+    """Forecasts of every actuator (or one) in a history folder, most urgent first.
+
+    ``relubrications`` maps an actuator id to its relubrication times (s since
+    the epoch); actuators not in it have theirs detected.
+    """
+    from .history import actuator_key, read_table
+    points = recording_points(read_table(history, 'runs', actuator))
+    if actuator is not None and not points:
+        raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
+    given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
+    forecasts = [fit_depletion(name, items, relubrications=given.get(name), levels=levels)
+                 for name, items in points.items()]
+    return sorted(forecasts, key=urgency_key)
+
+
+def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
+                     error_below: float = HealthThresholds.error_below) -> dict[str, str]:
+    """The forecast of one actuator as short key/value strings (for a diagnostics KeyValue list).
+
+    Keys: ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
+    ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
+    ``forecast`` holds ``ok`` or the reason there is none.  Raises
+    :class:`InputError` for a missing history or an actuator without runs.
+    """
+    forecast = forecast_history(history, actuator=actuator_id, levels=(warn_below, error_below))[0]
+    if forecast.reason:
+        return {'forecast': forecast.reason}
+    summary = {'forecast': 'ok', 'tau_days': f'{forecast.tau_days:.3g}', 'theta_now': f'{forecast.theta_now:.3f}'}
+    for name, crossing in zip(('warn', 'error'), forecast.crossings):
+        summary[f'{name}_crossing'] = _utc(crossing.time) or 'never'
+        summary[f'{name}_interval'] = f'{_utc(crossing.low) or "never"} .. {_utc(crossing.high) or "never"}'
+    return summary
