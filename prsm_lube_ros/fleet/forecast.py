@@ -165,10 +165,12 @@ def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float =
 
 def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
                   levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                  seed: int = 0) -> ActuatorForecast:
+                  usage_scatter: float | None = None, seed: int = 0) -> ActuatorForecast:
     """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
 
     ``relubrications`` (s since the epoch) are detected from jumps when None.
+    ``usage_scatter`` is the fleet's (:func:`fleet_usage_scatter`); None fits
+    this actuator's alone.
     A forecast that cannot be made has ``reason`` set and no crossings.
     """
     points = sorted(points, key=lambda p: p.time)
@@ -219,7 +221,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     if scaled:
         normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
     draws = np.array([last_level, rate]) + normal
-    walk = drift_and_diffusion(times / DAY, y, sigma, cycles)
+    walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
     tail = (1.0 - INTERVAL) / 2.0
     for level in levels:
         if y[-1] > math.log(level) and walk is not None:
@@ -266,38 +268,90 @@ def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0)
     return float(estimate), float(min(low, estimate)), float(max(high, estimate))
 
 
-def drift_and_diffusion(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray
-                        ) -> tuple[float, float, float] | None:
-    """Depletion as a random walk: ln theta falls by ``k dt`` plus noise of variance ``q dt`` (usage scatter).
+@dataclass(frozen=True)
+class Increments:
+    """Changes of ln theta between consecutive recordings of one lubrication cycle, and their covariance."""
 
-    Fitted to the increments between consecutive recordings of the same cycle,
-    whose covariance adds the recordings' own variances (``sigma``, relative)
-    with the -sigma^2 correlation of neighbours sharing a recording: ``k`` by
-    generalised least squares for each ``q`` on a grid, ``q`` by maximum
-    likelihood.  Returns (k 1/day, variance of k, q 1/day, degrees of
-    freedom) or None with fewer than two increments.
+    steps: np.ndarray          # days
+    changes: np.ndarray        # of ln theta
+    measurement: np.ndarray    # covariance from the recordings' own uncertainty
+
+
+def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray) -> Increments | None:
+    """The increments of ln theta ``y`` within cycles; neighbours sharing a recording correlate by -sigma^2.
+
+    None with fewer than two increments.
     """
-    pairs = [j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1]]
-    if len(pairs) < 2:
+    pairs = np.array([j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1]], dtype=int)
+    if pairs.size < 2:
         return None
-    pairs = np.array(pairs)
-    increments, steps = y[pairs + 1] - y[pairs], days[pairs + 1] - days[pairs]
     measurement = np.diag(sigma[pairs] ** 2 + sigma[pairs + 1] ** 2)
-    for a in range(len(pairs) - 1):
+    for a in range(pairs.size - 1):
         if pairs[a + 1] == pairs[a] + 1:
             measurement[a, a + 1] = measurement[a + 1, a] = -sigma[pairs[a + 1]] ** 2
-    best = None
-    for q in np.concatenate(([0.0], np.logspace(-9, -2, 57))):
-        covariance = measurement + np.diag(q * steps)
-        inverse = np.linalg.inv(covariance)
-        information = float(steps @ inverse @ steps)
-        k = -float(steps @ inverse @ increments) / information
-        residual = increments + k * steps
-        _, logdet = np.linalg.slogdet(covariance)
-        likelihood = -0.5 * (logdet + float(residual @ inverse @ residual))
-        if best is None or likelihood > best[0]:
-            best = (likelihood, k, 1.0 / information, q)
-    return best[1:] + (max(len(pairs) - 2, 1),)
+    return Increments(days[pairs + 1] - days[pairs], y[pairs + 1] - y[pairs], measurement)
+
+
+def _walk_likelihood(data: Increments, q: float) -> tuple[float, float, float]:
+    """Gaussian log-likelihood, GLS drift k (1/day) and its variance for diffusion ``q`` (1/day)."""
+    covariance = data.measurement + np.diag(q * data.steps)
+    inverse = np.linalg.inv(covariance)
+    information = float(data.steps @ inverse @ data.steps)
+    k = -float(data.steps @ inverse @ data.changes) / information
+    residual = data.changes + k * data.steps
+    _, logdet = np.linalg.slogdet(covariance)
+    return -0.5 * (logdet + float(residual @ inverse @ residual)), k, 1.0 / information
+
+
+#: fall of the log-likelihood at the 95 % bound of one parameter (chi-square 3.84 / 2)
+PROFILE_DROP = 1.92
+#: grid of the relative day-to-day usage variance searched by :func:`fleet_usage_scatter`
+USAGE_SCATTER_GRID = np.concatenate(([0.0], np.logspace(-4, 0, 81)))
+
+
+def _diffusion(data: Increments, usage_scatter: float) -> float:
+    """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
+    k = _walk_likelihood(data, 0.0)[1]
+    for _ in range(2):
+        k = _walk_likelihood(data, usage_scatter * k ** 2)[1]
+    return usage_scatter * k ** 2
+
+
+def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
+    """Relative variance of a day's revolutions: upper 95 % profile-likelihood bound over all actuators.
+
+    Each actuator's diffusion is ``q = s k^2`` with its own drift k: the
+    usage scatter ``s`` is a property of how the fleet is operated, which one
+    actuator's few recordings cannot pin down alone.  Daily recordings with
+    a few per mille of noise hardly see it, so the largest value the
+    likelihood does not reject (a drop of at most ``PROFILE_DROP``) is taken
+    rather than its maximum, which sits at zero.
+    """
+    sets = [data for data in sets if data is not None]
+    if not sets:
+        return 0.0
+    totals = np.array([sum(_walk_likelihood(data, _diffusion(data, scatter))[0] for data in sets)
+                       for scatter in USAGE_SCATTER_GRID])
+    return float(USAGE_SCATTER_GRID[np.flatnonzero(totals >= totals.max() - PROFILE_DROP)[-1]])
+
+
+def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = None
+                        ) -> tuple[float, float, float, int] | None:
+    """Depletion as a random walk: ln theta falls by ``k dt`` plus noise of variance ``q dt`` (usage scatter).
+
+    ``k`` by generalised least squares on the increments; ``q`` from the
+    fleet's relative ``usage_scatter`` (q = s k^2) or, without it, by maximum
+    likelihood on this actuator alone.  Returns (k 1/day, variance of k,
+    q 1/day, degrees of freedom) or None without increments.
+    """
+    if data is None:
+        return None
+    if usage_scatter is None:
+        q = max((_walk_likelihood(data, q)[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57))))[1]
+    else:
+        q = _diffusion(data, usage_scatter)
+    _, k, k_variance = _walk_likelihood(data, q)
+    return k, k_variance, q, max(data.steps.size - 1, 1)
 
 
 def _first_passage(walk, y_last: float, sigma_last: float, level: float, rng, tail: float):
@@ -333,13 +387,24 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
     the epoch); actuators not in it have theirs detected.
     """
     from .history import actuator_key, read_table
-    points = recording_points(read_table(history, 'runs', actuator))
-    if actuator is not None and not points:
+    points = recording_points(read_table(history, 'runs'))
+    if actuator is not None and actuator_key(actuator) not in points:
         raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
     given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
-    forecasts = [fit_depletion(name, items, relubrications=given.get(name), levels=levels)
-                 for name, items in points.items()]
+    found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
+             for name, items in points.items()}
+    scatter = fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
+    names = [actuator_key(actuator)] if actuator is not None else list(points)
+    forecasts = [fit_depletion(name, points[name], relubrications=found[name], levels=levels,
+                               usage_scatter=scatter) for name in names]
     return sorted(forecasts, key=urgency_key)
+
+
+def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float]) -> Increments | None:
+    times = np.array([p.time for p in points])
+    cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
+    return increments(times / DAY, np.log([p.theta_oil for p in points]),
+                      np.array([p.theta_oil_std / p.theta_oil for p in points]), cycles)
 
 
 def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
