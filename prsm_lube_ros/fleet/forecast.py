@@ -48,6 +48,8 @@ DAY = 86400.0            # s
 INTERVAL = 0.95
 #: parameter draws for the interval (seeded: a forecast is reproducible)
 DRAWS = 4000
+#: two-sided normal quantile of INTERVAL
+_NORMAL_QUANTILE = 1.959964
 
 
 @dataclass(frozen=True)
@@ -95,6 +97,10 @@ class ActuatorForecast:
     fit_rmse: float = math.nan                     # RMS of ln theta residuals
     parameters: np.ndarray | None = None           # ln a_c per cycle, then 1/tau (1/s)
     covariance: np.ndarray | None = None
+    #: random walk of ln theta from the last recording: (k 1/day, var k, q 1/day, dof), ln theta and its sigma
+    walk: tuple | None = None
+    last_ln_theta: float = math.nan
+    last_ln_sigma: float = math.nan
 
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
@@ -103,6 +109,21 @@ class ActuatorForecast:
     def law(self, times: np.ndarray) -> np.ndarray:
         """The fitted last-cycle law at ``times`` (s since the epoch)."""
         return np.exp(self.parameters[-2] - self.parameters[-1] * np.asarray(times, float))
+
+    def band(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """theta_Oil expected after the last recording at ``times`` (s since the epoch), with the interval.
+
+        ln theta = ln theta_last - k dt with variance sigma_last^2 + var(k) dt^2
+        + q dt (dt in days); the interval covers :data:`INTERVAL` (normal).
+        """
+        if self.walk is None:
+            nan = np.full(np.shape(times), math.nan)
+            return nan, nan, nan
+        k, k_variance, q, _ = self.walk
+        dt = np.maximum((np.asarray(times, float) - self.last_recording) / DAY, 0.0)
+        centre = self.last_ln_theta - k * dt
+        spread = _NORMAL_QUANTILE * np.sqrt(self.last_ln_sigma ** 2 + k_variance * dt ** 2 + q * dt)
+        return np.exp(centre), np.exp(centre - spread), np.exp(centre + spread)
 
     def as_json(self) -> dict:
         """Plain mapping for the trend JSON."""
@@ -222,6 +243,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
         normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
     draws = np.array([last_level, rate]) + normal
     walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
+    result.walk, result.last_ln_theta, result.last_ln_sigma = walk, float(y[-1]), float(sigma[-1])
     tail = (1.0 - INTERVAL) / 2.0
     for level in levels:
         if y[-1] > math.log(level) and walk is not None:
