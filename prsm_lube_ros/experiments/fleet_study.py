@@ -56,24 +56,7 @@ def compare_with_truth(history: Path, truth_path: Path, level: float | None = No
     from ..fleet.forecast import forecast_history
     truth = json.loads(Path(truth_path).read_text())
     level = truth['thresholds'][0] if level is None else level
-    forecasts = {f.actuator: f for f in forecast_history(history, levels=(level,))}
-    rows = []
-    for actuator in truth['actuators']:
-        forecast = forecasts.get(actuator['actuator_id'])
-        true_time = actuator['crossings'][f'{level:g}']['time']
-        crossing = forecast.crossing(level) if forecast is not None and not forecast.reason else None
-        low = crossing.low if crossing else None
-        high = crossing.high if crossing else None
-        inside = (crossing is not None and true_time is not None and low is not None
-                  and low <= true_time <= (high if high is not None else math.inf))
-        last = forecast.last_recording if forecast is not None else math.nan
-        rows.append({'actuator': actuator['actuator_id'], 'true': true_time,
-                     'forecast': crossing.time if crossing else None, 'low': low, 'high': high,
-                     'inside': bool(inside), 'ahead': true_time is not None and true_time > last,
-                     'true_relubrications': len(actuator['relubrications']),
-                     'found_relubrications': len(forecast.relubrications) if forecast else 0,
-                     'reason': forecast.reason if forecast else 'not in the history'})
-    return rows
+    return coverage_rows(forecast_history(history, levels=(level,)), truth, level)
 
 
 def _days(value, origin):
@@ -130,3 +113,39 @@ def main(argv=None) -> int:
 
 if __name__ == '__main__':
     sys.exit(main())
+
+
+def synthetic_points(truth: dict, *, noise: float = 0.0045, seed: int = 0) -> dict:
+    """Recording points from the truth alone: each recording's true theta_Oil plus normal noise ``noise``.
+
+    What assessment gives for the fleet's recordings (one-sigma about 0.0045
+    with the default rig), without simulating and reading the signals.
+    """
+    import numpy as np
+    from ..fleet.forecast import RecordingPoint
+    rng = np.random.default_rng(seed)
+    return {actuator['actuator_id']: [RecordingPoint(r['start'], r['theta_oil'] + noise * rng.standard_normal(),
+                                                     noise, r['path']) for r in actuator['recordings']]
+            for actuator in truth['actuators']}
+
+
+def coverage_rows(forecasts, truth: dict, level: float) -> list[dict]:
+    """Per actuator of the truth: the forecast crossing of ``level`` against the true one."""
+    by_name = {f.actuator: f for f in forecasts}
+    rows = []
+    for actuator in truth['actuators']:
+        forecast = by_name.get(actuator['actuator_id'])
+        true_time = actuator['crossings'][f'{level:g}']['time']
+        crossing = forecast.crossing(level) if forecast is not None and not forecast.reason else None
+        low = crossing.low if crossing else None
+        high = crossing.high if crossing else None
+        inside = (crossing is not None and true_time is not None and low is not None
+                  and low <= true_time <= (high if high is not None else math.inf))
+        last = forecast.last_recording if forecast is not None else math.nan
+        rows.append({'actuator': actuator['actuator_id'], 'true': true_time,
+                     'forecast': crossing.time if crossing else None, 'low': low, 'high': high,
+                     'inside': bool(inside), 'ahead': true_time is not None and true_time > last,
+                     'true_relubrications': len(actuator['relubrications']),
+                     'found_relubrications': len(forecast.relubrications) if forecast else 0,
+                     'reason': forecast.reason if forecast else 'not in the history'})
+    return rows

@@ -413,10 +413,23 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
     if actuator is not None and actuator_key(actuator) not in points:
         raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
     given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
+    return forecast_points(points, relubrications=given, levels=levels,
+                           only=actuator_key(actuator) if actuator is not None else None)
+
+
+def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
+                    levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                    only: str | None = None) -> list[ActuatorForecast]:
+    """Forecasts from each actuator's recording points (the fleet's usage scatter pooled), most urgent first.
+
+    ``only`` forecasts that actuator alone (the others still inform the
+    usage scatter).
+    """
+    given = relubrications or {}
     found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
              for name, items in points.items()}
     scatter = fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
-    names = [actuator_key(actuator)] if actuator is not None else list(points)
+    names = [only] if only is not None else list(points)
     forecasts = [fit_depletion(name, points[name], relubrications=found[name], levels=levels,
                                usage_scatter=scatter) for name in names]
     return sorted(forecasts, key=urgency_key)

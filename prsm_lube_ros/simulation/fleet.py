@@ -115,6 +115,15 @@ def _iso(seconds: float) -> str:
     return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='seconds')
 
 
+def _reference(out_dir: Path, rig: RigConfig, plan: ExperimentPlan, seed: int, storage: str) -> None:
+    """The plan's six conditions at theta_Oil = 1 as ``out_dir/reference`` (truth in reference_truth.json)."""
+    simulate_experiment(out_dir / 'reference_session', plan=replace(plan, stage_thetas=(1.0,)), rig=rig,
+                        seed=seed, storage=storage)
+    bag_path(out_dir / 'reference_session', 'stage_1', storage).rename(bag_path(out_dir, 'reference', storage))
+    (out_dir / 'reference_session' / 'truth.json').rename(out_dir / 'reference_truth.json')
+    (out_dir / 'reference_session').rmdir()
+
+
 def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condition, theta: float,
                      start_seconds: float, seed, storage: str) -> None:
     """One forward run at ``condition`` and its rewind, recorded from ``start_seconds`` (epoch s)."""
@@ -128,14 +137,16 @@ def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condit
 def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: RigConfig | None = None,
                    plan: ExperimentPlan | None = None, seed: int = 0, storage: str = 'mcap',
                    thresholds: Sequence[float] = (0.85, 0.70),
-                   progress: Callable[[int, int], None] | None = None) -> list[Path]:
+                   progress: Callable[[int, int], None] | None = None, write_recordings: bool = True) -> list[Path]:
     """Write the fleet's recordings to ``out_dir/<actuator>/<UTC time>`` and ``out_dir/truth.json``.
 
     Also ``out_dir/reference``: the plan's six conditions at theta_Oil = 1 for
     the calibration.  ``thresholds`` are the theta_Oil levels whose crossing
     times the truth lists (default: the estimator's warn and error levels).
     ``progress(done, total)`` counts recordings.  Returns the fleet's recording
-    paths (not the reference), in time order per actuator.
+    paths (not the reference), in time order per actuator.  With
+    ``write_recordings=False`` only ``truth.json`` is written (the same truth:
+    the random streams do not depend on it), for checks of the forecast alone.
     """
     fleet, rig, plan = fleet or FleetPlan(), rig or RigConfig(), plan or ExperimentPlan()
     check_storage(storage)
@@ -146,12 +157,8 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
     total = fleet.actuators * fleet.days
     done = 0
     truth_actuators, paths = [], []
-    simulate_experiment(out_dir / 'reference_session', plan=replace(plan, stage_thetas=(1.0,)), rig=rig,
-                        seed=int(sequences[-1].generate_state(1)[0]), storage=storage)
-    reference = bag_path(out_dir / 'reference_session', 'stage_1', storage)
-    reference.rename(bag_path(out_dir, 'reference', storage))
-    (out_dir / 'reference_session' / 'truth.json').rename(out_dir / 'reference_truth.json')
-    (out_dir / 'reference_session').rmdir()
+    if write_recordings:
+        _reference(out_dir, rig, plan, int(sequences[-1].generate_state(1)[0]), storage)
     for number, sequence in enumerate(sequences[:-1], start=1):
         actuator_id = f'A{number:02d}'
         usage_sequence, recording_sequence = sequence.spawn(2)
@@ -173,10 +180,11 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
             theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
             path = bag_path(out_dir / actuator_id, datetime.datetime.fromtimestamp(
                 epoch + t, datetime.timezone.utc).strftime('%Y%m%dT%H%M%S'), storage)
-            require(not path.exists(), f'{path}: exists already, not overwriting')
-            path.parent.mkdir(parents=True, exist_ok=True)
-            _short_recording(path, rig=rig, plan=plan, condition=fleet.condition, theta=theta,
-                             start_seconds=epoch + t, seed=int(seeds[day]), storage=storage)
+            if write_recordings:
+                require(not path.exists(), f'{path}: exists already, not overwriting')
+                path.parent.mkdir(parents=True, exist_ok=True)
+                _short_recording(path, rig=rig, plan=plan, condition=fleet.condition, theta=theta,
+                                 start_seconds=epoch + t, seed=int(seeds[day]), storage=storage)
             paths.append(path)
             recordings.append({'path': str(path.relative_to(out_dir)), 'start': epoch + t,
                                'start_utc': _iso(epoch + t), 'theta_oil': theta,
@@ -208,5 +216,6 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
                 'thresholds': [float(v) for v in thresholds], 'reference': bag_path(Path('.'), 'reference',
                                                                                     storage).name,
                 'actuators': truth_actuators}
+    out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / 'truth.json').write_text(json.dumps(document, indent=1))
     return paths
