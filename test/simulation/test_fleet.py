@@ -25,8 +25,8 @@ def test_truth_follows_the_depletion_law_and_the_relubrication_rule(tmp_path):
         for r in recordings:   # theta = theta_r exp(-N / N_d) within the cycle
             cycle = [x for x in actuator['relubrications'] if x['time'] < r['start']]
             theta_r = cycle[-1]['theta_oil_after'] if cycle else 1.0
-            assert math.isclose(r['theta_oil'], theta_r * math.exp(-r['revolutions_since_lubrication']
-                                                                    / actuator['depletion_revolutions']))
+            depleted = math.exp(-r['revolutions_since_lubrication'] / actuator['depletion_revolutions'])
+            assert math.isclose(r['theta_oil'], theta_r * depleted)
         warn = actuator['crossings']['0.85']['time']
         last = recordings[-1]
         assert (last['theta_oil'] > 0.85) == (warn > last['start'])
