@@ -97,10 +97,12 @@ class ActuatorForecast:
     fit_rmse: float = math.nan                     # RMS of ln theta residuals
     parameters: np.ndarray | None = None           # ln a_c per cycle, then 1/tau (1/s)
     covariance: np.ndarray | None = None
-    #: random walk of ln theta from the last recording: (k 1/day, var k, q 1/day, dof), ln theta and its sigma
-    walk: tuple | None = None
-    last_ln_theta: float = math.nan
-    last_ln_sigma: float = math.nan
+    #: state of ln theta at the last recording: mean (ln theta, k 1/day), covariance, Student-t degrees of
+    #: freedom (0: normal) and the diffusion q (1/day) of the usage scatter
+    state: np.ndarray | None = None
+    state_covariance: np.ndarray | None = None
+    state_dof: int = 0
+    diffusion: float = 0.0
 
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
@@ -113,16 +115,18 @@ class ActuatorForecast:
     def band(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """theta_Oil expected after the last recording at ``times`` (s since the epoch), with the interval.
 
-        ln theta = ln theta_last - k dt with variance sigma_last^2 + var(k) dt^2
-        + q dt (dt in days); the interval covers :data:`INTERVAL` (normal).
+        ln theta = x - k dt, variance var(x) - 2 cov(x, k) dt + var(k) dt^2 + q dt
+        (dt in days from the last recording); the interval covers
+        :data:`INTERVAL` (normal).
         """
-        if self.walk is None:
+        if self.state is None:
             nan = np.full(np.shape(times), math.nan)
             return nan, nan, nan
-        k, k_variance, q, _ = self.walk
+        (x, k), cov = self.state, self.state_covariance
         dt = np.maximum((np.asarray(times, float) - self.last_recording) / DAY, 0.0)
-        centre = self.last_ln_theta - k * dt
-        spread = _NORMAL_QUANTILE * np.sqrt(self.last_ln_sigma ** 2 + k_variance * dt ** 2 + q * dt)
+        centre = x - k * dt
+        variance = cov[0, 0] - 2.0 * cov[0, 1] * dt + cov[1, 1] * dt ** 2 + self.diffusion * dt
+        spread = _NORMAL_QUANTILE * np.sqrt(np.maximum(variance, 0.0))
         return np.exp(centre), np.exp(centre - spread), np.exp(centre + spread)
 
     def as_json(self) -> dict:
@@ -243,24 +247,28 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
         normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
     draws = np.array([last_level, rate]) + normal
     walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
-    result.walk, result.last_ln_theta, result.last_ln_sigma = walk, float(y[-1]), float(sigma[-1])
+    if walk is not None:
+        result.diffusion = walk[2]
+        result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
+                                                                                  walk[2])
     tail = (1.0 - INTERVAL) / 2.0
     for level in levels:
-        if y[-1] > math.log(level) and walk is not None:
-            estimate, low, high = _first_passage(walk, y[-1], sigma[-1], math.log(level), rng, tail)
+        if y[-1] > math.log(level) and result.state is not None:
+            estimate, low, high = _first_passage(result, math.log(level), rng, tail)
             result.crossings.append(Crossing(float(level), *(float(times[-1] + v * DAY) if math.isfinite(v)
                                                              else None for v in (estimate, low, high))))
             continue
-        bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
-        if bracket is not None:
-            result.crossings.append(Crossing(float(level), *bracket))
-            continue
         with np.errstate(divide='ignore', invalid='ignore'):
             days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
-        low, high = np.quantile(days, [tail, 1.0 - tail])
-        estimate = (last_level - math.log(level)) / rate if rate > 0 else math.inf
-        result.crossings.append(Crossing(float(level), *(float(origin + v * DAY) if math.isfinite(v) else None
-                                                         for v in (estimate, low, high))))
+        low, high = (float(origin + v * DAY) if math.isfinite(v) else None
+                     for v in np.quantile(days, [tail, 1.0 - tail]))
+        estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
+        bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
+        if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
+            estimate = bracket[0]
+            low = bracket[1] if low is None else min(low, bracket[1])
+            high = None if high is None else max(high, bracket[2])
+        result.crossings.append(Crossing(float(level), estimate, low, high))
     return result
 
 
@@ -376,22 +384,62 @@ def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = N
     return k, k_variance, q, max(data.steps.size - 1, 1)
 
 
-def _first_passage(walk, y_last: float, sigma_last: float, level: float, rng, tail: float):
+def depletion_state(days, y, sigma, cycles, q):
+    """Kalman filter of (ln theta, k): level falls by k dt with diffusion q dt, reset at relubrications.
+
+    Returns the state at the last recording, its covariance (scaled by the
+    innovations' chi-square per degree of freedom when above 1) and the
+    degrees of freedom of that scale (0 when not scaled).
+    """
+    diffuse = 1e4
+    state = np.array([y[0], 0.0])
+    cov = np.diag([diffuse, diffuse])
+    chi2, count = 0.0, 0
+    for j in range(len(y)):
+        if j > 0:
+            dt = days[j] - days[j - 1]
+            transition = np.array([[1.0, -dt], [0.0, 1.0]])
+            state = transition @ state
+            cov = transition @ cov @ transition.T + np.diag([q * dt, 0.0])
+            if cycles[j] != cycles[j - 1]:
+                state[0], cov[0, :], cov[:, 0] = y[j], 0.0, 0.0
+                cov[0, 0] = diffuse
+        innovation_var = cov[0, 0] + sigma[j] ** 2
+        innovation = y[j] - state[0]
+        if cov[0, 0] < diffuse / 10 and cov[1, 1] < diffuse / 10:
+            chi2 += innovation ** 2 / innovation_var
+            count += 1
+        gain = cov[:, 0] / innovation_var
+        state = state + gain * innovation
+        cov = cov - np.outer(gain, cov[0, :])
+    dof = count
+    if dof and chi2 / dof > 1.0:
+        return state, cov * (chi2 / dof), dof
+    return state, cov, 0
+
+
+def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     """Days from the last recording until ln theta first falls to ``level``: estimate and interval.
 
-    The walk's first passage at distance D with drift k and diffusion q is
-    inverse Gaussian (mean D/k, shape D^2/q); D and k are drawn from their
-    uncertainty (k Student-t; a draw with k <= 0 never crosses).
+    From a state (x, k) the first passage of the walk to ``level`` is inverse
+    Gaussian (mean D/k with D = x - level, shape D^2/q); (x, k) are drawn from
+    the filter's posterior (Student-t when its covariance was scaled).  A
+    draw with k <= 0 never crosses (the interval is open: ``inf``).
     """
-    k, k_variance, q, dof = walk
-    rates = k + math.sqrt(k_variance) * rng.standard_t(dof, DRAWS)
-    distance = np.maximum(y_last + sigma_last * rng.standard_normal(DRAWS) - level, 1e-12)
+    cov = forecast.state_covariance
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
+    if forecast.state_dof:
+        normal /= np.sqrt(rng.chisquare(forecast.state_dof, (DRAWS, 1)) / forecast.state_dof)
+    draws = forecast.state + normal
+    distance = np.maximum(draws[:, 0] - level, 1e-12)
     days = np.full(DRAWS, math.inf)
-    falling = rates > 0
-    mean = distance[falling] / rates[falling]
+    falling = draws[:, 1] > 0
+    mean = distance[falling] / draws[falling, 1]
+    q = forecast.diffusion
     days[falling] = rng.wald(mean, distance[falling] ** 2 / q) if q > 0 else mean
     low, high = np.quantile(days, [tail, 1.0 - tail])
-    return ((y_last - level) / k if k > 0 else math.inf), low, high
+    x, k = forecast.state
+    return ((x - level) / k if k > 0 else math.inf), low, high
 
 
 def urgency_key(forecast: ActuatorForecast):
