@@ -9,9 +9,11 @@ assessed into a Parquet history (serially, ``--jobs`` processes or
 ``--scheduler``) and forecast per actuator with relubrications detected from
 the recordings.  Each actuator's true warn crossing (its last lubrication
 cycle, usage continued past the last day) is compared with the forecast
-interval.  Writes ``results.json`` and ``coverage.md`` to ``--out``.
+interval.  Writes ``results.json`` and ``coverage.md`` to ``--results``
+(default ``--out``); one fleet per seed of ``--seeds``.
 
     python -m prsm_lube_ros.experiments.fleet_study --out out/fleet_study [--actuators 20] [--days 10]
+        [--seeds 0 1 2] [--results DIR] [--jobs N | --scheduler ADDRESS]
 """
 from __future__ import annotations
 
@@ -79,40 +81,52 @@ def main(argv=None) -> int:
     """Command line of the study."""
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.fleet_study',
                                      description=__doc__.split('\n')[0])
-    parser.add_argument('--out', default='out/fleet_study')
+    parser.add_argument('--out', default='out/fleet_study', help='folder for the fleets and histories')
+    parser.add_argument('--results', default=None, help='folder for coverage.md and results.json (default --out)')
     parser.add_argument('--actuators', type=int, default=20)
     parser.add_argument('--days', type=int, default=10)
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seeds', type=int, nargs='+', default=[0], help='one fleet per seed (default 0)')
     parser.add_argument('--jobs', type=int, default=1)
     parser.add_argument('--scheduler', default=None)
     args = parser.parse_args(argv)
     out = Path(args.out)
-    run = simulate_and_assess(out, actuators=args.actuators, days=args.days, seed=args.seed, jobs=args.jobs,
-                              scheduler=args.scheduler)
-    truth = json.loads((out / 'fleet' / 'truth.json').read_text())
-    rows = compare_with_truth(out / 'history', out / 'fleet' / 'truth.json')
-    inside = sum(row['inside'] for row in rows)
-    ahead = [row for row in rows if row['ahead']]
+    results = Path(args.results) if args.results else out
     arguments = sys.argv[1:] if argv is None else argv
     command = 'python -m prsm_lube_ros.experiments.fleet_study ' + ' '.join(arguments)
-    summary = (f'{args.actuators} actuators, {run["recordings"]} recordings ({len(run["failed"])} failed), '
-               f'seed {args.seed}: warn crossing ({truth["thresholds"][0]:g}) inside the forecast 95 % interval '
-               f'for {inside}/{len(rows)} actuators ({100.0 * inside / len(rows):.0f} %); of the '
-               f'{len(ahead)} whose crossing lies after their last recording: '
-               f'{sum(row["inside"] for row in ahead)}/{len(ahead)}.')
-    text = (f'# Fleet forecast against truth\n\n`{command}`\n\n{summary}\n\n'
-            f'Days since {truth["actuators"][0]["recordings"][0]["start_utc"][:10]} 00:00 UTC.\n\n'
-            + coverage_table(rows, truth['epoch']) + '\n')
-    out.mkdir(parents=True, exist_ok=True)
-    (out / 'coverage.md').write_text(text)
-    (out / 'results.json').write_text(json.dumps({'command': command, 'run': run, 'rows': rows,
-                                                  'inside': inside, 'actuators': len(rows)}, indent=1))
-    print(text)
+    sections, runs, all_rows = [], [], []
+    for seed in args.seeds:
+        folder = out / f'seed_{seed}'
+        run = simulate_and_assess(folder, actuators=args.actuators, days=args.days, seed=seed, jobs=args.jobs,
+                                  scheduler=args.scheduler)
+        truth = json.loads((folder / 'fleet' / 'truth.json').read_text())
+        rows = compare_with_truth(folder / 'history', folder / 'fleet' / 'truth.json')
+        for row in rows:
+            row['seed'] = seed
+        inside, ahead = sum(row['inside'] for row in rows), [row for row in rows if row['ahead']]
+        runs.append(dict(run, seed=seed))
+        all_rows += rows
+        sections.append(f'## Fleet seed {seed}: {inside}/{len(rows)} inside; ahead of the data '
+                        f'{sum(row["inside"] for row in ahead)}/{len(ahead)}\n\n'
+                        f'{run["recordings"]} recordings, {len(run["failed"])} failed; days since '
+                        f'{truth["actuators"][0]["recordings"][0]["start_utc"][:10]} 00:00 UTC.\n\n'
+                        + coverage_table(rows, truth['epoch']))
+        print(sections[-1].split('\n')[0], file=sys.stderr, flush=True)
+    inside = sum(row['inside'] for row in all_rows)
+    ahead = [row for row in all_rows if row['ahead']]
+    summary = (f'{len(args.seeds)} fleet(s) of {args.actuators} actuators x {args.days} days '
+               f'({sum(r["recordings"] for r in runs)} recordings, {sum(len(r["failed"]) for r in runs)} failed): '
+               f'the true warn crossing (0.85) lies inside the forecast 95 % interval for {inside}/{len(all_rows)} '
+               f'actuators ({100.0 * inside / len(all_rows):.1f} %); for the {len(ahead)} whose crossing comes '
+               f'after their last recording (a true forecast): {sum(row["inside"] for row in ahead)}/{len(ahead)}.')
+    text = (f'# Fleet forecast against the simulator\'s truth\n\n`{command}`\n\n{summary}\n\n'
+            + '\n\n'.join(sections) + '\n')
+    results.mkdir(parents=True, exist_ok=True)
+    (results / 'coverage.md').write_text(text)
+    (results / 'results.json').write_text(json.dumps({'command': command, 'summary': summary, 'runs': runs,
+                                                      'rows': all_rows, 'inside': inside,
+                                                      'actuators': len(all_rows)}, indent=1))
+    print(summary)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
 
 
 def synthetic_points(truth: dict, *, noise: float = 0.0045, seed: int = 0) -> dict:
@@ -149,3 +163,7 @@ def coverage_rows(forecasts, truth: dict, level: float) -> list[dict]:
                      'found_relubrications': len(forecast.relubrications) if forecast else 0,
                      'reason': forecast.reason if forecast else 'not in the history'})
     return rows
+
+
+if __name__ == '__main__':
+    sys.exit(main())
