@@ -49,8 +49,7 @@ def run(args) -> int:
     settings = WindowSettings(window_length=require_positive('--window', args.window))
     job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
                  hash_content=bool(args.history))
-    bar = progress_bar(len(args.bags), 'recordings')
-    bar.bar_format, bar.unit = None, 'recording'
+    bar = progress_bar(len(args.bags), 'assessing', unit='recording')
     try:
         outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler,
                                on_done=lambda outcome: bar.update(1))
@@ -72,7 +71,7 @@ def run(args) -> int:
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
                   f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
     if args.history and results:
-        _add_to_history(args, [outcome for outcome in outcomes if outcome.assessment is not None])
+        _add_to_history(args, [outcome for outcome in outcomes if outcome.assessment is not None], calibration)
     if args.json and results:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
@@ -80,16 +79,16 @@ def run(args) -> int:
     return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
 
 
-def _add_to_history(args, outcomes) -> None:
+def _add_to_history(args, outcomes, fit) -> None:
     """Each assessed recording's runs and windows into the ``--history`` dataset."""
     from pathlib import Path
     from ..fleet.history import add_assessment, calibration_id
-    calibration = calibration_id(args.calibration)
+    identifier = calibration_id(args.calibration)
     for outcome in outcomes:
         if args.actuator_id == 'folder':
             actuator_id = Path(outcome.path).resolve().parent.name
         else:
             actuator_id = args.actuator_id or args.namespace
         add_assessment(args.history, outcome.assessment, actuator_id=actuator_id, content=outcome.content,
-                       calibration=calibration, namespace=args.namespace)
+                       calibration=identifier, namespace=args.namespace, fit=fit)
     print(f'history {args.history}: {len(outcomes)} recordings added or replaced')

@@ -25,9 +25,11 @@ def add_recording_options(parser) -> None:
                         help='actuator geometry (default: the contract\'s default actuator)')
 
 
-def progress_bar(total: int, description: str):
-    """A tqdm bar on stderr that hides itself when stderr is not a terminal."""
+def progress_bar(total: int, description: str, unit: str = '%'):
+    """A tqdm bar on stderr that hides itself when stderr is not a terminal; counts ``unit`` (default percent)."""
     from tqdm import tqdm
+    if unit != '%':
+        return tqdm(total=total, desc=description, unit=unit, disable=None, leave=False)
     return tqdm(total=total, desc=description, unit='%', disable=None, leave=False,
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 

@@ -83,8 +83,7 @@ def _simulate_fleet(args, rig, plan) -> int:
     require(not args.effect and not args.endurance and args.stages is None,
             '--fleet cannot be combined with --effect, --endurance or --stages')
     fleet = FleetPlan(actuators=args.fleet, days=args.days)
-    bar = progress_bar(fleet.actuators * fleet.days, 'simulating the fleet')
-    bar.bar_format, bar.unit = None, 'recording'
+    bar = progress_bar(fleet.actuators * fleet.days, 'simulating the fleet', unit='recording')
     try:
         paths = simulate_fleet(args.out, fleet=fleet, rig=rig, plan=plan, seed=args.seed, storage=args.storage,
                                progress=lambda done, total: bar.update(done - bar.n))

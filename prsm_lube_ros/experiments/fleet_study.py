@@ -48,7 +48,7 @@ def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, 
     for outcome in outcomes:
         if outcome.assessment is not None:
             add_assessment(history, outcome.assessment, actuator_id=Path(outcome.path).parent.name,
-                           content=outcome.content, calibration=identifier)
+                           content=outcome.content, calibration=identifier, fit=calibration)
     return {'recordings': len(paths), 'failed': failed, 'simulate_s': simulated - started,
             'assess_s': time.perf_counter() - simulated}
 

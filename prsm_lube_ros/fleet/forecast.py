@@ -54,12 +54,23 @@ _NORMAL_QUANTILE = 1.959964
 
 @dataclass(frozen=True)
 class RecordingPoint:
-    """One recording's theta_Oil: time of its first run (s since the epoch), value and one-sigma."""
+    """One recording's theta_Oil: time of its first run (s since the epoch), value and one-sigma.
+
+    ``theta_oil_std`` is the whole one-sigma; ``calibration_std`` its part
+    from the calibration constants, common to every recording assessed with
+    the same calibration (it shifts them all alike and does not average out).
+    """
 
     time: float
     theta_oil: float
     theta_oil_std: float
     recording_path: str = ''
+    calibration_std: float = 0.0
+
+    @property
+    def independent_std(self) -> float:
+        """The one-sigma of this recording alone (its own vibration scatter), at least a fifth of the whole."""
+        return math.sqrt(max(self.theta_oil_std ** 2 - self.calibration_std ** 2, (0.2 * self.theta_oil_std) ** 2))
 
 
 @dataclass(frozen=True)
@@ -154,26 +165,33 @@ def _utc(seconds):
 def recording_points(runs) -> dict[str, list[RecordingPoint]]:
     """One point per recording and actuator from a history ``runs`` table, in time order.
 
-    A recording's value is the inverse-variance mean of its assessed runs; its
-    one-sigma is the larger of that mean's and the runs' scatter about it over
-    sqrt(n).
+    A recording's value is the inverse-variance mean of its assessed runs,
+    weighted by their own (independent) one-sigma; that mean's one-sigma is
+    the larger of the propagated one and the runs' scatter about it over
+    sqrt(n), and the calibration's share (``theta_oil_std_calibration``,
+    0 where the history has none) is added back in quadrature.
     """
-    columns = {name: runs.column(name).to_pylist()
-               for name in ('actuator', 'recording_path', 'start', 'theta_oil', 'theta_oil_std')}
-    grouped: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
-    for actuator, path, start, theta, std in zip(*columns.values()):
+    names = ('actuator', 'recording_path', 'start', 'theta_oil', 'theta_oil_std', 'theta_oil_std_calibration')
+    columns = {name: runs.column(name).to_pylist() if name in runs.column_names else [None] * runs.num_rows
+               for name in names}
+    grouped: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {}
+    for actuator, path, start, theta, std, shared in zip(*columns.values()):
         if theta is None or std is None or not theta > 0 or not std > 0 or start is None:
             continue
-        grouped.setdefault((actuator, path), []).append((start.timestamp(), theta, std))
+        shared = min(shared or 0.0, std)
+        own = RecordingPoint(0.0, theta, std, calibration_std=shared).independent_std
+        grouped.setdefault((actuator, path), []).append((start.timestamp(), theta, own, shared))
     points: dict[str, list[RecordingPoint]] = {}
     for (actuator, path), rows in grouped.items():
-        times, thetas, stds = (np.array(v, float) for v in zip(*rows))
+        times, thetas, stds, shared = (np.array(v, float) for v in zip(*rows))
         weights = 1.0 / stds ** 2
         mean = float(np.sum(weights * thetas) / np.sum(weights))
         std = math.sqrt(1.0 / np.sum(weights))
         if thetas.size > 1:
             std = max(std, float(np.std(thetas, ddof=1)) / math.sqrt(thetas.size))
-        points.setdefault(actuator, []).append(RecordingPoint(float(times.min()), mean, std, path))
+        calibration = float(np.mean(shared))
+        points.setdefault(actuator, []).append(RecordingPoint(float(times.min()), mean, math.hypot(std, calibration),
+                                                              path, calibration))
     return {actuator: sorted(items, key=lambda p: p.time) for actuator, items in sorted(points.items())}
 
 
@@ -183,7 +201,7 @@ def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float =
     found = []
     for before, after in zip(points, points[1:]):
         rise = after.theta_oil - before.theta_oil
-        if rise > min_jump and rise > jump_sigmas * math.hypot(before.theta_oil_std, after.theta_oil_std):
+        if rise > min_jump and rise > jump_sigmas * math.hypot(before.independent_std, after.independent_std):
             found.append(0.5 * (before.time + after.time))
     return found
 
@@ -214,7 +232,8 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
                          f'{used.size + 2} to fit the depletion')
         return result
     y = np.log([p.theta_oil for p in points])
-    sigma = np.array([p.theta_oil_std / p.theta_oil for p in points])
+    sigma = np.array([p.independent_std / p.theta_oil for p in points])
+    shared = points[-1].calibration_std / points[-1].theta_oil     # common to all recordings, relative
     origin = times[0]
     design = np.zeros((len(points), used.size + 1))
     design[np.arange(len(points)), index] = 1.0
@@ -241,7 +260,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     result.theta_now = float(math.exp(last_level - rate * (times[-1] - origin) / DAY))
     rng = np.random.default_rng(seed)
     pair = np.array([last, design.shape[1] - 1])
-    block = covariance[np.ix_(pair, pair)]
+    block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
     normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(block + 1e-18 * np.eye(2)).T
     if scaled:
         normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
@@ -251,6 +270,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
         result.diffusion = walk[2]
         result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
                                                                                   walk[2])
+        result.state_covariance[0, 0] += shared ** 2
     tail = (1.0 - INTERVAL) / 2.0
     for level in levels:
         if y[-1] > math.log(level) and result.state is not None:
@@ -487,7 +507,7 @@ def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[fl
     times = np.array([p.time for p in points])
     cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
     return increments(times / DAY, np.log([p.theta_oil for p in points]),
-                      np.array([p.theta_oil_std / p.theta_oil for p in points]), cycles)
+                      np.array([p.independent_std / p.theta_oil for p in points]), cycles)
 
 
 def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,

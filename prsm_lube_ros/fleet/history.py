@@ -25,8 +25,10 @@ Columns of both tables: ``recording_path``, ``content_hash``,
 ``calibration_id``, ``assessed_at`` (UTC), ``namespace``, ``run_index``,
 ``start``/``end`` (UTC), ``screw_speed`` (rad/s), ``axial_load`` (N),
 ``vibration_rms`` (m/s^2), ``theta_oil`` and ``theta_oil_std`` (null where not
-assessable), ``reason``; runs add ``windows`` and ``temperature`` (degC),
-windows add ``steady`` and ``nut_position`` (m).  The partition columns
+assessable), ``reason``; runs add ``windows``, ``temperature`` (degC) and
+``theta_oil_std_calibration`` (the calibration's share of the one-sigma, common
+to all recordings assessed with it), windows add ``steady`` and
+``nut_position`` (m).  The partition columns
 ``actuator`` and ``date`` come from the folder names.
 """
 from __future__ import annotations
@@ -52,7 +54,8 @@ _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('cal
            ('start', UTC_TIME), ('end', UTC_TIME), ('screw_speed', pa.float64()), ('axial_load', pa.float64()),
            ('vibration_rms', pa.float64()), ('theta_oil', pa.float64()), ('theta_oil_std', pa.float64()),
            ('reason', pa.string())]
-SCHEMAS = {'runs': pa.schema(_COMMON + [('windows', pa.int64()), ('temperature', pa.float64())]),
+_RUN_ONLY = [('windows', pa.int64()), ('temperature', pa.float64()), ('theta_oil_std_calibration', pa.float64())]
+SCHEMAS = {'runs': pa.schema(_COMMON + _RUN_ONLY),
            'windows': pa.schema(_COMMON + [('steady', pa.bool_()), ('nut_position', pa.float64())])}
 PARTITIONING = ds.partitioning(pa.schema([('actuator', pa.string()), ('date', pa.string())]), flavor='hive')
 _HASH_BLOCK = 1 << 20
@@ -108,18 +111,27 @@ def _finite(value) -> float | None:
 
 
 def assessment_tables(assessment, *, content: str, calibration: str, namespace: str = '/prsm',
-                      assessed_at: datetime.datetime | None = None) -> dict[str, pa.Table]:
-    """The ``runs`` and ``windows`` rows of one ``RecordingAssessment`` as pyarrow tables."""
+                      assessed_at: datetime.datetime | None = None, fit=None) -> dict[str, pa.Table]:
+    """The ``runs`` and ``windows`` rows of one ``RecordingAssessment`` as pyarrow tables.
+
+    ``fit`` (the :class:`~prsm_lube_ros.estimation.calibration.Calibration`
+    used) fills ``theta_oil_std_calibration``: the part of each run's
+    one-sigma that comes from the constants' covariance, shared by every
+    recording assessed with that calibration (null without ``fit``).
+    """
     assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
     path = str(Path(assessment.path).resolve())
     common = {'recording_path': path, 'content_hash': content, 'calibration_id': calibration,
               'assessed_at': assessed_at, 'namespace': namespace}
+    shared = _calibration_std(fit, assessment.runs)
     runs = [dict(common, run_index=run.run_index, start=_utc(run.start), end=_utc(run.end),
                  screw_speed=_finite(run.screw_speed), axial_load=_finite(run.axial_load),
                  vibration_rms=_finite(run.vibration_rms),
                  theta_oil=None if run.reason else _finite(run.theta_oil),
                  theta_oil_std=None if run.reason else _finite(run.theta_oil_std), reason=run.reason,
-                 windows=run.windows, temperature=_finite(run.temperature)) for run in assessment.runs]
+                 windows=run.windows, temperature=_finite(run.temperature),
+                 theta_oil_std_calibration=None if run.reason else _finite(std))
+            for run, std in zip(assessment.runs, shared)]
     windows = [dict(common, run_index=item.window.run_index, start=_utc(item.window.start),
                     end=_utc(item.window.end), screw_speed=_finite(item.window.screw_speed),
                     axial_load=_finite(item.window.axial_load), vibration_rms=_finite(item.window.vibration_rms),
@@ -128,6 +140,16 @@ def assessment_tables(assessment, *, content: str, calibration: str, namespace: 
                     nut_position=_finite(item.window.nut_position)) for item in assessment.windows]
     return {'runs': pa.Table.from_pylist(runs, schema=SCHEMAS['runs']),
             'windows': pa.Table.from_pylist(windows, schema=SCHEMAS['windows'])}
+
+
+def _calibration_std(fit, runs) -> list[float | None]:
+    """Per run, the one-sigma of theta_Oil from the calibration's covariance alone (Eq. 23 propagation)."""
+    if fit is None:
+        return [None] * len(runs)
+    from ..estimation.assessment import Assessor
+    assessor = Assessor(fit)
+    return [assessor.theta(run.vibration_rms, run.screw_speed, run.axial_load, 0.0)[1] if not run.reason else None
+            for run in runs]
 
 
 def write_table_atomically(table: pa.Table, path: Path, *, before_replace=None) -> None:
@@ -158,17 +180,18 @@ def _first_start(tables: dict[str, pa.Table], fallback: datetime.datetime) -> da
 
 def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,
                    namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
-                   before_replace=None) -> list[Path]:
+                   before_replace=None, fit=None) -> list[Path]:
     """Write one recording's runs and windows into the history, replacing its earlier rows; returns the files.
 
     ``content`` is the recording's :func:`content_hash`, ``calibration`` the
-    :func:`calibration_id` of the calibration used.  ``before_replace`` is
-    passed to :func:`write_table_atomically`.
+    :func:`calibration_id` of the calibration used and ``fit`` the calibration
+    itself (for ``theta_oil_std_calibration``).  ``before_replace`` is passed
+    to :func:`write_table_atomically`.
     """
     history = Path(history)
     assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
     tables = assessment_tables(assessment, content=content, calibration=calibration, namespace=namespace,
-                               assessed_at=assessed_at)
+                               assessed_at=assessed_at, fit=fit)
     date = _first_start(tables, assessed_at).strftime('%Y-%m-%d')
     path_key, content_key = _path_key(assessment.path), content[:16]
     name = f'{path_key}-{content_key}.parquet'

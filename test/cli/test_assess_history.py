@@ -31,3 +31,13 @@ def test_history_actuator_defaults_to_the_namespace(small_fleet, tmp_path):
     assert main(['assess', small_fleet['bags'][0], '--calibration', str(small_fleet['calibration']),
                  '--history', str(history)]) == 0
     assert set(read_table(history).column('actuator').to_pylist()) == {'prsm'}
+
+
+def test_the_calibrations_share_of_the_uncertainty_is_recorded(small_fleet):
+    from prsm_lube_ros.fleet.forecast import recording_points
+    runs = read_table(small_fleet['history']).to_pylist()
+    assessed = [run for run in runs if run['theta_oil'] is not None]
+    assert assessed and all(0 < run['theta_oil_std_calibration'] < run['theta_oil_std'] for run in assessed)
+    assert all(run['theta_oil_std_calibration'] is None for run in runs if run['theta_oil'] is None)
+    point = recording_points(read_table(small_fleet['history']))['A01'][0]
+    assert 0 < point.calibration_std < point.theta_oil_std and point.independent_std < point.theta_oil_std
