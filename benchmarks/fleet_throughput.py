@@ -60,6 +60,7 @@ def main(argv=None) -> int:
     calibration = calibrate_recordings([recording_windows(data / 'reference', lead=lead)])
     job = BagJob(calibration, lead, hash_content=True)
     rows, prints = [], {}
+    load_before = os.getloadavg()[0]
     for name, options in MODES:
         best = None
         for _ in range(args.repeat):
@@ -89,7 +90,8 @@ def main(argv=None) -> int:
               'machine': {'cpus': os.cpu_count(), 'python': platform.python_version(),
                           'platform': platform.platform()},
               'repeat': args.repeat, 'identical': identical, 'rows': rows,
-              'dask_cluster_start_stop_seconds': startup}
+              'dask_cluster_start_stop_seconds': startup,
+              'load_average_1min': {'before': load_before, 'after': os.getloadavg()[0]}}
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / 'fleet_throughput.json').write_text(json.dumps(result, indent=1))
     lines = ['# Fleet assessment throughput', '', f'`{result["command"]}` on {os.cpu_count()} CPUs, best of '
@@ -98,6 +100,9 @@ def main(argv=None) -> int:
              '| mode | s | recording-h/s | recordings/s | failed |', '|---|---|---|---|---|']
     lines += [f'| {r["mode"]} | {r["seconds"]:.2f} | {r["recording_hours_per_second"]:.3f} | '
               f'{r["recordings_per_second"]:.1f} | {r["failed"]} |' for r in rows]
+    lines += ['', f'Load average of the machine (1 min) before and after: {load_before:.1f} and '
+              f'{result["load_average_1min"]["after"]:.1f} (other jobs share its {os.cpu_count()} CPUs; with a '
+              'load above the CPU count, extra processes cannot run in parallel).']
     lines += ['', f'Starting and stopping the local Dask cluster (2 worker processes) alone takes {startup:.2f} s '
               'of the Dask row.']
     lines += ['', f'Outcomes identical across the three modes (every theta, sigma, RMS, window and hash): '
