@@ -19,6 +19,9 @@ def add_command(subparsers) -> None:
     parser.add_argument('--relubrications', default=None, metavar='CSV',
                         help='known relubrications, lines "actuator,time" (ISO 8601 or s since the epoch); '
                         'actuators not listed have theirs found as jumps up in theta_oil')
+    parser.add_argument('--odometer', default=None, metavar='CSV',
+                        help='cumulative screw revolutions, lines "actuator,time,revolutions": adds the fit against '
+                        'revolutions (N_d) and the odometer reading at each crossing')
     parser.set_defaults(func=run)
 
 
@@ -32,14 +35,18 @@ def run(args) -> int:
     from .common import write_json
     HealthThresholds(warn_below=args.warn_below, error_below=args.error_below)   # checks the order
     levels = (args.warn_below, args.error_below)
+    from ..fleet.service_log import read_odometer, read_relubrications
     relubrications = read_relubrications(args.relubrications) if args.relubrications else None
+    odometers = read_odometer(args.odometer) if args.odometer else None
     forecasts = forecast_history(args.history, actuator=args.actuator, relubrications=relubrications,
-                                 levels=levels)
+                                 levels=levels, odometers=odometers)
     report = Path(args.report)
     rows = [_row(forecast) for forecast in forecasts]
     header = ('| actuator | recordings | relubrications | tau d | theta now | warn crossing (95 % interval) '
               '| error crossing (95 % interval) |')
-    table = '\n'.join([header, '|---|---|---|---|---|---|---|'] + rows)
+    if odometers:
+        header += ' N_d rev | warn at odometer rev (95 % interval) |'
+    table = '\n'.join([header, '|---' * header.count(' |') + '|'] + rows)
     print(table)
     for forecast in forecasts:
         points = forecast.points
@@ -61,6 +68,7 @@ def run(args) -> int:
 
 def _row(forecast) -> str:
     """One Markdown table row of a forecast."""
+    import math
     if forecast.reason:
         return f'| {forecast.actuator} | {len(forecast.points)} | – | – | – | {forecast.reason} | |'
     cells = []
@@ -68,36 +76,13 @@ def _row(forecast) -> str:
         data = crossing.as_json()
         cells.append(f'{data["time_utc"] or "never"} ({data["low_utc"] or "never"} .. '
                      f'{data["high_utc"] or "never"})')
-    return (f'| {forecast.actuator} | {len(forecast.points)} | {len(forecast.relubrications)} | '
-            f'{forecast.tau_days:.3g} | {forecast.theta_now:.3f} | ' + ' | '.join(cells) + ' |')
-
-
-def read_relubrications(path) -> dict[str, list[float]]:
-    """``{actuator: [s since the epoch]}`` from a CSV of ``actuator,time`` lines (a header line is allowed)."""
-    import csv
-    import datetime
-    from ..errors import ConfigError
-    result: dict[str, list[float]] = {}
-    try:
-        with open(path, newline='') as stream:
-            for number, row in enumerate(csv.reader(stream), start=1):
-                if not row or row[0].strip().startswith('#') or (number == 1 and row[0].strip() == 'actuator'):
-                    continue
-                if len(row) < 2:
-                    raise ConfigError(f'{path}:{number}: expected "actuator,time", got {",".join(row)!r}')
-                text = row[1].strip()
-                try:
-                    seconds = float(text)
-                except ValueError:
-                    try:
-                        stamp = datetime.datetime.fromisoformat(text.replace('Z', '+00:00'))
-                    except ValueError:
-                        raise ConfigError(f'{path}:{number}: time {text!r} is neither ISO 8601 nor seconds '
-                                          'since the epoch') from None
-                    if stamp.tzinfo is None:
-                        stamp = stamp.replace(tzinfo=datetime.timezone.utc)
-                    seconds = stamp.timestamp()
-                result.setdefault(row[0].strip(), []).append(seconds)
-    except OSError as exc:
-        raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
-    return result
+    row = (f'| {forecast.actuator} | {len(forecast.points)} | {len(forecast.relubrications)} | '
+           f'{forecast.tau_days:.3g} | {forecast.theta_now:.3f} | ' + ' | '.join(cells) + ' |')
+    if math.isfinite(forecast.depletion_revolutions):
+        crossing = forecast.revolution_crossings[0] if forecast.revolution_crossings else None
+        where = 'passed'
+        if crossing and crossing.time is not None:
+            high = 'never' if crossing.high is None else f'{crossing.high:.0f}'
+            where = f'{crossing.time:.0f} ({crossing.low:.0f} .. {high})'
+        row += f' {forecast.depletion_revolutions:.3g} | {where} |'
+    return row

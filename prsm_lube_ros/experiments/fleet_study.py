@@ -54,11 +54,26 @@ def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, 
 
 
 def compare_with_truth(history: Path, truth_path: Path, level: float | None = None) -> list[dict]:
-    """Per actuator: the forecast crossing of ``level`` (default the truth's first threshold) against the truth."""
+    """Per actuator: the forecast crossing of ``level`` (default the truth's first threshold) against the truth.
+
+    With ``odometer.csv`` beside the truth, each row also has the fitted N_d
+    (``depletion_revolutions``, its one-sigma) and the true one.
+    """
+    from ..fleet.service_log import read_odometer
     from ..fleet.forecast import forecast_history
     truth = json.loads(Path(truth_path).read_text())
     level = truth['thresholds'][0] if level is None else level
-    return coverage_rows(forecast_history(history, levels=(level,)), truth, level)
+    odometer = Path(truth_path).parent / 'odometer.csv'
+    forecasts = forecast_history(history, levels=(level,),
+                                 odometers=read_odometer(odometer) if odometer.exists() else None)
+    rows = coverage_rows(forecasts, truth, level)
+    by_name = {f.actuator: f for f in forecasts}
+    for row, actuator in zip(rows, truth['actuators']):
+        forecast = by_name.get(row['actuator'])
+        row['depletion_revolutions'] = forecast.depletion_revolutions if forecast else None
+        row['depletion_revolutions_std'] = forecast.depletion_revolutions_std if forecast else None
+        row['true_depletion_revolutions'] = actuator['depletion_revolutions']
+    return rows
 
 
 def _days(value, origin):
@@ -118,6 +133,15 @@ def main(argv=None) -> int:
                f'the true warn crossing (0.85) lies inside the forecast 95 % interval for {inside}/{len(all_rows)} '
                f'actuators ({100.0 * inside / len(all_rows):.1f} %); for the {len(ahead)} whose crossing comes '
                f'after their last recording (a true forecast): {sum(row["inside"] for row in ahead)}/{len(ahead)}.')
+    fitted = [row for row in all_rows if row['depletion_revolutions'] is not None
+              and math.isfinite(row['depletion_revolutions'])]
+    if fitted:
+        errors = [abs(row['depletion_revolutions'] / row['true_depletion_revolutions'] - 1.0) for row in fitted]
+        within = sum(abs(row['depletion_revolutions'] - row['true_depletion_revolutions'])
+                     <= 2.0 * row['depletion_revolutions_std'] for row in fitted)
+        median = 100.0 * sorted(errors)[len(errors) // 2]
+        summary += (f' Against the odometer, N_d of the depletion law came out within {median:.1f} % of the truth '
+                    f'(median), within two stated one-sigmas for {within}/{len(fitted)} actuators.')
     text = (f'# Fleet forecast against the simulator\'s truth\n\n`{command}`\n\n{summary}\n\n'
             + '\n\n'.join(sections) + '\n')
     results.mkdir(parents=True, exist_ok=True)

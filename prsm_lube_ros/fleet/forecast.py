@@ -114,6 +114,13 @@ class ActuatorForecast:
     state_covariance: np.ndarray | None = None
     state_dof: int = 0
     diffusion: float = 0.0
+    #: against revolutions (with an odometer): N_d (rev) and its one-sigma, the odometer at the last recording
+    #: and the odometer readings at which the levels are crossed (``Crossing`` in rev instead of s; None
+    #: where theta_Oil is already below the level)
+    depletion_revolutions: float = math.nan
+    depletion_revolutions_std: float = math.nan
+    odometer_last: float = math.nan
+    revolution_crossings: list[Crossing] = field(default_factory=list)
 
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
@@ -148,6 +155,11 @@ class ActuatorForecast:
                 'fit_rmse_ln': _finite(self.fit_rmse), 'recordings': len(self.points),
                 'relubrications': [{'time': t, 'time_utc': _utc(t)} for t in self.relubrications],
                 'crossings': [c.as_json() for c in self.crossings],
+                'revolutions': {'depletion_revolutions': _finite(self.depletion_revolutions),
+                                'depletion_revolutions_std': _finite(self.depletion_revolutions_std),
+                                'odometer_last': _finite(self.odometer_last),
+                                'crossings': [{'level': c.level, 'odometer': c.time, 'low': c.low, 'high': c.high}
+                                              for c in self.revolution_crossings]},
                 'points': [{'time': p.time, 'theta_oil': p.theta_oil, 'theta_oil_std': p.theta_oil_std,
                             'recording_path': p.recording_path} for p in self.points]}
 
@@ -208,15 +220,20 @@ def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float =
 
 def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
                   levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                  usage_scatter: float | None = None, seed: int = 0) -> ActuatorForecast:
+                  usage_scatter: float | None = None, odometer: Sequence[float] | None = None,
+                  seed: int = 0) -> ActuatorForecast:
     """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
 
     ``relubrications`` (s since the epoch) are detected from jumps when None.
     ``usage_scatter`` is the fleet's (:func:`fleet_usage_scatter`); None fits
-    this actuator's alone.
+    this actuator's alone.  ``odometer`` (cumulative screw revolutions at each
+    point, in time order) adds the fit against revolutions:
+    :func:`fit_revolutions`.
     A forecast that cannot be made has ``reason`` set and no crossings.
     """
-    points = sorted(points, key=lambda p: p.time)
+    order = sorted(range(len(points)), key=lambda j: points[j].time)
+    points = [points[j] for j in order]
+    odometer = None if odometer is None else np.array([odometer[j] for j in order], float)
     relubrications = sorted(detect_relubrications(points) if relubrications is None else relubrications)
     result = ActuatorForecast(actuator, list(points), list(relubrications))
     if not points:
@@ -289,7 +306,49 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
             low = bracket[1] if low is None else min(low, bracket[1])
             high = None if high is None else max(high, bracket[2])
         result.crossings.append(Crossing(float(level), estimate, low, high))
+    if odometer is not None:
+        fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
     return result
+
+
+#: revolutions per unit of the filter's axis against revolutions (keeps its numbers near those in days)
+KILO = 1000.0
+
+
+def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarray, sigma: np.ndarray,
+                    cycles: np.ndarray, shared: float, levels: Sequence[float], rng) -> None:
+    """The law against revolutions: ln theta = ln a_c - N / N_d (``lubricant_depletion``), N from an odometer.
+
+    The Kalman filter of :func:`depletion_state` on the odometer axis, without
+    usage diffusion (the law is deterministic in revolutions); gives N_d and
+    the odometer readings where the levels are crossed, with the 95 % interval
+    of the remaining revolutions.  Nothing when the odometer does not cover
+    every recording or does not increase.
+    """
+    if not (np.all(np.isfinite(odometer)) and np.all(np.diff(odometer) >= 0)) or len(odometer) < 3:
+        return
+    state, cov, dof = depletion_state(odometer / KILO, y, sigma, cycles, 0.0)
+    cov = cov + np.diag([shared ** 2, 0.0])
+    k = state[1]
+    result.odometer_last = float(odometer[-1])
+    result.depletion_revolutions = KILO / k if k > 0 else math.inf
+    result.depletion_revolutions_std = KILO * math.sqrt(cov[1, 1]) / k ** 2 if k > 0 else math.inf
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
+    if dof:
+        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
+    draws = state + normal
+    tail = (1.0 - INTERVAL) / 2.0
+    for level in levels:
+        if not state[0] > math.log(level):
+            result.revolution_crossings.append(Crossing(float(level), None, None, None))   # already below
+            continue
+        with np.errstate(divide='ignore', invalid='ignore'):
+            remaining = np.where(draws[:, 1] > 0, np.maximum(draws[:, 0] - math.log(level), 0.0) / draws[:, 1],
+                                 math.inf)
+        low, high = np.quantile(remaining, [tail, 1.0 - tail])
+        estimate = (state[0] - math.log(level)) / k if k > 0 else math.inf
+        result.revolution_crossings.append(Crossing(float(level), *(
+            float(odometer[-1] + v * KILO) if math.isfinite(v) else None for v in (estimate, low, high))))
 
 
 def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0):
@@ -469,12 +528,14 @@ def urgency_key(forecast: ActuatorForecast):
 
 
 def forecast_history(history, *, actuator: str | None = None, relubrications: dict | None = None,
-                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below)
-                     ) -> list[ActuatorForecast]:
+                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                     odometers: dict | None = None) -> list[ActuatorForecast]:
     """Forecasts of every actuator (or one) in a history folder, most urgent first.
 
     ``relubrications`` maps an actuator id to its relubrication times (s since
-    the epoch); actuators not in it have theirs detected.
+    the epoch); actuators not in it have theirs detected.  ``odometers`` maps
+    an actuator id to ``(times, cumulative revolutions)`` for the fit against
+    revolutions.
     """
     from .history import actuator_key, read_table
     points = recording_points(read_table(history, 'runs'))
@@ -482,16 +543,19 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
         raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
     given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
     return forecast_points(points, relubrications=given, levels=levels,
-                           only=actuator_key(actuator) if actuator is not None else None)
+                           only=actuator_key(actuator) if actuator is not None else None,
+                           odometers={actuator_key(k): v for k, v in (odometers or {}).items()})
 
 
 def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                    only: str | None = None) -> list[ActuatorForecast]:
+                    only: str | None = None, odometers: dict | None = None) -> list[ActuatorForecast]:
     """Forecasts from each actuator's recording points (the fleet's usage scatter pooled), most urgent first.
 
     ``only`` forecasts that actuator alone (the others still inform the
-    usage scatter).
+    usage scatter).  ``odometers`` maps an actuator to ``(times, readings)``
+    (s since the epoch, cumulative revolutions), interpolated at its
+    recordings for the fit against revolutions.
     """
     given = relubrications or {}
     found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
@@ -499,8 +563,30 @@ def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubricatio
     scatter = fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
     names = [only] if only is not None else list(points)
     forecasts = [fit_depletion(name, points[name], relubrications=found[name], levels=levels,
-                               usage_scatter=scatter) for name in names]
+                               usage_scatter=scatter, odometer=_odometer_at(points[name], (odometers or {}).get(name)))
+                 for name in names]
     return sorted(forecasts, key=urgency_key)
+
+
+#: how far (s) before the first or after the last odometer reading a recording may lie (extrapolated linearly)
+ODOMETER_REACH = 3600.0
+
+
+def _odometer_at(points: Sequence[RecordingPoint], odometer) -> list[float] | None:
+    """Odometer readings interpolated at the points' times, NaN beyond :data:`ODOMETER_REACH`, or None."""
+    if odometer is None:
+        return None
+    times, readings = (np.asarray(v, float) for v in odometer)
+    order = np.argsort(times)
+    times, readings = times[order], readings[order]
+    at = np.array([p.time for p in points])
+    values = np.interp(at, times, readings)
+    if times.size > 1:
+        rates = np.diff(readings) / np.maximum(np.diff(times), 1e-9)
+        values = np.where(at < times[0], readings[0] + rates[0] * (at - times[0]), values)
+        values = np.where(at > times[-1], readings[-1] + rates[-1] * (at - times[-1]), values)
+    values[(at < times[0] - ODOMETER_REACH) | (at > times[-1] + ODOMETER_REACH)] = math.nan
+    return values.tolist()
 
 
 def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float]) -> Increments | None:

@@ -16,9 +16,11 @@ condition and its rewind) at the theta_Oil of that moment.  The operator
 relubricates an actuator shortly after a recording whose true theta_Oil is
 below ``relubricate_below`` (never after the last recording).
 
-``truth.json`` beside the recordings gives, per actuator, the law's
+``odometer.csv`` lists each actuator's cumulative screw revolutions at each
+recording (``actuator,time,revolutions``), as a drive's revolution counter or a
+maintenance log would; ``truth.json`` beside the recordings gives, per actuator, the law's
 parameters, every relubrication, every recording's true theta_Oil and the
-times the last lubrication cycle crosses given thresholds (the usage process
+times (and odometer readings) the last lubrication cycle crosses given thresholds (the usage process
 continued past the last day without further relubrication), so a forecast made
 from the recordings can be checked.  A reference recording of the whole
 experiment plan at theta_Oil = 1 (``reference``) calibrates the fleet (all
@@ -44,6 +46,8 @@ from .rig_config import ExperimentPlan, RigConfig
 from .signal import RigStream
 
 DAY = 86400.0   # s
+#: each actuator's odometer reads this many days of its mean usage at the fleet's epoch
+ODOMETER_DAYS = 365
 
 
 @dataclass(frozen=True)
@@ -156,7 +160,7 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
     sequences = np.random.SeedSequence(seed).spawn(fleet.actuators + 1)
     total = fleet.actuators * fleet.days
     done = 0
-    truth_actuators, paths = [], []
+    truth_actuators, paths, odometer_rows = [], [], []
     if write_recordings:
         _reference(out_dir, rig, plan, int(sequences[-1].generate_state(1)[0]), storage)
     for number, sequence in enumerate(sequences[:-1], start=1):
@@ -199,11 +203,17 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
                 relubrications.append({'time': epoch + cycle_start_time, 'time_utc': _iso(epoch + cycle_start_time),
                                        'theta_oil_after': theta_r})
         crossings = {}
+        odometer_start = round(rate * ODOMETER_DAYS)
         for level in thresholds:
             revs = cycle_start_revs + depletion * math.log(theta_r / level) if level < theta_r else -math.inf
             crossing = service.time_at(max(revs, 0.0)) if revs > 0 else 0.0
-            crossings[f'{level:g}'] = {'time': epoch + crossing if math.isfinite(crossing) else None,
-                                       'time_utc': _iso(epoch + crossing) if math.isfinite(crossing) else None}
+            known = math.isfinite(crossing)
+            crossings[f'{level:g}'] = {'time': epoch + crossing if known else None,
+                                       'time_utc': _iso(epoch + crossing) if known else None,
+                                       'odometer': odometer_start + float(service.revolutions(crossing)) if known
+                                       else None}
+        odometer_rows += [(actuator_id, r['start_utc'], odometer_start + float(service.revolutions(r['start'] - epoch)))
+                          for r in recordings]
         truth_actuators.append({
             'actuator_id': actuator_id, 'revolutions_per_day': rate, 'depletion_revolutions': depletion,
             'initial_theta': initial_theta, 'last_relubrication_theta': theta_r,
@@ -218,4 +228,6 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
                 'actuators': truth_actuators}
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / 'truth.json').write_text(json.dumps(document, indent=1))
+    (out_dir / 'odometer.csv').write_text('actuator,time,revolutions\n' + ''.join(
+        f'{name},{time},{revolutions:.1f}\n' for name, time, revolutions in odometer_rows))
     return paths

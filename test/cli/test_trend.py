@@ -3,6 +3,8 @@
 """``prsm-lube trend``: table most urgent first, JSON and plots; bad input is one line."""
 import json
 
+import pytest
+
 from prsm_lube_ros.cli import main
 
 
@@ -42,3 +44,16 @@ def test_bad_input_is_one_line(small_fleet, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and 'yesterday' in err[0] and 'nothing' in err[1] and 'error_below' in err[2]
     assert 'Traceback' not in '\n'.join(err)
+
+
+def test_trend_with_an_odometer_fits_the_depletion_revolutions(small_fleet, tmp_path, capsys):
+    truth = json.loads((small_fleet['root'] / 'truth.json').read_text())
+    report = tmp_path / 'odometer'
+    assert main(['trend', str(small_fleet['history']), '--report', str(report),
+                 '--odometer', str(small_fleet['root'] / 'odometer.csv')]) == 0
+    assert 'N_d rev' in capsys.readouterr().out
+    fitted = {a['actuator']: a['revolutions'] for a in json.loads((report / 'trend.json').read_text())['actuators']}
+    for actuator in truth['actuators']:
+        revolutions = fitted[actuator['actuator_id']]
+        assert revolutions['depletion_revolutions'] == pytest.approx(actuator['depletion_revolutions'], rel=0.25)
+        assert len(revolutions['crossings']) == 2

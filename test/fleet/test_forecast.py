@@ -79,3 +79,30 @@ def test_forecast_summary_for_one_actuator(small_fleet):
     assert all(isinstance(value, str) for value in summary.values())
     with pytest.raises(InputError, match='no assessed run'):
         forecast_summary(small_fleet['history'], 'A99')
+
+
+def test_against_an_odometer_the_depletion_revolutions_and_the_crossing_reading_are_recovered():
+    """Uneven usage: exponential in revolutions, not in time; the fit against the odometer is exact."""
+    rng = np.random.default_rng(4)
+    daily = rng.uniform(2000.0, 8000.0, 12)
+    odometer = 1e6 + np.concatenate(([0.0], np.cumsum(daily)))[:12]
+    depletion = 600_000.0     # warn (0.85) after 79,000 rev, beyond the 12 days recorded
+    points = [RecordingPoint((day + 0.5) * DAY, 0.97 * math.exp(-(reading - 1e6) / depletion), 1e-4)
+              for day, reading in enumerate(odometer)]
+    forecast = fit_depletion('A', points, levels=(0.85, 0.70), odometer=list(odometer))
+    assert forecast.depletion_revolutions == pytest.approx(depletion, rel=1e-3)
+    warn, error = forecast.revolution_crossings
+    assert warn.time == pytest.approx(1e6 + depletion * math.log(0.97 / 0.85), rel=1e-6)
+    assert error.low <= 1e6 + depletion * math.log(0.97 / 0.70) <= error.high
+
+
+def test_service_logs_read_iso_and_epoch_times(tmp_path):
+    from prsm_lube_ros.fleet.service_log import read_odometer, read_relubrications
+    log = tmp_path / 'odometer.csv'
+    log.write_text('actuator,time,revolutions\n# comment\nA,2026-01-01T00:00:00Z,10\nA,1767229200,20.5\n')
+    assert read_odometer(log) == {'A': ([1767225600.0, 1767229200.0], [10.0, 20.5])}
+    (tmp_path / 'r.csv').write_text('A,2026-01-01T01:00:00\n')
+    assert read_relubrications(tmp_path / 'r.csv') == {'A': [1767229200.0]}
+    log.write_text('A,2026-01-01,many\n')
+    with pytest.raises(InputError, match=r'odometer.csv:1: revolutions .many. is not a number'):
+        read_odometer(log)
