@@ -3,30 +3,42 @@
 """theta_Oil over service time per actuator: depletion fit and when it will cross the warn and error levels.
 
 Law.  Oil is flung out as the screw turns (``physics.effects.lubricant_depletion``,
-theta = theta_r exp(-N_rev / N_d)); at a steady usage rate of r revolutions a
-day, N_rev = r (t - t_r), so between relubrications
+theta = theta_r exp(-N_rev / N_d)); at a usage of r revolutions a day,
+N_rev grows by r dt, so between relubrications
 
-    theta_Oil(t) = a_c exp(-t / tau)            (tau = N_d / r, days)
+    ln theta_Oil(t) = ln a_c - k t          (k = r / N_d per day, tau = 1/k)
 
 with one level ``a_c`` per lubrication cycle ``c`` (it absorbs the unknown
-moment of the relubrication and the oil put in) and one time constant ``tau``
-shared by the cycles of an actuator.  ``ln theta = ln a_c - t / tau`` is
-linear in (ln a_c, 1/tau); it is fitted by weighted least squares to one point
-per recording (the runs' theta_Oil averaged with inverse-variance weights),
-each with the relative one-sigma ``theta_oil_std / theta_oil``.  Scatter
-beyond the stated uncertainty (day-to-day usage, unmodelled drift) scales the
-covariance by the reduced chi-square when that exceeds 1.
+moment of the relubrication and the oil put in) and one drift ``k`` shared by
+the cycles of an actuator.  Day-to-day scatter of the usage makes ln theta a
+random walk with that drift and a diffusion ``q = s k^2`` per day, ``s`` the
+relative variance of a day's revolutions: a property of how the fleet is
+operated, estimated over all actuators (:func:`fleet_usage_scatter`).
+
+Data.  One point per recording: its runs' theta_Oil averaged with
+inverse-variance weights.  Each run's one-sigma has a part of its own (the
+vibration scatter) and a part from the calibration's covariance, common to all
+recordings assessed with it (``theta_oil_std_calibration`` in the history):
+the fit weighs by the own part and adds the common part once, to the level.
 
 Relubrications are given, or found as a jump up in theta_Oil between two
 consecutive recordings larger than ``min_jump`` and than ``jump_sigmas`` times
-their combined uncertainty (placed half-way between them).
+their combined own uncertainty (placed half-way between them).
 
-Forecast.  The last cycle crosses level L at t_L = tau (ln a_last - ln L).  Its
-interval comes from parameter draws: Student-t with the fit's degrees of
-freedom when the covariance was scaled, normal otherwise; a draw with a
-non-positive 1/tau never crosses (interval open upwards, ``None``).  The
-default levels are the estimator's ``warn_below`` and ``error_below``
-(:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).
+Fit.  Weighted least squares of ``ln a_c`` and ``k`` for the time constant,
+the law drawn in the plots and crossings already seen in the data; a Kalman
+filter of (ln theta, k), the level reset at each relubrication, for the state
+at the last recording (:func:`depletion_state`).
+
+Forecast.  From that state the first passage of the walk to ln L is inverse
+Gaussian (mean D/k, shape D^2/q, D the distance to ln L); drawn over the
+state's uncertainty it gives the estimate and a 95 % interval (a draw with
+k <= 0 never crosses: the interval is open upwards, ``None``).  A level
+already crossed in the recordings is placed between the bracketing
+recordings, its interval widened to the fitted law's.  The default levels are
+the estimator's ``warn_below`` and ``error_below``
+(:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).  With an
+odometer the same filter runs against revolutions (:func:`fit_revolutions`).
 
 :func:`forecast_summary` is the one call for a single actuator from a history
 folder (what the estimator's diagnostics show).
