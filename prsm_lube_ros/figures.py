@@ -42,3 +42,40 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[float], errors: Sequence[float],
+                          band_times: Sequence[float], band: tuple[Sequence[float], Sequence[float],
+                                                                   Sequence[float]],
+                          levels: Mapping[str, float], events: Sequence[float], title: str,
+                          ylabel: str = 'theta_Oil') -> Path:
+    """Values with one-sigma bars over days since the first, a forecast (centre and band) and level lines.
+
+    ``times``, ``band_times`` and ``events`` (vertical dotted lines, e.g.
+    relubrications) in s since the epoch; ``levels`` maps a label to a value.
+    """
+    plt = _pyplot()
+    origin = float(times[0]) if len(times) else 0.0
+
+    def days(seconds):
+        return (np.asarray(seconds, float) - origin) / 86400.0
+    fig, ax = plt.subplots(figsize=(8.0, 4.2), dpi=120)
+    ax.errorbar(days(times), values, yerr=errors, fmt='o', markersize=3, capsize=2, label='recordings')
+    centre, low, high = (np.asarray(v, float) for v in band)
+    if len(band_times) and np.isfinite(centre).any():
+        ax.plot(days(band_times), centre, color='C1', label='forecast')
+        ax.fill_between(days(band_times), low, high, color='C1', alpha=0.25, label='forecast band')
+    for i, (label, value) in enumerate(levels.items()):
+        ax.axhline(value, color=('C3' if i else 'C8'), linestyle='--', linewidth=1, label=label)
+    for j, event in enumerate(events):
+        ax.axvline(days(event), color='0.4', linestyle=':', linewidth=1, label='relubrication' if j == 0 else None)
+    ax.set_xlabel('days since the first recording')
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path

@@ -38,3 +38,21 @@ def fake_daq(monkeypatch):
     for name, module in fake_nidaqmx.fake_nidaqmx().items():
         monkeypatch.setitem(sys.modules, name, module)
     return fake_nidaqmx.FakeTask
+
+
+@pytest.fixture(scope='session')
+def small_fleet(tmp_path_factory):
+    """A simulated fleet (4 actuators, 6 days, bare .mcap files), calibrated and assessed into a history.
+
+    A dict with ``root`` (recordings, ``truth.json``), ``calibration``, ``history`` and ``bags``.
+    """
+    from prsm_lube_ros.cli import main
+    root = tmp_path_factory.mktemp('fleet')
+    assert main(['simulate', str(root / 'fleet'), '--fleet', '4', '--days', '6', '--seed', '3',
+                 '--storage', 'mcap-file']) == 0
+    calibration, history = root / 'calibration.yaml', root / 'history'
+    assert main(['calibrate', str(root / 'fleet' / 'reference.mcap'), '--out', str(calibration)]) == 0
+    bags = sorted(str(p) for p in (root / 'fleet').glob('A*/*.mcap'))
+    assert main(['assess', *bags, '--calibration', str(calibration), '--history', str(history),
+                 '--actuator-id', 'folder']) == 0
+    return {'root': root / 'fleet', 'calibration': calibration, 'history': history, 'bags': bags}

@@ -24,10 +24,11 @@ ALLOWED = {
     'recording': set(),
     'estimation': {'physics', 'recording'},
     'diagnosis': {'physics', 'recording', 'estimation'},
+    'fleet': {'physics', 'recording', 'estimation'},
     'simulation': {'physics', 'recording', 'estimation', 'diagnosis'},
-    'experiments': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation'},
-    'nodes': {'physics', 'recording', 'estimation', 'simulation', 'msg', 'srv'},
-    'cli': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'experiments', 'nodes'},
+    'experiments': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'fleet'},
+    'nodes': {'physics', 'recording', 'estimation', 'simulation', 'fleet', 'msg', 'srv'},
+    'cli': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'experiments', 'nodes', 'fleet'},
 }
 #: ROS Python packages (the generated interfaces are checked as the layers 'msg' and 'srv').
 ROS_MODULES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'std_msgs', 'sensor_msgs', 'geometry_msgs',

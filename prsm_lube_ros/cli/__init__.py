@@ -22,7 +22,7 @@ from ..errors import InputError
 from .common import EXIT_USER_ERROR
 
 #: Command modules, in the order ``--help`` lists them.
-COMMAND_MODULES = ('simulate', 'calibrate', 'assess', 'diagnose', 'demo', 'run')
+COMMAND_MODULES = ('simulate', 'calibrate', 'assess', 'trend', 'diagnose', 'demo', 'run')
 
 __all__ = ['build_parser', 'COMMAND_MODULES', 'EXIT_USER_ERROR', 'main']
 

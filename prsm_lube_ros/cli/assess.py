@@ -3,7 +3,9 @@
 """``prsm-lube assess``: theta_Oil for every steady window and run of recordings."""
 from __future__ import annotations
 
-from .common import add_recording_options
+import sys
+
+from .common import add_recording_options, EXIT_USER_ERROR
 
 
 def add_command(subparsers) -> None:
@@ -15,19 +17,50 @@ def add_command(subparsers) -> None:
     parser.add_argument('--calibration', required=True, metavar='CALIB.yaml')
     parser.add_argument('--json', metavar='OUT.json', help='write runs and windows as JSON')
     add_recording_options(parser)
+    parser.add_argument('--history', metavar='DIR',
+                        help='add runs and windows to this Parquet history (re-assessed recordings replace theirs)')
+    parser.add_argument('--actuator-id', default=None, metavar='ID',
+                        help='actuator the recordings belong to in the history: an id, "folder" for the name of '
+                        'the folder holding each recording, or (default) the namespace')
+    parser.add_argument('--jobs', type=int, default=1, metavar='N',
+                        help='assess N recordings at a time in local processes (default 1)')
+    parser.add_argument('--scheduler', default=None, metavar='ADDRESS',
+                        help='assess on a Dask distributed cluster at ADDRESS, or "local" for a local cluster '
+                        'of --jobs workers')
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    """theta_Oil for every steady window and run; table on stdout, JSON if asked."""
+    """theta_Oil for every steady window and run; table on stdout, JSON and history if asked.
+
+    A recording that cannot be assessed is one line on stderr; the others are
+    assessed, and the status is non-zero at the end.
+    """
     import math
     from pathlib import Path
     from ..estimation.calibration_file import load_calibration
-    from ..estimation.pipeline import assess_recording, assessment_json
-    from .common import read_recordings, write_json
+    from ..estimation.pipeline import assessment_json
+    from ..estimation.windowing import WindowSettings
+    from ..fleet.parallel import assess_bags, BagJob
+    from ..physics.actuator import load_actuator
+    from ..validation import require_positive
+    from .common import progress_bar, warn, write_json
     calibration = load_calibration(args.calibration)
-    recordings, _ = read_recordings(args.bags, args)
-    results = [assess_recording(rec, calibration) for rec in recordings]
+    settings = WindowSettings(window_length=require_positive('--window', args.window))
+    job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
+                 hash_content=bool(args.history))
+    bar = progress_bar(len(args.bags), 'assessing', unit='recording')
+    try:
+        outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler,
+                               on_done=lambda outcome: bar.update(1))
+    finally:
+        bar.close()
+    results = [outcome.assessment for outcome in outcomes if outcome.assessment is not None]
+    for outcome in outcomes:
+        for line in (outcome.assessment.problems if outcome.assessment else []):
+            warn(line)
+        if outcome.error:
+            print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '
           f'{"theta_oil":>9} {"+/-":>6}')
     for rec in results:
@@ -37,8 +70,25 @@ def run(args) -> int:
             print(f'{Path(rec.path).name[:28]:<28} {run_result.run_index:>4} '
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
                   f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
-    if args.json:
+    if args.history and results:
+        _add_to_history(args, [outcome for outcome in outcomes if outcome.assessment is not None], calibration)
+    if args.json and results:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
-    return 0
+    return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
+
+
+def _add_to_history(args, outcomes, fit) -> None:
+    """Each assessed recording's runs and windows into the ``--history`` dataset."""
+    from pathlib import Path
+    from ..fleet.history import add_assessment, calibration_id
+    identifier = calibration_id(args.calibration)
+    for outcome in outcomes:
+        if args.actuator_id == 'folder':
+            actuator_id = Path(outcome.path).resolve().parent.name
+        else:
+            actuator_id = args.actuator_id or args.namespace
+        add_assessment(args.history, outcome.assessment, actuator_id=actuator_id, content=outcome.content,
+                       calibration=identifier, namespace=args.namespace, fit=fit)
+    print(f'history {args.history}: {len(outcomes)} recordings added or replaced')

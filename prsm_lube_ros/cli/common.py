@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 import sys
 
-from ..errors import ConfigError, NotIdentifiable
+from ..errors import ConfigError
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -25,9 +25,11 @@ def add_recording_options(parser) -> None:
                         help='actuator geometry (default: the contract\'s default actuator)')
 
 
-def progress_bar(total: int, description: str):
-    """A tqdm bar on stderr that hides itself when stderr is not a terminal."""
+def progress_bar(total: int, description: str, unit: str = '%'):
+    """A tqdm bar on stderr that hides itself when stderr is not a terminal; counts ``unit`` (default percent)."""
     from tqdm import tqdm
+    if unit != '%':
+        return tqdm(total=total, desc=description, unit=unit, disable=None, leave=False)
     return tqdm(total=total, desc=description, unit='%', disable=None, leave=False,
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 
@@ -51,7 +53,7 @@ def warn(line: str) -> None:
 
 def read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
-    from ..estimation.pipeline import recording_windows
+    from ..estimation.pipeline import recording_windows, require_usable
     from ..estimation.windowing import WindowSettings
     from ..physics.actuator import load_actuator
     from ..validation import require_positive
@@ -66,9 +68,7 @@ def read_recordings(paths, args, *, spectra: bool = False):
                                           on_problem=warn, progress=percent_updater(bar))
         finally:
             bar.close()
-        if not any(window.steady for window in recording.windows):
-            raise NotIdentifiable(f'{path}: no usable window: {recording.why_no_window(settings)}')
-        recordings.append(recording)
+        recordings.append(require_usable(recording, settings))
     return recordings, actuator
 
 

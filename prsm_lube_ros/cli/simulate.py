@@ -29,6 +29,11 @@ def add_command(subparsers) -> None:
                         help='instead of the experiment, one bag cycling the six conditions for this long')
     parser.add_argument('--config', default=None, metavar='YAML',
                         help='rig simulator configuration (default config/rig_simulator.yaml values)')
+    parser.add_argument('--fleet', type=int, default=0, metavar='K',
+                        help='instead of the experiment, K actuators in service (one short recording a day each, '
+                        'oil depleting with use, relubrications at known times) with truth.json and a reference '
+                        'recording at theta_oil 1 for the calibration')
+    parser.add_argument('--days', type=int, default=10, metavar='D', help='days of service with --fleet (default 10)')
     parser.set_defaults(func=run)
 
 
@@ -50,6 +55,8 @@ def run(args) -> int:
             bar.update(step - done[0])
             done[0] = step
 
+    if args.fleet:
+        return _simulate_fleet(args, rig, plan)
     try:
         if args.endurance:
             paths = [simulate_endurance(bag_path(args.out, 'endurance', args.storage), args.endurance, plan=plan,
@@ -65,4 +72,23 @@ def run(args) -> int:
         bar.close()
     for path in paths:
         print(path)
+    return 0
+
+
+def _simulate_fleet(args, rig, plan) -> int:
+    """``--fleet K --days D``: the fleet's recordings, truth.json and the reference recording."""
+    from ..simulation.fleet import FleetPlan, simulate_fleet
+    from ..validation import require
+    from .common import progress_bar
+    require(not args.effect and not args.endurance and args.stages is None,
+            '--fleet cannot be combined with --effect, --endurance or --stages')
+    fleet = FleetPlan(actuators=args.fleet, days=args.days)
+    bar = progress_bar(fleet.actuators * fleet.days, 'simulating the fleet', unit='recording')
+    try:
+        paths = simulate_fleet(args.out, fleet=fleet, rig=rig, plan=plan, seed=args.seed, storage=args.storage,
+                               progress=lambda done, total: bar.update(done - bar.n))
+    finally:
+        bar.close()
+    print(f'wrote {len(paths)} recordings of {fleet.actuators} actuators over {fleet.days} days to {args.out} '
+          '(one folder per actuator), truth.json and the reference recording "reference"')
     return 0

@@ -14,6 +14,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from ..errors import NotIdentifiable
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
 from .assessment import Assessor, RunAssessment, WindowAssessment
@@ -100,6 +101,13 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     for line in builder.take_problems():
         report(line)
     return RecordingWindows(str(path), windows, problems, messages_read, max_speed)
+
+
+def require_usable(recording: RecordingWindows, settings: WindowSettings | None = None) -> RecordingWindows:
+    """``recording`` if it has a steady window, else :class:`NotIdentifiable` saying why in one line."""
+    if not any(window.steady for window in recording.windows):
+        raise NotIdentifiable(f'{recording.path}: no usable window: {recording.why_no_window(settings)}')
+    return recording
 
 
 def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 1.0,

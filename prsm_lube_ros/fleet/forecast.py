@@ -1,0 +1,627 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""theta_Oil over service time per actuator: depletion fit and when it will cross the warn and error levels.
+
+Law.  Oil is flung out as the screw turns (``physics.effects.lubricant_depletion``,
+theta = theta_r exp(-N_rev / N_d)); at a usage of r revolutions a day,
+N_rev grows by r dt, so between relubrications
+
+    ln theta_Oil(t) = ln a_c - k t          (k = r / N_d per day, tau = 1/k)
+
+with one level ``a_c`` per lubrication cycle ``c`` (it absorbs the unknown
+moment of the relubrication and the oil put in) and one drift ``k`` shared by
+the cycles of an actuator.  Day-to-day scatter of the usage makes ln theta a
+random walk with that drift and a diffusion ``q = s k^2`` per day, ``s`` the
+relative variance of a day's revolutions: a property of how the fleet is
+operated, estimated over all actuators (:func:`fleet_usage_scatter`).
+
+Data.  One point per recording: its runs' theta_Oil averaged with
+inverse-variance weights.  Each run's one-sigma has a part of its own (the
+vibration scatter) and a part from the calibration's covariance, common to all
+recordings assessed with it (``theta_oil_std_calibration`` in the history):
+the fit weighs by the own part and adds the common part once, to the level.
+
+Relubrications are given, or found as a jump up in theta_Oil between two
+consecutive recordings larger than ``min_jump`` and than ``jump_sigmas`` times
+their combined own uncertainty (placed half-way between them).
+
+Fit.  Weighted least squares of ``ln a_c`` and ``k`` for the time constant,
+the law drawn in the plots and crossings already seen in the data; a Kalman
+filter of (ln theta, k), the level reset at each relubrication, for the state
+at the last recording (:func:`depletion_state`).
+
+Forecast.  From that state the first passage of the walk to ln L is inverse
+Gaussian (mean D/k, shape D^2/q, D the distance to ln L); drawn over the
+state's uncertainty it gives the estimate and a 95 % interval (a draw with
+k <= 0 never crosses: the interval is open upwards, ``None``).  A level
+already crossed in the recordings is placed between the bracketing
+recordings, its interval widened to the fitted law's.  The default levels are
+the estimator's ``warn_below`` and ``error_below``
+(:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).  With an
+odometer the same filter runs against revolutions (:func:`fit_revolutions`).
+
+:func:`forecast_summary` is the one call for a single actuator from a history
+folder (what the estimator's diagnostics show).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import datetime
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..estimation.health import HealthThresholds
+
+DAY = 86400.0            # s
+#: probability inside the stated forecast interval
+INTERVAL = 0.95
+#: parameter draws for the interval (seeded: a forecast is reproducible)
+DRAWS = 4000
+#: two-sided normal quantile of INTERVAL
+_NORMAL_QUANTILE = 1.959964
+
+
+@dataclass(frozen=True)
+class RecordingPoint:
+    """One recording's theta_Oil: time of its first run (s since the epoch), value and one-sigma.
+
+    ``theta_oil_std`` is the whole one-sigma; ``calibration_std`` its part
+    from the calibration constants, common to every recording assessed with
+    the same calibration (it shifts them all alike and does not average out).
+    """
+
+    time: float
+    theta_oil: float
+    theta_oil_std: float
+    recording_path: str = ''
+    calibration_std: float = 0.0
+
+    @property
+    def independent_std(self) -> float:
+        """The one-sigma of this recording alone (its own vibration scatter), at least a fifth of the whole."""
+        return math.sqrt(max(self.theta_oil_std ** 2 - self.calibration_std ** 2, (0.2 * self.theta_oil_std) ** 2))
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """When theta_Oil crosses ``level``: estimate and interval in s since the epoch (None: not within reach)."""
+
+    level: float
+    time: float | None
+    low: float | None
+    high: float | None
+
+    def as_json(self) -> dict:
+        """Mapping with UTC strings beside the epoch seconds."""
+        result = {'level': self.level}
+        for name in ('time', 'low', 'high'):
+            value = getattr(self, name)
+            result[name] = value
+            result[f'{name}_utc'] = _utc(value)
+        return result
+
+
+@dataclass
+class ActuatorForecast:
+    """Depletion fit of one actuator and its threshold crossings."""
+
+    actuator: str
+    points: list[RecordingPoint]
+    relubrications: list[float]                    # s since the epoch
+    tau_days: float = math.nan                     # depletion time constant
+    tau_days_std: float = math.nan
+    theta_now: float = math.nan                    # the law at the last recording
+    last_recording: float = math.nan
+    crossings: list[Crossing] = field(default_factory=list)
+    reason: str = ''                               # why there is no forecast
+    fit_rmse: float = math.nan                     # RMS of ln theta residuals
+    parameters: np.ndarray | None = None           # ln a_c per cycle, then 1/tau (1/s)
+    covariance: np.ndarray | None = None
+    #: state of ln theta at the last recording: mean (ln theta, k 1/day), covariance, Student-t degrees of
+    #: freedom (0: normal) and the diffusion q (1/day) of the usage scatter
+    state: np.ndarray | None = None
+    state_covariance: np.ndarray | None = None
+    state_dof: int = 0
+    diffusion: float = 0.0
+    #: against revolutions (with an odometer): N_d (rev) and its one-sigma, the odometer at the last recording
+    #: and the odometer readings at which the levels are crossed (``Crossing`` in rev instead of s; None
+    #: where theta_Oil is already below the level)
+    depletion_revolutions: float = math.nan
+    depletion_revolutions_std: float = math.nan
+    odometer_last: float = math.nan
+    revolution_crossings: list[Crossing] = field(default_factory=list)
+
+    def crossing(self, level: float) -> Crossing | None:
+        """The crossing of ``level``, if forecast."""
+        return next((c for c in self.crossings if math.isclose(c.level, level)), None)
+
+    def law(self, times: np.ndarray) -> np.ndarray:
+        """The fitted last-cycle law at ``times`` (s since the epoch)."""
+        return np.exp(self.parameters[-2] - self.parameters[-1] * np.asarray(times, float))
+
+    def band(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """theta_Oil expected after the last recording at ``times`` (s since the epoch), with the interval.
+
+        ln theta = x - k dt, variance var(x) - 2 cov(x, k) dt + var(k) dt^2 + q dt
+        (dt in days from the last recording); the interval covers
+        :data:`INTERVAL` (normal).
+        """
+        if self.state is None:
+            nan = np.full(np.shape(times), math.nan)
+            return nan, nan, nan
+        (x, k), cov = self.state, self.state_covariance
+        dt = np.maximum((np.asarray(times, float) - self.last_recording) / DAY, 0.0)
+        centre = x - k * dt
+        variance = cov[0, 0] - 2.0 * cov[0, 1] * dt + cov[1, 1] * dt ** 2 + self.diffusion * dt
+        spread = _NORMAL_QUANTILE * np.sqrt(np.maximum(variance, 0.0))
+        return np.exp(centre), np.exp(centre - spread), np.exp(centre + spread)
+
+    def as_json(self) -> dict:
+        """Plain mapping for the trend JSON."""
+        return {'actuator': self.actuator, 'reason': self.reason, 'tau_days': _finite(self.tau_days),
+                'tau_days_std': _finite(self.tau_days_std), 'theta_now': _finite(self.theta_now),
+                'last_recording': _finite(self.last_recording), 'last_recording_utc': _utc(self.last_recording),
+                'fit_rmse_ln': _finite(self.fit_rmse), 'recordings': len(self.points),
+                'relubrications': [{'time': t, 'time_utc': _utc(t)} for t in self.relubrications],
+                'crossings': [c.as_json() for c in self.crossings],
+                'revolutions': {'depletion_revolutions': _finite(self.depletion_revolutions),
+                                'depletion_revolutions_std': _finite(self.depletion_revolutions_std),
+                                'odometer_last': _finite(self.odometer_last),
+                                'crossings': [{'level': c.level, 'odometer': c.time, 'low': c.low, 'high': c.high}
+                                              for c in self.revolution_crossings]},
+                'points': [{'time': p.time, 'theta_oil': p.theta_oil, 'theta_oil_std': p.theta_oil_std,
+                            'recording_path': p.recording_path} for p in self.points]}
+
+
+def _finite(value):
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
+def _utc(seconds):
+    if seconds is None or not math.isfinite(seconds):
+        return None
+    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='minutes')
+
+
+def recording_points(runs) -> dict[str, list[RecordingPoint]]:
+    """One point per recording and actuator from a history ``runs`` table, in time order.
+
+    A recording's value is the inverse-variance mean of its assessed runs,
+    weighted by their own (independent) one-sigma; that mean's one-sigma is
+    the larger of the propagated one and the runs' scatter about it over
+    sqrt(n), and the calibration's share (``theta_oil_std_calibration``,
+    0 where the history has none) is added back in quadrature.
+    """
+    names = ('actuator', 'recording_path', 'start', 'theta_oil', 'theta_oil_std', 'theta_oil_std_calibration')
+    columns = {name: runs.column(name).to_pylist() if name in runs.column_names else [None] * runs.num_rows
+               for name in names}
+    grouped: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {}
+    for actuator, path, start, theta, std, shared in zip(*columns.values()):
+        if theta is None or std is None or not theta > 0 or not std > 0 or start is None:
+            continue
+        shared = min(shared or 0.0, std)
+        own = RecordingPoint(0.0, theta, std, calibration_std=shared).independent_std
+        grouped.setdefault((actuator, path), []).append((start.timestamp(), theta, own, shared))
+    points: dict[str, list[RecordingPoint]] = {}
+    for (actuator, path), rows in grouped.items():
+        times, thetas, stds, shared = (np.array(v, float) for v in zip(*rows))
+        weights = 1.0 / stds ** 2
+        mean = float(np.sum(weights * thetas) / np.sum(weights))
+        std = math.sqrt(1.0 / np.sum(weights))
+        if thetas.size > 1:
+            std = max(std, float(np.std(thetas, ddof=1)) / math.sqrt(thetas.size))
+        calibration = float(np.mean(shared))
+        points.setdefault(actuator, []).append(RecordingPoint(float(times.min()), mean, math.hypot(std, calibration),
+                                                              path, calibration))
+    return {actuator: sorted(items, key=lambda p: p.time) for actuator, items in sorted(points.items())}
+
+
+def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float = 0.05,
+                          jump_sigmas: float = 4.0) -> list[float]:
+    """Times (s since the epoch) of jumps up in theta_Oil between consecutive recordings."""
+    found = []
+    for before, after in zip(points, points[1:]):
+        rise = after.theta_oil - before.theta_oil
+        if rise > min_jump and rise > jump_sigmas * math.hypot(before.independent_std, after.independent_std):
+            found.append(0.5 * (before.time + after.time))
+    return found
+
+
+def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
+                  levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                  usage_scatter: float | None = None, odometer: Sequence[float] | None = None,
+                  seed: int = 0) -> ActuatorForecast:
+    """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
+
+    ``relubrications`` (s since the epoch) are detected from jumps when None.
+    ``usage_scatter`` is the fleet's (:func:`fleet_usage_scatter`); None fits
+    this actuator's alone.  ``odometer`` (cumulative screw revolutions at each
+    point, in time order) adds the fit against revolutions:
+    :func:`fit_revolutions`.
+    A forecast that cannot be made has ``reason`` set and no crossings.
+    """
+    order = sorted(range(len(points)), key=lambda j: points[j].time)
+    points = [points[j] for j in order]
+    odometer = None if odometer is None else np.array([odometer[j] for j in order], float)
+    relubrications = sorted(detect_relubrications(points) if relubrications is None else relubrications)
+    result = ActuatorForecast(actuator, list(points), list(relubrications))
+    if not points:
+        result.reason = 'no assessed recording'
+        return result
+    times = np.array([p.time for p in points])
+    cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
+    used = np.unique(cycles)
+    index = np.searchsorted(used, cycles)
+    result.last_recording = float(times[-1])
+    if len(points) < used.size + 2:
+        result.reason = (f'{len(points)} recordings in {used.size} lubrication cycles: need at least '
+                         f'{used.size + 2} to fit the depletion')
+        return result
+    y = np.log([p.theta_oil for p in points])
+    sigma = np.array([p.independent_std / p.theta_oil for p in points])
+    shared = points[-1].calibration_std / points[-1].theta_oil     # common to all recordings, relative
+    origin = times[0]
+    design = np.zeros((len(points), used.size + 1))
+    design[np.arange(len(points)), index] = 1.0
+    design[:, -1] = -(times - origin) / DAY
+    weights = 1.0 / sigma
+    solution, *_ = np.linalg.lstsq(design * weights[:, None], y * weights, rcond=None)
+    residual = y - design @ solution
+    dof = len(points) - design.shape[1]
+    chi2 = float(np.sum((residual * weights) ** 2))
+    covariance = np.linalg.pinv((design * weights[:, None]).T @ (design * weights[:, None]))
+    scaled = chi2 / dof > 1.0
+    if scaled:
+        covariance = covariance * (chi2 / dof)
+    rate = solution[-1]                                  # 1/day
+    # back to absolute time: ln a_c = b_c + rate * origin / DAY
+    result.parameters = np.concatenate((solution[:-1] + solution[-1] * origin / DAY, [rate / DAY]))
+    result.covariance = covariance
+    result.fit_rmse = float(np.sqrt(np.mean(residual ** 2)))
+    rate_std = math.sqrt(covariance[-1, -1])
+    result.tau_days = 1.0 / rate if rate > 0 else math.inf
+    result.tau_days_std = rate_std / rate ** 2 if rate > 0 else math.inf
+    last = index[-1]
+    last_level = solution[last]                          # ln a_last at t = origin
+    result.theta_now = float(math.exp(last_level - rate * (times[-1] - origin) / DAY))
+    rng = np.random.default_rng(seed)
+    pair = np.array([last, design.shape[1] - 1])
+    block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(block + 1e-18 * np.eye(2)).T
+    if scaled:
+        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
+    draws = np.array([last_level, rate]) + normal
+    walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
+    if walk is not None:
+        result.diffusion = walk[2]
+        result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
+                                                                                  walk[2])
+        result.state_covariance[0, 0] += shared ** 2
+    tail = (1.0 - INTERVAL) / 2.0
+    for level in levels:
+        if y[-1] > math.log(level) and result.state is not None:
+            estimate, low, high = _first_passage(result, math.log(level), rng, tail)
+            result.crossings.append(Crossing(float(level), *(float(times[-1] + v * DAY) if math.isfinite(v)
+                                                             else None for v in (estimate, low, high))))
+            continue
+        with np.errstate(divide='ignore', invalid='ignore'):
+            days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
+        low, high = (float(origin + v * DAY) if math.isfinite(v) else None
+                     for v in np.quantile(days, [tail, 1.0 - tail]))
+        estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
+        bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
+        if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
+            estimate = bracket[0]
+            low = bracket[1] if low is None else min(low, bracket[1])
+            high = None if high is None else max(high, bracket[2])
+        result.crossings.append(Crossing(float(level), estimate, low, high))
+    if odometer is not None:
+        fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
+    return result
+
+
+#: revolutions per unit of the filter's axis against revolutions (keeps its numbers near those in days)
+KILO = 1000.0
+
+
+def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarray, sigma: np.ndarray,
+                    cycles: np.ndarray, shared: float, levels: Sequence[float], rng) -> None:
+    """The law against revolutions: ln theta = ln a_c - N / N_d (``lubricant_depletion``), N from an odometer.
+
+    The Kalman filter of :func:`depletion_state` on the odometer axis, without
+    usage diffusion (the law is deterministic in revolutions); gives N_d and
+    the odometer readings where the levels are crossed, with the 95 % interval
+    of the remaining revolutions.  Nothing when the odometer does not cover
+    every recording or does not increase.
+    """
+    if not (np.all(np.isfinite(odometer)) and np.all(np.diff(odometer) >= 0)) or len(odometer) < 3:
+        return
+    state, cov, dof = depletion_state(odometer / KILO, y, sigma, cycles, 0.0)
+    cov = cov + np.diag([shared ** 2, 0.0])
+    k = state[1]
+    result.odometer_last = float(odometer[-1])
+    result.depletion_revolutions = KILO / k if k > 0 else math.inf
+    result.depletion_revolutions_std = KILO * math.sqrt(cov[1, 1]) / k ** 2 if k > 0 else math.inf
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
+    if dof:
+        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
+    draws = state + normal
+    tail = (1.0 - INTERVAL) / 2.0
+    for level in levels:
+        if not state[0] > math.log(level):
+            result.revolution_crossings.append(Crossing(float(level), None, None, None))   # already below
+            continue
+        with np.errstate(divide='ignore', invalid='ignore'):
+            remaining = np.where(draws[:, 1] > 0, np.maximum(draws[:, 0] - math.log(level), 0.0) / draws[:, 1],
+                                 math.inf)
+        low, high = np.quantile(remaining, [tail, 1.0 - tail])
+        estimate = (state[0] - math.log(level)) / k if k > 0 else math.inf
+        result.revolution_crossings.append(Crossing(float(level), *(
+            float(odometer[-1] + v * KILO) if math.isfinite(v) else None for v in (estimate, low, high))))
+
+
+def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0):
+    """A crossing of ``level`` already seen in the last cycle: interpolated time and bracketing interval.
+
+    The interval runs from the last recording clearly above the level
+    (``sigmas`` one-sigmas) to the first one clearly below it after that.
+    None when the last cycle has no recording above the level.
+    """
+    last = np.flatnonzero(cycles == cycles[-1])
+    above = [j for j in last if y[j] > level]
+    if not above:
+        return None
+    first_below = next((j for j in last if j > above[0] and y[j] <= level), None)
+    if first_below is None:
+        return None
+    before = first_below - 1
+    share = (y[before] - level) / (y[before] - y[first_below])
+    estimate = times[before] + (times[first_below] - times[before]) * share
+    sure_above = [j for j in last if y[j] - sigmas * sigma[j] > level and j <= before]
+    sure_below = [j for j in last if y[j] + sigmas * sigma[j] < level and j >= first_below]
+    if not sure_above:
+        return None
+    low = times[sure_above[-1]]
+    high = times[sure_below[0]] if sure_below else times[last[-1]]
+    return float(estimate), float(min(low, estimate)), float(max(high, estimate))
+
+
+@dataclass(frozen=True)
+class Increments:
+    """Changes of ln theta between consecutive recordings of one lubrication cycle, and their covariance."""
+
+    steps: np.ndarray          # days
+    changes: np.ndarray        # of ln theta
+    measurement: np.ndarray    # covariance from the recordings' own uncertainty
+
+
+def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray) -> Increments | None:
+    """The increments of ln theta ``y`` within cycles; neighbours sharing a recording correlate by -sigma^2.
+
+    None with fewer than two increments.
+    """
+    pairs = np.array([j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1]], dtype=int)
+    if pairs.size < 2:
+        return None
+    measurement = np.diag(sigma[pairs] ** 2 + sigma[pairs + 1] ** 2)
+    for a in range(pairs.size - 1):
+        if pairs[a + 1] == pairs[a] + 1:
+            measurement[a, a + 1] = measurement[a + 1, a] = -sigma[pairs[a + 1]] ** 2
+    return Increments(days[pairs + 1] - days[pairs], y[pairs + 1] - y[pairs], measurement)
+
+
+def _walk_likelihood(data: Increments, q: float) -> tuple[float, float, float]:
+    """Gaussian log-likelihood, GLS drift k (1/day) and its variance for diffusion ``q`` (1/day)."""
+    covariance = data.measurement + np.diag(q * data.steps)
+    inverse = np.linalg.inv(covariance)
+    information = float(data.steps @ inverse @ data.steps)
+    k = -float(data.steps @ inverse @ data.changes) / information
+    residual = data.changes + k * data.steps
+    _, logdet = np.linalg.slogdet(covariance)
+    return -0.5 * (logdet + float(residual @ inverse @ residual)), k, 1.0 / information
+
+
+#: fall of the log-likelihood at the 95 % bound of one parameter (chi-square 3.84 / 2)
+PROFILE_DROP = 1.92
+#: grid of the relative day-to-day usage variance searched by :func:`fleet_usage_scatter`
+USAGE_SCATTER_GRID = np.concatenate(([0.0], np.logspace(-4, 0, 81)))
+
+
+def _diffusion(data: Increments, usage_scatter: float) -> float:
+    """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
+    k = _walk_likelihood(data, 0.0)[1]
+    for _ in range(2):
+        k = _walk_likelihood(data, usage_scatter * k ** 2)[1]
+    return usage_scatter * k ** 2
+
+
+def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
+    """Relative variance of a day's revolutions: upper 95 % profile-likelihood bound over all actuators.
+
+    Each actuator's diffusion is ``q = s k^2`` with its own drift k: the
+    usage scatter ``s`` is a property of how the fleet is operated, which one
+    actuator's few recordings cannot pin down alone.  Daily recordings with
+    a few per mille of noise hardly see it, so the largest value the
+    likelihood does not reject (a drop of at most ``PROFILE_DROP``) is taken
+    rather than its maximum, which sits at zero.
+    """
+    sets = [data for data in sets if data is not None]
+    if not sets:
+        return 0.0
+    totals = np.array([sum(_walk_likelihood(data, _diffusion(data, scatter))[0] for data in sets)
+                       for scatter in USAGE_SCATTER_GRID])
+    return float(USAGE_SCATTER_GRID[np.flatnonzero(totals >= totals.max() - PROFILE_DROP)[-1]])
+
+
+def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = None
+                        ) -> tuple[float, float, float, int] | None:
+    """Depletion as a random walk: ln theta falls by ``k dt`` plus noise of variance ``q dt`` (usage scatter).
+
+    ``k`` by generalised least squares on the increments; ``q`` from the
+    fleet's relative ``usage_scatter`` (q = s k^2) or, without it, by maximum
+    likelihood on this actuator alone.  Returns (k 1/day, variance of k,
+    q 1/day, degrees of freedom) or None without increments.
+    """
+    if data is None:
+        return None
+    if usage_scatter is None:
+        q = max((_walk_likelihood(data, q)[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57))))[1]
+    else:
+        q = _diffusion(data, usage_scatter)
+    _, k, k_variance = _walk_likelihood(data, q)
+    return k, k_variance, q, max(data.steps.size - 1, 1)
+
+
+def depletion_state(days, y, sigma, cycles, q):
+    """Kalman filter of (ln theta, k): level falls by k dt with diffusion q dt, reset at relubrications.
+
+    Returns the state at the last recording, its covariance (scaled by the
+    innovations' chi-square per degree of freedom when above 1) and the
+    degrees of freedom of that scale (0 when not scaled).
+    """
+    diffuse = 1e4
+    state = np.array([y[0], 0.0])
+    cov = np.diag([diffuse, diffuse])
+    chi2, count = 0.0, 0
+    for j in range(len(y)):
+        if j > 0:
+            dt = days[j] - days[j - 1]
+            transition = np.array([[1.0, -dt], [0.0, 1.0]])
+            state = transition @ state
+            cov = transition @ cov @ transition.T + np.diag([q * dt, 0.0])
+            if cycles[j] != cycles[j - 1]:
+                state[0], cov[0, :], cov[:, 0] = y[j], 0.0, 0.0
+                cov[0, 0] = diffuse
+        innovation_var = cov[0, 0] + sigma[j] ** 2
+        innovation = y[j] - state[0]
+        if cov[0, 0] < diffuse / 10 and cov[1, 1] < diffuse / 10:
+            chi2 += innovation ** 2 / innovation_var
+            count += 1
+        gain = cov[:, 0] / innovation_var
+        state = state + gain * innovation
+        cov = cov - np.outer(gain, cov[0, :])
+    dof = count
+    if dof and chi2 / dof > 1.0:
+        return state, cov * (chi2 / dof), dof
+    return state, cov, 0
+
+
+def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
+    """Days from the last recording until ln theta first falls to ``level``: estimate and interval.
+
+    From a state (x, k) the first passage of the walk to ``level`` is inverse
+    Gaussian (mean D/k with D = x - level, shape D^2/q); (x, k) are drawn from
+    the filter's posterior (Student-t when its covariance was scaled).  A
+    draw with k <= 0 never crosses (the interval is open: ``inf``).
+    """
+    cov = forecast.state_covariance
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
+    if forecast.state_dof:
+        normal /= np.sqrt(rng.chisquare(forecast.state_dof, (DRAWS, 1)) / forecast.state_dof)
+    draws = forecast.state + normal
+    distance = np.maximum(draws[:, 0] - level, 1e-12)
+    days = np.full(DRAWS, math.inf)
+    falling = draws[:, 1] > 0
+    mean = distance[falling] / draws[falling, 1]
+    q = forecast.diffusion
+    days[falling] = rng.wald(mean, distance[falling] ** 2 / q) if q > 0 else mean
+    low, high = np.quantile(days, [tail, 1.0 - tail])
+    x, k = forecast.state
+    return ((x - level) / k if k > 0 else math.inf), low, high
+
+
+def urgency_key(forecast: ActuatorForecast):
+    """Sort key: earliest warn crossing first, then error crossing; no forecast last."""
+    times = [c.time if c.time is not None else math.inf for c in forecast.crossings] or [math.inf]
+    return (bool(forecast.reason), times[0], times[-1], forecast.actuator)
+
+
+def forecast_history(history, *, actuator: str | None = None, relubrications: dict | None = None,
+                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                     odometers: dict | None = None) -> list[ActuatorForecast]:
+    """Forecasts of every actuator (or one) in a history folder, most urgent first.
+
+    ``relubrications`` maps an actuator id to its relubrication times (s since
+    the epoch); actuators not in it have theirs detected.  ``odometers`` maps
+    an actuator id to ``(times, cumulative revolutions)`` for the fit against
+    revolutions.
+    """
+    from .history import actuator_key, read_table
+    points = recording_points(read_table(history, 'runs'))
+    if actuator is not None and actuator_key(actuator) not in points:
+        raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
+    given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
+    return forecast_points(points, relubrications=given, levels=levels,
+                           only=actuator_key(actuator) if actuator is not None else None,
+                           odometers={actuator_key(k): v for k, v in (odometers or {}).items()})
+
+
+def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
+                    levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
+                    only: str | None = None, odometers: dict | None = None) -> list[ActuatorForecast]:
+    """Forecasts from each actuator's recording points (the fleet's usage scatter pooled), most urgent first.
+
+    ``only`` forecasts that actuator alone (the others still inform the
+    usage scatter).  ``odometers`` maps an actuator to ``(times, readings)``
+    (s since the epoch, cumulative revolutions), interpolated at its
+    recordings for the fit against revolutions.
+    """
+    given = relubrications or {}
+    found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
+             for name, items in points.items()}
+    scatter = fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
+    names = [only] if only is not None else list(points)
+    forecasts = [fit_depletion(name, points[name], relubrications=found[name], levels=levels,
+                               usage_scatter=scatter, odometer=_odometer_at(points[name], (odometers or {}).get(name)))
+                 for name in names]
+    return sorted(forecasts, key=urgency_key)
+
+
+#: how far (s) before the first or after the last odometer reading a recording may lie (extrapolated linearly)
+ODOMETER_REACH = 3600.0
+
+
+def _odometer_at(points: Sequence[RecordingPoint], odometer) -> list[float] | None:
+    """Odometer readings interpolated at the points' times, NaN beyond :data:`ODOMETER_REACH`, or None."""
+    if odometer is None:
+        return None
+    times, readings = (np.asarray(v, float) for v in odometer)
+    order = np.argsort(times)
+    times, readings = times[order], readings[order]
+    at = np.array([p.time for p in points])
+    values = np.interp(at, times, readings)
+    if times.size > 1:
+        rates = np.diff(readings) / np.maximum(np.diff(times), 1e-9)
+        values = np.where(at < times[0], readings[0] + rates[0] * (at - times[0]), values)
+        values = np.where(at > times[-1], readings[-1] + rates[-1] * (at - times[-1]), values)
+    values[(at < times[0] - ODOMETER_REACH) | (at > times[-1] + ODOMETER_REACH)] = math.nan
+    return values.tolist()
+
+
+def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float]) -> Increments | None:
+    times = np.array([p.time for p in points])
+    cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
+    return increments(times / DAY, np.log([p.theta_oil for p in points]),
+                      np.array([p.independent_std / p.theta_oil for p in points]), cycles)
+
+
+def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
+                     error_below: float = HealthThresholds.error_below) -> dict[str, str]:
+    """The forecast of one actuator as short key/value strings (for a diagnostics KeyValue list).
+
+    Keys: ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
+    ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
+    ``forecast`` holds ``ok`` or the reason there is none.  Raises
+    :class:`InputError` for a missing history or an actuator without runs.
+    """
+    forecast = forecast_history(history, actuator=actuator_id, levels=(warn_below, error_below))[0]
+    if forecast.reason:
+        return {'forecast': forecast.reason}
+    summary = {'forecast': 'ok', 'tau_days': f'{forecast.tau_days:.3g}', 'theta_now': f'{forecast.theta_now:.3f}'}
+    for name, crossing in zip(('warn', 'error'), forecast.crossings):
+        summary[f'{name}_crossing'] = _utc(crossing.time) or 'never'
+        summary[f'{name}_interval'] = f'{_utc(crossing.low) or "never"} .. {_utc(crossing.high) or "never"}'
+    return summary

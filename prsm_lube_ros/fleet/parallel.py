@@ -1,0 +1,144 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Assess many recordings: serially, in local processes, or on a Dask distributed cluster, with equal results.
+
+The unit of work is one recording (:func:`assess_bag`): read it into windows,
+assess every window and run with the calibration, and hash its content for
+the history.  It is a pure function of the recording's bytes and its
+arguments, so where it runs does not change a single number: serial, ``jobs``
+processes (:class:`concurrent.futures.ProcessPoolExecutor`) and a Dask
+cluster (``scheduler`` an address such as ``tcp://host:8786``, or ``'local'``
+for a :class:`distributed.LocalCluster` of ``jobs`` worker processes) give
+bit-identical outcomes, returned in the order of the paths.
+
+A recording that cannot be assessed (unreadable, no usable window, a worker
+lost) is an outcome with ``error``, one line naming it; the others go on.
+"""
+from __future__ import annotations
+
+from concurrent.futures import as_completed, ProcessPoolExecutor
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from ..errors import InputError
+from ..estimation.calibration import Calibration
+from ..estimation.pipeline import assess_recording, recording_windows, RecordingAssessment, require_usable
+from ..estimation.windowing import WindowSettings
+
+LOCAL_SCHEDULER = 'local'
+
+
+@dataclass(frozen=True)
+class BagOutcome:
+    """What assessing one recording gave: the assessment and content hash, or the error in one line."""
+
+    path: str
+    assessment: RecordingAssessment | None = None
+    content: str = ''
+    error: str = ''
+
+
+@dataclass(frozen=True)
+class BagJob:
+    """Everything a worker needs to assess recordings (picklable)."""
+
+    calibration: Calibration
+    lead: float                                  # m per screw revolution
+    settings: WindowSettings = WindowSettings()
+    namespace: str = '/prsm'
+    hash_content: bool = False                   # compute the SHA-256 for the history
+
+
+def assess_bag(path: str, job: BagJob) -> BagOutcome:
+    """Assess one recording; never raises for a bad recording (the outcome carries the error line)."""
+    try:
+        problems: list[str] = []
+        recording = require_usable(recording_windows(path, lead=job.lead, settings=job.settings,
+                                                     namespace=job.namespace, on_problem=problems.append),
+                                   job.settings)
+        content = ''
+        if job.hash_content:
+            from .history import content_hash
+            content = content_hash(path)
+        return BagOutcome(str(path), assess_recording(recording, job.calibration), content)
+    except InputError as exc:
+        return BagOutcome(str(path), error=str(exc))
+    except Exception as exc:  # noqa: BLE001 -- one bad recording must not stop a fleet; named in one line
+        return BagOutcome(str(path), error=f'{path}: {exc.__class__.__name__}: {exc}')
+
+
+def assess_bags(paths: Sequence[str], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
+                on_done: Callable[[BagOutcome], None] | None = None) -> list[BagOutcome]:
+    """:func:`assess_bag` for every path; outcomes in the order of ``paths``.
+
+    ``jobs`` > 1 runs that many local processes; ``scheduler`` (an address or
+    ``'local'``) runs on Dask instead (``jobs`` workers for ``'local'``).
+    ``on_done(outcome)`` is called in the calling process as each one finishes.
+    """
+    paths = [str(p) for p in paths]
+    if not isinstance(jobs, int) or jobs < 1:
+        raise InputError(f'--jobs must be a whole number >= 1, got {jobs!r}')
+    if scheduler:
+        outcomes = _on_dask(paths, job, scheduler, jobs, on_done)
+    elif jobs > 1 and len(paths) > 1:
+        outcomes = _in_processes(paths, job, jobs, on_done)
+    else:
+        outcomes = {}
+        for path in paths:
+            outcomes[path] = assess_bag(path, job)
+            if on_done is not None:
+                on_done(outcomes[path])
+    return [outcomes[path] for path in paths]
+
+
+def _in_processes(paths, job, jobs, on_done) -> dict[str, BagOutcome]:
+    outcomes = {}
+    with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
+        futures = {pool.submit(assess_bag, path, job): path for path in dict.fromkeys(paths)}
+        for future in as_completed(futures):
+            outcomes[futures[future]] = _outcome(futures[future], future)
+            if on_done is not None:
+                on_done(outcomes[futures[future]])
+    return outcomes
+
+
+def _outcome(path, future) -> BagOutcome:
+    """The future's outcome, or an error line when its worker was lost."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 -- a lost worker is one failed recording, not a failed fleet
+        return BagOutcome(path, error=f'{path}: worker failed ({exc.__class__.__name__}: {exc})')
+
+
+def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
+    try:
+        from distributed import as_completed as dask_completed, Client, LocalCluster
+    except ImportError:
+        raise InputError('--scheduler needs dask.distributed: pip install "distributed>=2024.1"') from None
+    cluster = None
+    try:
+        if scheduler == LOCAL_SCHEDULER:
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(scheduler, timeout='10s')
+    except (OSError, TimeoutError) as exc:
+        if cluster is not None:
+            cluster.close()
+        raise InputError(f'--scheduler {scheduler}: cannot connect ({exc})') from None
+    try:
+        unique = list(dict.fromkeys(paths))
+        job_future = client.scatter(job, broadcast=True)
+        futures = client.map(assess_bag, unique, job=job_future, pure=False)
+        by_key = dict(zip((f.key for f in futures), unique))
+        outcomes = {}
+        for future in dask_completed(futures):
+            path = by_key[future.key]
+            outcomes[path] = _outcome(path, future)
+            if on_done is not None:
+                on_done(outcomes[path])
+        return outcomes
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,233 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""A simulated fleet in service: K actuators over D days, oil depleting with use, relubrications at known times.
+
+Each actuator turns its screw ``u_d`` revolutions on day ``d`` (its own mean
+rate times a log-normal day-to-day factor, spread evenly over the day), so the
+revolutions since its last lubrication ``N(t)`` grow piecewise linearly.  The
+oil is flung out as the screw turns (``physics.effects.lubricant_depletion``):
+
+    theta_Oil(t) = theta_r exp(-N(t) / N_d)
+
+with theta_r the supply factor just after the relubrication and N_d the
+actuator's depletion revolutions.  Once a day, at a random hour of the working
+day, a short contract recording is made (one forward run at the fleet's test
+condition and its rewind) at the theta_Oil of that moment.  The operator
+relubricates an actuator shortly after a recording whose true theta_Oil is
+below ``relubricate_below`` (never after the last recording).
+
+``odometer.csv`` lists each actuator's cumulative screw revolutions at each
+recording (``actuator,time,revolutions``), as a drive's revolution counter or a
+maintenance log would; ``truth.json`` beside the recordings gives, per actuator, the law's
+parameters, every relubrication, every recording's true theta_Oil and the
+times (and odometer readings) the last lubrication cycle crosses given thresholds (the usage process
+continued past the last day without further relubrication), so a forecast made
+from the recordings can be checked.  A reference recording of the whole
+experiment plan at theta_Oil = 1 (``reference``) calibrates the fleet (all
+actuators are of the rig's type).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+import datetime
+import json
+import math
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..physics.effects.lubricant_depletion import theta_factor
+from ..recording.writer import bag_path, check_storage
+from ..validation import require
+from .drive import DriveProgram, schedule_session
+from .recordings import _blocks, _record, _streams, simulate_experiment
+from .rig_config import ExperimentPlan, RigConfig
+from .signal import RigStream
+
+DAY = 86400.0   # s
+#: each actuator's odometer reads this many days of its mean usage at the fleet's epoch
+ODOMETER_DAYS = 365
+
+
+@dataclass(frozen=True)
+class FleetPlan:
+    """How the simulated fleet is used and recorded (SI units; days where the name says so)."""
+
+    actuators: int = 20
+    days: int = 10
+    #: each actuator's mean screw revolutions per day, drawn uniformly in this range
+    revolutions_per_day: tuple[float, float] = (2000.0, 6000.0)
+    #: sigma of the log-normal day-to-day factor of the revolutions
+    usage_scatter: float = 0.15
+    #: days a full lubrication (theta_r = 1) lasts until theta_Oil falls to ``depletion_reference``, drawn
+    #: uniformly in this range times ``days``; sets N_d
+    days_to_reference: tuple[float, float] = (0.5, 1.5)
+    depletion_reference: float = 0.85
+    #: theta_Oil just after a relubrication, drawn uniformly
+    relubricated_theta: tuple[float, float] = (0.95, 1.0)
+    #: true theta_Oil at the first day, drawn uniformly (the revolutions since the last lubrication follow)
+    initial_theta: tuple[float, float] = (0.82, 1.0)
+    #: the operator relubricates after a recording whose true theta_Oil is below this
+    relubricate_below: float = 0.78
+    #: s after that recording when the oil is injected
+    relubrication_delay: float = 3600.0
+    #: recordings are made between these hours of the day (UTC)
+    recording_hours: tuple[float, float] = (8.0, 16.0)
+    #: the test condition of every recording: screw speed rad/s, axial load N
+    condition: tuple[float, float] = (200 * 2 * math.pi / 60, 200.0)
+    #: days the usage is continued past the last recording to find the true threshold crossings
+    horizon_days: int = 200
+
+    def __post_init__(self):
+        """Reject plans that cannot be simulated."""
+        require(int(self.actuators) >= 1, f'fleet actuators must be >= 1, got {self.actuators!r}')
+        require(int(self.days) >= 1, f'fleet days must be >= 1, got {self.days!r}')
+        object.__setattr__(self, 'actuators', int(self.actuators))
+        object.__setattr__(self, 'days', int(self.days))
+        require(0 < self.revolutions_per_day[0] <= self.revolutions_per_day[1],
+                f'fleet revolutions_per_day must be an increasing positive range, got {self.revolutions_per_day}')
+        require(0 < self.depletion_reference < min(self.relubricated_theta),
+                'fleet depletion_reference must lie below the relubricated theta')
+
+
+@dataclass
+class ActuatorService:
+    """One actuator's drawn law and usage: cumulative revolutions piecewise linear over whole days."""
+
+    actuator_id: str
+    revolutions_per_day: float       # mean, rev/day
+    depletion_revolutions: float     # N_d, rev
+    daily_revolutions: np.ndarray    # rev on each day from day 0 to the horizon
+    start_revolutions: float         # rev since the last lubrication at t = 0
+
+    def revolutions(self, t):
+        """Cumulative revolutions since t = 0 at ``t`` s after the fleet epoch."""
+        edges = np.concatenate(([0.0], np.cumsum(self.daily_revolutions)))
+        days = np.arange(edges.size) * DAY
+        return np.interp(t, days, edges)
+
+    def time_at(self, revolutions: float) -> float:
+        """Inverse of :meth:`revolutions` (s), inf past the horizon."""
+        edges = np.concatenate(([0.0], np.cumsum(self.daily_revolutions)))
+        if revolutions > edges[-1]:
+            return math.inf
+        return float(np.interp(revolutions, edges, np.arange(edges.size) * DAY))
+
+
+def _iso(seconds: float) -> str:
+    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='seconds')
+
+
+def _reference(out_dir: Path, rig: RigConfig, plan: ExperimentPlan, seed: int, storage: str) -> None:
+    """The plan's six conditions at theta_Oil = 1 as ``out_dir/reference`` (truth in reference_truth.json)."""
+    simulate_experiment(out_dir / 'reference_session', plan=replace(plan, stage_thetas=(1.0,)), rig=rig,
+                        seed=seed, storage=storage)
+    bag_path(out_dir / 'reference_session', 'stage_1', storage).rename(bag_path(out_dir, 'reference', storage))
+    (out_dir / 'reference_session' / 'truth.json').rename(out_dir / 'reference_truth.json')
+    (out_dir / 'reference_session').rmdir()
+
+
+def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condition, theta: float,
+                     start_seconds: float, seed, storage: str) -> None:
+    """One forward run at ``condition`` and its rewind, recorded from ``start_seconds`` (epoch s)."""
+    rig_seed, latency_rng, _ = _streams(seed)
+    program = DriveProgram()
+    _, end = schedule_session(program, 0.0, [condition], plan, rig)
+    stream = RigStream(rig, program, seed=rig_seed, origin_ns=int(round(start_seconds * 1e9)))
+    _record(path, storage, stream, 0, _blocks(end, rig), theta, latency_rng, None)
+
+
+def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: RigConfig | None = None,
+                   plan: ExperimentPlan | None = None, seed: int = 0, storage: str = 'mcap',
+                   thresholds: Sequence[float] = (0.85, 0.70),
+                   progress: Callable[[int, int], None] | None = None, write_recordings: bool = True) -> list[Path]:
+    """Write the fleet's recordings to ``out_dir/<actuator>/<UTC time>`` and ``out_dir/truth.json``.
+
+    Also ``out_dir/reference``: the plan's six conditions at theta_Oil = 1 for
+    the calibration.  ``thresholds`` are the theta_Oil levels whose crossing
+    times the truth lists (default: the estimator's warn and error levels).
+    ``progress(done, total)`` counts recordings.  Returns the fleet's recording
+    paths (not the reference), in time order per actuator.  With
+    ``write_recordings=False`` only ``truth.json`` is written (the same truth:
+    the random streams do not depend on it), for checks of the forecast alone.
+    """
+    fleet, rig, plan = fleet or FleetPlan(), rig or RigConfig(), plan or ExperimentPlan()
+    check_storage(storage)
+    out_dir = Path(out_dir)
+    require(not (out_dir / 'truth.json').exists(), f'{out_dir / "truth.json"}: exists already, not overwriting')
+    epoch = rig.epoch_ns * 1e-9
+    sequences = np.random.SeedSequence(seed).spawn(fleet.actuators + 1)
+    total = fleet.actuators * fleet.days
+    done = 0
+    truth_actuators, paths, odometer_rows = [], [], []
+    if write_recordings:
+        _reference(out_dir, rig, plan, int(sequences[-1].generate_state(1)[0]), storage)
+    for number, sequence in enumerate(sequences[:-1], start=1):
+        actuator_id = f'A{number:02d}'
+        usage_sequence, recording_sequence = sequence.spawn(2)
+        usage_rng = np.random.default_rng(usage_sequence)
+        rate = usage_rng.uniform(*fleet.revolutions_per_day)
+        days_to_reference = usage_rng.uniform(*fleet.days_to_reference) * fleet.days
+        depletion = rate * days_to_reference / math.log(1.0 / fleet.depletion_reference)
+        daily = rate * usage_rng.lognormal(-0.5 * fleet.usage_scatter ** 2, fleet.usage_scatter,
+                                           fleet.days + fleet.horizon_days)
+        initial_theta = usage_rng.uniform(*fleet.initial_theta)
+        service = ActuatorService(actuator_id, rate, depletion, daily,
+                                  start_revolutions=depletion * math.log(1.0 / initial_theta))
+        theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
+        relubrications, recordings = [], []
+        seeds = recording_sequence.generate_state(fleet.days)
+        for day in range(fleet.days):
+            hour = usage_rng.uniform(*fleet.recording_hours)
+            t = day * DAY + hour * 3600.0
+            theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
+            path = bag_path(out_dir / actuator_id, datetime.datetime.fromtimestamp(
+                epoch + t, datetime.timezone.utc).strftime('%Y%m%dT%H%M%S'), storage)
+            if write_recordings:
+                require(not path.exists(), f'{path}: exists already, not overwriting')
+                path.parent.mkdir(parents=True, exist_ok=True)
+                _short_recording(path, rig=rig, plan=plan, condition=fleet.condition, theta=theta,
+                                 start_seconds=epoch + t, seed=int(seeds[day]), storage=storage)
+            paths.append(path)
+            recordings.append({'path': str(path.relative_to(out_dir)), 'start': epoch + t,
+                               'start_utc': _iso(epoch + t), 'theta_oil': theta,
+                               'revolutions_since_lubrication': float(service.revolutions(t) - cycle_start_revs)})
+            done += 1
+            if progress is not None:
+                progress(done, total)
+            if theta < fleet.relubricate_below and day < fleet.days - 1:
+                cycle_start_time = t + fleet.relubrication_delay
+                cycle_start_revs = float(service.revolutions(cycle_start_time))
+                theta_r = usage_rng.uniform(*fleet.relubricated_theta)
+                relubrications.append({'time': epoch + cycle_start_time, 'time_utc': _iso(epoch + cycle_start_time),
+                                       'theta_oil_after': theta_r})
+        crossings = {}
+        odometer_start = round(rate * ODOMETER_DAYS)
+        for level in thresholds:
+            revs = cycle_start_revs + depletion * math.log(theta_r / level) if level < theta_r else -math.inf
+            crossing = service.time_at(max(revs, 0.0)) if revs > 0 else 0.0
+            known = math.isfinite(crossing)
+            crossings[f'{level:g}'] = {'time': epoch + crossing if known else None,
+                                       'time_utc': _iso(epoch + crossing) if known else None,
+                                       'odometer': odometer_start + float(service.revolutions(crossing)) if known
+                                       else None}
+        odometer_rows += [(actuator_id, r['start_utc'], odometer_start + float(service.revolutions(r['start'] - epoch)))
+                          for r in recordings]
+        truth_actuators.append({
+            'actuator_id': actuator_id, 'revolutions_per_day': rate, 'depletion_revolutions': depletion,
+            'initial_theta': initial_theta, 'last_relubrication_theta': theta_r,
+            'last_relubrication': None if cycle_start_time is None else epoch + cycle_start_time,
+            'relubrications': relubrications, 'recordings': recordings, 'crossings': crossings,
+            'daily_revolutions': [float(v) for v in daily[:fleet.days]]})
+    document = {'generator': 'prsm_lube_ros.simulation.fleet', 'seed': seed, 'storage': storage,
+                'epoch': epoch, 'law': 'theta_oil = theta_r exp(-N_rev / N_d), N_rev since the last lubrication',
+                'fleet': {key: value for key, value in asdict(fleet).items()},
+                'thresholds': [float(v) for v in thresholds], 'reference': bag_path(Path('.'), 'reference',
+                                                                                    storage).name,
+                'actuators': truth_actuators}
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / 'truth.json').write_text(json.dumps(document, indent=1))
+    (out_dir / 'odometer.csv').write_text('actuator,time,revolutions\n' + ''.join(
+        f'{name},{time},{revolutions:.1f}\n' for name, time, revolutions in odometer_rows))
+    return paths

@@ -1,0 +1,43 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""``prsm-lube assess --history --jobs``: a bad recording is one line, the others are assessed and recorded."""
+import json
+
+from prsm_lube_ros.cli import main
+from prsm_lube_ros.fleet.history import read_table
+
+
+def test_a_bad_recording_among_good_ones_is_one_line_and_the_rest_go_on(small_fleet, tmp_path, capsys):
+    bad = tmp_path / 'X' / 'broken.mcap'
+    bad.parent.mkdir()
+    bad.write_bytes(b'\x89MCAP0\r\n truncated')
+    good = small_fleet['bags'][:3]
+    history, out = tmp_path / 'history', tmp_path / 'a.json'
+    status = main(['assess', good[0], str(bad), *good[1:], '--calibration', str(small_fleet['calibration']),
+                   '--history', str(history), '--actuator-id', 'folder', '--jobs', '2', '--json', str(out)])
+    captured = capsys.readouterr()
+    assert status == 2 and 'Traceback' not in captured.err
+    errors = [line for line in captured.err.splitlines() if 'error' in line]
+    assert len(errors) == 1 and str(bad) in errors[0]
+    assert len({run['bag'] for run in json.loads(out.read_text())['runs']}) == 3
+    runs = read_table(history)
+    assert len(set(runs.column('recording_path').to_pylist())) == 3
+    assert set(runs.column('actuator').to_pylist()) == {'A01'}
+    assert set(runs.column('calibration_id').to_pylist()) != {''}
+
+
+def test_history_actuator_defaults_to_the_namespace(small_fleet, tmp_path):
+    history = tmp_path / 'history'
+    assert main(['assess', small_fleet['bags'][0], '--calibration', str(small_fleet['calibration']),
+                 '--history', str(history)]) == 0
+    assert set(read_table(history).column('actuator').to_pylist()) == {'prsm'}
+
+
+def test_the_calibrations_share_of_the_uncertainty_is_recorded(small_fleet):
+    from prsm_lube_ros.fleet.forecast import recording_points
+    runs = read_table(small_fleet['history']).to_pylist()
+    assessed = [run for run in runs if run['theta_oil'] is not None]
+    assert assessed and all(0 < run['theta_oil_std_calibration'] < run['theta_oil_std'] for run in assessed)
+    assert all(run['theta_oil_std_calibration'] is None for run in runs if run['theta_oil'] is None)
+    point = recording_points(read_table(small_fleet['history']))['A01'][0]
+    assert 0 < point.calibration_std < point.theta_oil_std and point.independent_std < point.theta_oil_std
