@@ -26,10 +26,13 @@ handed out only once nothing later in the file can fall into it -- the
 result is that of the plainly written file, and memory grows only by how far
 back the chunks go.
 
-MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file` and decoded in
-bulk by :mod:`prsm_lube_ros.recording.cdr`; sqlite3 (and file- or
-message-compressed) bags are read through rosbags' Reader and decoded the same
-way.  ``engine='rosbags'`` reads through rosbags (or, for a bare ``.mcap``, the
+MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file`, sqlite3
+storage (a bag folder or a bare ``.db3``) by
+:mod:`prsm_lube_ros.recording.sqlite_file`, and both are decoded in bulk by
+:mod:`prsm_lube_ros.recording.cdr`; file- or message-compressed bags are read
+through rosbags' Reader and decoded the same way.  A folder without
+metadata.yaml is read when it holds one storage file or the parts of one split
+bag (``<folder>_0``, ``<folder>_1``...).  ``engine='rosbags'`` reads through rosbags (or, for a bare ``.mcap``, the
 ``mcap`` package) and deserializes every message with rosbags: the slow
 reference path.
 
@@ -51,7 +54,7 @@ from typing import Callable, Dict, Iterator, List, Optional
 import numpy as np
 import yaml
 
-from . import mcap_file
+from . import mcap_file, sqlite_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
 from ..errors import ConfigError, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
@@ -59,6 +62,8 @@ from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATE
 
 #: default length of one time slice, s of log time
 SLICE_SECONDS = 10.0
+#: the first 16 bytes of every sqlite3 database file
+SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
 _ROSBAGS_CHUNK_BYTES = 1 << 20
 ProblemSink = Callable[[str], None]
@@ -104,13 +109,17 @@ class _McapSource:
                 summary = mcap.summary
                 if summary is None:
                     summary, problems = mcap.scan()
-                    self.problems.extend(problems)
+                    self.problems.extend(self._about(mcap, line) for line in problems)
             except mcap_file.McapProblem as problem:
                 raise RecordingError(f'{path}: {problem}') from None
             except OSError as err:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(mcap)
             self._add_listing(summary)
+
+    def _about(self, mcap: mcap_file.McapFile, line: str) -> str:
+        """A problem line of one file of a bag names that file (a bare file is named by the label already)."""
+        return line if str(mcap.path) == self.label else f'{mcap.path}: {line}'
 
     def _add_listing(self, summary: mcap_file.Summary):
         for channel_id, channel in summary.channels.items():
@@ -159,7 +168,7 @@ class _McapSource:
             summary = mcap_file.Summary()
             if mcap.summary is not None:
                 summary.channels.update(mcap.summary.channels)
-            for chunk in mcap.chunks(on_problem, summary):
+            for chunk in mcap.chunks(lambda line, mcap=mcap: on_problem(self._about(mcap, line)), summary):
                 groups = {}
                 for channel_id, group in chunk.groups.items():
                     channel = summary.channels.get(channel_id)
@@ -197,6 +206,49 @@ def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
             pending, size = [], 0
     if pending:
         yield _pack(pending, 1.0)
+
+
+class _SqliteSource:
+    """The ``.db3`` files of an uncompressed sqlite3 rosbag2 bag, read with Python's sqlite3 module."""
+
+    def __init__(self, label: str, paths: List[Path]):
+        self.label = label
+        self.problems: List[str] = []
+        self.topics: Dict[str, TopicInfo] = {}
+        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        self.files: List[sqlite_file.SqliteFile] = []
+        self.start_time: Optional[int] = None
+        self.end_time: Optional[int] = None
+        for path in paths:
+            try:
+                db = sqlite_file.SqliteFile(path)
+            except sqlite_file.SqliteProblem as problem:
+                raise RecordingError(f'{path}: {problem}') from None
+            except OSError as err:
+                raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
+            self.files.append(db)
+            for topic in db.topics.values():
+                if topic.start_time is not None:
+                    self.start_time = min(topic.start_time, self.start_time or topic.start_time)
+                    self.end_time = max(topic.end_time, self.end_time or topic.end_time)
+                if topic.name in self.topics:
+                    self.topics[topic.name].message_count += topic.message_count
+                    continue
+                self.topics[topic.name] = TopicInfo(topic.name, topic.msgtype, topic.message_count)
+                encoding, text = db.definitions.get(topic.msgtype, ('', ''))
+                self.definitions[topic.name] = (topic.msgtype, encoding, text, topic.serialization_format)
+
+    layout_problem = _McapSource.layout_problem
+
+    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        wanted = set(topics)
+
+        def messages():
+            for db in self.files:      # split bags: one file after the other, as rosbag2 plays them
+                names = {key: topic.name for key, topic in db.topics.items() if topic.name in wanted}
+                for topic_id, log_time, data in db.messages(list(names), on_problem):
+                    yield names[topic_id], log_time, data
+        return _pseudo_chunks(messages(), self.start_time or 0, self.end_time or 0)
 
 
 class _RosbagsSource:
@@ -260,6 +312,29 @@ def _reason(err: BaseException) -> str:
     return f'{type(err).__name__}: {text}' if text else type(err).__name__
 
 
+def _split_index(path: Path) -> tuple:
+    """Sort key of the files of a split bag: ``name_2`` before ``name_10``."""
+    stem, _, number = path.stem.rpartition('_')
+    return (stem, int(number)) if stem and number.isdigit() else (path.stem, -1)
+
+
+def _source_without_metadata(path: Path):
+    """A bag folder without metadata.yaml (what ``ros2 bag reindex`` repairs): its files in split order.
+
+    Taken when it holds one storage file, or only the files of one split bag
+    (``<folder>_0``, ``<folder>_1``...); a folder of unrelated recordings is refused.
+    """
+    for suffix, source in (('.mcap', _McapSource), ('.db3', _SqliteSource)):
+        files = sorted(path.glob('*' + suffix), key=_split_index)
+        if len(files) == 1 or (files and all(_split_index(f)[0] == path.name for f in files)):
+            return source(str(path), files)
+        if files:
+            names = ', '.join(f.name for f in files)
+            raise RecordingError(f'{path}: no metadata.yaml, and its {suffix} files ({names}) are not the parts '
+                                 'of one split bag; give one file')
+    raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml, no .mcap or .db3 file)')
+
+
 def _open_source(path: Path):
     """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
     if not path.exists():
@@ -268,19 +343,15 @@ def _open_source(path: Path):
         if path.name == 'metadata.yaml':
             return _open_source(path.parent)
         with open(path, 'rb') as stream:
-            magic = stream.read(len(mcap_file.MAGIC))
-        if magic != mcap_file.MAGIC:
-            if magic.startswith(b'SQLite format'):
-                raise RecordingError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
-                                     '(with metadata.yaml) instead')
-            raise RecordingError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
-        return _McapSource(str(path), [path])
+            magic = stream.read(len(SQLITE_MAGIC))
+        if magic.startswith(mcap_file.MAGIC):
+            return _McapSource(str(path), [path])
+        if magic == SQLITE_MAGIC:    # one storage file of a sqlite3 bag, read as rosbag2 reads a bare .db3
+            return _SqliteSource(str(path), [path])
+        raise RecordingError(f'{path}: not a recording (neither an MCAP or sqlite3 file nor a rosbag2 directory)')
     metadata_path = path / 'metadata.yaml'
     if not metadata_path.is_file():
-        mcaps = sorted(path.glob('*.mcap'))
-        if len(mcaps) == 1:
-            return _McapSource(str(path), mcaps)
-        raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
+        return _source_without_metadata(path)
     try:
         info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
         storage = info['storage_identifier']
@@ -290,8 +361,11 @@ def _open_source(path: Path):
         raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
         raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
-    if storage == 'mcap' and compression in ('', 'none'):
-        return _McapSource(str(path), files)
+    if compression in ('', 'none'):
+        if storage == 'mcap':
+            return _McapSource(str(path), files)
+        if storage == 'sqlite3':
+            return _SqliteSource(str(path), files)
     if storage not in ('mcap', 'sqlite3'):
         raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
@@ -582,6 +656,20 @@ def bare_read(path) -> int:
     for chunk in source.raw_chunks(list(source.topics), lambda line: None):
         count += sum(group.data_offsets.size for group in chunk.groups.values())
     return count
+
+
+def topic_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+    """Every message of any recording as ``(topic, log_time, data)``, undecoded; per topic in reading order.
+
+    Raises :class:`InputError` (one line naming the file) when it cannot be opened.
+    """
+    source = _open_source(Path(path))
+    for chunk in source.raw_chunks(list(source.topics), on_problem or (lambda line: None)):
+        buffer = chunk.buffer
+        for topic, group in chunk.groups.items():
+            for start, length, log_time in zip(group.data_offsets.tolist(), group.data_lengths.tolist(),
+                                               group.log_times.tolist()):
+                yield topic, log_time, bytes(buffer[start:start + length])
 
 
 def list_topics(path) -> Dict[str, TopicInfo]:

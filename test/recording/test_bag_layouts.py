@@ -1,0 +1,80 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Bags laid out in other ways: a bare .db3, a split bag (intact and with its last file cut), no metadata.yaml."""
+
+import shutil
+import sqlite3
+
+import numpy as np
+import pytest
+import yaml
+
+import bagfactory as bf
+from prsm_lube_ros.errors import RecordingError
+from prsm_lube_ros.recording.reader import open_recording
+
+
+def same_slices(want, have):
+    assert len(want) == len(have) > 0
+    for a_list, b_list in zip(want, have):
+        assert [type(b) for b in a_list] == [type(b) for b in b_list]
+        for a, b in zip(a_list, b_list):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name])
+
+
+def test_a_bare_db3_file_reads_like_its_bag(tmp_path):
+    bag = bf.write_rosbag2(tmp_path / 'bag', bf.contract_entries(seconds=3.0), storage='sqlite3')
+    (db3,) = bag.glob('*.db3')
+    same_slices(list(open_recording(bag).slices(slice_seconds=1.0)),
+                list(open_recording(db3).slices(slice_seconds=1.0)))
+
+
+def test_a_sqlite3_file_that_is_not_a_bag_is_refused_in_one_line(tmp_path):
+    path = tmp_path / 'other.db3'
+    connection = sqlite3.connect(path)
+    connection.execute('CREATE TABLE things (x INTEGER)')
+    connection.commit()
+    connection.close()
+    with pytest.raises(RecordingError, match='not a rosbag2 sqlite3 database') as raised:
+        open_recording(path)
+    assert '\n' not in str(raised.value) and str(path) in str(raised.value)
+
+
+def write_split_bag(tmp_path, storage):
+    """One recording as a bag of two storage files, ``split_0`` and ``split_1``, and the plain bag."""
+    entries = bf.contract_entries(seconds=4.0)
+    half = len(entries) // 2
+    plain = bf.write_rosbag2(tmp_path / f'plain_{storage}', entries, storage=storage)
+    split = tmp_path / 'split'
+    split.mkdir()
+    suffix = '.mcap' if storage == 'mcap' else '.db3'
+    for index, part in enumerate((entries[:half], entries[half:])):
+        bag = bf.write_rosbag2(tmp_path / f'part{index}', part, storage=storage)
+        shutil.move(str(next(bag.glob('*' + suffix))), split / f'split_{index}{suffix}')
+    metadata = yaml.safe_load((plain / 'metadata.yaml').read_text())
+    metadata['rosbag2_bagfile_information']['relative_file_paths'] = [f'split_0{suffix}', f'split_1{suffix}']
+    (split / 'metadata.yaml').write_text(yaml.safe_dump(metadata))
+    return plain, split
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_a_split_bag_reads_like_the_plain_one_with_or_without_metadata(tmp_path, storage):
+    plain, split = write_split_bag(tmp_path, storage)
+    want = list(open_recording(plain).slices(slice_seconds=1.0))
+    same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
+    (split / 'metadata.yaml').unlink()
+    same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
+
+
+def test_a_cut_last_file_of_a_split_bag_is_reported_against_that_file(tmp_path):
+    _, split = write_split_bag(tmp_path, 'mcap')
+    last = split / 'split_1.mcap'
+    data = last.read_bytes()
+    last.write_bytes(data[:len(data) * 2 // 3])
+    recording = open_recording(split)
+    problems = []
+    slices = list(recording.slices(on_problem=problems.append, slice_seconds=1.0))
+    assert slices
+    cut = [line for line in problems + recording.problems if 'truncated' in line]
+    assert cut and all(line.startswith(f'{last}: ') and '\n' not in line for line in cut)
