@@ -150,10 +150,11 @@ def write_bare_mcap(path, entries, store=None):
 
 
 def write_mcap_library(path, entries, store=None, compression: str = 'zstd', chunk_size: int = 1 << 20,
-                       use_chunking: bool = True):
+                       use_chunking: bool = True, schemas=None):
     """Write ``entries`` as a bare ``.mcap`` with the ``mcap`` package's writer (another writer's layout).
 
     Its chunks may be ``zstd``/``lz4``/uncompressed, or absent (``use_chunking=False``).
+    ``schemas`` maps a message type to the ``(encoding, text)`` stored for it (default ``ros2msg``).
     """
     from mcap.writer import CompressionType, Writer as McapWriter
     store = store or typestore()
@@ -165,8 +166,9 @@ def write_mcap_library(path, entries, store=None, compression: str = 'zstd', chu
         channels = {}
         for topic, msgtype, log_time, message in entries:
             if topic not in channels:
-                definition = store.generate_msgdef(msgtype, ros_version=2)[0]
-                schema = writer.register_schema(msgtype, 'ros2msg', definition.encode())
+                encoding, definition = (schemas or {}).get(msgtype) or (
+                    'ros2msg', store.generate_msgdef(msgtype, ros_version=2)[0])
+                schema = writer.register_schema(msgtype, encoding, definition.encode())
                 channels[topic] = writer.register_channel(topic, 'cdr', schema)
             data = message if isinstance(message, (bytes, memoryview)) else store.serialize_cdr(message, msgtype)
             writer.add_message(channels[topic], log_time, bytes(data), log_time)
