@@ -328,6 +328,35 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
 
 # -- the file ---------------------------------------------------------------------------------------
 
+def _definitions_into(summary: Summary, on_problem):
+    """A sink for the Schema and Channel records met while reading, filling ``summary``."""
+    def on_record(opcode, content):
+        try:
+            if opcode == OP_SCHEMA:
+                schema = parse_schema(content)
+                summary.schemas.setdefault(schema.id, schema)
+            elif opcode == OP_CHANNEL:
+                channel = parse_channel(content)
+                summary.channels.setdefault(channel.id, channel)
+        except McapProblem as problem:
+            on_problem(f'bad schema/channel record ({problem})')
+    return on_record
+
+
+def _add_index(indexes: Dict[int, bytes], content: bytes):
+    """Add one MessageIndex record's entries to a chunk's ``indexes``; a bad one makes them all unusable."""
+    try:
+        fields = _Fields(content)
+        channel_id = fields.u16()
+        entries = fields.u32()
+        if entries % 16 or fields.pos + entries > len(content):
+            raise McapProblem('bad message index')
+        indexes[channel_id] = content[fields.pos:fields.pos + entries]
+    except McapProblem:
+        indexes.clear()
+        indexes[-1] = b''  # marks the index unusable
+
+
 class McapFile:
     """One MCAP file opened for listing and streaming; problems raise :class:`McapProblem`."""
 
@@ -429,18 +458,7 @@ class McapFile:
         chunk), a chunk that does not decompress is skipped.
         """
         summary = summary if summary is not None else Summary()
-
-        def on_record(opcode, content):
-            try:
-                if opcode == OP_SCHEMA:
-                    schema = parse_schema(content)
-                    summary.schemas.setdefault(schema.id, schema)
-                elif opcode == OP_CHANNEL:
-                    channel = parse_channel(content)
-                    summary.channels.setdefault(channel.id, channel)
-            except McapProblem as problem:
-                on_problem(f'bad schema/channel record ({problem})')
-
+        on_record = _definitions_into(summary, on_problem)
         loose: List[bytes] = []   # top-level (unchunked) records, gathered into pseudo-chunks
         loose_size = 0
         loose_at = 0
@@ -458,17 +476,7 @@ class McapFile:
                     cut = pos
                     break
                 if opcode == OP_MESSAGE_INDEX and pending is not None:
-                    content = stream.read(length)
-                    try:
-                        fields = _Fields(content)
-                        channel_id = fields.u16()
-                        entries = fields.u32()
-                        if entries % 16 or fields.pos + entries > len(content):
-                            raise McapProblem('bad message index')
-                        pending[2][channel_id] = content[fields.pos:fields.pos + entries]
-                    except McapProblem:
-                        pending[2].clear()
-                        pending[2][-1] = b''  # marks the index unusable
+                    _add_index(pending[2], stream.read(length))
                     pos += RECORD_PREFIX + length
                     continue
                 if pending is not None:
@@ -514,6 +522,42 @@ class McapFile:
                     lost += f' (recovered {salvage.message_count()} messages from the cut chunk)'
                 on_problem(f'truncated or corrupt at byte {cut} of {self.size}: '
                            f'the last {lost} are not readable')
+
+    def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
+        """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
+
+        Reads each chunk with the MessageIndex records that follow it: what
+        the reference readers do to give messages in log time order from a
+        file whose chunks are not, holding one chunk at a time.  A chunk that
+        cannot be read is left out with one line to ``on_problem``.
+        """
+        summary = summary if summary is not None else Summary()
+        on_record = _definitions_into(summary, on_problem)
+        with open(self.path, 'rb') as stream:
+            for pos in offsets:
+                pos = int(pos)
+                stream.seek(pos)
+                head = stream.read(RECORD_PREFIX)
+                opcode, length = _RECORD.unpack_from(head, 0) if len(head) == RECORD_PREFIX else (0, 0)
+                if opcode != OP_CHUNK or length > self.size - pos - RECORD_PREFIX:
+                    on_problem(f'chunk at byte {pos} skipped: no chunk record there')
+                    continue
+                try:
+                    pending = self._open_chunk(stream.read(length), pos, on_problem)
+                except McapProblem as problem:
+                    on_problem(f'chunk at byte {pos} skipped: {problem}')
+                    continue
+                at = pos + RECORD_PREFIX + length
+                while True:     # its message index records
+                    head = stream.read(RECORD_PREFIX)
+                    if len(head) < RECORD_PREFIX:
+                        break
+                    opcode, length = _RECORD.unpack_from(head, 0)
+                    if opcode != OP_MESSAGE_INDEX or length > self.size - at - RECORD_PREFIX:
+                        break
+                    _add_index(pending[2], stream.read(length))
+                    at += RECORD_PREFIX + length
+                yield self._finish_chunk(*pending, on_record)
 
     def _open_chunk(self, content: bytes, pos: int, on_problem):
         """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
@@ -571,14 +615,29 @@ class McapFile:
         return chunk if chunk.message_count() else None
 
 
-def start_times(path, size: int) -> Tuple[np.ndarray, np.ndarray]:
-    """File offsets and earliest log times of the chunks and unchunked messages of a data section.
+@dataclass
+class DataLayout:
+    """Where the chunks and unchunked messages of a data section start, and their earliest log times."""
 
-    Reads only record headers (seeking over chunk data), so it is cheap; a
-    damaged record ends the list quietly (:meth:`McapFile.chunks` reports it).
+    offsets: np.ndarray     # (n,) int64 file offsets of the records
+    times: np.ndarray       # (n,) int64 ns: a chunk's message_start_time, a message's log time
+    only_chunks: bool       # no message outside a chunk
+    complete: bool          # every record fits and the section ends with DataEnd or the Footer
+
+    def in_time_order(self) -> bool:
+        """True when no record starts before the one in front of it."""
+        return bool(np.all(self.times[1:] >= self.times[:-1]))
+
+
+def data_layout(path, size: int) -> DataLayout:
+    """The :class:`DataLayout` of a file's data section, from its record headers only.
+
+    Seeks over chunk data, so it is cheap; a damaged record ends the list
+    quietly with ``complete`` False (:meth:`McapFile.chunks` reports it).
     """
     offsets: List[int] = []
     times: List[int] = []
+    only_chunks, complete = True, False
     with open(path, 'rb') as stream:
         pos = len(MAGIC)
         stream.seek(pos)
@@ -587,17 +646,23 @@ def start_times(path, size: int) -> Tuple[np.ndarray, np.ndarray]:
             if len(head) < RECORD_PREFIX:
                 break
             opcode, length = _RECORD.unpack_from(head, 0)
-            if length > size - pos - RECORD_PREFIX or opcode in (OP_DATA_END, OP_FOOTER):
+            if opcode in (OP_DATA_END, OP_FOOTER):
+                complete = True
+                break
+            if length > size - pos - RECORD_PREFIX:
                 break
             if opcode == OP_CHUNK and length >= 8 and len(head) >= RECORD_PREFIX + 8:
                 offsets.append(pos)
                 times.append(_U64.unpack_from(head, RECORD_PREFIX)[0])
-            elif opcode == OP_MESSAGE and length >= MESSAGE_HEADER and len(head) == RECORD_PREFIX + MESSAGE_HEADER:
-                offsets.append(pos)
-                times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
+            elif opcode == OP_MESSAGE:
+                only_chunks = False
+                if length >= MESSAGE_HEADER and len(head) == RECORD_PREFIX + MESSAGE_HEADER:
+                    offsets.append(pos)
+                    times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
             pos += RECORD_PREFIX + length
             stream.seek(pos)
-    return np.array(offsets, np.int64), np.array([signed(t) for t in times], np.int64)
+    return DataLayout(np.array(offsets, np.int64), np.array([signed(t) for t in times], np.int64),
+                      only_chunks, complete)
 
 
 def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:

@@ -19,12 +19,14 @@ recording that carry a vibration topic.
 Slices are consecutive spans of ``slice_seconds`` of log time on a grid
 starting at the first message; each holds one batch per topic that has data in
 it, with values taken from the header stamps.  Memory stays at about one MCAP
-chunk plus one slice, however long the recording.  Chunks may go back in log
-time (e.g. written topic after topic): a cheap pre-scan of the chunk headers
-says, for every chunk, the earliest log time still to come, and a slice is
-handed out only once nothing later in the file can fall into it -- the
-result is that of the plainly written file, and memory grows only by how far
-back the chunks go.
+chunk plus one slice, however long the recording and in whatever order its
+chunks are.  A cheap pre-scan of the chunk headers gives every chunk's start
+time; when they go back in log time (chunks written topic after topic,
+reversed, shuffled), the chunks are read by seeking, in order of start time
+across all files, as the reference readers do -- the result is that of the
+plainly written file.  Only a damaged file, or one with messages outside
+chunks, is read in file order; a slice is then handed out once nothing later
+in the file can fall into it, and memory grows with how far back chunks go.
 
 MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file`, sqlite3
 storage (a bag folder or a bare ``.db3``) by
@@ -32,9 +34,9 @@ storage (a bag folder or a bare ``.db3``) by
 :mod:`prsm_lube_ros.recording.cdr`; file- or message-compressed bags are read
 through rosbags' Reader and decoded the same way.  A folder without
 metadata.yaml is read when it holds one storage file or the parts of one split
-bag (``<folder>_0``, ``<folder>_1``...).  ``engine='rosbags'`` reads through rosbags (or, for a bare ``.mcap``, the
-``mcap`` package) and deserializes every message with rosbags: the slow
-reference path.
+bag (``<folder>_0``, ``<folder>_1``...).  ``engine='rosbags'`` reads
+through rosbags (or, for a bare ``.mcap``, the ``mcap`` package) and
+deserializes every message with rosbags: the slow reference path.
 
 Problems: :func:`open_recording` raises :class:`InputError` (one line naming
 the file) for a missing path, something that is not a bag, a bag without the
@@ -98,6 +100,7 @@ class _McapSource:
         self.label = label
         self.paths = paths
         self.files: List[mcap_file.McapFile] = []
+        self.listings: List[mcap_file.Summary] = []       # per file: its summary, or what a scan found
         self.problems: List[str] = []
         self.topics: Dict[str, TopicInfo] = {}
         self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text)
@@ -115,6 +118,7 @@ class _McapSource:
             except OSError as err:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(mcap)
+            self.listings.append(summary)
             self._add_listing(summary)
 
     def _about(self, mcap: mcap_file.McapFile, line: str) -> str:
@@ -144,40 +148,87 @@ class _McapSource:
             return f'has message encoding {message_encoding!r}, not cdr'
         return check_layout(kind, msgtype, encoding, text)
 
-    def _horizons(self) -> List[tuple]:
+    @staticmethod
+    def _horizons(layouts: List[mcap_file.DataLayout]) -> List[tuple]:
         """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
 
-        Chunks may be written out of log time order (e.g. topic after topic);
-        a slice can be handed out only once no chunk still to come starts
-        before its end.  Memory then stays bounded by how far back chunks go.
+        For a file read in file order although its chunks go back in log time
+        (one that is damaged or has unchunked messages): a slice can be handed
+        out only once no chunk still to come starts before its end, so memory
+        grows with how far back chunks go.
         """
-        per_file = [mcap_file.start_times(mcap.path, mcap.size) for mcap in self.files]
         later = np.iinfo(np.int64).max
         horizons: List[tuple] = []
-        for offsets, times in reversed(per_file):
+        for layout in reversed(layouts):
+            times = layout.times
             suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
             suffix = np.append(np.minimum(suffix, later), later)
-            horizons.append((offsets, suffix))
+            horizons.append((layout.offsets, suffix))
             later = int(suffix[0])
         return horizons[::-1]
 
+    def _groups(self, chunk: mcap_file.RawChunk, channels: Dict[int, mcap_file.Channel],
+                topics: List[str]) -> Dict[str, mcap_file.MessageGroup]:
+        groups = {}
+        for channel_id, group in chunk.groups.items():
+            channel = channels.get(channel_id)
+            if channel is not None and channel.topic in topics:
+                groups[channel.topic] = group
+        return groups
+
+    def _sink(self, mcap: mcap_file.McapFile, on_problem: ProblemSink) -> ProblemSink:
+        return lambda line: on_problem(self._about(mcap, line))
+
+    def _summary_of(self, index: int) -> mcap_file.Summary:
+        """A summary to fill while reading file ``index``, knowing the channels its listing found."""
+        summary = mcap_file.Summary()
+        summary.channels.update(self.listings[index].channels)
+        return summary
+
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """The files' chunks in log time order of their start: in file order, or by seeking when they go back."""
+        layouts = [mcap_file.data_layout(mcap.path, mcap.size) for mcap in self.files]
+        times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
+        if times.size and np.any(times[1:] < times[:-1]) and all(
+                layout.complete and layout.only_chunks for layout in layouts):
+            return self._chunks_by_start_time(layouts, topics, on_problem)
+        return self._chunks_in_file_order(layouts, topics, on_problem)
+
+    def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """Chunks that go back in time (reversed, shuffled, topic after topic), read by seeking.
+
+        Sorted by their start times across all files, as the reference readers
+        read them: each slice is complete once a chunk starting after its end
+        is reached, so memory stays at about one chunk and one slice.
+        """
+        times = np.concatenate([layout.times for layout in layouts])
+        offsets = np.concatenate([layout.offsets for layout in layouts])
+        files = np.concatenate([np.full(layout.times.size, index) for index, layout in enumerate(layouts)])
+        order = np.lexsort((offsets, files, times))
+        summaries = [self._summary_of(index) for index in range(len(self.files))]
+        # runs of consecutive chunks from one file, each read with one open file
+        breaks = np.flatnonzero(np.diff(files[order])) + 1
+        done = 0
+        for run in np.split(order, breaks):
+            index = int(files[run[0]])
+            mcap, summary = self.files[index], summaries[index]
+            for chunk in mcap.chunks_at(offsets[run], self._sink(mcap, on_problem), summary):
+                done += 1
+                yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
+                                done / order.size)
+
+    def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
         total = sum(f.size for f in self.files) or 1
         done = 0
-        for mcap, (offsets, suffix) in zip(self.files, self._horizons()):
-            summary = mcap_file.Summary()
-            if mcap.summary is not None:
-                summary.channels.update(mcap.summary.channels)
-            for chunk in mcap.chunks(lambda line, mcap=mcap: on_problem(self._about(mcap, line)), summary):
-                groups = {}
-                for channel_id, group in chunk.groups.items():
-                    channel = summary.channels.get(channel_id)
-                    if channel is not None and channel.topic in topics:
-                        groups[channel.topic] = group
+        for index, (mcap, (offsets, suffix)) in enumerate(zip(self.files, self._horizons(layouts))):
+            summary = self._summary_of(index)
+            for chunk in mcap.chunks(self._sink(mcap, on_problem), summary):
                 # nothing from this chunk on is earlier than the horizon
                 horizon = int(suffix[np.searchsorted(offsets, chunk.file_offset, 'left')])
-                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer, groups,
-                                (done + chunk.file_offset) / total)
+                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer,
+                                self._groups(chunk, summary.channels, topics), (done + chunk.file_offset) / total)
             done += mcap.size
 
 

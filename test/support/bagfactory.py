@@ -174,3 +174,52 @@ def write_mcap_library(path, entries, store=None, compression: str = 'zstd', chu
             writer.add_message(channels[topic], log_time, bytes(data), log_time)
         writer.finish()
     return path
+
+
+def reorder_chunks(source, target, order):
+    """Rewrite an MCAP file with its chunks (each with its MessageIndex records) in another order.
+
+    ``order(n)`` returns the new order of the ``n`` chunks (e.g. reversed).
+    Records before, between and after the chunks keep their place before
+    them, and the summary's Schema and Channel records are repeated there
+    (a chunk may use a channel defined in a chunk now after it); the summary
+    section keeps its Schema, Channel and Statistics
+    records, without the ChunkIndex and SummaryOffset records whose offsets
+    would be stale; CRCs of the data end and footer are left out (zero).
+    """
+    import struct
+    data = Path(source).read_bytes()
+    magic = data[:8]
+    footer_at = len(data) - 8 - 9 - 20
+    summary_start = struct.unpack_from('<Q', data, footer_at + 9)[0] or footer_at
+    records, chunks = [], []
+    pos = 8
+    while pos < summary_start:
+        opcode, length = struct.unpack_from('<BQ', data, pos)
+        record = data[pos:pos + 9 + length]
+        pos += 9 + length
+        if opcode == 0x0F:                      # DataEnd
+            break
+        if opcode == 0x06:
+            chunks.append([record])
+        elif opcode == 0x07 and chunks:
+            chunks[-1].append(record)
+        else:
+            records.append(record)
+    summary, definitions = [], []
+    pos = summary_start
+    while pos < footer_at:
+        opcode, length = struct.unpack_from('<BQ', data, pos)
+        if opcode not in (0x08, 0x0E):          # ChunkIndex, SummaryOffset
+            summary.append(data[pos:pos + 9 + length])
+        if opcode in (0x03, 0x04):              # Schema, Channel: before every chunk that may use them
+            definitions.append(data[pos:pos + 9 + length])
+        pos += 9 + length
+    body = magic + b''.join(records[:1] + definitions + records[1:])      # the Header record first
+    body += b''.join(b''.join(chunks[i]) for i in order(len(chunks)))
+    body += struct.pack('<BQI', 0x0F, 4, 0)
+    new_summary_start = len(body) if summary else 0
+    body += b''.join(summary)
+    body += struct.pack('<BQQQI', 0x02, 20, new_summary_start, 0, 0) + magic
+    Path(target).write_bytes(body)
+    return Path(target)
