@@ -64,6 +64,8 @@ from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATE
 
 #: default length of one time slice, s of log time
 SLICE_SECONDS = 10.0
+#: log time a file read in file order may go back before that is reported (memory held), s
+HELD_BACK_SECONDS = 60.0
 #: the first 16 bytes of every sqlite3 database file
 SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
@@ -220,6 +222,11 @@ class _McapSource:
 
     def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], topics: List[str],
                               on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
+        back = float(np.max(np.maximum.accumulate(times) - times)) * 1e-9 if times.size else 0.0
+        if back > HELD_BACK_SECONDS:
+            on_problem(f'chunks go back in log time by up to {back:.0f} s and cannot be read by seeking (damaged, '
+                       'or messages outside chunks): up to that much of the recording was held in memory')
         total = sum(f.size for f in self.files) or 1
         done = 0
         for index, (mcap, (offsets, suffix)) in enumerate(zip(self.files, self._horizons(layouts))):

@@ -158,3 +158,23 @@ def test_chunks_in_any_order_give_the_same_slices_while_streaming(plain_and_grou
             for name, value in vars(a).items():
                 np.testing.assert_array_equal(value, vars(b)[name])
     assert seen_at[len(seen_at) // 2] < 0.7     # streamed, not held until the last chunk
+
+
+def test_a_damaged_file_whose_chunks_go_far_back_says_it_held_them_in_one_line(tmp_path):
+    """Without an intact data section the chunks are read in file order: same data, and one line on memory."""
+    plain = bf.write_mcap_library(tmp_path / 'plain.mcap', bf.contract_entries(seconds=70.0, temperature=False),
+                                  compression='none', chunk_size=64 * 1024)
+    reversed_file = bf.reorder_chunks(plain, tmp_path / 'reversed.mcap', lambda n: range(n)[::-1])
+    data = reversed_file.read_bytes()
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(data[:data.rindex(bytes([mcap_file.OP_DATA_END]) + (4).to_bytes(8, 'little'))])
+    problems = []
+    got = list(open_recording(cut).slices(on_problem=problems.append, slice_seconds=10.0))
+    held = [line for line in problems if 'held in memory' in line]
+    assert len(held) == 1 and '\n' not in held[0]
+    want = list(open_recording(plain).slices(slice_seconds=10.0))
+    assert len(got) == len(want) > 5
+    for a_list, b_list in zip(want, got):
+        for a, b in zip(a_list, b_list):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name])
