@@ -15,6 +15,7 @@ a hang.  No ROS import.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 import struct
 import zlib
 from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
@@ -36,12 +37,21 @@ RECORD_PREFIX = 9
 MESSAGE_HEADER = 22
 #: a chunk claiming more than this many uncompressed bytes is treated as corrupt
 MAX_CHUNK_BYTES = 1 << 31
+#: chunks with at most this many messages (or, unindexed, bytes) are gathered with their neighbours
+SMALL_CHUNK_MESSAGES = 16
+SMALL_CHUNK_BYTES = 16 << 10
+#: bytes of top-level messages and small chunks gathered into one pseudo-chunk
+GATHER_BYTES = 1 << 20
 
 _RECORD = struct.Struct('<BQ')
 _U16 = struct.Struct('<H')
 _U32 = struct.Struct('<I')
 _U64 = struct.Struct('<Q')
 _MESSAGE = struct.Struct('<HIQQ')
+#: Chunk record: message_start_time, message_end_time, uncompressed_size, uncompressed_crc, compression length
+_CHUNK_HEAD = struct.Struct('<QQQII')
+#: MessageIndex record: channel_id, byte length of the records array
+_INDEX_HEAD = struct.Struct('<HI')
 
 
 class McapProblem(Exception):
@@ -241,28 +251,43 @@ def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
         pos = end
 
 
-def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
-    """Split records by walking them one by one (no message index); return the chunk and bytes used.
+def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+    """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
-    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    Walks every record (no message index); each buffer is walked on its own,
+    so one that ends in a cut record cannot shift the next.  Returns the chunk
+    (over the buffers joined) and the bytes of the last buffer used.
+    ``on_record(opcode, content)`` receives every non-message record.
     """
     per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
-    used = 0
-    for opcode, begin, end in walk_records(buf):
-        used = end
-        if opcode == OP_MESSAGE:
-            if end - begin < MESSAGE_HEADER:
-                continue
-            channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
-            per_channel.setdefault(channel_id, []).append(
-                (begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
-        else:
-            on_record(opcode, memoryview(buf)[begin:end])
+    base = used = 0
+    for buf in buffers:
+        used = 0
+        for opcode, begin, end in walk_records(buf):
+            used = end
+            if opcode == OP_MESSAGE:
+                if end - begin < MESSAGE_HEADER:
+                    continue
+                channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
+                per_channel.setdefault(channel_id, []).append(
+                    (base + begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
+            else:
+                on_record(opcode, memoryview(buf)[begin:end])
+        base += len(buf)
     groups = {}
     for channel_id, rows in per_channel.items():
         table = np.array(rows, dtype=np.int64).reshape(-1, 3)
         groups[channel_id] = MessageGroup(table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
-    return RawChunk(start_time, np.frombuffer(buf, np.uint8), groups, file_offset), used
+    joined = buffers[0] if len(buffers) == 1 else b''.join(buffers)
+    return RawChunk(start_time, np.frombuffer(joined, np.uint8), groups, file_offset), used
+
+
+def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+    """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
+
+    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    """
+    return split_records([buf], start_time, file_offset, on_record)
 
 
 def split_indexed(buf: bytes, start_time: int, file_offset: int,
@@ -345,16 +370,62 @@ def _definitions_into(summary: Summary, on_problem):
 
 def _add_index(indexes: Dict[int, bytes], content: bytes):
     """Add one MessageIndex record's entries to a chunk's ``indexes``; a bad one makes them all unusable."""
+    if len(content) >= _INDEX_HEAD.size:
+        channel_id, entries = _INDEX_HEAD.unpack_from(content, 0)
+        if not entries % 16 and _INDEX_HEAD.size + entries <= len(content):
+            indexes[channel_id] = content[_INDEX_HEAD.size:_INDEX_HEAD.size + entries]
+            return
+    indexes.clear()
+    indexes[-1] = b''  # marks the index unusable
+
+
+@lru_cache(maxsize=64)
+def _compression_name(raw: bytes) -> str:
     try:
-        fields = _Fields(content)
-        channel_id = fields.u16()
-        entries = fields.u32()
-        if entries % 16 or fields.pos + entries > len(content):
-            raise McapProblem('bad message index')
-        indexes[channel_id] = content[fields.pos:fields.pos + entries]
-    except McapProblem:
-        indexes.clear()
-        indexes[-1] = b''  # marks the index unusable
+        return raw.decode('utf-8')
+    except UnicodeDecodeError:
+        raise McapProblem('record string is not UTF-8') from None
+
+
+class _Gathered:
+    """Top-level messages and the records of small chunks, gathered into pseudo-chunks of about ``size`` bytes.
+
+    One message per chunk (or none at all) would otherwise cost a split, a
+    decode and a slice step per message; gathered, they cost one per batch.
+    """
+
+    def __init__(self, on_record, size: int):
+        self.on_record = on_record
+        self.size = size
+        self.buffers: List[bytes] = []
+        self.bytes = 0
+        self.file_offset = 0
+        self.start_time: Optional[int] = None
+
+    def add(self, buffer: bytes, start_time: Optional[int], file_offset: int) -> Optional[RawChunk]:
+        """Gather ``buffer`` (records); return a pseudo-chunk when enough is gathered."""
+        if not self.buffers:
+            self.file_offset = file_offset
+        self.buffers.append(buffer)
+        self.bytes += len(buffer)
+        if start_time is not None:
+            self.start_time = start_time if self.start_time is None else min(self.start_time, start_time)
+        return self.take() if self.bytes >= self.size else None
+
+    def take(self) -> Optional[RawChunk]:
+        """What is gathered as one pseudo-chunk (None if nothing)."""
+        if not self.buffers:
+            return None
+        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record)
+        self.buffers, self.bytes, self.start_time = [], 0, None
+        return chunk
+
+
+def _few_messages(records: bytes, indexes: Dict[int, bytes]) -> bool:
+    """True for a chunk small enough that gathering it with its neighbours is cheaper than splitting it alone."""
+    if indexes and -1 not in indexes:
+        return sum(len(entries) for entries in indexes.values()) <= 16 * SMALL_CHUNK_MESSAGES
+    return len(records) <= SMALL_CHUNK_BYTES
 
 
 class McapFile:
@@ -449,19 +520,19 @@ class McapFile:
 
     # data section -------------------------------------------------------------------------------
     def chunks(self, on_problem, summary: Optional[Summary] = None,
-               unchunked_batch: int = 1 << 20) -> Iterator[RawChunk]:
+               unchunked_batch: int = GATHER_BYTES) -> Iterator[RawChunk]:
         """Yield the file's messages chunk by chunk, in file order.
 
-        Schemas and channels met on the way go into ``summary`` (if given).
-        Damage ends or skips with one line to ``on_problem``: a truncated file
-        yields everything before the cut (including the readable start of a cut
-        chunk), a chunk that does not decompress is skipped.
+        Top-level messages and consecutive small chunks come gathered into
+        pseudo-chunks of about ``unchunked_batch`` bytes.  Schemas and channels
+        met on the way go into ``summary`` (if given).  Damage ends or skips
+        with one line to ``on_problem``: a truncated file yields everything
+        before the cut (including the readable start of a cut chunk), a chunk
+        that does not decompress is skipped.
         """
         summary = summary if summary is not None else Summary()
         on_record = _definitions_into(summary, on_problem)
-        loose: List[bytes] = []   # top-level (unchunked) records, gathered into pseudo-chunks
-        loose_size = 0
-        loose_at = 0
+        gathered = _Gathered(on_record, unchunked_batch)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
             pos = len(MAGIC)
@@ -480,21 +551,19 @@ class McapFile:
                     pos += RECORD_PREFIX + length
                     continue
                 if pending is not None:
-                    yield self._finish_chunk(*pending, on_record)
+                    yield from self._finish_or_gather(pending, gathered)
                     pending = None
-                if opcode == OP_MESSAGE or (loose and opcode in (OP_SCHEMA, OP_CHANNEL)):
-                    if not loose:
-                        loose_at = pos
-                    loose.append(head + stream.read(length))
-                    loose_size += RECORD_PREFIX + length
+                if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
+                    record = head + stream.read(length)
+                    start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
+                                  if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
+                    chunk = gathered.add(record, start_time, pos)
+                    if chunk is not None:
+                        yield chunk
                     pos += RECORD_PREFIX + length
-                    if loose_size >= unchunked_batch:
-                        yield self._loose_chunk(loose, loose_at, on_record)
-                        loose, loose_size = [], 0
                     continue
-                if loose:
-                    yield self._loose_chunk(loose, loose_at, on_record)
-                    loose, loose_size = [], 0
+                if opcode != OP_CHUNK and gathered.buffers:
+                    yield gathered.take()
                 if opcode in (OP_DATA_END, OP_FOOTER):
                     cut = None
                     break
@@ -511,9 +580,9 @@ class McapFile:
                     stream.seek(length, 1)
                 pos += RECORD_PREFIX + length
             if pending is not None:
-                yield self._finish_chunk(*pending, on_record)
-            if loose:
-                yield self._loose_chunk(loose, loose_at, on_record)
+                yield from self._finish_or_gather(pending, gathered)
+            if gathered.buffers:
+                yield gathered.take()
             if cut is not None:
                 salvage = self._salvage(stream, cut, on_record)
                 lost = f'{self.size - cut} bytes'
@@ -522,6 +591,18 @@ class McapFile:
                     lost += f' (recovered {salvage.message_count()} messages from the cut chunk)'
                 on_problem(f'truncated or corrupt at byte {cut} of {self.size}: '
                            f'the last {lost} are not readable')
+
+    def _finish_or_gather(self, pending: list, gathered: _Gathered) -> Iterator[RawChunk]:
+        """A read chunk: gathered when small, else split on its own (after what was gathered before it)."""
+        records, start_time, indexes, pos = pending
+        if _few_messages(records, indexes):
+            chunk = gathered.add(records, start_time, pos)
+            if chunk is not None:
+                yield chunk
+            return
+        if gathered.buffers:
+            yield gathered.take()
+        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record)
 
     def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
         """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
@@ -532,7 +613,7 @@ class McapFile:
         cannot be read is left out with one line to ``on_problem``.
         """
         summary = summary if summary is not None else Summary()
-        on_record = _definitions_into(summary, on_problem)
+        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES)
         with open(self.path, 'rb') as stream:
             for pos in offsets:
                 pos = int(pos)
@@ -557,20 +638,24 @@ class McapFile:
                         break
                     _add_index(pending[2], stream.read(length))
                     at += RECORD_PREFIX + length
-                yield self._finish_chunk(*pending, on_record)
+                yield from self._finish_or_gather(pending, gathered)
+        if gathered.buffers:
+            yield gathered.take()
 
     def _open_chunk(self, content: bytes, pos: int, on_problem):
         """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
-        fields = _Fields(content)
-        start_time = fields.u64()
-        fields.u64()
-        size = fields.u64()
-        crc = fields.u32()
-        compression = fields.string()
-        compressed_size = fields.u64()
-        if compressed_size > len(content) - fields.pos:
+        if len(content) < _CHUNK_HEAD.size:
+            raise McapProblem('record field runs past the end of its record')
+        start_time, _, size, crc, name_length = _CHUNK_HEAD.unpack_from(content, 0)
+        at = _CHUNK_HEAD.size + name_length
+        if at + 8 > len(content):
+            raise McapProblem('record field runs past the end of its record')
+        compression = _compression_name(bytes(content[_CHUNK_HEAD.size:at]))
+        compressed_size = _U64.unpack_from(content, at)[0]
+        at += 8
+        if compressed_size > len(content) - at:
             raise McapProblem('compressed data runs past its chunk record')
-        compressed = memoryview(content)[fields.pos:fields.pos + compressed_size]
+        compressed = memoryview(content)[at:at + compressed_size]
         records = decompress(compressed, compression, size)
         if crc and zlib.crc32(records) != crc:
             raise McapProblem(f'its records do not match their CRC ({size} bytes, corrupt)')
@@ -583,15 +668,6 @@ class McapFile:
             if chunk is not None:
                 return chunk
         chunk, _ = split_sequential(records, start_time, pos, on_record)
-        return chunk
-
-    @staticmethod
-    def _loose_chunk(loose: List[bytes], pos: int, on_record) -> RawChunk:
-        buf = b''.join(loose)
-        start_time = min((signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2]) for record in loose
-                          if record[0] == OP_MESSAGE and len(record) >= RECORD_PREFIX + MESSAGE_HEADER),
-                         default=0)
-        chunk, _ = split_sequential(buf, start_time, pos, on_record)
         return chunk
 
     def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:

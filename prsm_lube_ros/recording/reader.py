@@ -211,14 +211,13 @@ class _McapSource:
         summaries = [self._summary_of(index) for index in range(len(self.files))]
         # runs of consecutive chunks from one file, each read with one open file
         breaks = np.flatnonzero(np.diff(files[order])) + 1
-        done = 0
+        first, span = int(times[order[0]]), max(int(times[order[-1]]) - int(times[order[0]]), 1)
         for run in np.split(order, breaks):
             index = int(files[run[0]])
             mcap, summary = self.files[index], summaries[index]
             for chunk in mcap.chunks_at(offsets[run], self._sink(mcap, on_problem), summary):
-                done += 1
                 yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
-                                done / order.size)
+                                (chunk.start_time - first) / span)
 
     def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], topics: List[str],
                               on_problem: ProblemSink) -> Iterator[_RawChunk]:
