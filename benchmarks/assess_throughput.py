@@ -7,7 +7,7 @@ The recordings are the rig simulator's endurance bags (the six conditions of
 the paper cycled, rewinds included): 4 kHz acceleration in 0.1 s blocks,
 joint states at 100 Hz, load at 50 Hz, temperature at 1 Hz, storage mcap.
 Each measurement runs in a fresh subprocess so its peak resident memory
-(ru_maxrss) is its own:
+(``VmHWM``; ``ru_maxrss`` would carry over the parent's peak) is its own:
 
 * ``bare read``: every message read, decompressed and split, nothing decoded
   (:func:`prsm_lube_ros.recording.reader.bare_read`);
@@ -32,7 +32,6 @@ import argparse
 import json
 import platform
 from pathlib import Path
-import resource
 import subprocess
 import sys
 import time
@@ -44,6 +43,7 @@ RESULTS = ROOT / 'benchmarks' / 'results'
 def child(kind: str, bag: str, calibration: str) -> None:
     """Run one measurement in this process and print a JSON line."""
     sys.path.insert(0, str(ROOT))
+    from read_memory import peak_rss_mib   # beside this file
     from prsm_lube_ros.physics.actuator import Actuator
     from prsm_lube_ros.estimation.pipeline import assess_recording, recording_windows
     from prsm_lube_ros.recording.reader import bare_read
@@ -65,7 +65,7 @@ def child(kind: str, bag: str, calibration: str) -> None:
         detail = {'windows': len(result.windows), 'runs': len(result.runs),
                   'assessed_runs': sum(1 for r in result.runs if not r.reason)}
     elapsed = time.perf_counter() - start
-    peak_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    peak_mib = peak_rss_mib()
     print(json.dumps({'kind': kind, 'seconds': elapsed, 'setup_seconds': setup, 'peak_rss_mib': peak_mib,
                       **detail}))
 

@@ -342,13 +342,24 @@ class _RosbagsSource:
 
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         from rosbags.rosbag2 import Reader
+        streamed = dict.fromkeys(topics, 0)
+
+        def counted(messages):
+            for topic, log_time, data in messages:
+                streamed[topic] += 1
+                yield topic, log_time, data
         try:
             with Reader(self.path) as reader:
                 connections = [c for c in reader.connections if c.topic in topics]
                 messages = ((c.topic, t, data) for c, t, data in reader.messages(connections=connections))
-                yield from _pseudo_chunks(messages, self.start_time or 0, self.end_time or 0)
+                yield from _pseudo_chunks(counted(messages), self.start_time or 0, self.end_time or 0)
         except Exception as err:  # keep what was read, report the rest in one line
             on_problem(f'reading stopped early: {_reason(err)}')
+            return
+        for topic, count in streamed.items():   # rosbags matches metadata.yaml to the storage by QoS too
+            if count < self.topics[topic].message_count:
+                on_problem(f'{topic}: {self.topics[topic].message_count} message(s) listed, {count} streamed '
+                           "(rosbags' Reader could not match the rest to metadata.yaml)")
 
 
 def _mcap_library_chunks(path: Path, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:

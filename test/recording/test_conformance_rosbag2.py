@@ -88,3 +88,15 @@ def test_a_folder_of_unrelated_recordings_is_refused_in_one_line():
     with pytest.raises(RecordingError, match='not the parts of one split bag') as raised:
         list_topics(folder)
     assert '\n' not in str(raised.value) and str(folder) in str(raised.value)
+
+
+def test_where_rosbags_streams_fewer_messages_than_listed_it_says_so_per_topic():
+    """Compressed bags and the reference engine read through rosbags, which drops the talker bag's messages."""
+    from prsm_lube_ros.recording.reader import _RosbagsSource
+    bag = next(b for b in BAGS if b.name == 'talker' and b.parent.name == 'sqlite3')
+    source = _RosbagsSource(bag)
+    problems = []
+    for _ in source.raw_chunks(list(source.topics), problems.append):
+        pass
+    assert sorted(line.split(':')[0] for line in problems) == ['/rosout', '/topic']
+    assert all('10 message(s) listed, 0 streamed' in line for line in problems)
