@@ -44,19 +44,10 @@ MEMORY_LIMIT = 1 << 31
 
 def seeds(folder: Path) -> list[tuple[Path, str]]:
     """(path, kind) of every seed file; kind is 'contract', 'mcap' or 'calibration'."""
-    from fuzzing import seed_recordings
-    from prsm_lube_ros.estimation.calibration import fit_constants
-    from prsm_lube_ros.estimation.calibration_file import save_calibration
-    import numpy as np
+    from fuzzing import seed_calibration, seed_recordings
     out = seed_recordings(folder)
     out += [(p, 'mcap') for p in sorted(CONFORMANCE.glob('*/*.mcap'))[::8]]
-    speed = np.repeat([10.0, 15.0, 20.0], 20)
-    load = np.tile(np.repeat([100.0, 200.0], 10), 3)
-    rms = 0.08 * speed ** 2 * load ** (-1 / 3) * np.exp(1e-3 * load - 0.3 * speed ** 0.68 * load ** -0.073)
-    calibration = folder / 'calibration.yaml'
-    save_calibration(fit_constants(speed, load, rms * np.exp(np.random.default_rng(1).normal(0, 0.01, rms.size)),
-                                   1.0), calibration)
-    out.append((calibration, 'calibration'))
+    out.append((seed_calibration(folder / 'calibration.yaml'), 'calibration'))
     return out
 
 

@@ -5,7 +5,6 @@
 import shutil
 import sqlite3
 
-import numpy as np
 import pytest
 import yaml
 
@@ -14,20 +13,11 @@ from prsm_lube_ros.errors import RecordingError
 from prsm_lube_ros.recording.reader import open_recording
 
 
-def same_slices(want, have):
-    assert len(want) == len(have) > 0
-    for a_list, b_list in zip(want, have):
-        assert [type(b) for b in a_list] == [type(b) for b in b_list]
-        for a, b in zip(a_list, b_list):
-            for name, value in vars(a).items():
-                np.testing.assert_array_equal(value, vars(b)[name])
-
-
 def test_a_bare_db3_file_reads_like_its_bag(tmp_path):
     bag = bf.write_rosbag2(tmp_path / 'bag', bf.contract_entries(seconds=3.0), storage='sqlite3')
     (db3,) = bag.glob('*.db3')
-    same_slices(list(open_recording(bag).slices(slice_seconds=1.0)),
-                list(open_recording(db3).slices(slice_seconds=1.0)))
+    bf.assert_same_slices(list(open_recording(bag).slices(slice_seconds=1.0)),
+                          list(open_recording(db3).slices(slice_seconds=1.0)))
 
 
 def test_a_sqlite3_file_that_is_not_a_bag_is_refused_in_one_line(tmp_path):
@@ -62,9 +52,9 @@ def write_split_bag(tmp_path, storage):
 def test_a_split_bag_reads_like_the_plain_one_with_or_without_metadata(tmp_path, storage):
     plain, split = write_split_bag(tmp_path, storage)
     want = list(open_recording(plain).slices(slice_seconds=1.0))
-    same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
+    bf.assert_same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
     (split / 'metadata.yaml').unlink()
-    same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
+    bf.assert_same_slices(want, list(open_recording(split).slices(slice_seconds=1.0)))
 
 
 def test_a_cut_last_file_of_a_split_bag_is_reported_against_that_file(tmp_path):

@@ -2,7 +2,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """``ros2idl`` schemas with ``#include`` lines (what rosbag2 stores when no .msg exists) are understood."""
 
-import numpy as np
 import pytest
 
 import bagfactory as bf
@@ -112,11 +111,7 @@ def test_idl_schemas_with_includes_read_like_msg_schemas(tmp_path):
     assert all(topic.layout_problem is None for topic in recording.topics.values())
     want = list(open_recording(plain).slices(slice_seconds=1.0))
     got = list(recording.slices(slice_seconds=1.0))
-    assert len(got) == len(want) > 2
-    for a_list, b_list in zip(want, got):
-        for a, b in zip(a_list, b_list):
-            for name, value in vars(a).items():
-                np.testing.assert_array_equal(value, vars(b)[name])
+    bf.assert_same_slices(want, got, at_least=3)
 
 
 def test_an_idl_root_with_a_separator_line_before_it_also_parses():

@@ -9,11 +9,10 @@ import struct
 import time
 import zlib
 
-import numpy as np
 import pytest
 
 import bagfactory as bf
-from fuzzing import exercise, mutate, seed_recordings
+from fuzzing import exercise, mutate, seed_calibration, seed_recordings
 from prsm_lube_ros.errors import ConfigError, InputError
 from prsm_lube_ros.estimation.calibration_file import load_calibration
 from prsm_lube_ros.recording import mcap_file
@@ -59,14 +58,7 @@ def test_mutated_recordings_give_data_or_one_input_error_line(tmp_path):
 
 
 def test_mutated_calibration_files_give_a_calibration_or_one_config_error_line(tmp_path):
-    from prsm_lube_ros.estimation.calibration import fit_constants
-    from prsm_lube_ros.estimation.calibration_file import save_calibration
-    speed = np.repeat([10.0, 15.0, 20.0], 20)
-    load = np.tile(np.repeat([100.0, 200.0], 10), 3)
-    rms = 0.08 * speed ** 2 * load ** (-1 / 3) * np.exp(1e-3 * load - 0.3 * speed ** 0.68 * load ** -0.073)
-    source = tmp_path / 'calibration.yaml'
-    save_calibration(fit_constants(speed, load, rms * np.exp(np.random.default_rng(1).normal(0, 0.01, rms.size)),
-                                   1.0), source)
+    source = seed_calibration(tmp_path / 'calibration.yaml')
     rng = random.Random(11)
     target = tmp_path / 'mutant.yaml'
     outcomes = {'read': 0, 'refused': 0}

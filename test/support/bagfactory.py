@@ -223,3 +223,13 @@ def reorder_chunks(source, target, order):
     body += struct.pack('<BQQQI', 0x02, 20, new_summary_start, 0, 0) + magic
     Path(target).write_bytes(body)
     return Path(target)
+
+
+def assert_same_slices(want, have, at_least: int = 1):
+    """Two readings of a recording (lists of slices of batches) hold the same batches, value for value."""
+    assert len(want) == len(have) >= at_least
+    for want_batches, have_batches in zip(want, have):
+        assert [type(b) for b in want_batches] == [type(b) for b in have_batches]
+        for a, b in zip(want_batches, have_batches):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name], err_msg=f'{type(a).__name__}.{name}')

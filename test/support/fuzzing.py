@@ -56,6 +56,19 @@ def seed_recordings(folder: Path) -> list:
     return out
 
 
+def seed_calibration(path: Path) -> Path:
+    """A valid calibration file fitted to noisy Eq. 22 amplitudes at three speeds and two loads."""
+    import numpy as np
+    from prsm_lube_ros.estimation.calibration import fit_constants
+    from prsm_lube_ros.estimation.calibration_file import save_calibration
+    speed = np.repeat([10.0, 15.0, 20.0], 20)
+    load = np.tile(np.repeat([100.0, 200.0], 10), 3)
+    rms = 0.08 * speed ** 2 * load ** (-1 / 3) * np.exp(1e-3 * load - 0.3 * speed ** 0.68 * load ** -0.073)
+    save_calibration(fit_constants(speed, load, rms * np.exp(np.random.default_rng(1).normal(0, 0.01, rms.size)),
+                                   1.0), path)
+    return path
+
+
 def exercise(path: Path, contract: bool):
     """Everything a command does with a recording; returns normally or raises InputError."""
     if path.is_file() and path.suffix == '.mcap':
