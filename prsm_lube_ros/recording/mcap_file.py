@@ -14,6 +14,7 @@ a hang.  No ROS import.
 """
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
 from functools import lru_cache
 import struct
@@ -715,8 +716,8 @@ def data_layout(path, size: int) -> DataLayout:
     Seeks over chunk data, so it is cheap; a damaged record ends the list
     quietly with ``complete`` False (:meth:`McapFile.chunks` reports it).
     """
-    offsets: List[int] = []
-    times: List[int] = []
+    offsets = array('q')          # 8 bytes an entry, not a Python int: files of one message per chunk are long
+    times = array('Q')
     only_chunks, complete = True, False
     with open(path, 'rb') as stream:
         pos = len(MAGIC)
@@ -741,7 +742,7 @@ def data_layout(path, size: int) -> DataLayout:
                     times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
             pos += RECORD_PREFIX + length
             stream.seek(pos)
-    return DataLayout(np.array(offsets, np.int64), np.array([signed(t) for t in times], np.int64),
+    return DataLayout(np.frombuffer(offsets, np.int64).copy(), np.frombuffer(times, np.uint64).view(np.int64).copy(),
                       only_chunks, complete)
 
 
