@@ -160,8 +160,9 @@ def main() -> int:
     (RESULTS / f'{args.out}.json').write_text(json.dumps(document, indent=1))
     lines = ['# Reading one hour in any chunk order (`python benchmarks/read_memory.py`)', '',
              f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, 1-min load '
-             f'{load:.1f} at the end, best of {args.repeat} fresh processes (peak: the largest).  Open + decode '
-             'every slice; the checksum (sum of all decoded values) is equal when the data are.', '',
+             f'{load:.1f} at the end, best of {args.repeat} fresh processes (peak: the largest), reader of '
+             f'{"this checkout" if args.root.resolve() == ROOT else args.root}.  Open + decode every slice; the '
+             'checksum (sum of all decoded values) is equal when the data are.', '',
              '| chunk order | size MiB | read + decode s | peak RSS MiB | RSS after imports MiB | slices | messages '
              '| checksum | problems |', '|---|---|---|---|---|---|---|---|---|']
     for r in rows:

@@ -7,10 +7,12 @@ On a shared machine the load changes between two benchmark runs more than a
 change to the reader does; this runs both readers in turn (fresh processes,
 the order alternating each round) so that both see the same load.  Per
 recording and reader: the bare read (every message read, decompressed and
-split, nothing decoded) and open + decode of every slice, best and median of
-``--rounds``.  The older commit's package is unpacked with ``git archive``.
-Recordings: the one-hour endurance bag of ``benchmarks/assess_throughput.py``
-(mcap, and with zstd chunks) and a five-minute sqlite3 bag simulated once.
+split, nothing decoded) and open + decode of every slice, in CPU seconds of
+the process (``time.process_time``: waiting for a core the other sessions hold
+does not count, as wall time would), best and median of ``--rounds``.  The
+older commit's package is unpacked with ``git archive``.  Recordings: the
+one-hour endurance bag of ``benchmarks/assess_throughput.py`` (mcap, and
+with zstd chunks) and a five-minute sqlite3 bag simulated once.
 
 Usage: ``python benchmarks/reader_ab.py [--commit 7c2826a] [--rounds 8] [--data /tmp/prsm_lube_bench]``;
 results in ``benchmarks/results/reader_ab.{json,md}``.
@@ -34,13 +36,13 @@ sys.path.insert(0, sys.argv[1])
 from prsm_lube_ros.recording.reader import bare_read, open_recording
 from prsm_lube_ros.recording.typestore import contract_typestore
 contract_typestore()
-start = time.perf_counter()
+start = time.process_time()
 bare_read(sys.argv[2])
-bare = time.perf_counter() - start
-start = time.perf_counter()
+bare = time.process_time() - start
+start = time.process_time()
 for _ in open_recording(sys.argv[2]).slices():
     pass
-print(json.dumps([bare, time.perf_counter() - start]))
+print(json.dumps([bare, time.process_time() - start]))
 '''
 
 
@@ -70,7 +72,7 @@ def unpack(commit: str, into: Path) -> Path:
 
 
 def run(root: Path, path: Path) -> list:
-    """[bare read s, open + decode s] of the reader in ``root`` on ``path``, in a fresh process."""
+    """[bare read, open + decode] CPU s of the reader in ``root`` on ``path``, in a fresh process."""
     env = dict(os.environ, PYTHONPATH=str(root))
     out = subprocess.run([sys.executable, '-c', CHILD, str(root), str(path)], check=True, capture_output=True,
                          text=True, env=env, cwd=root).stdout
@@ -107,6 +109,7 @@ def main() -> int:
     (RESULTS / 'reader_ab.json').write_text(json.dumps(document, indent=1))
     lines = [f'# Reader A/B (`{document["command"]}`)', '',
              f'{args.rounds} rounds, readers alternating, a fresh process each; 1-min load {load:.1f} at the end.', '',
+             'CPU seconds of the reading process.', '',
              '| recording | reader | bare read best s | bare read median s | open + decode best s '
              '| open + decode median s |', '|---|---|---|---|---|---|']
     lines += [f'| {r["recording"]} | {r["reader"]} | {r["bare_best_s"]:.3f} | {r["bare_median_s"]:.3f} | '
