@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 from pathlib import Path
 import subprocess
@@ -156,7 +157,7 @@ def main() -> int:
     }
     document = {'benchmark': 'assess_throughput', 'command': 'python benchmarks/assess_throughput.py',
                 'machine': {'python': platform.python_version(), 'processor': platform.processor() or
-                            platform.machine(), 'cpus': _cpus()},
+                            platform.machine(), 'cpus': _cpus(), 'load_average_1min_at_end': os.getloadavg()[0]},
                 'repeat': args.repeat, 'rows': rows, 'whole_process_s': processes,
                 'goals': {'assess_x_realtime >= 5000': hour['assess_x_realtime'] >= 5000,
                           'assess_over_bare <= 2': hour['assess_over_bare'] <= 2.0,
@@ -166,7 +167,8 @@ def main() -> int:
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / 'assess_throughput.json').write_text(json.dumps(document, indent=1))
     lines = ['# Assessment throughput (`python benchmarks/assess_throughput.py`)', '',
-             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, best of {args.repeat}.',
+             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, 1-min load average '
+             f'{document["machine"]["load_average_1min_at_end"]:.1f} at the end, best of {args.repeat}.',
              'Times exclude the one-time set-up of a process (building the ROS type store for the layout '
              'checks), shown apart.', '',
              '| recording | size MiB | bare read s | assess s | assess x real time | assess / bare '
@@ -185,7 +187,6 @@ def main() -> int:
 
 
 def _cpus() -> int:
-    import os
     return len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count()
 
 

@@ -31,17 +31,21 @@ def test_a_sqlite3_file_that_is_not_a_bag_is_refused_in_one_line(tmp_path):
     assert '\n' not in str(raised.value) and str(path) in str(raised.value)
 
 
-def write_split_bag(tmp_path, storage):
+def write_split_bag(tmp_path, storage, seconds=4.0):
     """One recording as a bag of two storage files, ``split_0`` and ``split_1``, and the plain bag."""
-    entries = bf.contract_entries(seconds=4.0)
+    entries = bf.contract_entries(seconds=seconds)
     half = len(entries) // 2
     plain = bf.write_rosbag2(tmp_path / f'plain_{storage}', entries, storage=storage)
     split = tmp_path / 'split'
     split.mkdir()
     suffix = '.mcap' if storage == 'mcap' else '.db3'
     for index, part in enumerate((entries[:half], entries[half:])):
-        bag = bf.write_rosbag2(tmp_path / f'part{index}', part, storage=storage)
-        shutil.move(str(next(bag.glob('*' + suffix))), split / f'split_{index}{suffix}')
+        target = split / f'split_{index}{suffix}'
+        if storage == 'mcap':     # small chunks, several to a file
+            bf.write_mcap_library(target, part, compression='none', chunk_size=64 * 1024)
+        else:
+            bag = bf.write_rosbag2(tmp_path / f'part{index}', part, storage=storage)
+            shutil.move(str(next(bag.glob('*' + suffix))), target)
     metadata = yaml.safe_load((plain / 'metadata.yaml').read_text())
     metadata['rosbag2_bagfile_information']['relative_file_paths'] = [f'split_0{suffix}', f'split_1{suffix}']
     (split / 'metadata.yaml').write_text(yaml.safe_dump(metadata))
@@ -68,3 +72,20 @@ def test_a_cut_last_file_of_a_split_bag_is_reported_against_that_file(tmp_path):
     assert slices
     cut = [line for line in problems + recording.problems if 'truncated' in line]
     assert cut and all(line.startswith(f'{last}: ') and '\n' not in line for line in cut)
+
+
+def test_a_split_bag_whose_files_go_back_in_time_reads_like_the_plain_one_while_streaming(tmp_path, monkeypatch):
+    plain, split = write_split_bag(tmp_path, 'mcap', seconds=20.0)
+    first, second = split / 'split_0.mcap', split / 'split_1.mcap'
+    swap = split / 'swap.mcap'
+    first.rename(swap)
+    second.rename(first)
+    swap.rename(second)                          # split_0 now holds the later half
+    expected = list(open_recording(plain).slices(slice_seconds=1.0))
+    splits = bf.count_chunk_splits(monkeypatch)
+    seen_at, got = [], []
+    for batches in open_recording(split).slices(slice_seconds=1.0):
+        seen_at.append(splits[0])
+        got.append(batches)
+    bf.assert_same_slices(expected, got, at_least=6)
+    assert splits[0] > 4 and seen_at[len(seen_at) // 4] < 0.5 * splits[0]   # the earlier file streams first

@@ -3,8 +3,8 @@
 """Every rosbag2 test bag (test/data/conformance/rosbag2) streams the messages the reference readers give.
 
 The references: the ``mcap`` package's reader for MCAP storage files, and a plain SQL query joining
-``messages`` to ``topics`` by id for sqlite3 files (rosbags' Reader streams nothing from 9 of these bags,
-whose metadata.yaml and storage disagree on QoS or topic ids, so it cannot be the reference here).
+``messages`` to ``topics`` by id for sqlite3 files (rosbags' Reader streams nothing from 8 of these bags,
+whose metadata.yaml does not match the storage exactly, and refuses 2, so it cannot be the reference here).
 """
 
 from pathlib import Path

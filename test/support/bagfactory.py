@@ -233,3 +233,21 @@ def assert_same_slices(want, have, at_least: int = 1):
         for a, b in zip(want_batches, have_batches):
             for name, value in vars(a).items():
                 np.testing.assert_array_equal(value, vars(b)[name], err_msg=f'{type(a).__name__}.{name}')
+
+
+def count_chunk_splits(monkeypatch) -> list:
+    """Count the chunks the MCAP reader splits from now on: returns a one-item list holding the count.
+
+    A test reading slices notes the count as each slice is handed out, to
+    see whether slices stream or wait for the whole file.
+    """
+    from prsm_lube_ros.recording import mcap_file
+    count = [0]
+    for name in ('split_indexed', 'split_records'):
+        original = getattr(mcap_file, name)
+
+        def counted(*args, original=original, **kwargs):
+            count[0] += 1
+            return original(*args, **kwargs)
+        monkeypatch.setattr(mcap_file, name, counted)
+    return count
