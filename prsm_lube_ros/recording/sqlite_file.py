@@ -8,8 +8,9 @@ data``, indexed by timestamp) and, from Iron on, ``message_definitions``
 (``topic_type, encoding, encoded_message_definition``).  Messages are matched
 to topics by ``topic_id`` alone, as rosbag2 does: the QoS profiles of
 ``metadata.yaml`` and of the database may differ (rosbag2's own ``talker``
-test bag) without losing anything.  Files are opened read-only; anything
-sqlite3 complains about ends as one :class:`SqliteProblem` line.  No ROS import.
+test bag) without losing anything.  Files are opened read-only, and leave
+no ``-wal``/``-shm`` files behind; anything sqlite3 complains about ends as
+one :class:`SqliteProblem` line.  No ROS import.
 """
 from __future__ import annotations
 
@@ -40,8 +41,18 @@ class SqliteTopic:
 
 
 def _connect(path: Path) -> sqlite3.Connection:
+    """A read-only connection that leaves the bag's folder as it was.
+
+    A database in WAL mode (as rosbag2 writes them) opened read-only makes
+    sqlite3 create ``-wal`` and ``-shm`` files beside it; opened ``immutable``
+    it does not.  Only when a non-empty ``-wal`` file holds data not yet in the
+    database (a recorder that did not close it) is it opened to read that too.
+    """
+    path = Path(path).resolve()
+    wal = path.with_name(path.name + '-wal')
+    pending = wal.is_file() and wal.stat().st_size > 0
     try:
-        return sqlite3.connect(f'{Path(path).resolve().as_uri()}?mode=ro', uri=True)
+        return sqlite3.connect(f'{path.as_uri()}?{"mode=ro" if pending else "immutable=1"}', uri=True)
     except sqlite3.Error as err:
         raise SqliteProblem(f'not a readable sqlite3 database ({err})') from None
 

@@ -89,3 +89,10 @@ def test_a_split_bag_whose_files_go_back_in_time_reads_like_the_plain_one_while_
         got.append(batches)
     bf.assert_same_slices(expected, got, at_least=6)
     assert splits[0] > 4 and seen_at[len(seen_at) // 4] < 0.5 * splits[0]   # the earlier file streams first
+
+
+def test_reading_a_sqlite3_bag_leaves_its_folder_as_it_was(tmp_path):
+    bag = bf.write_rosbag2(tmp_path / 'bag', bf.contract_entries(seconds=2.0), storage='sqlite3')
+    before = sorted(p.name for p in bag.iterdir())
+    list(open_recording(bag).slices())
+    assert sorted(p.name for p in bag.iterdir()) == before
