@@ -220,6 +220,43 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
     return out[:size]
 
 
+def zstd_frame(data: bytes, limit: int = MAX_CHUNK_BYTES) -> bytes:
+    """One zstd frame that states its size (a rosbag2 message- or file-compressed unit), decompressed.
+
+    Raises :class:`McapProblem` when it is not such a frame, claims more than
+    ``limit`` bytes, or does not decompress.
+    """
+    if _zstandard is None:  # pragma: no cover - zstandard comes with mcap
+        raise McapProblem('zstd data cannot be read without the zstandard package')
+    try:
+        size = _zstandard.frame_content_size(data)
+        if size < 0 or size > limit:
+            raise McapProblem(f'zstd frame states {size} bytes' if size >= 0 else 'zstd frame states no size')
+        return _zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+    except _zstandard.ZstdError as err:
+        raise McapProblem(f'zstd data does not decompress ({err})') from None
+
+
+def zstd_file(source, target, limit: int):
+    """Decompress the zstd file ``source`` (one or more frames) into ``target``, at most ``limit`` bytes.
+
+    Raises :class:`McapProblem` when it does not decompress or would grow past ``limit``.
+    """
+    if _zstandard is None:  # pragma: no cover - zstandard comes with mcap
+        raise McapProblem('zstd data cannot be read without the zstandard package')
+    written = 0
+    try:
+        with open(source, 'rb') as stream_in, open(target, 'wb') as stream_out:
+            reader = _zstandard.ZstdDecompressor().stream_reader(stream_in, read_across_frames=True)
+            while piece := reader.read(1 << 20):
+                written += len(piece)
+                if written > limit:
+                    raise McapProblem(f'decompresses to more than {limit} bytes')
+                stream_out.write(piece)
+    except _zstandard.ZstdError as err:
+        raise McapProblem(f'zstd data does not decompress ({err})') from None
+
+
 def _zstd_prefix(data, size: int) -> bytes:
     """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
     pieces: List[bytes] = []

@@ -31,7 +31,8 @@ in the file can fall into it, and memory grows with how far back chunks go.
 MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file`, sqlite3
 storage (a bag folder or a bare ``.db3``) by
 :mod:`prsm_lube_ros.recording.sqlite_file`, and both are decoded in bulk by
-:mod:`prsm_lube_ros.recording.cdr`; file- or message-compressed bags are read
+:mod:`prsm_lube_ros.recording.cdr`; sqlite3 bags with zstd file or message
+compression are decompressed on the way; other compressed bags are read
 through rosbags' Reader and decoded the same way.  A folder without
 metadata.yaml is read when it holds one storage file or the parts of one split
 bag (``<folder>_0``, ``<folder>_1``...).  ``engine='rosbags'`` reads
@@ -51,6 +52,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 from pathlib import Path
+import tempfile
 from typing import Callable, Dict, Iterator, List, Optional
 
 import numpy as np
@@ -266,9 +268,14 @@ def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
 
 
 class _SqliteSource:
-    """The ``.db3`` files of an uncompressed sqlite3 rosbag2 bag, read with Python's sqlite3 module."""
+    """The ``.db3`` files of a sqlite3 rosbag2 bag, read with Python's sqlite3 module.
 
-    def __init__(self, label: str, paths: List[Path]):
+    ``compression``: ``''``, ``'message'`` (every message a zstd frame) or
+    ``'file'`` (every ``.db3.zstd`` file decompressed into a temporary folder
+    that lives as long as this source, at most 64 times its size).
+    """
+
+    def __init__(self, label: str, paths: List[Path], compression: str = ''):
         self.label = label
         self.problems: List[str] = []
         self.topics: Dict[str, TopicInfo] = {}
@@ -276,10 +283,15 @@ class _SqliteSource:
         self.files: List[sqlite_file.SqliteFile] = []
         self.start_time: Optional[int] = None
         self.end_time: Optional[int] = None
+        self._scratch = tempfile.TemporaryDirectory(prefix='prsm_lube_bag_') if compression == 'file' else None
         for path in paths:
             try:
-                db = sqlite_file.SqliteFile(path)
-            except sqlite_file.SqliteProblem as problem:
+                if self._scratch is not None:
+                    plain = Path(self._scratch.name) / path.name.removesuffix('.zstd')
+                    mcap_file.zstd_file(path, plain, max(64 * path.stat().st_size, 1 << 30))
+                db = sqlite_file.SqliteFile(plain if self._scratch is not None else path,
+                                            compressed_messages=compression == 'message')
+            except (sqlite_file.SqliteProblem, mcap_file.McapProblem) as problem:
                 raise RecordingError(f'{path}: {problem}') from None
             except OSError as err:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
@@ -425,6 +437,7 @@ def _open_source(path: Path):
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
+        compression_format = (info.get('compression_format') or '').lower()
     except Exception as err:
         raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
@@ -434,6 +447,8 @@ def _open_source(path: Path):
             return _McapSource(str(path), files)
         if storage == 'sqlite3':
             return _SqliteSource(str(path), files)
+    if storage == 'sqlite3' and compression in ('message', 'file') and compression_format == 'zstd':
+        return _SqliteSource(str(path), files, compression)
     if storage not in ('mcap', 'sqlite3'):
         raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)

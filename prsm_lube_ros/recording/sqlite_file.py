@@ -19,6 +19,8 @@ from pathlib import Path
 import sqlite3
 from typing import Dict, Iterator, List, Optional, Tuple
 
+from .mcap_file import McapProblem, zstd_frame
+
 #: rows fetched from sqlite3 at a time while streaming
 FETCH_ROWS = 4096
 
@@ -60,9 +62,11 @@ def _connect(path: Path) -> sqlite3.Connection:
 class SqliteFile:
     """One ``.db3`` file of a rosbag2 bag, listed at opening; problems raise :class:`SqliteProblem`."""
 
-    def __init__(self, path):
+    def __init__(self, path, compressed_messages: bool = False):
         self.path = Path(path)
         self.size = self.path.stat().st_size
+        #: every message blob is a zstd frame (rosbag2's ``compression_mode: message``)
+        self.compressed_messages = compressed_messages
         self.topics: Dict[int, SqliteTopic] = {}
         self.definitions: Dict[str, Tuple[str, str]] = {}   # type -> (encoding, text)
         connection = _connect(self.path)
@@ -104,16 +108,23 @@ class SqliteFile:
                 if not rows:
                     break
                 for topic_id, timestamp, data in rows:
-                    if isinstance(data, bytes) and isinstance(timestamp, int):
-                        yield topic_id, timestamp, data
-                    else:
+                    if not (isinstance(data, bytes) and isinstance(timestamp, int)):
                         malformed += 1
+                        continue
+                    if self.compressed_messages:
+                        try:
+                            data = zstd_frame(data)
+                        except McapProblem:
+                            malformed += 1
+                            continue
+                    yield topic_id, timestamp, data
         except sqlite3.Error as err:
             on_problem(f'reading stopped early: {_reason(err)}')
         finally:
             connection.close()
         if malformed:
-            on_problem(f'{malformed} row(s) of the messages table without a blob and an integer timestamp skipped')
+            on_problem(f'{malformed} row(s) of the messages table without a (zstd) blob and an integer timestamp '
+                       'skipped')
 
 
 def _reason(err: BaseException) -> str:

@@ -96,3 +96,24 @@ def test_reading_a_sqlite3_bag_leaves_its_folder_as_it_was(tmp_path):
     before = sorted(p.name for p in bag.iterdir())
     list(open_recording(bag).slices())
     assert sorted(p.name for p in bag.iterdir()) == before
+
+
+@pytest.mark.parametrize('mode', ['message', 'file'])
+def test_a_zstd_compressed_sqlite3_bag_reads_like_the_plain_one(tmp_path, mode):
+    entries = bf.contract_entries(seconds=3.0)
+    plain = bf.write_rosbag2(tmp_path / 'plain', entries, storage='sqlite3')
+    compressed = bf.write_rosbag2(tmp_path / mode, entries, storage='sqlite3', zstd=True, zstd_mode=mode)
+    problems = []
+    got = list(open_recording(compressed).slices(on_problem=problems.append, slice_seconds=1.0))
+    assert problems == []
+    bf.assert_same_slices(list(open_recording(plain).slices(slice_seconds=1.0)), got, at_least=3)
+
+
+def test_a_corrupt_file_compressed_sqlite3_bag_is_refused_in_one_line(tmp_path):
+    bag = bf.write_rosbag2(tmp_path / 'bag', bf.contract_entries(seconds=1.0), storage='sqlite3', zstd=True,
+                           zstd_mode='file')
+    (storage_file,) = bag.glob('*.zstd')
+    storage_file.write_bytes(b'\x28\xb5\x2f\xfd' + b'\xff' * 64)
+    with pytest.raises(RecordingError, match='zstd') as raised:
+        open_recording(bag)
+    assert '\n' not in str(raised.value) and str(storage_file) in str(raised.value)

@@ -54,7 +54,7 @@ def test_mutated_recordings_give_data_or_one_input_error_line(tmp_path):
         kinds.add(kind.split(':')[0] + source.suffix)
         done += 1
     assert done >= min(MUTATIONS, 50)
-    assert {'contract.mcap', 'contract.db3', 'bag.mcap', 'bag.db3', 'bag.yaml', 'mcap.mcap'} <= kinds
+    assert {'contract.mcap', 'contract.db3', 'bag.mcap', 'bag.db3', 'bag.zstd', 'bag.yaml', 'mcap.mcap'} <= kinds
 
 
 def test_mutated_calibration_files_give_a_calibration_or_one_config_error_line(tmp_path):

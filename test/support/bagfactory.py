@@ -116,12 +116,13 @@ def contract_entries(seconds: float = 20.0, namespace: str = '/prsm', *, block: 
     return entries
 
 
-def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool = False):
+def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool = False, zstd_mode: str = 'storage'):
     """Write ``entries`` to a rosbag2 directory at ``path``; returns the path.
 
     Messages given as bytes are written as they are.  Topics are registered in
     order of first appearance with ``store`` (default: contract); ``zstd``
-    compresses the MCAP chunks.
+    compresses the MCAP chunks (``zstd_mode='storage'``), every message
+    (``'message'``) or every storage file (``'file'``).
     """
     store = store or typestore()
     path = Path(path)
@@ -129,7 +130,7 @@ def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool =
     connections = {}
     writer = Writer(path, version=9, storage_plugin=plugin)
     if zstd:
-        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        writer.set_compression(CompressionMode[zstd_mode.upper()], CompressionFormat.ZSTD)
     with writer:
         for topic, msgtype, _, _ in entries:
             if topic not in connections:

@@ -35,7 +35,8 @@ def seed_recordings(folder: Path) -> list:
     ``'bag:<name>'`` (one file of a rosbag2 folder: mutate it inside a copy of
     the folder).  Bare MCAP unchunked, lz4 and zstd chunks, one message per
     chunk (gathered), chunks reversed (read by seeking), a bare ``.db3``,
-    and rosbag2 folders with mcap and sqlite3 storage.
+    and rosbag2 folders with mcap and sqlite3 storage (plain, and zstd
+    message and file compression).
     """
     import bagfactory as bf
     folder.mkdir(parents=True, exist_ok=True)
@@ -46,12 +47,12 @@ def seed_recordings(folder: Path) -> list:
            (bf.write_mcap_library(folder / 'tiny_chunks.mcap', entries, compression='none', chunk_size=1),
             'contract'),
            (bf.reorder_chunks(lz4, folder / 'reversed.mcap', lambda n: range(n)[::-1]), 'contract')]
-    for storage in ('mcap', 'sqlite3'):
-        bag = folder / f'bag_{storage}'
-        bf.write_rosbag2(bag, entries, storage=storage)
-        for file in sorted(p for p in bag.iterdir() if p.suffix in ('.mcap', '.db3', '.yaml')):
+    for storage, mode in (('mcap', None), ('sqlite3', None), ('sqlite3', 'message'), ('sqlite3', 'file')):
+        bag = folder / f'bag_{storage}_{mode or "plain"}'
+        bf.write_rosbag2(bag, entries, storage=storage, zstd=mode is not None, zstd_mode=mode or 'storage')
+        for file in sorted(p for p in bag.iterdir() if p.suffix in ('.mcap', '.db3', '.yaml', '.zstd')):
             out.append((file, f'bag:{bag.name}'))
-    db3 = next((folder / 'bag_sqlite3').glob('*.db3'))
+    db3 = next((folder / 'bag_sqlite3_plain').glob('*.db3'))
     out.append((Path(shutil.copy(db3, folder / 'bare.db3')), 'contract'))
     return out
 
