@@ -7,7 +7,7 @@ The recordings are the rig simulator's endurance bags (the six conditions of
 the paper cycled, rewinds included): 4 kHz acceleration in 0.1 s blocks,
 joint states at 100 Hz, load at 50 Hz, temperature at 1 Hz, storage mcap.
 Each measurement runs in a fresh subprocess so its peak resident memory
-(ru_maxrss) is its own:
+(``VmHWM``; ``ru_maxrss`` would carry over the parent's peak) is its own:
 
 * ``bare read``: every message read, decompressed and split, nothing decoded
   (:func:`prsm_lube_ros.recording.reader.bare_read`);
@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 from pathlib import Path
-import resource
 import subprocess
 import sys
 import time
@@ -44,6 +44,7 @@ RESULTS = ROOT / 'benchmarks' / 'results'
 def child(kind: str, bag: str, calibration: str) -> None:
     """Run one measurement in this process and print a JSON line."""
     sys.path.insert(0, str(ROOT))
+    from read_memory import peak_rss_mib   # beside this file
     from prsm_lube_ros.physics.actuator import Actuator
     from prsm_lube_ros.estimation.pipeline import assess_recording, recording_windows
     from prsm_lube_ros.recording.reader import bare_read
@@ -65,7 +66,7 @@ def child(kind: str, bag: str, calibration: str) -> None:
         detail = {'windows': len(result.windows), 'runs': len(result.runs),
                   'assessed_runs': sum(1 for r in result.runs if not r.reason)}
     elapsed = time.perf_counter() - start
-    peak_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    peak_mib = peak_rss_mib()
     print(json.dumps({'kind': kind, 'seconds': elapsed, 'setup_seconds': setup, 'peak_rss_mib': peak_mib,
                       **detail}))
 
@@ -156,7 +157,7 @@ def main() -> int:
     }
     document = {'benchmark': 'assess_throughput', 'command': 'python benchmarks/assess_throughput.py',
                 'machine': {'python': platform.python_version(), 'processor': platform.processor() or
-                            platform.machine(), 'cpus': _cpus()},
+                            platform.machine(), 'cpus': _cpus(), 'load_average_1min_at_end': os.getloadavg()[0]},
                 'repeat': args.repeat, 'rows': rows, 'whole_process_s': processes,
                 'goals': {'assess_x_realtime >= 5000': hour['assess_x_realtime'] >= 5000,
                           'assess_over_bare <= 2': hour['assess_over_bare'] <= 2.0,
@@ -166,7 +167,8 @@ def main() -> int:
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / 'assess_throughput.json').write_text(json.dumps(document, indent=1))
     lines = ['# Assessment throughput (`python benchmarks/assess_throughput.py`)', '',
-             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, best of {args.repeat}.',
+             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, 1-min load average '
+             f'{document["machine"]["load_average_1min_at_end"]:.1f} at the end, best of {args.repeat}.',
              'Times exclude the one-time set-up of a process (building the ROS type store for the layout '
              'checks), shown apart.', '',
              '| recording | size MiB | bare read s | assess s | assess x real time | assess / bare '
@@ -185,7 +187,6 @@ def main() -> int:
 
 
 def _cpus() -> int:
-    import os
     return len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count()
 
 

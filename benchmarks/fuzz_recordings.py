@@ -3,9 +3,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Long fuzz run: mutated recordings and calibration files, each in a bounded child, counted by outcome.
 
-Seeds are small valid files of every container the reader takes: bare MCAP
-(unchunked), chunked MCAP with lz4 and with zstd, rosbag2 folders with mcap and
-sqlite3 storage, the MCAP conformance files, and calibration YAML.  Each
+Seeds are small valid files of every container and layout the reader takes
+(``test/support/fuzzing.py`` ``seed_recordings``: bare MCAP unchunked, with
+lz4 and zstd chunks, one message per chunk, chunks reversed, a bare ``.db3``,
+rosbag2 folders with mcap and sqlite3 storage), the MCAP conformance files,
+and calibration YAML.  Each
 mutation (byte flips, truncation, overwritten 64/32-bit values, mostly
 lengths: ``test/support/fuzzing.py``) is read as a command would read it.  An
 outcome is ``read`` (data or problem lines), ``refused`` (one InputError
@@ -42,27 +44,10 @@ MEMORY_LIMIT = 1 << 31
 
 def seeds(folder: Path) -> list[tuple[Path, str]]:
     """(path, kind) of every seed file; kind is 'contract', 'mcap' or 'calibration'."""
-    import bagfactory as bf
-    from prsm_lube_ros.estimation.calibration import fit_constants
-    from prsm_lube_ros.estimation.calibration_file import save_calibration
-    import numpy as np
-    entries = bf.contract_entries(seconds=2.0, block=100)
-    out = [(bf.write_bare_mcap(folder / 'bare.mcap', entries), 'contract'),
-           (bf.write_mcap_library(folder / 'lz4.mcap', entries, compression='lz4', chunk_size=4096), 'contract'),
-           (bf.write_mcap_library(folder / 'zstd.mcap', entries, compression='zstd', chunk_size=4096), 'contract')]
-    for storage in ('mcap', 'sqlite3'):
-        bag = folder / f'bag_{storage}'
-        bf.write_rosbag2(bag, entries, storage=storage)
-        for file in sorted(p for p in bag.iterdir() if p.suffix in ('.mcap', '.db3', '.yaml')):
-            out.append((file, f'bag:{bag.name}'))
+    from fuzzing import seed_calibration, seed_recordings
+    out = seed_recordings(folder)
     out += [(p, 'mcap') for p in sorted(CONFORMANCE.glob('*/*.mcap'))[::8]]
-    speed = np.repeat([10.0, 15.0, 20.0], 20)
-    load = np.tile(np.repeat([100.0, 200.0], 10), 3)
-    rms = 0.08 * speed ** 2 * load ** (-1 / 3) * np.exp(1e-3 * load - 0.3 * speed ** 0.68 * load ** -0.073)
-    calibration = folder / 'calibration.yaml'
-    save_calibration(fit_constants(speed, load, rms * np.exp(np.random.default_rng(1).normal(0, 0.01, rms.size)),
-                                   1.0), calibration)
-    out.append((calibration, 'calibration'))
+    out.append((seed_calibration(folder / 'calibration.yaml'), 'calibration'))
     return out
 
 
@@ -94,10 +79,6 @@ def run_one(job: tuple[str, str, int, int]) -> tuple[str, str]:
         try:
             if kind == 'calibration':
                 load_calibration(path)
-            elif kind.startswith('bag:'):
-                from prsm_lube_ros.recording.reader import open_recording
-                for _ in open_recording(path).slices(on_problem=lambda line: None):
-                    pass
             else:
                 exercise(path, contract)
             return 'read', ''

@@ -18,6 +18,7 @@ reference path (``vectorised=False``).  No ROS import.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import re
 import struct
 from typing import Dict, List, Optional, Tuple
 
@@ -71,18 +72,30 @@ def layout_signature(typename: str, typs: Optional[dict] = None, depth: int = 0)
     return tuple((name, _describe(desc, typs, depth)) for name, desc in definition[1])
 
 
+#: the line before each dependency's definition in a ``ros2idl`` schema (and maybe before the root's)
+_IDL_SEPARATOR = re.compile(r'^={80}[ \t]*\r?\n', re.MULTILINE)
+#: the ``IDL: pkg/msg/Type`` line that follows a separator
+_IDL_NAME = re.compile(r'\A[ \t\r\n]*IDL: [^\n]*\n')
+#: ``#include "std_msgs/msg/Header.idl"`` and other preprocessor lines, which rosbags' IDL parser refuses
+_PREPROCESSOR = re.compile(r'^[ \t]*#[^\n]*$', re.MULTILINE)
+
+
 def embedded_types(msgtype: str, encoding: str, text: str) -> dict:
-    """Type definitions from a schema embedded in a recording (``ros2msg`` or ``ros2idl``)."""
+    """Type definitions from a schema embedded in a recording (``ros2msg`` or ``ros2idl``).
+
+    A ``ros2idl`` schema is the root type's IDL followed by each dependency's,
+    every one after a line of 80 ``=`` and ``IDL: <type>`` (rosbag2 writes
+    these when no ``.msg`` exists); ``#include`` lines are dropped, the
+    definitions they name being appended or standard types.
+    """
     if encoding == 'ros2msg':
         return get_types_from_msg(text, msgtype)
     if encoding == 'ros2idl':
-        separator = '=' * 80 + '\n'
         types = {}
-        if text.startswith(separator + 'IDL: '):
-            for part in text.split(separator)[1:]:
-                types.update(get_types_from_idl(part.split('\n', 1)[1]))
-        else:
-            types.update(get_types_from_idl(text))
+        for part in _IDL_SEPARATOR.split(text):
+            body = _PREPROCESSOR.sub('', _IDL_NAME.sub('', part, count=1))
+            if body.strip():
+                types.update(get_types_from_idl(body))
         return types
     raise ValueError(f'unknown schema encoding {encoding!r}')
 

@@ -14,13 +14,19 @@ a hang.  No ROS import.
 """
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
+from functools import lru_cache
 import struct
-import zlib
 from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
 
 import lz4.frame
 import numpy as np
+
+try:  # ISA-L's CRC-32 (same polynomial as zlib's) runs about 4x faster than zlib 1.2's on x86-64
+    from isal.isal_zlib import crc32
+except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
+    from zlib import crc32
 
 try:  # the zstandard package comes with ``mcap``; rosbags brings backports.zstd
     import zstandard as _zstandard
@@ -36,12 +42,21 @@ RECORD_PREFIX = 9
 MESSAGE_HEADER = 22
 #: a chunk claiming more than this many uncompressed bytes is treated as corrupt
 MAX_CHUNK_BYTES = 1 << 31
+#: chunks with at most this many messages (or, unindexed, bytes) are gathered with their neighbours
+SMALL_CHUNK_MESSAGES = 16
+SMALL_CHUNK_BYTES = 16 << 10
+#: bytes of top-level messages and small chunks gathered into one pseudo-chunk
+GATHER_BYTES = 1 << 20
 
 _RECORD = struct.Struct('<BQ')
 _U16 = struct.Struct('<H')
 _U32 = struct.Struct('<I')
 _U64 = struct.Struct('<Q')
 _MESSAGE = struct.Struct('<HIQQ')
+#: Chunk record: message_start_time, message_end_time, uncompressed_size, uncompressed_crc, compression length
+_CHUNK_HEAD = struct.Struct('<QQQII')
+#: MessageIndex record: channel_id, byte length of the records array
+_INDEX_HEAD = struct.Struct('<HI')
 
 
 class McapProblem(Exception):
@@ -205,6 +220,43 @@ def decompress(data, compression: str, size: int, partial: bool = False) -> byte
     return out[:size]
 
 
+def zstd_frame(data: bytes, limit: int = MAX_CHUNK_BYTES) -> bytes:
+    """One zstd frame that states its size (a rosbag2 message- or file-compressed unit), decompressed.
+
+    Raises :class:`McapProblem` when it is not such a frame, claims more than
+    ``limit`` bytes, or does not decompress.
+    """
+    if _zstandard is None:  # pragma: no cover - zstandard comes with mcap
+        raise McapProblem('zstd data cannot be read without the zstandard package')
+    try:
+        size = _zstandard.frame_content_size(data)
+        if size < 0 or size > limit:
+            raise McapProblem(f'zstd frame states {size} bytes' if size >= 0 else 'zstd frame states no size')
+        return _zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+    except _zstandard.ZstdError as err:
+        raise McapProblem(f'zstd data does not decompress ({err})') from None
+
+
+def zstd_file(source, target, limit: int):
+    """Decompress the zstd file ``source`` (one or more frames) into ``target``, at most ``limit`` bytes.
+
+    Raises :class:`McapProblem` when it does not decompress or would grow past ``limit``.
+    """
+    if _zstandard is None:  # pragma: no cover - zstandard comes with mcap
+        raise McapProblem('zstd data cannot be read without the zstandard package')
+    written = 0
+    try:
+        with open(source, 'rb') as stream_in, open(target, 'wb') as stream_out:
+            reader = _zstandard.ZstdDecompressor().stream_reader(stream_in, read_across_frames=True)
+            while piece := reader.read(1 << 20):
+                written += len(piece)
+                if written > limit:
+                    raise McapProblem(f'decompresses to more than {limit} bytes')
+                stream_out.write(piece)
+    except _zstandard.ZstdError as err:
+        raise McapProblem(f'zstd data does not decompress ({err})') from None
+
+
 def _zstd_prefix(data, size: int) -> bytes:
     """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
     pieces: List[bytes] = []
@@ -241,28 +293,43 @@ def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
         pos = end
 
 
-def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
-    """Split records by walking them one by one (no message index); return the chunk and bytes used.
+def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+    """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
-    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    Walks every record (no message index); each buffer is walked on its own,
+    so one that ends in a cut record cannot shift the next.  Returns the chunk
+    (over the buffers joined) and the bytes of the last buffer used.
+    ``on_record(opcode, content)`` receives every non-message record.
     """
     per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
-    used = 0
-    for opcode, begin, end in walk_records(buf):
-        used = end
-        if opcode == OP_MESSAGE:
-            if end - begin < MESSAGE_HEADER:
-                continue
-            channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
-            per_channel.setdefault(channel_id, []).append(
-                (begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
-        else:
-            on_record(opcode, memoryview(buf)[begin:end])
+    base = used = 0
+    for buf in buffers:
+        used = 0
+        for opcode, begin, end in walk_records(buf):
+            used = end
+            if opcode == OP_MESSAGE:
+                if end - begin < MESSAGE_HEADER:
+                    continue
+                channel_id, _, log_time, _ = _MESSAGE.unpack_from(buf, begin)
+                per_channel.setdefault(channel_id, []).append(
+                    (base + begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
+            else:
+                on_record(opcode, memoryview(buf)[begin:end])
+        base += len(buf)
     groups = {}
     for channel_id, rows in per_channel.items():
         table = np.array(rows, dtype=np.int64).reshape(-1, 3)
         groups[channel_id] = MessageGroup(table[:, 0].copy(), table[:, 1].copy(), table[:, 2].copy())
-    return RawChunk(start_time, np.frombuffer(buf, np.uint8), groups, file_offset), used
+    joined = buffers[0] if len(buffers) == 1 else b''.join(buffers)
+    return RawChunk(start_time, np.frombuffer(joined, np.uint8), groups, file_offset), used
+
+
+def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+    """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
+
+    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    """
+    return split_records([buf], start_time, file_offset, on_record)
 
 
 def split_indexed(buf: bytes, start_time: int, file_offset: int,
@@ -327,6 +394,81 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
 
 
 # -- the file ---------------------------------------------------------------------------------------
+
+def _definitions_into(summary: Summary, on_problem):
+    """A sink for the Schema and Channel records met while reading, filling ``summary``."""
+    def on_record(opcode, content):
+        try:
+            if opcode == OP_SCHEMA:
+                schema = parse_schema(content)
+                summary.schemas.setdefault(schema.id, schema)
+            elif opcode == OP_CHANNEL:
+                channel = parse_channel(content)
+                summary.channels.setdefault(channel.id, channel)
+        except McapProblem as problem:
+            on_problem(f'bad schema/channel record ({problem})')
+    return on_record
+
+
+def _add_index(indexes: Dict[int, bytes], content: bytes):
+    """Add one MessageIndex record's entries to a chunk's ``indexes``; a bad one makes them all unusable."""
+    if len(content) >= _INDEX_HEAD.size:
+        channel_id, entries = _INDEX_HEAD.unpack_from(content, 0)
+        if not entries % 16 and _INDEX_HEAD.size + entries <= len(content):
+            indexes[channel_id] = content[_INDEX_HEAD.size:_INDEX_HEAD.size + entries]
+            return
+    indexes.clear()
+    indexes[-1] = b''  # marks the index unusable
+
+
+@lru_cache(maxsize=64)
+def _compression_name(raw: bytes) -> str:
+    try:
+        return raw.decode('utf-8')
+    except UnicodeDecodeError:
+        raise McapProblem('record string is not UTF-8') from None
+
+
+class _Gathered:
+    """Top-level messages and the records of small chunks, gathered into pseudo-chunks of about ``size`` bytes.
+
+    One message per chunk (or none at all) would otherwise cost a split, a
+    decode and a slice step per message; gathered, they cost one per batch.
+    """
+
+    def __init__(self, on_record, size: int):
+        self.on_record = on_record
+        self.size = size
+        self.buffers: List[bytes] = []
+        self.bytes = 0
+        self.file_offset = 0
+        self.start_time: Optional[int] = None
+
+    def add(self, buffer: bytes, start_time: Optional[int], file_offset: int) -> Optional[RawChunk]:
+        """Gather ``buffer`` (records); return a pseudo-chunk when enough is gathered."""
+        if not self.buffers:
+            self.file_offset = file_offset
+        self.buffers.append(buffer)
+        self.bytes += len(buffer)
+        if start_time is not None:
+            self.start_time = start_time if self.start_time is None else min(self.start_time, start_time)
+        return self.take() if self.bytes >= self.size else None
+
+    def take(self) -> Optional[RawChunk]:
+        """What is gathered as one pseudo-chunk (None if nothing)."""
+        if not self.buffers:
+            return None
+        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record)
+        self.buffers, self.bytes, self.start_time = [], 0, None
+        return chunk
+
+
+def _few_messages(records: bytes, indexes: Dict[int, bytes]) -> bool:
+    """True for a chunk small enough that gathering it with its neighbours is cheaper than splitting it alone."""
+    if indexes and -1 not in indexes:
+        return sum(len(entries) for entries in indexes.values()) <= 16 * SMALL_CHUNK_MESSAGES
+    return len(records) <= SMALL_CHUNK_BYTES
+
 
 class McapFile:
     """One MCAP file opened for listing and streaming; problems raise :class:`McapProblem`."""
@@ -420,30 +562,19 @@ class McapFile:
 
     # data section -------------------------------------------------------------------------------
     def chunks(self, on_problem, summary: Optional[Summary] = None,
-               unchunked_batch: int = 1 << 20) -> Iterator[RawChunk]:
+               unchunked_batch: int = GATHER_BYTES) -> Iterator[RawChunk]:
         """Yield the file's messages chunk by chunk, in file order.
 
-        Schemas and channels met on the way go into ``summary`` (if given).
-        Damage ends or skips with one line to ``on_problem``: a truncated file
-        yields everything before the cut (including the readable start of a cut
-        chunk), a chunk that does not decompress is skipped.
+        Top-level messages and consecutive small chunks come gathered into
+        pseudo-chunks of about ``unchunked_batch`` bytes.  Schemas and channels
+        met on the way go into ``summary`` (if given).  Damage ends or skips
+        with one line to ``on_problem``: a truncated file yields everything
+        before the cut (including the readable start of a cut chunk), a chunk
+        that does not decompress is skipped.
         """
         summary = summary if summary is not None else Summary()
-
-        def on_record(opcode, content):
-            try:
-                if opcode == OP_SCHEMA:
-                    schema = parse_schema(content)
-                    summary.schemas.setdefault(schema.id, schema)
-                elif opcode == OP_CHANNEL:
-                    channel = parse_channel(content)
-                    summary.channels.setdefault(channel.id, channel)
-            except McapProblem as problem:
-                on_problem(f'bad schema/channel record ({problem})')
-
-        loose: List[bytes] = []   # top-level (unchunked) records, gathered into pseudo-chunks
-        loose_size = 0
-        loose_at = 0
+        on_record = _definitions_into(summary, on_problem)
+        gathered = _Gathered(on_record, unchunked_batch)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
             pos = len(MAGIC)
@@ -458,35 +589,23 @@ class McapFile:
                     cut = pos
                     break
                 if opcode == OP_MESSAGE_INDEX and pending is not None:
-                    content = stream.read(length)
-                    try:
-                        fields = _Fields(content)
-                        channel_id = fields.u16()
-                        entries = fields.u32()
-                        if entries % 16 or fields.pos + entries > len(content):
-                            raise McapProblem('bad message index')
-                        pending[2][channel_id] = content[fields.pos:fields.pos + entries]
-                    except McapProblem:
-                        pending[2].clear()
-                        pending[2][-1] = b''  # marks the index unusable
+                    _add_index(pending[2], stream.read(length))
                     pos += RECORD_PREFIX + length
                     continue
                 if pending is not None:
-                    yield self._finish_chunk(*pending, on_record)
+                    yield from self._finish_or_gather(pending, gathered)
                     pending = None
-                if opcode == OP_MESSAGE or (loose and opcode in (OP_SCHEMA, OP_CHANNEL)):
-                    if not loose:
-                        loose_at = pos
-                    loose.append(head + stream.read(length))
-                    loose_size += RECORD_PREFIX + length
+                if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
+                    record = head + stream.read(length)
+                    start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
+                                  if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
+                    chunk = gathered.add(record, start_time, pos)
+                    if chunk is not None:
+                        yield chunk
                     pos += RECORD_PREFIX + length
-                    if loose_size >= unchunked_batch:
-                        yield self._loose_chunk(loose, loose_at, on_record)
-                        loose, loose_size = [], 0
                     continue
-                if loose:
-                    yield self._loose_chunk(loose, loose_at, on_record)
-                    loose, loose_size = [], 0
+                if opcode != OP_CHUNK and gathered.buffers:
+                    yield gathered.take()
                 if opcode in (OP_DATA_END, OP_FOOTER):
                     cut = None
                     break
@@ -503,9 +622,9 @@ class McapFile:
                     stream.seek(length, 1)
                 pos += RECORD_PREFIX + length
             if pending is not None:
-                yield self._finish_chunk(*pending, on_record)
-            if loose:
-                yield self._loose_chunk(loose, loose_at, on_record)
+                yield from self._finish_or_gather(pending, gathered)
+            if gathered.buffers:
+                yield gathered.take()
             if cut is not None:
                 salvage = self._salvage(stream, cut, on_record)
                 lost = f'{self.size - cut} bytes'
@@ -515,20 +634,72 @@ class McapFile:
                 on_problem(f'truncated or corrupt at byte {cut} of {self.size}: '
                            f'the last {lost} are not readable')
 
+    def _finish_or_gather(self, pending: list, gathered: _Gathered) -> Iterator[RawChunk]:
+        """A read chunk: gathered when small, else split on its own (after what was gathered before it)."""
+        records, start_time, indexes, pos = pending
+        if _few_messages(records, indexes):
+            chunk = gathered.add(records, start_time, pos)
+            if chunk is not None:
+                yield chunk
+            return
+        if gathered.buffers:
+            yield gathered.take()
+        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record)
+
+    def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
+        """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
+
+        Reads each chunk with the MessageIndex records that follow it: what
+        the reference readers do to give messages in log time order from a
+        file whose chunks are not, holding one chunk at a time.  A chunk that
+        cannot be read is left out with one line to ``on_problem``.
+        """
+        summary = summary if summary is not None else Summary()
+        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES)
+        with open(self.path, 'rb') as stream:
+            for pos in offsets:
+                pos = int(pos)
+                stream.seek(pos)
+                head = stream.read(RECORD_PREFIX)
+                opcode, length = _RECORD.unpack_from(head, 0) if len(head) == RECORD_PREFIX else (0, 0)
+                if opcode != OP_CHUNK or length > self.size - pos - RECORD_PREFIX:
+                    on_problem(f'chunk at byte {pos} skipped: no chunk record there')
+                    continue
+                try:
+                    pending = self._open_chunk(stream.read(length), pos, on_problem)
+                except McapProblem as problem:
+                    on_problem(f'chunk at byte {pos} skipped: {problem}')
+                    continue
+                at = pos + RECORD_PREFIX + length
+                while True:     # its message index records
+                    head = stream.read(RECORD_PREFIX)
+                    if len(head) < RECORD_PREFIX:
+                        break
+                    opcode, length = _RECORD.unpack_from(head, 0)
+                    if opcode != OP_MESSAGE_INDEX or length > self.size - at - RECORD_PREFIX:
+                        break
+                    _add_index(pending[2], stream.read(length))
+                    at += RECORD_PREFIX + length
+                yield from self._finish_or_gather(pending, gathered)
+        if gathered.buffers:
+            yield gathered.take()
+
     def _open_chunk(self, content: bytes, pos: int, on_problem):
         """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
-        fields = _Fields(content)
-        start_time = fields.u64()
-        fields.u64()
-        size = fields.u64()
-        crc = fields.u32()
-        compression = fields.string()
-        compressed_size = fields.u64()
-        if compressed_size > len(content) - fields.pos:
+        if len(content) < _CHUNK_HEAD.size:
+            raise McapProblem('record field runs past the end of its record')
+        start_time, _, size, crc, name_length = _CHUNK_HEAD.unpack_from(content, 0)
+        at = _CHUNK_HEAD.size + name_length
+        if at + 8 > len(content):
+            raise McapProblem('record field runs past the end of its record')
+        compression = _compression_name(bytes(content[_CHUNK_HEAD.size:at]))
+        compressed_size = _U64.unpack_from(content, at)[0]
+        at += 8
+        if compressed_size > len(content) - at:
             raise McapProblem('compressed data runs past its chunk record')
-        compressed = memoryview(content)[fields.pos:fields.pos + compressed_size]
+        compressed = memoryview(content)[at:at + compressed_size]
         records = decompress(compressed, compression, size)
-        if crc and zlib.crc32(records) != crc:
+        if crc and crc32(records) != crc:
             raise McapProblem(f'its records do not match their CRC ({size} bytes, corrupt)')
         return [records, signed(start_time), {}, pos]
 
@@ -539,15 +710,6 @@ class McapFile:
             if chunk is not None:
                 return chunk
         chunk, _ = split_sequential(records, start_time, pos, on_record)
-        return chunk
-
-    @staticmethod
-    def _loose_chunk(loose: List[bytes], pos: int, on_record) -> RawChunk:
-        buf = b''.join(loose)
-        start_time = min((signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2]) for record in loose
-                          if record[0] == OP_MESSAGE and len(record) >= RECORD_PREFIX + MESSAGE_HEADER),
-                         default=0)
-        chunk, _ = split_sequential(buf, start_time, pos, on_record)
         return chunk
 
     def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
@@ -571,14 +733,29 @@ class McapFile:
         return chunk if chunk.message_count() else None
 
 
-def start_times(path, size: int) -> Tuple[np.ndarray, np.ndarray]:
-    """File offsets and earliest log times of the chunks and unchunked messages of a data section.
+@dataclass
+class DataLayout:
+    """Where the chunks and unchunked messages of a data section start, and their earliest log times."""
 
-    Reads only record headers (seeking over chunk data), so it is cheap; a
-    damaged record ends the list quietly (:meth:`McapFile.chunks` reports it).
+    offsets: np.ndarray     # (n,) int64 file offsets of the records
+    times: np.ndarray       # (n,) int64 ns: a chunk's message_start_time, a message's log time
+    only_chunks: bool       # no message outside a chunk
+    complete: bool          # every record fits and the section ends with DataEnd or the Footer
+
+    def in_time_order(self) -> bool:
+        """True when no record starts before the one in front of it."""
+        return bool(np.all(self.times[1:] >= self.times[:-1]))
+
+
+def data_layout(path, size: int) -> DataLayout:
+    """The :class:`DataLayout` of a file's data section, from its record headers only.
+
+    Seeks over chunk data, so it is cheap; a damaged record ends the list
+    quietly with ``complete`` False (:meth:`McapFile.chunks` reports it).
     """
-    offsets: List[int] = []
-    times: List[int] = []
+    offsets = array('q')          # 8 bytes an entry, not a Python int: files of one message per chunk are long
+    times = array('Q')
+    only_chunks, complete = True, False
     with open(path, 'rb') as stream:
         pos = len(MAGIC)
         stream.seek(pos)
@@ -587,17 +764,23 @@ def start_times(path, size: int) -> Tuple[np.ndarray, np.ndarray]:
             if len(head) < RECORD_PREFIX:
                 break
             opcode, length = _RECORD.unpack_from(head, 0)
-            if length > size - pos - RECORD_PREFIX or opcode in (OP_DATA_END, OP_FOOTER):
+            if opcode in (OP_DATA_END, OP_FOOTER):
+                complete = True
+                break
+            if length > size - pos - RECORD_PREFIX:
                 break
             if opcode == OP_CHUNK and length >= 8 and len(head) >= RECORD_PREFIX + 8:
                 offsets.append(pos)
                 times.append(_U64.unpack_from(head, RECORD_PREFIX)[0])
-            elif opcode == OP_MESSAGE and length >= MESSAGE_HEADER and len(head) == RECORD_PREFIX + MESSAGE_HEADER:
-                offsets.append(pos)
-                times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
+            elif opcode == OP_MESSAGE:
+                only_chunks = False
+                if length >= MESSAGE_HEADER and len(head) == RECORD_PREFIX + MESSAGE_HEADER:
+                    offsets.append(pos)
+                    times.append(_MESSAGE.unpack_from(head, RECORD_PREFIX)[2])
             pos += RECORD_PREFIX + length
             stream.seek(pos)
-    return np.array(offsets, np.int64), np.array([signed(t) for t in times], np.int64)
+    return DataLayout(np.frombuffer(offsets, np.int64).copy(), np.frombuffer(times, np.uint64).view(np.int64).copy(),
+                      only_chunks, complete)
 
 
 def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:

@@ -19,19 +19,25 @@ recording that carry a vibration topic.
 Slices are consecutive spans of ``slice_seconds`` of log time on a grid
 starting at the first message; each holds one batch per topic that has data in
 it, with values taken from the header stamps.  Memory stays at about one MCAP
-chunk plus one slice, however long the recording.  Chunks may go back in log
-time (e.g. written topic after topic): a cheap pre-scan of the chunk headers
-says, for every chunk, the earliest log time still to come, and a slice is
-handed out only once nothing later in the file can fall into it -- the
-result is that of the plainly written file, and memory grows only by how far
-back the chunks go.
+chunk plus one slice, however long the recording and in whatever order its
+chunks are.  A cheap pre-scan of the chunk headers gives every chunk's start
+time; when they go back in log time (chunks written topic after topic,
+reversed, shuffled), the chunks are read by seeking, in order of start time
+across all files, as the reference readers do -- the result is that of the
+plainly written file.  Only a damaged file, or one with messages outside
+chunks, is read in file order; a slice is then handed out once nothing later
+in the file can fall into it, and memory grows with how far back chunks go.
 
-MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file` and decoded in
-bulk by :mod:`prsm_lube_ros.recording.cdr`; sqlite3 (and file- or
-message-compressed) bags are read through rosbags' Reader and decoded the same
-way.  ``engine='rosbags'`` reads through rosbags (or, for a bare ``.mcap``, the
-``mcap`` package) and deserializes every message with rosbags: the slow
-reference path.
+MCAP storage is read by :mod:`prsm_lube_ros.recording.mcap_file`, sqlite3
+storage (a bag folder or a bare ``.db3``) by
+:mod:`prsm_lube_ros.recording.sqlite_file`, and both are decoded in bulk by
+:mod:`prsm_lube_ros.recording.cdr`; sqlite3 bags with zstd file or message
+compression are decompressed on the way; other compressed bags are read
+through rosbags' Reader and decoded the same way.  A folder without
+metadata.yaml is read when it holds one storage file or the parts of one split
+bag (``<folder>_0``, ``<folder>_1``...).  ``engine='rosbags'`` reads
+through rosbags (or, for a bare ``.mcap``, the ``mcap`` package) and
+deserializes every message with rosbags: the slow reference path.
 
 Problems: :func:`open_recording` raises :class:`InputError` (one line naming
 the file) for a missing path, something that is not a bag, a bag without the
@@ -46,12 +52,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 from pathlib import Path
+import tempfile
 from typing import Callable, Dict, Iterator, List, Optional
 
 import numpy as np
 import yaml
 
-from . import mcap_file
+from . import mcap_file, sqlite_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
 from ..errors import ConfigError, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
@@ -59,6 +66,10 @@ from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATE
 
 #: default length of one time slice, s of log time
 SLICE_SECONDS = 10.0
+#: log time a file read in file order may go back before that is reported (memory held), s
+HELD_BACK_SECONDS = 60.0
+#: the first 16 bytes of every sqlite3 database file
+SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
 _ROSBAGS_CHUNK_BYTES = 1 << 20
 ProblemSink = Callable[[str], None]
@@ -93,6 +104,7 @@ class _McapSource:
         self.label = label
         self.paths = paths
         self.files: List[mcap_file.McapFile] = []
+        self.listings: List[mcap_file.Summary] = []       # per file: its summary, or what a scan found
         self.problems: List[str] = []
         self.topics: Dict[str, TopicInfo] = {}
         self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text)
@@ -104,13 +116,18 @@ class _McapSource:
                 summary = mcap.summary
                 if summary is None:
                     summary, problems = mcap.scan()
-                    self.problems.extend(problems)
+                    self.problems.extend(self._about(mcap, line) for line in problems)
             except mcap_file.McapProblem as problem:
                 raise RecordingError(f'{path}: {problem}') from None
             except OSError as err:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(mcap)
+            self.listings.append(summary)
             self._add_listing(summary)
+
+    def _about(self, mcap: mcap_file.McapFile, line: str) -> str:
+        """A problem line of one file of a bag names that file (a bare file is named by the label already)."""
+        return line if str(mcap.path) == self.label else f'{mcap.path}: {line}'
 
     def _add_listing(self, summary: mcap_file.Summary):
         for channel_id, channel in summary.channels.items():
@@ -135,40 +152,91 @@ class _McapSource:
             return f'has message encoding {message_encoding!r}, not cdr'
         return check_layout(kind, msgtype, encoding, text)
 
-    def _horizons(self) -> List[tuple]:
+    @staticmethod
+    def _horizons(layouts: List[mcap_file.DataLayout]) -> List[tuple]:
         """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
 
-        Chunks may be written out of log time order (e.g. topic after topic);
-        a slice can be handed out only once no chunk still to come starts
-        before its end.  Memory then stays bounded by how far back chunks go.
+        For a file read in file order although its chunks go back in log time
+        (one that is damaged or has unchunked messages): a slice can be handed
+        out only once no chunk still to come starts before its end, so memory
+        grows with how far back chunks go.
         """
-        per_file = [mcap_file.start_times(mcap.path, mcap.size) for mcap in self.files]
         later = np.iinfo(np.int64).max
         horizons: List[tuple] = []
-        for offsets, times in reversed(per_file):
+        for layout in reversed(layouts):
+            times = layout.times
             suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
             suffix = np.append(np.minimum(suffix, later), later)
-            horizons.append((offsets, suffix))
+            horizons.append((layout.offsets, suffix))
             later = int(suffix[0])
         return horizons[::-1]
 
+    def _groups(self, chunk: mcap_file.RawChunk, channels: Dict[int, mcap_file.Channel],
+                topics: List[str]) -> Dict[str, mcap_file.MessageGroup]:
+        groups = {}
+        for channel_id, group in chunk.groups.items():
+            channel = channels.get(channel_id)
+            if channel is not None and channel.topic in topics:
+                groups[channel.topic] = group
+        return groups
+
+    def _sink(self, mcap: mcap_file.McapFile, on_problem: ProblemSink) -> ProblemSink:
+        return lambda line: on_problem(self._about(mcap, line))
+
+    def _summary_of(self, index: int) -> mcap_file.Summary:
+        """A summary to fill while reading file ``index``, knowing the channels its listing found."""
+        summary = mcap_file.Summary()
+        summary.channels.update(self.listings[index].channels)
+        return summary
+
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """The files' chunks in log time order of their start: in file order, or by seeking when they go back."""
+        layouts = [mcap_file.data_layout(mcap.path, mcap.size) for mcap in self.files]
+        times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
+        if times.size and np.any(times[1:] < times[:-1]) and all(
+                layout.complete and layout.only_chunks for layout in layouts):
+            return self._chunks_by_start_time(layouts, topics, on_problem)
+        return self._chunks_in_file_order(layouts, topics, on_problem)
+
+    def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """Chunks that go back in time (reversed, shuffled, topic after topic), read by seeking.
+
+        Sorted by their start times across all files, as the reference readers
+        read them: each slice is complete once a chunk starting after its end
+        is reached, so memory stays at about one chunk and one slice.
+        """
+        times = np.concatenate([layout.times for layout in layouts])
+        offsets = np.concatenate([layout.offsets for layout in layouts])
+        files = np.concatenate([np.full(layout.times.size, index) for index, layout in enumerate(layouts)])
+        order = np.lexsort((offsets, files, times))
+        summaries = [self._summary_of(index) for index in range(len(self.files))]
+        # runs of consecutive chunks from one file, each read with one open file
+        breaks = np.flatnonzero(np.diff(files[order])) + 1
+        first, span = int(times[order[0]]), max(int(times[order[-1]]) - int(times[order[0]]), 1)
+        for run in np.split(order, breaks):
+            index = int(files[run[0]])
+            mcap, summary = self.files[index], summaries[index]
+            for chunk in mcap.chunks_at(offsets[run], self._sink(mcap, on_problem), summary):
+                yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
+                                (chunk.start_time - first) / span)
+
+    def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
+        back = float(np.max(np.maximum.accumulate(times) - times)) * 1e-9 if times.size else 0.0
+        if back > HELD_BACK_SECONDS:
+            on_problem(f'chunks go back in log time by up to {back:.0f} s and cannot be read by seeking (damaged, '
+                       'or messages outside chunks): up to that much of the recording was held in memory')
         total = sum(f.size for f in self.files) or 1
         done = 0
-        for mcap, (offsets, suffix) in zip(self.files, self._horizons()):
-            summary = mcap_file.Summary()
-            if mcap.summary is not None:
-                summary.channels.update(mcap.summary.channels)
-            for chunk in mcap.chunks(on_problem, summary):
-                groups = {}
-                for channel_id, group in chunk.groups.items():
-                    channel = summary.channels.get(channel_id)
-                    if channel is not None and channel.topic in topics:
-                        groups[channel.topic] = group
+        for index, (mcap, (offsets, suffix)) in enumerate(zip(self.files, self._horizons(layouts))):
+            summary = self._summary_of(index)
+            for chunk in mcap.chunks(self._sink(mcap, on_problem), summary):
                 # nothing from this chunk on is earlier than the horizon
                 horizon = int(suffix[np.searchsorted(offsets, chunk.file_offset, 'left')])
-                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer, groups,
-                                (done + chunk.file_offset) / total)
+                yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer,
+                                self._groups(chunk, summary.channels, topics), (done + chunk.file_offset) / total)
             done += mcap.size
 
 
@@ -197,6 +265,59 @@ def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
             pending, size = [], 0
     if pending:
         yield _pack(pending, 1.0)
+
+
+class _SqliteSource:
+    """The ``.db3`` files of a sqlite3 rosbag2 bag, read with Python's sqlite3 module.
+
+    ``compression``: ``''``, ``'message'`` (every message a zstd frame) or
+    ``'file'`` (every ``.db3.zstd`` file decompressed into a temporary folder
+    that lives as long as this source, at most 64 times its size).
+    """
+
+    def __init__(self, label: str, paths: List[Path], compression: str = ''):
+        self.label = label
+        self.problems: List[str] = []
+        self.topics: Dict[str, TopicInfo] = {}
+        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        self.files: List[sqlite_file.SqliteFile] = []
+        self.start_time: Optional[int] = None
+        self.end_time: Optional[int] = None
+        self._scratch = tempfile.TemporaryDirectory(prefix='prsm_lube_bag_') if compression == 'file' else None
+        for path in paths:
+            try:
+                if self._scratch is not None:
+                    plain = Path(self._scratch.name) / path.name.removesuffix('.zstd')
+                    mcap_file.zstd_file(path, plain, max(64 * path.stat().st_size, 1 << 30))
+                db = sqlite_file.SqliteFile(plain if self._scratch is not None else path,
+                                            compressed_messages=compression == 'message')
+            except (sqlite_file.SqliteProblem, mcap_file.McapProblem) as problem:
+                raise RecordingError(f'{path}: {problem}') from None
+            except OSError as err:
+                raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
+            self.files.append(db)
+            for topic in db.topics.values():
+                if topic.start_time is not None:
+                    self.start_time = min(topic.start_time, self.start_time or topic.start_time)
+                    self.end_time = max(topic.end_time, self.end_time or topic.end_time)
+                if topic.name in self.topics:
+                    self.topics[topic.name].message_count += topic.message_count
+                    continue
+                self.topics[topic.name] = TopicInfo(topic.name, topic.msgtype, topic.message_count)
+                encoding, text = db.definitions.get(topic.msgtype, ('', ''))
+                self.definitions[topic.name] = (topic.msgtype, encoding, text, topic.serialization_format)
+
+    layout_problem = _McapSource.layout_problem
+
+    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        wanted = set(topics)
+
+        def messages():
+            for db in self.files:      # split bags: one file after the other, as rosbag2 plays them
+                names = {key: topic.name for key, topic in db.topics.items() if topic.name in wanted}
+                for topic_id, log_time, data in db.messages(list(names), on_problem):
+                    yield names[topic_id], log_time, data
+        return _pseudo_chunks(messages(), self.start_time or 0, self.end_time or 0)
 
 
 class _RosbagsSource:
@@ -233,13 +354,24 @@ class _RosbagsSource:
 
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         from rosbags.rosbag2 import Reader
+        streamed = dict.fromkeys(topics, 0)
+
+        def counted(messages):
+            for topic, log_time, data in messages:
+                streamed[topic] += 1
+                yield topic, log_time, data
         try:
             with Reader(self.path) as reader:
                 connections = [c for c in reader.connections if c.topic in topics]
                 messages = ((c.topic, t, data) for c, t, data in reader.messages(connections=connections))
-                yield from _pseudo_chunks(messages, self.start_time or 0, self.end_time or 0)
+                yield from _pseudo_chunks(counted(messages), self.start_time or 0, self.end_time or 0)
         except Exception as err:  # keep what was read, report the rest in one line
             on_problem(f'reading stopped early: {_reason(err)}')
+            return
+        for topic, count in streamed.items():   # rosbags matches metadata.yaml to the storage by QoS too
+            if count < self.topics[topic].message_count:
+                on_problem(f'{topic}: {self.topics[topic].message_count} message(s) listed, {count} streamed '
+                           "(rosbags' Reader could not match the rest to metadata.yaml)")
 
 
 def _mcap_library_chunks(path: Path, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
@@ -260,6 +392,29 @@ def _reason(err: BaseException) -> str:
     return f'{type(err).__name__}: {text}' if text else type(err).__name__
 
 
+def _split_index(path: Path) -> tuple:
+    """Sort key of the files of a split bag: ``name_2`` before ``name_10``."""
+    stem, _, number = path.stem.rpartition('_')
+    return (stem, int(number)) if stem and number.isdigit() else (path.stem, -1)
+
+
+def _source_without_metadata(path: Path):
+    """A bag folder without metadata.yaml (what ``ros2 bag reindex`` repairs): its files in split order.
+
+    Taken when it holds one storage file, or only the files of one split bag
+    (``<folder>_0``, ``<folder>_1``...); a folder of unrelated recordings is refused.
+    """
+    for suffix, source in (('.mcap', _McapSource), ('.db3', _SqliteSource)):
+        files = sorted(path.glob('*' + suffix), key=_split_index)
+        if len(files) == 1 or (files and all(_split_index(f)[0] == path.name for f in files)):
+            return source(str(path), files)
+        if files:
+            names = ', '.join(f.name for f in files)
+            raise RecordingError(f'{path}: no metadata.yaml, and its {suffix} files ({names}) are not the parts '
+                                 'of one split bag; give one file')
+    raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml, no .mcap or .db3 file)')
+
+
 def _open_source(path: Path):
     """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
     if not path.exists():
@@ -268,30 +423,32 @@ def _open_source(path: Path):
         if path.name == 'metadata.yaml':
             return _open_source(path.parent)
         with open(path, 'rb') as stream:
-            magic = stream.read(len(mcap_file.MAGIC))
-        if magic != mcap_file.MAGIC:
-            if magic.startswith(b'SQLite format'):
-                raise RecordingError(f'{path}: a bare sqlite3 bag file; give its rosbag2 directory '
-                                     '(with metadata.yaml) instead')
-            raise RecordingError(f'{path}: not a recording (neither an MCAP file nor a rosbag2 directory)')
-        return _McapSource(str(path), [path])
+            magic = stream.read(len(SQLITE_MAGIC))
+        if magic.startswith(mcap_file.MAGIC):
+            return _McapSource(str(path), [path])
+        if magic == SQLITE_MAGIC:    # one storage file of a sqlite3 bag, read as rosbag2 reads a bare .db3
+            return _SqliteSource(str(path), [path])
+        raise RecordingError(f'{path}: not a recording (neither an MCAP or sqlite3 file nor a rosbag2 directory)')
     metadata_path = path / 'metadata.yaml'
     if not metadata_path.is_file():
-        mcaps = sorted(path.glob('*.mcap'))
-        if len(mcaps) == 1:
-            return _McapSource(str(path), mcaps)
-        raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml)')
+        return _source_without_metadata(path)
     try:
         info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
+        compression_format = (info.get('compression_format') or '').lower()
     except Exception as err:
         raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
         raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
-    if storage == 'mcap' and compression in ('', 'none'):
-        return _McapSource(str(path), files)
+    if compression in ('', 'none'):
+        if storage == 'mcap':
+            return _McapSource(str(path), files)
+        if storage == 'sqlite3':
+            return _SqliteSource(str(path), files)
+    if storage == 'sqlite3' and compression in ('message', 'file') and compression_format == 'zstd':
+        return _SqliteSource(str(path), files, compression)
     if storage not in ('mcap', 'sqlite3'):
         raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
@@ -582,6 +739,20 @@ def bare_read(path) -> int:
     for chunk in source.raw_chunks(list(source.topics), lambda line: None):
         count += sum(group.data_offsets.size for group in chunk.groups.values())
     return count
+
+
+def topic_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+    """Every message of any recording as ``(topic, log_time, data)``, undecoded; per topic in reading order.
+
+    Raises :class:`InputError` (one line naming the file) when it cannot be opened.
+    """
+    source = _open_source(Path(path))
+    for chunk in source.raw_chunks(list(source.topics), on_problem or (lambda line: None)):
+        buffer = chunk.buffer
+        for topic, group in chunk.groups.items():
+            for start, length, log_time in zip(group.data_offsets.tolist(), group.data_lengths.tolist(),
+                                               group.log_times.tolist()):
+                yield topic, log_time, bytes(buffer[start:start + length])
 
 
 def list_topics(path) -> Dict[str, TopicInfo]:

@@ -4,6 +4,7 @@
 
 from pathlib import Path
 import random
+import shutil
 import struct
 import time
 import zlib
@@ -11,7 +12,7 @@ import zlib
 import pytest
 
 import bagfactory as bf
-from fuzzing import exercise, mutate
+from fuzzing import exercise, mutate, seed_calibration, seed_recordings
 from prsm_lube_ros.errors import ConfigError, InputError
 from prsm_lube_ros.estimation.calibration_file import load_calibration
 from prsm_lube_ros.recording import mcap_file
@@ -23,28 +24,55 @@ MUTATIONS = 300
 SECONDS = 60.0
 
 
-def test_mutated_mcap_files_give_data_or_one_input_error_line(tmp_path):
-    seeds = [(bf.write_bare_mcap(tmp_path / 'contract.mcap', bf.contract_entries(seconds=2.0, block=100)), True),
-             (bf.write_mcap_library(tmp_path / 'lib.mcap', bf.contract_entries(seconds=2.0, block=100),
-                                    compression='lz4', chunk_size=4096), True)]
-    seeds = seeds * 10 + [(path, False) for path in sorted(CONFORMANCE.glob('*/*.mcap'))[::20]]
+def test_mutated_recordings_give_data_or_one_input_error_line(tmp_path):
+    """Every container and layout (bare MCAP, small and reversed chunks, .db3, rosbag2 folders), and conformance."""
+    seeds = [(path, kind) for path, kind in seed_recordings(tmp_path / 'seeds')]
+    seeds = seeds * 4 + [(path, 'mcap') for path in sorted(CONFORMANCE.glob('*/*.mcap'))[::20]]
     rng = random.Random(20261123)
     deadline = time.monotonic() + SECONDS
-    target = tmp_path / 'mutant.mcap'
     done = 0
+    kinds = set()
     while done < MUTATIONS and time.monotonic() < deadline:
-        source, contract = seeds[done % len(seeds)]
+        source, kind = seeds[done % len(seeds)]
+        work = tmp_path / f'mutant_{done}'
+        if kind.startswith('bag:'):
+            shutil.copytree(source.parent, work)
+            target = path = work / source.name
+        else:
+            work.mkdir()
+            target = path = work / source.name
         mutant = mutate(source.read_bytes(), rng)
         target.write_bytes(mutant)
         try:
-            exercise(target, contract)
+            exercise(work if kind.startswith('bag:') else path, kind != 'mcap')
         except InputError as err:
             assert '\n' not in str(err)
         except Exception as err:  # pragma: no cover - the failure report
             pytest.fail(f'mutation {done} of {source.name} (crc {zlib.crc32(mutant)}): '
                         f'{type(err).__name__}: {err}')
+        shutil.rmtree(work)
+        kinds.add(kind.split(':')[0] + source.suffix)
         done += 1
     assert done >= min(MUTATIONS, 50)
+    assert {'contract.mcap', 'contract.db3', 'bag.mcap', 'bag.db3', 'bag.zstd', 'bag.yaml', 'mcap.mcap'} <= kinds
+
+
+def test_mutated_calibration_files_give_a_calibration_or_one_config_error_line(tmp_path):
+    source = seed_calibration(tmp_path / 'calibration.yaml')
+    rng = random.Random(11)
+    target = tmp_path / 'mutant.yaml'
+    outcomes = {'read': 0, 'refused': 0}
+    for index in range(150):
+        target.write_bytes(mutate(source.read_bytes(), rng))
+        try:
+            load_calibration(target)
+            outcomes['read'] += 1
+        except ConfigError as err:
+            assert '\n' not in str(err) and str(target) in str(err)
+            outcomes['refused'] += 1
+        except Exception as err:  # pragma: no cover - the failure report
+            pytest.fail(f'calibration mutation {index}: {type(err).__name__}: {err}')
+    assert outcomes['read'] and outcomes['refused']
 
 
 def test_corrupt_lengths_in_unindexed_records_are_left_out_not_raised():

@@ -116,12 +116,13 @@ def contract_entries(seconds: float = 20.0, namespace: str = '/prsm', *, block: 
     return entries
 
 
-def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool = False):
+def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool = False, zstd_mode: str = 'storage'):
     """Write ``entries`` to a rosbag2 directory at ``path``; returns the path.
 
     Messages given as bytes are written as they are.  Topics are registered in
     order of first appearance with ``store`` (default: contract); ``zstd``
-    compresses the MCAP chunks.
+    compresses the MCAP chunks (``zstd_mode='storage'``), every message
+    (``'message'``) or every storage file (``'file'``).
     """
     store = store or typestore()
     path = Path(path)
@@ -129,7 +130,7 @@ def write_rosbag2(path, entries, storage: str = 'mcap', store=None, zstd: bool =
     connections = {}
     writer = Writer(path, version=9, storage_plugin=plugin)
     if zstd:
-        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        writer.set_compression(CompressionMode[zstd_mode.upper()], CompressionFormat.ZSTD)
     with writer:
         for topic, msgtype, _, _ in entries:
             if topic not in connections:
@@ -150,10 +151,11 @@ def write_bare_mcap(path, entries, store=None):
 
 
 def write_mcap_library(path, entries, store=None, compression: str = 'zstd', chunk_size: int = 1 << 20,
-                       use_chunking: bool = True):
+                       use_chunking: bool = True, schemas=None):
     """Write ``entries`` as a bare ``.mcap`` with the ``mcap`` package's writer (another writer's layout).
 
     Its chunks may be ``zstd``/``lz4``/uncompressed, or absent (``use_chunking=False``).
+    ``schemas`` maps a message type to the ``(encoding, text)`` stored for it (default ``ros2msg``).
     """
     from mcap.writer import CompressionType, Writer as McapWriter
     store = store or typestore()
@@ -165,10 +167,88 @@ def write_mcap_library(path, entries, store=None, compression: str = 'zstd', chu
         channels = {}
         for topic, msgtype, log_time, message in entries:
             if topic not in channels:
-                definition = store.generate_msgdef(msgtype, ros_version=2)[0]
-                schema = writer.register_schema(msgtype, 'ros2msg', definition.encode())
+                encoding, definition = (schemas or {}).get(msgtype) or (
+                    'ros2msg', store.generate_msgdef(msgtype, ros_version=2)[0])
+                schema = writer.register_schema(msgtype, encoding, definition.encode())
                 channels[topic] = writer.register_channel(topic, 'cdr', schema)
             data = message if isinstance(message, (bytes, memoryview)) else store.serialize_cdr(message, msgtype)
             writer.add_message(channels[topic], log_time, bytes(data), log_time)
         writer.finish()
     return path
+
+
+def reorder_chunks(source, target, order):
+    """Rewrite an MCAP file with its chunks (each with its MessageIndex records) in another order.
+
+    ``order(n)`` returns the new order of the ``n`` chunks (e.g. reversed).
+    Records before, between and after the chunks keep their place before
+    them, and the summary's Schema and Channel records are repeated there
+    (a chunk may use a channel defined in a chunk now after it); the summary
+    section keeps its Schema, Channel and Statistics
+    records, without the ChunkIndex and SummaryOffset records whose offsets
+    would be stale; CRCs of the data end and footer are left out (zero).
+    """
+    import struct
+    data = Path(source).read_bytes()
+    magic = data[:8]
+    footer_at = len(data) - 8 - 9 - 20
+    summary_start = struct.unpack_from('<Q', data, footer_at + 9)[0] or footer_at
+    records, chunks = [], []
+    pos = 8
+    while pos < summary_start:
+        opcode, length = struct.unpack_from('<BQ', data, pos)
+        record = data[pos:pos + 9 + length]
+        pos += 9 + length
+        if opcode == 0x0F:                      # DataEnd
+            break
+        if opcode == 0x06:
+            chunks.append([record])
+        elif opcode == 0x07 and chunks:
+            chunks[-1].append(record)
+        else:
+            records.append(record)
+    summary, definitions = [], []
+    pos = summary_start
+    while pos < footer_at:
+        opcode, length = struct.unpack_from('<BQ', data, pos)
+        if opcode not in (0x08, 0x0E):          # ChunkIndex, SummaryOffset
+            summary.append(data[pos:pos + 9 + length])
+        if opcode in (0x03, 0x04):              # Schema, Channel: before every chunk that may use them
+            definitions.append(data[pos:pos + 9 + length])
+        pos += 9 + length
+    body = magic + b''.join(records[:1] + definitions + records[1:])      # the Header record first
+    body += b''.join(b''.join(chunks[i]) for i in order(len(chunks)))
+    body += struct.pack('<BQI', 0x0F, 4, 0)
+    new_summary_start = len(body) if summary else 0
+    body += b''.join(summary)
+    body += struct.pack('<BQQQI', 0x02, 20, new_summary_start, 0, 0) + magic
+    Path(target).write_bytes(body)
+    return Path(target)
+
+
+def assert_same_slices(want, have, at_least: int = 1):
+    """Two readings of a recording (lists of slices of batches) hold the same batches, value for value."""
+    assert len(want) == len(have) >= at_least
+    for want_batches, have_batches in zip(want, have):
+        assert [type(b) for b in want_batches] == [type(b) for b in have_batches]
+        for a, b in zip(want_batches, have_batches):
+            for name, value in vars(a).items():
+                np.testing.assert_array_equal(value, vars(b)[name], err_msg=f'{type(a).__name__}.{name}')
+
+
+def count_chunk_splits(monkeypatch) -> list:
+    """Count the chunks the MCAP reader splits from now on: returns a one-item list holding the count.
+
+    A test reading slices notes the count as each slice is handed out, to
+    see whether slices stream or wait for the whole file.
+    """
+    from prsm_lube_ros.recording import mcap_file
+    count = [0]
+    for name in ('split_indexed', 'split_records'):
+        original = getattr(mcap_file, name)
+
+        def counted(*args, original=original, **kwargs):
+            count[0] += 1
+            return original(*args, **kwargs)
+        monkeypatch.setattr(mcap_file, name, counted)
+    return count
