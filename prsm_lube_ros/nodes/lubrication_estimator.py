@@ -71,6 +71,7 @@ from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
 from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
+from ..fleet.forecast import forecast_summary
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
@@ -97,6 +98,10 @@ PARAMETERS = {
                          'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name '
                          'with / as _ (e.g. prsm); empty: none. Loaded at start and when changed; the '
                          'calibrate service writes it when persist is set', None, False),
+    'history_dir': ('', _STRING, 'Parquet assessment history of the fleet (prsm-lube assess --history); when '
+                    'set, each actuator\'s depletion forecast (prsm-lube trend) is added to its diagnostics', None,
+                    True),
+    'forecast_period': (600.0, _DOUBLE, 's between re-reads of history_dir for the forecast', (1.0, 86400.0), True),
     'recordings_dir': ('~/prsm_recordings', _STRING, 'folder the calibrate service may read bags from; '
                        'relative bag paths are taken from it, paths outside it are refused', None, False),
     'actuator_file': ('', _STRING, 'actuator geometry YAML (config/actuator.yaml layout) for the screw lead; '
@@ -208,6 +213,7 @@ class ActuatorChannel:
     last_drain: float = -math.inf                    # time.monotonic() of the last auxiliary drain
     node_name: str = STATUS_PREFIX
     frame_id: str = ''                               # header.frame_id of the last vibration block
+    forecast: list = field(default_factory=list)     # (key, value) of the depletion forecast from history_dir
 
     @property
     def status_name(self) -> str:
@@ -281,6 +287,11 @@ class LubricationEstimator(Node):
         self._drain_timer = self.create_timer(self._drain_period, self._drain_idle, callback_group=self._input_group,
                                               clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._stop_forecast = threading.Event()
+        self._history_dir = str(values['history_dir']).strip()
+        if self._history_dir:
+            threading.Thread(target=self._forecast_loop, args=(float(values['forecast_period']),),
+                             name='forecast', daemon=True).start()
         self.get_logger().info(
             f'watching {", ".join(c.name for c in self.channels)}; window {self._settings.window_length:g} s; '
             f'WARN below {self._thresholds.warn_below:g}, ERROR below {self._thresholds.error_below:g}')
@@ -507,7 +518,7 @@ class LubricationEstimator(Node):
             ('calibration', 'loaded' if channel.assessor else channel.calibration_note),
             ('problems', channel.problem_count()),
             ('last_vibration_age', channel.monitor.stale_for(now)),
-        ]
+        ] + channel.forecast
         if status.level != channel.last_level:
             line = f'{channel.name}: {LEVEL_NAMES[status.level]}: {status.message}'
             if status.level == 0:
@@ -525,6 +536,41 @@ class LubricationEstimator(Node):
             array.header.stamp = self.get_clock().now().to_msg()
             array.status = [self._status(channel, now) for channel in self.channels]
         self._diagnostics.publish(array)
+
+    # -- forecast from the fleet history -----------------------------------------------------------
+    def _forecast_loop(self, period: float):
+        """Worker thread: each actuator's depletion forecast from ``history_dir``, every ``period`` s."""
+        told = set()
+        while not self._stop_forecast.is_set():
+            with self._lock:
+                thresholds = self._thresholds
+            for channel in self.channels:
+                try:
+                    summary = forecast_summary(self._history_dir, channel.name, warn_below=thresholds.warn_below,
+                                               error_below=thresholds.error_below)
+                    values = [('forecast', summary.pop('forecast'))]
+                    values += [(f'forecast_{key}', value) for key, value in summary.items()]
+                except InputError as exc:
+                    values = [('forecast', f'none: {exc}')]
+                    if str(exc) not in told:
+                        told.add(str(exc))
+                        self.get_logger().warning(f'{channel.name}: no forecast: {exc}')
+                except Exception as exc:   # a broken history must not stop the node; say it once
+                    values = [('forecast', f'none: internal error {type(exc).__name__}')]
+                    if type(exc).__name__ not in told:
+                        told.add(type(exc).__name__)
+                        self.get_logger().error(f'{channel.name}: forecast failed (please report): '
+                                                f'{type(exc).__name__}: {exc}')
+                with self._lock:
+                    channel.forecast = values
+            self._stop_forecast.wait(period)
+
+    def destroy_node(self):
+        """Stop the forecast worker before the node goes."""
+        stop = getattr(self, '_stop_forecast', None)
+        if stop is not None:
+            stop.set()
+        return super().destroy_node()
 
     # -- calibration service -----------------------------------------------------------------------
     def _calibrate_handler(self, channel: ActuatorChannel):

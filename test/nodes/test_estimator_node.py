@@ -682,6 +682,22 @@ def test_a_late_subscriber_gets_the_last_states(graph, tmp_path):
     assert [s.window_start for s in late] == [s.window_start for s in early[-len(late):]]
 
 
+def test_the_forecast_of_a_fleet_history_is_in_the_diagnostics(graph, tmp_path, small_fleet):
+    """history_dir set: each actuator's depletion forecast (prsm-lube trend's) rides on its status."""
+    from prsm_lube_ros.fleet.forecast import forecast_summary
+    graph.estimator(tmp_path, actuators=['/A01', '/nowhere'], history_dir=str(small_fleet['history']))
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+
+    def forecast_of(actuator):
+        return values_of(status_of(diagnostics[-1], actuator)).get('forecast', '') if diagnostics else ''
+    wait_for(lambda: forecast_of('/A01') and forecast_of('/nowhere'), 30, 'forecasts in the diagnostics')
+    values = values_of(status_of(diagnostics[-1], '/A01'))
+    expected = forecast_summary(small_fleet['history'], 'A01')
+    assert values['forecast'] == expected.pop('forecast') == 'ok'
+    assert {f'forecast_{key}': value for key, value in expected.items()}.items() <= values.items()
+    assert forecast_of('/nowhere').startswith('none: ') and 'nowhere' in forecast_of('/nowhere')
+
+
 def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
     node = graph.estimator(tmp_path, calibration_file='')
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
