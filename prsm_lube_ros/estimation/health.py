@@ -123,6 +123,13 @@ class HealthMonitor:
         self._last_input: float | None = None
         self._message = 'no window evaluated yet'
 
+    def restart_smoothing(self) -> None:
+        """Forget the windows averaged for the level (new calibration: old thetas are on another scale).
+
+        The theta level itself is kept until the next assessed window judges it anew.
+        """
+        self._recent.clear()
+
     def set_thresholds(self, thresholds: HealthThresholds) -> None:
         """New thresholds; the theta level is re-judged at the next assessed window."""
         self.thresholds = thresholds

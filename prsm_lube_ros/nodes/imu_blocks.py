@@ -133,6 +133,17 @@ class ImuBlockAssembler:
         """The current (partial) block, if it has samples and a known rate."""
         return self._close()
 
+    def pause(self) -> List[AssembledBlock]:
+        """End of a stretch of samples (the source deactivated): :meth:`flush`, and the next sample starts afresh.
+
+        The time until that sample is a pause of the bridge, not samples the
+        IMU lost: it is neither a gap nor counted in :attr:`lost_samples`.
+        The rate measured so far is kept.
+        """
+        blocks = self._close()
+        self._last_stamp = None
+        return blocks
+
     # -- checks -------------------------------------------------------------------------------------
     def _problem_of(self, interval: int) -> Optional[str]:
         """The kind of problem of one interval, reported and counted; None when it fits the period.

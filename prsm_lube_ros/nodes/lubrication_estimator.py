@@ -348,6 +348,7 @@ class LubricationEstimator(Node):
     def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load)
         channel.calibration_note = ''
+        channel.monitor.restart_smoothing()      # thetas of the old constants must not be averaged with the new
 
     # -- inputs ------------------------------------------------------------------------------------
     def now(self) -> float:

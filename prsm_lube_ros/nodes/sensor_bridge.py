@@ -245,6 +245,10 @@ class BridgeCore:
 
     def _start(self) -> None:
         """Start publishing: the worker thread, or (imu) the subscription."""
+        previous = getattr(self, '_thread', None)
+        if previous is not None and previous.is_alive():
+            raise InputError('the source worker of the last activation has not stopped yet (a blocked read?); '
+                             'deactivate again later or restart the node')
         self._stop = threading.Event()
         self.health.active = True
         if self.source == 'imu':
@@ -267,13 +271,21 @@ class BridgeCore:
             stop.set()
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
             thread.join(timeout=5.0)
-        self._thread = None
+        if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+            self.get_logger().error('the source worker did not stop within 5 s (a blocked read?); '
+                                    'it is not started again until it has')
+        else:
+            self._thread = None
         daq = getattr(self, '_daq', None)
         if daq is not None:
             daq.stop()
         subscription, self._imu_subscription = getattr(self, '_imu_subscription', None), None
         if subscription is not None:
             self.destroy_subscription(subscription)
+            assembler = getattr(self, '_assembler', None)
+            if assembler is not None:    # the partial block goes out now; the pause is no gap
+                self._publish_imu_blocks(assembler.pause(), getattr(self, '_imu_frame_id', self.frame_id),
+                                         time.monotonic())
         if getattr(self, 'health', None) is not None:
             self.health.active = False
 
@@ -386,8 +398,15 @@ class BridgeCore:
         lost = assembler.lost_samples + assembler.dropped_samples - lost_before
         if lost:
             self.health.loss(now, samples=lost, why=assembler.last_problem)
-        frame_id = msg.header.frame_id or self.frame_id
-        vibration = self._outputs['vibration']
+        self._imu_frame_id = msg.header.frame_id or self.frame_id
+        self._publish_imu_blocks(blocks, self._imu_frame_id, now)
+
+    def _publish_imu_blocks(self, blocks, frame_id: str, now: float) -> None:
+        """Publish assembled IMU blocks as VibrationBlocks and count them for the bridge's status."""
+        vibration = getattr(self, '_outputs', {}).get('vibration')
+        if vibration is None:
+            return
+        assembler = self._assembler
         for block in blocks:
             vibration.publish(vibration_block_msg(time_from_ns(block.stamp_ns), block.sample_rate, block.samples,
                                                   frame_id))

@@ -47,8 +47,14 @@ def init_ros(args: Optional[Sequence[str]] = None) -> None:
 
 
 def _request_stop(signum, frame) -> None:
-    """Signal handler: ask the spin loop to stop (nothing else: it may run between any two bytecodes)."""
+    """Signal handler: ask the spin loop to stop; a second signal of the kind ends the process at once.
+
+    Nothing else happens here (it may run between any two bytecodes).  The
+    default disposition is put back so that a teardown that hangs (a blocked
+    hardware read, say) still yields to a second Ctrl-C.
+    """
     _stop_requested.set()
+    signal.signal(signum, signal.SIG_DFL)
 
 
 def build_node(factory: Callable[[], object], node_name: str) -> Optional[object]:

@@ -69,6 +69,16 @@ def test_a_real_step_is_followed_after_six_windows_with_the_default_smoothing():
     assert 'mean of the last 3 windows 0.950' in monitor.status(0.0).message
 
 
+def test_a_restart_of_the_smoothing_judges_the_next_window_alone():
+    """After a new calibration the old windows' thetas are forgotten: 0.5 x 8 then 1.0 is OK at once."""
+    monitor = HealthMonitor(HealthThresholds())
+    for _ in range(8):
+        monitor.observe(0.5)
+    assert monitor.observe(1.0) == ERROR              # mean of 0.5 x 7 and 1.0
+    monitor.restart_smoothing()
+    assert monitor.observe(1.0) == OK
+
+
 def test_level_smoothing_must_be_a_positive_integer():
     with pytest.raises(InputError, match='level_smoothing'):
         HealthThresholds(level_smoothing=0)

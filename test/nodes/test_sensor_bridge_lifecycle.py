@@ -103,6 +103,13 @@ def test_imu_bridge_follows_configure_activate_deactivate_cleanup(graph):
     wait_for(lambda: statuses[-1].message.startswith('not active'), 20, 'status: not active')
     assert len(blocks) == count                                # nothing published while inactive
 
+    assert graph.transition(name, Transition.TRANSITION_ACTIVATE)          # the pause is not lost samples
+    wait_for(lambda: imu.get_subscription_count() == 1, 20, 'the IMU subscription again')
+    publish_at_1khz(imu, range(2000, 2200))
+    wait_for(lambda: len(blocks) >= count + 4, 20, 'four blocks after re-activation')
+    assert bridge._assembler.lost_samples == 0 and bridge._assembler.problems['gap'] == 0
+    assert graph.transition(name, Transition.TRANSITION_DEACTIVATE)
+
     assert graph.transition(name, Transition.TRANSITION_CLEANUP)
     assert graph.state(name) == 'unconfigured'
     wait_for(lambda: graph.probe.count_publishers('/lc/vibration') == 0, 20, 'the vibration publisher gone')
