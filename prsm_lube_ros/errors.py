@@ -34,3 +34,9 @@ class ConfigError(InputError):
 
 class NotIdentifiable(InputError):
     """Readable data that cannot determine what was asked of them (constants, windows, a verdict)."""
+
+
+def exception_text(err: BaseException) -> str:
+    """``<ExceptionType>: <message on one line>`` (just the type when the message is empty)."""
+    text = ' '.join(str(err).split())
+    return f'{type(err).__name__}: {text}' if text else type(err).__name__

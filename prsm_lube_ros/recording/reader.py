@@ -60,7 +60,7 @@ import yaml
 
 from . import mcap_file, sqlite_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
-from ..errors import ConfigError, RecordingError
+from ..errors import ConfigError, exception_text, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
 
@@ -272,7 +272,8 @@ class _SqliteSource:
 
     ``compression``: ``''``, ``'message'`` (every message a zstd frame) or
     ``'file'`` (every ``.db3.zstd`` file decompressed into a temporary folder
-    that lives as long as this source, at most 64 times its size).
+    that lives as long as this source, at most 64 times its size or 1 GiB,
+    whichever is larger).
     """
 
     def __init__(self, label: str, paths: List[Path], compression: str = ''):
@@ -347,7 +348,7 @@ class _RosbagsSource:
                 self.start_time = reader.start_time if count else None
                 self.end_time = reader.end_time - 1 if count else None
         except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
-            raise RecordingError(f'{path}: not a readable rosbag2 bag ({_reason(err)})') from None
+            raise RecordingError(f'{path}: not a readable rosbag2 bag ({exception_text(err)})') from None
 
     def layout_problem(self, topic: str, kind: str) -> Optional[str]:
         return check_layout(kind, *self.definitions[topic])
@@ -366,7 +367,7 @@ class _RosbagsSource:
                 messages = ((c.topic, t, data) for c, t, data in reader.messages(connections=connections))
                 yield from _pseudo_chunks(counted(messages), self.start_time or 0, self.end_time or 0)
         except Exception as err:  # keep what was read, report the rest in one line
-            on_problem(f'reading stopped early: {_reason(err)}')
+            on_problem(f'reading stopped early: {exception_text(err)}')
             return
         for topic, count in streamed.items():   # rosbags matches metadata.yaml to the storage by QoS too
             if count < self.topics[topic].message_count:
@@ -384,12 +385,7 @@ def _mcap_library_chunks(path: Path, topics: List[str], on_problem: ProblemSink)
                         for _, channel, message in reader.iter_messages(topics=topics, log_time_order=True))
             yield from _pseudo_chunks(messages, 0, 0)
     except Exception as err:
-        on_problem(f'reading stopped early: {_reason(err)}')
-
-
-def _reason(err: BaseException) -> str:
-    text = ' '.join(str(err).split())
-    return f'{type(err).__name__}: {text}' if text else type(err).__name__
+        on_problem(f'reading stopped early: {exception_text(err)}')
 
 
 def _split_index(path: Path) -> tuple:
@@ -439,7 +435,7 @@ def _open_source(path: Path):
         compression = (info.get('compression_mode') or '').lower()
         compression_format = (info.get('compression_format') or '').lower()
     except Exception as err:
-        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({_reason(err)})') from None
+        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({exception_text(err)})') from None
     if missing := [str(f) for f in files if not f.exists()]:
         raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
     if compression in ('', 'none'):

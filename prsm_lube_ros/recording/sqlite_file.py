@@ -19,6 +19,7 @@ from pathlib import Path
 import sqlite3
 from typing import Dict, Iterator, List, Optional, Tuple
 
+from ..errors import exception_text
 from .mcap_file import McapProblem, zstd_frame
 
 #: rows fetched from sqlite3 at a time while streaming
@@ -85,7 +86,7 @@ class SqliteFile:
                         'SELECT topic_type, encoding, encoded_message_definition FROM message_definitions'):
                     self.definitions[str(msgtype)] = (str(encoding), str(text or ''))
         except (sqlite3.Error, TypeError, ValueError) as err:
-            raise SqliteProblem(f'not a rosbag2 sqlite3 database ({_reason(err)})') from None
+            raise SqliteProblem(f'not a rosbag2 sqlite3 database ({exception_text(err)})') from None
         finally:
             connection.close()
 
@@ -119,14 +120,9 @@ class SqliteFile:
                             continue
                     yield topic_id, timestamp, data
         except sqlite3.Error as err:
-            on_problem(f'reading stopped early: {_reason(err)}')
+            on_problem(f'reading stopped early: {exception_text(err)}')
         finally:
             connection.close()
         if malformed:
             on_problem(f'{malformed} row(s) of the messages table without a (zstd) blob and an integer timestamp '
                        'skipped')
-
-
-def _reason(err: BaseException) -> str:
-    text = ' '.join(str(err).split())
-    return f'{type(err).__name__}: {text}' if text else type(err).__name__
