@@ -2,9 +2,22 @@
 # SPDX-License-Identifier: Apache-2.0
 """Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
 
-An effect with several forms (:meth:`.effects.Effect.variants`, e.g. the
-shaft compliance of each bearing arrangement) is fitted in each; the form with
-the lowest BIC stands for it.
+An effect with several physical forms (:meth:`.effects.Effect.variants`: the
+shaft stiffness of each bearing arrangement, a mode below, inside or above the
+speed band, the viscosity laws, depletion exponential or linear, with or
+without recovery at rest) is fitted in each on all windows; the form with the
+lowest BIC stands for it, except that a form with more parameters than the
+best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`.
+Only the chosen form is scored on held-out runs.  Its name is in the JSON
+(``form``, and ``forms`` with every form's BIC).
+
+Two effects at once (forward selection): once an effect is named, the
+residual it leaves is tested the same way (lack of fit and located pattern);
+when something remains, each other candidate (in its own chosen form) is
+fitted together with the first, and the best pair is kept when the second
+effect earns its parameters over the first alone (BIC by :data:`BIC_MARGIN`
+and held-out error by :data:`MIN_GAIN`).  Both are then reported (``effects``
+in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
@@ -58,6 +71,8 @@ BIC_MARGIN = 10.0
 MIN_GAIN = 0.05
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative).
 EVIDENCE_TOLERANCE = 0.02
+#: BIC drop a form with more parameters needs over the simpler forms of the same effect.
+FORM_MARGIN = 6.0
 #: Runner-up gain, relative to the leader's, from which the two are tested against each other.
 TIE_RATIO = 0.5
 #: |Spearman| over runs from which two covariates count as confounded.
@@ -78,11 +93,14 @@ class Candidate:
     delta_bic: float = math.nan
     evidence: str = ''
     evidence_against: str = ''
+    form: str = ''              # the chosen form's name
+    forms: list = field(default_factory=list)   # (form name, BIC relative to the chosen form)
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
         out = {'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
-               'reason': self.reason, 'equations': self.effect.equations,
+               'reason': self.reason, 'equations': self.effect.equations, 'form': self.form,
+               'forms': [{'form': name, 'delta_bic': _num(delta)} for name, delta in self.forms],
                'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
         if self.fit is not None:
             c = self.fit.constants
@@ -93,6 +111,28 @@ class Candidate:
                         'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
                         'explanation': self.effect.describe(self.fit.params)})
         return out
+
+
+@dataclass
+class SecondEffect:
+    """A second effect named with the first: the pair's fit and what the second adds."""
+
+    candidate: Candidate        # the second effect alone (its form and first-round fit)
+    fit: ModelFit               # both effects fitted together
+    params: dict                # the second effect's parameters in the joint fit
+    gain: float                 # 1 - cv_rmse(pair) / cv_rmse(first alone)
+    delta_bic: float            # BIC(pair) - BIC(first alone)
+
+    @property
+    def effect(self) -> Effect:
+        """The second effect (its chosen form)."""
+        return self.candidate.effect
+
+    def as_json(self) -> dict:
+        """Entry of the ``effects`` list."""
+        return {'effect': self.effect.id, 'form': self.candidate.form, 'params': _clean(self.params),
+                'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
+                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse)}
 
 
 @dataclass
@@ -111,6 +151,7 @@ class Diagnosis:
     confounding: list = field(default_factory=list)   # Confounding findings
     baseline_fit_test: LackOfFit | None = None
     chosen_fit_test: LackOfFit | None = None
+    second: 'SecondEffect | None' = None     # a second effect named with the first (forward selection)
 
     @property
     def confident(self) -> bool:
@@ -145,15 +186,21 @@ class Diagnosis:
         best = None
         if self.best is not None:
             f = self.best.fit
-            best = {'effect': self.best.effect.id, 'rmse': _num(f.rmse), 'cv_rmse': _num(f.cv_rmse),
-                    'cv_run_rmse': _num(f.cv_run_rmse),
+            best = {'effect': self.best.effect.id, 'form': self.best.form, 'rmse': _num(f.rmse),
+                    'cv_rmse': _num(f.cv_rmse), 'cv_run_rmse': _num(f.cv_run_rmse),
                     'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
                     'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
                     'status': self.best.status}
+        effects = []
+        if self.chosen is not None:
+            effects.append({key: best[key] for key in ('effect', 'form', 'params', 'explanation', 'gain',
+                                                         'delta_bic', 'cv_rmse')})
+            if self.second is not None:
+                effects.append(self.second.as_json())
         table = self.table
         adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
                     'chosen': self.chosen_fit_test.as_json() if self.chosen_fit_test else None}
-        return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy,
+        return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy, 'effects': effects,
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
                              'cv_run_rmse': _num(base.cv_run_rmse),
@@ -211,20 +258,39 @@ def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
     return own - bic(reference.log_residual, reference.n_params, n_eff)
 
 
+def _choose_form(table, forms: list, folds):
+    """Fit every form (Effects of one ID) on all windows; the chosen form's fit (with held-out scores) and all BICs.
+
+    Forms are compared on one effective sample size: each fit's own would favour the form that leaves the
+    more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
+    """
+    fits = [fit_model(table, form, folds=[]) for form in forms]
+    n_common = min(f.n_eff for f in fits)
+    scores = [bic(f.log_residual, f.n_params, n_common) for f in fits]
+    fewest = min(f.n_params for f in fits)
+    simple = min((i for i, f in enumerate(fits) if f.n_params == fewest), key=lambda i: scores[i])
+    richer = [i for i, f in enumerate(fits) if f.n_params > fewest]
+    chosen = simple
+    if richer:
+        best_richer = min(richer, key=lambda i: scores[i])
+        if scores[best_richer] <= scores[simple] - FORM_MARGIN:
+            chosen = best_richer
+    fit = fit_model(table, forms[chosen], folds) if folds else fits[chosen]
+    return forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)]
+
+
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
     reason = effect.applicable(table)
     if reason:
-        return Candidate(effect, None, 'not testable', reason)
-    fits = [(fit_model(table, form, folds), form) for form in effect.variants()]
-    # Forms compared on one effective sample size: each fit's own would favour the form that leaves the
-    # more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
-    n_common = min(f.n_eff for f, _ in fits)
-    fit, effect = min(fits, key=lambda pair: bic(pair[0].log_residual, pair[0].n_params, n_common))
+        return Candidate(effect, None, 'not testable', reason, form=effect.form)
+    testable = [form for form in effect.variants() if not form.applicable(table)]
+    effect, fit, forms = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
     unphysical = fit.unphysical()
-    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence)
+    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
+                          form=effect.form_name(fit.params, table, location), forms=forms)
     if unphysical:
         candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
@@ -254,6 +320,36 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -BIC_MARGIN
     runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -BIC_MARGIN
     return leader_adds, runner_adds
+
+
+def _joint_starts(both: CombinedEffect, first: Candidate, second: Candidate) -> list:
+    """Starts of a joint fit: both effects at their own fitted values, then a few of the pair grid."""
+    by_id = {first.effect.id: first.fit.vector[3:], second.effect.id: second.fit.vector[3:]}
+    return [np.r_[by_id[both.first.id], by_id[both.second.id]]] + list(both.starts())[:4]
+
+
+def _second_effect(table, first: Candidate, candidates, folds) -> SecondEffect | None:
+    """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
+
+    Tried only when the first effect leaves a lack of fit or a located pattern.
+    """
+    remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
+    if not remaining.significant and locate(table, first.fit.log_residual).located == 'none':
+        return None
+    chosen = None
+    for cand in candidates:
+        if cand.fit is None or cand.effect.id == first.effect.id:
+            continue
+        both = CombinedEffect(first.effect, cand.effect)
+        fit = fit_model(table, both, folds, starts=_joint_starts(both, first, cand))
+        if fit.unphysical() or not first.fit.cv_rmse > 0:
+            continue
+        gain = 1.0 - fit.cv_rmse / first.fit.cv_rmse
+        delta = _delta_bic(fit, first.fit)
+        if delta <= -BIC_MARGIN and gain >= MIN_GAIN and (chosen is None or fit.cv_rmse < chosen.fit.cv_rmse):
+            params = fit.params['first' if both.first is cand.effect else 'second']
+            chosen = SecondEffect(cand, fit, params, gain, delta)
+    return chosen
 
 
 def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
@@ -397,12 +493,20 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
                      'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
                      'adequacy cannot be confirmed')
-    chosen_test = None
+    chosen_test, second = None, None
     if best is not None and verdict == best.effect.id:
-        chosen_test = lack_of_fit(table, best.fit.log_residual, best.fit.n_params)
+        second = _second_effect(table, best, candidates, folds)
+        named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
+        final = best.fit if second is None else second.fit
+        if second is not None:
+            notes.append(f'two effects at once: {second.effect.id} ({second.candidate.form}) explains part of what '
+                         f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '
+                         f'BIC {second.delta_bic:+.0f}')
+        chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
         if chosen_test.significant:
-            notes.append(f'{best.effect.id} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
+            notes.append(f'{named} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
                          f'(p = {chosen_test.p_value:.2g}): it explains part of the mismatch, not all')
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
                      tied=tied, notes=notes, what_to_record=advice, table=table,
-                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test)
+                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
+                     second=second)
