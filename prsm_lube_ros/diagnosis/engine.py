@@ -7,9 +7,11 @@ shaft stiffness of each bearing arrangement, a mode below, inside or above the
 speed band, the viscosity laws, depletion exponential or linear, with or
 without recovery at rest) is fitted in each on all windows; the form with the
 lowest BIC stands for it, except that a form with more parameters than the
-best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`.
-Only the chosen form is scored on held-out runs.  Its name is in the JSON
-(``form``, and ``forms`` with every form's BIC).
+best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`;
+forms with as many parameters within :data:`FORM_TIE` of it are named with it
+("Vogel or Walther (ASTM D341)": the data fit them equally well).  Only the
+chosen form is scored on held-out runs.  Its name is in the JSON (``form``,
+and ``forms`` with every form's BIC relative to it).
 
 Two effects at once (forward selection): once an effect is named, the
 residual it leaves is tested the same way (lack of fit and located pattern);
@@ -73,6 +75,8 @@ MIN_GAIN = 0.05
 EVIDENCE_TOLERANCE = 0.02
 #: BIC drop a form with more parameters needs over the simpler forms of the same effect.
 FORM_MARGIN = 6.0
+#: BIC difference below which two forms with as many parameters are reported together (a tie).
+FORM_TIE = 2.0
 #: Runner-up gain, relative to the leader's, from which the two are tested against each other.
 TIE_RATIO = 0.5
 #: |Spearman| over runs from which two covariates count as confounded.
@@ -125,7 +129,7 @@ class SecondEffect:
 
     @property
     def effect(self) -> Effect:
-        """The second effect (its chosen form)."""
+        """The second effect in its chosen form."""
         return self.candidate.effect
 
     def as_json(self) -> dict:
@@ -193,8 +197,8 @@ class Diagnosis:
                     'status': self.best.status}
         effects = []
         if self.chosen is not None:
-            effects.append({key: best[key] for key in ('effect', 'form', 'params', 'explanation', 'gain',
-                                                         'delta_bic', 'cv_rmse')})
+            keys = ('effect', 'form', 'params', 'explanation', 'gain', 'delta_bic', 'cv_rmse')
+            effects.append({key: best[key] for key in keys})
             if self.second is not None:
                 effects.append(self.second.as_json())
         table = self.table
@@ -276,7 +280,10 @@ def _choose_form(table, forms: list, folds):
         if scores[best_richer] <= scores[simple] - FORM_MARGIN:
             chosen = best_richer
     fit = fit_model(table, forms[chosen], folds) if folds else fits[chosen]
-    return forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)]
+    ties = [forms[i].form for i, f in enumerate(fits)
+            if i != chosen and f.n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
+    return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
+            ties)
 
 
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
@@ -284,13 +291,18 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     if reason:
         return Candidate(effect, None, 'not testable', reason, form=effect.form)
     testable = [form for form in effect.variants() if not form.applicable(table)]
-    effect, fit, forms = _choose_form(table, testable, folds)
+    effect, fit, forms, ties = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
     unphysical = fit.unphysical()
+    form = effect.form_name(fit.params, table, location)
+    if len(forms) == 1:
+        forms = [(form, 0.0)]
+    if ties:
+        form = ' or '.join([form, *ties]) + ' (the data fit these forms equally well)'
     candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
-                          form=effect.form_name(fit.params, table, location), forms=forms)
+                          form=form, forms=forms)
     if unphysical:
         candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:

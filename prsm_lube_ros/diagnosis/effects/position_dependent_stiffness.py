@@ -78,8 +78,9 @@ class PositionDependentStiffness(Effect, law.Extension):
 
     def bounds(self):
         """c s and the offset(s) in their ranges."""
-        n = len(self.parameter_names)
-        return np.r_[SCALE_RANGE[0], np.full(n - 1, OFFSET_RANGE[0])], np.r_[SCALE_RANGE[1], np.full(n - 1, OFFSET_RANGE[1])]
+        offsets = len(self.parameter_names) - 1
+        return (np.r_[SCALE_RANGE[0], np.full(offsets, OFFSET_RANGE[0])],
+                np.r_[SCALE_RANGE[1], np.full(offsets, OFFSET_RANGE[1])])
 
     def starts(self):
         """Weak and strong compliance, bearings near and far."""

@@ -151,4 +151,3 @@ class WaltherViscosity(ThermalViscosity):
                                   params['reference_viscosity'])
         return (f'Walther / ASTM D341 law, nu_ref = {params["reference_viscosity"]:.3g} mm^2/s at T_ref, '
                 f'B = {slope:.2f}')
-

@@ -83,7 +83,6 @@ class BackgroundVibration:
         require(min(shares) >= 0 and abs(sum(shares) - 1.0) <= 1e-9,
                 f'background_vibration shares must be >= 0 and add up to 1, got {shares}')
 
-
     @property
     def form(self) -> str:
         """Which of :data:`FORMS` the power shares make."""

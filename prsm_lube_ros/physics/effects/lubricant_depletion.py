@@ -95,19 +95,20 @@ class LubricantDepletion:
 
     N_rev is the screw revolutions (either direction) run since the last
     lubrication, i.e. since the start of the bag.  ``form`` is one of
-    :data:`FORMS`; ``recovery_time`` tau_r (s) of the loss at rest, infinite
+    :data:`FORMS`; ``recovery_time`` tau_r (s) of the loss at rest, None
     for none (the rig simulator runs without recovery; the window-table
     simulator applies it).
     """
 
     depletion_revolutions: float   # N_d, revolutions
     form: str = 'exponential'
-    recovery_time: float = math.inf   # s, tau_r
+    recovery_time: float | None = None   # s, tau_r (None: no recovery)
 
     def __post_init__(self):
         """Reject non-physical parameters."""
-        require_all_positive('lubricant_depletion', depletion_revolutions=self.depletion_revolutions,
-                             recovery_time=self.recovery_time)
+        require_all_positive('lubricant_depletion', depletion_revolutions=self.depletion_revolutions)
+        if self.recovery_time is not None:
+            require_all_positive('lubricant_depletion', recovery_time=self.recovery_time)
         require(self.form in FORMS, f'lubricant_depletion form must be one of {", ".join(FORMS)}, '
                                     f'got {self.form!r}')
 
