@@ -99,6 +99,8 @@ class Candidate:
     evidence_against: str = ''
     form: str = ''              # the chosen form's name
     forms: list = field(default_factory=list)   # (form name, BIC relative to the chosen form)
+    family: Effect | None = None                # the registered effect (all its forms)
+    form_vectors: dict = field(default_factory=dict)   # form name -> its fitted internal parameters alone
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
@@ -121,22 +123,27 @@ class Candidate:
 class SecondEffect:
     """A second effect named with the first: the pair's fit and what the second adds."""
 
-    candidate: Candidate        # the second effect alone (its form and first-round fit)
+    candidate: Candidate        # the second effect alone (its first-round fit)
     fit: ModelFit               # both effects fitted together
     params: dict                # the second effect's parameters in the joint fit
     gain: float                 # 1 - cv_rmse(pair) / cv_rmse(first alone)
     delta_bic: float            # BIC(pair) - BIC(first alone)
-
-    @property
-    def effect(self) -> Effect:
-        """The second effect in its chosen form."""
-        return self.candidate.effect
+    effect: Effect              # the second effect in the form chosen on top of the first
+    form: str                   # its name
+    first_effect: Effect        # the first effect in its form in the pair
+    first_params: dict          # and its parameters in the joint fit
+    first_form: str
 
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
-        return {'effect': self.effect.id, 'form': self.candidate.form, 'params': _clean(self.params),
+        return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
                 'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
                 'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse)}
+
+    def first_as_json(self) -> dict:
+        """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
+        return {'effect': self.first_effect.id, 'form': self.first_form, 'params': _clean(self.first_params),
+                'explanation': self.first_effect.describe(self.first_params)}
 
 
 @dataclass
@@ -200,6 +207,7 @@ class Diagnosis:
             keys = ('effect', 'form', 'params', 'explanation', 'gain', 'delta_bic', 'cv_rmse')
             effects.append({key: best[key] for key in keys})
             if self.second is not None:
+                effects[0].update(self.second.first_as_json())
                 effects.append(self.second.as_json())
         table = self.table
         adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
@@ -282,16 +290,18 @@ def _choose_form(table, forms: list, folds):
     fit = fit_model(table, forms[chosen], folds) if folds else fits[chosen]
     ties = [forms[i].form for i, f in enumerate(fits)
             if i != chosen and f.n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
+    vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
     return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
-            ties)
+            ties, vectors)
 
 
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
+    family = effect
     reason = effect.applicable(table)
     if reason:
-        return Candidate(effect, None, 'not testable', reason, form=effect.form)
+        return Candidate(effect, None, 'not testable', reason, form=effect.form, family=family)
     testable = [form for form in effect.variants() if not form.applicable(table)]
-    effect, fit, forms, ties = _choose_form(table, testable, folds)
+    effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
@@ -302,7 +312,7 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     if ties:
         form = ' or '.join([form, *ties]) + ' (the data fit these forms equally well)'
     candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
-                          form=form, forms=forms)
+                          form=form, forms=forms, family=family, form_vectors=vectors)
     if unphysical:
         candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
@@ -334,13 +344,43 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     return leader_adds, runner_adds
 
 
-def _joint_starts(both: CombinedEffect, first: Candidate, second: Candidate) -> list:
-    """Starts of a joint fit: both effects at their own fitted values, then a few of the pair grid."""
-    by_id = {first.effect.id: first.fit.vector[3:], second.effect.id: second.fit.vector[3:]}
-    return [np.r_[by_id[both.first.id], by_id[both.second.id]]] + list(both.starts())[:4]
+def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
+    form = effect.form_name(params, table, location)
+    return ' or '.join([form, *ties]) + ' (the data fit these forms equally well)' if ties else form
 
 
-def _second_effect(table, first: Candidate, candidates, folds) -> SecondEffect | None:
+def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
+    """The best of ``combos`` (CombinedEffects, chosen by BIC) when it earns its parameters over ``reference``.
+
+    Earning: physical constants, BIC lower by :data:`BIC_MARGIN` and held-out
+    error lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
+    """
+    combos = [both for both in combos if not both.applicable(table)]
+    if not combos or not reference.cv_rmse > 0:
+        return None
+    both, fit, _, ties, _ = _choose_form(table, combos, folds)
+    if fit.unphysical():
+        return None
+    gain = 1.0 - fit.cv_rmse / reference.cv_rmse
+    delta = _delta_bic(fit, reference)
+    if delta > -BIC_MARGIN or gain < MIN_GAIN:
+        return None
+    kept = both.first if both.added is both.second else both.second
+    params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
+    return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
+                                                                                 ties),
+                        kept, first_params, kept.form_name(first_params, table, location))
+
+
+def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:
+    """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC."""
+    family = other.family or other.effect
+    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
+              for form in family.variants()]
+    return _fit_pair(table, combos, first.fit, other, folds, location)
+
+
+def _second_effect(table, first: Candidate, candidates, folds, location) -> SecondEffect | None:
     """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
 
     Tried only when the first effect leaves a lack of fit or a located pattern.
@@ -352,16 +392,39 @@ def _second_effect(table, first: Candidate, candidates, folds) -> SecondEffect |
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
-        both = CombinedEffect(first.effect, cand.effect)
-        fit = fit_model(table, both, folds, starts=_joint_starts(both, first, cand))
-        if fit.unphysical() or not first.fit.cv_rmse > 0:
-            continue
-        gain = 1.0 - fit.cv_rmse / first.fit.cv_rmse
-        delta = _delta_bic(fit, first.fit)
-        if delta <= -BIC_MARGIN and gain >= MIN_GAIN and (chosen is None or fit.cv_rmse < chosen.fit.cv_rmse):
-            params = fit.params['first' if both.first is cand.effect else 'second']
-            chosen = SecondEffect(cand, fit, params, gain, delta)
+        second = _add_second(table, first, cand, folds, location)
+        if second is not None and (chosen is None or second.fit.cv_rmse < chosen.fit.cv_rmse):
+            chosen = second
     return chosen
+
+
+#: Candidates (by held-out gain alone) tried in pairs when none earns its parameters alone.
+PAIR_POOL = 3
+
+
+def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
+    """Two effects that only together explain the mismatch: ``(first, second)`` or None.
+
+    Among the :data:`PAIR_POOL` candidates with the largest held-out gains
+    alone, each pair is fitted (the larger-gain one first); a pair counts when
+    it earns its parameters over the paper's model and over each effect alone.
+    """
+    pool = sorted([c for c in ranked if c.fit is not None and c.gain > 0], key=lambda c: -c.gain)[:PAIR_POOL]
+    best = None
+    for i, first in enumerate(pool):
+        for other in pool[i + 1:]:
+            combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
+                      for a in (first.family or first.effect).variants()
+                      for b in (other.family or other.effect).variants()]
+            second = _fit_pair(table, combos, first.fit, other, folds, location)
+            if second is None:
+                continue
+            pair = second.fit
+            earns = (_delta_bic(pair, baseline) <= -BIC_MARGIN and _delta_bic(pair, other.fit) <= -BIC_MARGIN
+                     and 1.0 - pair.cv_rmse / baseline.cv_rmse >= MIN_GAIN)
+            if earns and (best is None or pair.cv_rmse < best[1].fit.cv_rmse):
+                best = (first, second)
+    return best
 
 
 def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
@@ -452,7 +515,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     ranked = sorted(fitted, key=lambda c: c.fit.cv_rmse)
     earning = [c for c in ranked if c.status == 'earns']
     best = earning[0] if earning else (ranked[0] if ranked else None)
-    verdict, tied, advice = ADEQUATE, [], ''
+    verdict, tied, advice, second = ADEQUATE, [], '', None
     if earning:
         verdict = best.effect.id
         for runner in earning[1:]:
@@ -489,7 +552,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 break
     else:
         pattern = location.located not in ('none', 'spectrum')
-        if baseline_test.significant or pattern or baseline.unphysical():
+        pair = (_pair_when_none_earns(table, ranked, baseline, folds, location)
+                if baseline_test.significant or pattern or baseline.unphysical() else None)
+        if pair is not None:
+            best, second = pair
+            best.status = 'earns'
+            best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
+            verdict = best.effect.id
+        elif baseline_test.significant or pattern or baseline.unphysical():
             verdict = UNEXPLAINED
             advice = 'a candidate for the located mismatch is missing from the catalogue'
             size = (f'the paper\'s model misses by {100 * baseline_test.residual_rms:.1f} % RMS, '
@@ -505,13 +575,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
                      'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
                      'adequacy cannot be confirmed')
-    chosen_test, second = None, None
+    chosen_test = None
     if best is not None and verdict == best.effect.id:
-        second = _second_effect(table, best, candidates, folds)
+        if second is None:
+            second = _second_effect(table, best, candidates, folds, location)
         named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
         final = best.fit if second is None else second.fit
         if second is not None:
-            notes.append(f'two effects at once: {second.effect.id} ({second.candidate.form}) explains part of what '
+            notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
                          f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '
                          f'BIC {second.delta_bic:+.0f}')
         chosen_test = lack_of_fit(table, final.log_residual, final.n_params)

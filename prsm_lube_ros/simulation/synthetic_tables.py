@@ -105,10 +105,12 @@ BACKGROUND_SHARES = {background_vibration.FORMS[0]: (0.35, 0.3), background_vibr
                      background_vibration.FORMS[2]: (0.1, 0.8)}
 
 
-def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: SyntheticPlan | None = None,
+def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan | None = None,
                     params: dict | None = None, order=None) -> tuple[WindowTable, dict]:
     """A window table of ``plan.sessions`` sessions with ``effect`` hidden (None: none) and its truth.
 
+    ``effect`` is one effect ID or a tuple of IDs (several effects at once;
+    ``params`` then maps each ID to its parameters, missing ones drawn).
     ``order``: run order as indices into the condition list (default: random or plan order).
     Returns ``(table, truth)``, truth with the effect, its parameters and the true theta per window.
     position_dependent_stiffness with ``params`` ``{'arrangement': one of the law's ARRANGEMENTS,
@@ -119,7 +121,14 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
     (r at the top speed: the mode above, inside or below the band).
     """
     plan = plan or SyntheticPlan()
-    params = dict(params) if params is not None else (_draw_effect(effect, rng, plan) if effect else {})
+    if effect is None or isinstance(effect, str):
+        given = {effect: params} if effect else {}
+    else:
+        given = {name: (params or {}).get(name) for name in effect}
+    laws = {name: dict(p) if p is not None else _draw_effect(name, rng, plan) for name, p in given.items()}
+    stiff, res = laws.get('position_dependent_stiffness'), laws.get('resonance')
+    heat, loss, noise_floor = (laws.get('thermal_viscosity'), laws.get('lubricant_depletion'),
+                               laws.get('background_vibration'))
     conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
     if order is None:
         order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
@@ -135,8 +144,8 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
         session = run // per_session
         if run and run % per_session == 0:
             revs, clock, depleted = 0.0, 0.0, 0.0   # relubricated; a new recording starts
-            if effect == 'thermal_viscosity':
-                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / params['tau'])
+            if heat:
+                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / heat['tau'])
         speed, load = conditions[index]
         nut_speed = plan.lead * speed / (2 * math.pi)
         n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
@@ -145,44 +154,43 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
             clock += plan.window
             revs += speed * plan.window / (2 * math.pi)
             depleted += speed * plan.window / (2 * math.pi)
-            if effect == 'thermal_viscosity':
-                target = plan.ambient + params['rise']
-                temp = target + (temp - target) * math.exp(-plan.window / params['tau'])
+            if heat:
+                target = plan.ambient + heat['rise']
+                temp = target + (temp - target) * math.exp(-plan.window / heat['tau'])
             position = (k + 0.5) * plan.window * nut_speed
             theta = plan.theta
             film = 1.0
-            if effect == 'lubricant_depletion':
-                form = params.get('form', 'exponential')
-                fall = -math.log1p(-params['fall']) if form == 'exponential' else params['fall']
-                rate = fall / total_revs
-                theta *= float(depletion.theta_factor(depleted, rate, form))
-            if effect == 'thermal_viscosity':
-                film = float(thermal.film_factor(temp, plan.ambient, params['beta'], params.get('law', 'exponential'),
-                                                 params.get('shape', math.nan)))
+            if loss:
+                form = loss.get('form', 'exponential')
+                fall = -math.log1p(-loss['fall']) if form == 'exponential' else loss['fall']
+                theta *= float(depletion.theta_factor(depleted, fall / total_revs, form))
+            if heat:
+                film = float(thermal.film_factor(temp, plan.ambient, heat['beta'], heat.get('law', 'exponential'),
+                                                 heat.get('shape', math.nan)))
             a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
             amplitude = a22
-            if effect == 'position_dependent_stiffness' and 'contact_ratio' in params:
+            if stiff and 'contact_ratio' in stiff:
                 # Any arrangement through the law: EA = 1, contact_ratio = k_c / (E A) in 1/m.
-                shaft = stiffness.shaft_stiffness_for(params['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
-                                                      plan.stroke, params['bearing_before'], params['bearing_after'])
-                contact = stiffness.contact_stiffness_at(load, params['contact_ratio'], float(np.mean(plan.loads)))
+                shaft = stiffness.shaft_stiffness_for(stiff['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
+                                                      plan.stroke, stiff['bearing_before'], stiff['bearing_after'])
+                contact = stiffness.contact_stiffness_at(load, stiff['contact_ratio'], float(np.mean(plan.loads)))
                 amplitude *= float(stiffness.series_stiffness_amplification(contact, shaft))
-            elif effect == 'position_dependent_stiffness':
-                length = params['free_length_start'] + (params['free_length_end']
-                                                        - params['free_length_start']) * position / plan.stroke
-                contact = stiffness.contact_stiffness_at(load, params['ratio_long'] / params['long_length'],
+            elif stiff:
+                length = stiff['free_length_start'] + (stiff['free_length_end']
+                                                       - stiff['free_length_start']) * position / plan.stroke
+                contact = stiffness.contact_stiffness_at(load, stiff['ratio_long'] / stiff['long_length'],
                                                          float(np.mean(plan.loads)))
                 amplitude *= float(stiffness.series_stiffness_amplification(contact, 1.0 / length))
-            elif effect == 'resonance':
-                r = params['top_ratio'] * speed / params['top_speed']
-                amplitude *= float(resonance.magnification(r, params['damping_ratio']))
+            if res:
+                r = res['top_ratio'] * speed / res['top_speed']
+                amplitude *= float(resonance.magnification(r, res['damping_ratio']))
             noise = math.exp(run_gain + rng.normal(0.0, plan.window_noise))
             amplitude *= noise
             background = 0.0
-            if effect == 'background_vibration':
+            if noise_floor:
                 slow = min(plan.speeds_rpm) * math.pi / 30
                 reference = float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants))
-                background = params['fraction'] * reference
+                background = noise_floor['fraction'] * reference
                 amplitude = float(background_vibration.total_amplitude(amplitude, background))
             rows['speed'].append(speed * (1 + rng.normal(0, 0.002)))
             rows['load'].append(load * (1 + rng.normal(0, 0.005)))
@@ -197,17 +205,19 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
             a22_list.append(a22)
             if plan.spectrum_bins:
                 spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
-                                         params.get('tones', ()), rng, params.get('form', '')))
+                                         (noise_floor or {}).get('tones', ()), rng,
+                                         (noise_floor or {}).get('form', '')))
         clock += plan.rest
-        if effect == 'lubricant_depletion' and params.get('recovery_time'):
-            depleted *= math.exp(-plan.rest / params['recovery_time'])
-        if effect == 'thermal_viscosity':
-            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / params['tau'])
+        if loss and loss.get('recovery_time'):
+            depleted *= math.exp(-plan.rest / loss['recovery_time'])
+        if heat:
+            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / heat['tau'])
     resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
     table = WindowTable(theta=plan.theta,
                         spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
-    truth = {'effect': effect, 'params': params, 'theta_effective': np.array(theta_eff),
-             'amplitude_eq22': np.array(a22_list)}
+    single = effect is None or isinstance(effect, str)
+    truth = {'effect': effect, 'params': laws.get(effect, {}) if single else laws,
+             'theta_effective': np.array(theta_eff), 'amplitude_eq22': np.array(a22_list)}
     return table, truth
 
 

@@ -19,7 +19,7 @@ FRACTION_RANGE = (0.0, 1.5)
 #: Smallest share of the power at the lowest speed in fixed spectral lines that counts as evidence.
 MIN_LINE_SHARE = 1e-3
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
-LINE_SHARE = 0.6
+LINE_SHARE = 0.4
 
 
 @register
