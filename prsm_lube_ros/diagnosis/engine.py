@@ -295,6 +295,13 @@ def _choose_form(table, forms: list, folds):
             ties, vectors)
 
 
+def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
+    """The form the fit shows, with the forms that fit as well (each named once)."""
+    form = effect.form_name(params, table, location)
+    others = [t for t in dict.fromkeys(ties) if t not in (form, effect.form)]
+    return ' or '.join([form, *others]) + ' (the data fit these forms equally well)' if others else form
+
+
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
     family = effect
     reason = effect.applicable(table)
@@ -306,11 +313,9 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
     unphysical = fit.unphysical()
-    form = effect.form_name(fit.params, table, location)
+    form = _named_form(effect, fit.params, table, location, ties)
     if len(forms) == 1:
         forms = [(form, 0.0)]
-    if ties:
-        form = ' or '.join([form, *ties]) + ' (the data fit these forms equally well)'
     candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
                           form=form, forms=forms, family=family, form_vectors=vectors)
     if unphysical:
@@ -342,11 +347,6 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -BIC_MARGIN
     runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -BIC_MARGIN
     return leader_adds, runner_adds
-
-
-def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
-    form = effect.form_name(params, table, location)
-    return ' or '.join([form, *ties]) + ' (the data fit these forms equally well)' if ties else form
 
 
 def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
@@ -409,7 +409,8 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
     alone, each pair is fitted (the larger-gain one first); a pair counts when
     it earns its parameters over the paper's model and over each effect alone.
     """
-    pool = sorted([c for c in ranked if c.fit is not None and c.gain > 0], key=lambda c: -c.gain)[:PAIR_POOL]
+    pool = sorted([c for c in ranked if c.fit is not None and math.isfinite(c.gain)], key=lambda c: -c.gain)
+    pool = pool[:PAIR_POOL]
     best = None
     for i, first in enumerate(pool):
         for other in pool[i + 1:]:
