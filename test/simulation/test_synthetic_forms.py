@@ -15,7 +15,8 @@ def test_two_effects_at_once_both_act():
               'position_dependent_stiffness': {'arrangement': 'fixed-fixed', 'bearing_before': 0.02,
                                                'bearing_after': 0.02, 'contact_ratio': 4.7}}
     table, truth = synthetic_table(np.random.default_rng(1), tuple(params), PLAN, params=params)
-    alone, _ = synthetic_table(np.random.default_rng(1), 'lubricant_depletion', PLAN, params=params['lubricant_depletion'])
+    alone, _ = synthetic_table(np.random.default_rng(1), 'lubricant_depletion', PLAN,
+                               params=params['lubricant_depletion'])
     assert truth['params'] == params
     assert truth['theta_effective'][-1] == pytest.approx(0.8, rel=0.02)
     # The arch raises the amplitude mid-travel on top of the depletion.
