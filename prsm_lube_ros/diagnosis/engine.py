@@ -177,6 +177,16 @@ class Diagnosis:
         """The candidate the verdict names (None for adequate, ambiguous, unexplained)."""
         return self.best if self.best is not None and self.verdict == self.best.effect.id else None
 
+    def named_effects(self) -> list:
+        """``(effect, form, params)`` of each effect the verdict names: none, one, or two (both from the joint fit)."""
+        if self.chosen is None:
+            return []
+        if self.second is None:
+            return [(self.chosen.effect, self.chosen.form, self.chosen.fit.params)]
+        second = self.second
+        return [(second.first_effect, second.first_form, second.first_params),
+                (second.effect, second.form, second.params)]
+
     def calibration(self) -> Calibration:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
         fit = self.chosen.fit if self.chosen is not None else self.baseline
