@@ -68,7 +68,7 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
         # (1 + rho_long) / (1 + rho_long short/long) = 1 / (1 - change)
         rho_long = (1 / (1 - change) - 1) / (1 - (short / long) / (1 - change))
         return {'free_length_start': length_start, 'free_length_end': length_end,
-                'ratio_long': rho_long, 'long_length': long, 'change': change}
+                'ratio_long': rho_long, 'long_length': long, 'change': change, 'arrangement': arrangement}
     if effect == 'resonance':
         band = ('above', 'inside', 'below')[int(rng.integers(3))]
         if band == 'above':
