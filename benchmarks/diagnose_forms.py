@@ -108,7 +108,8 @@ def main(argv=None) -> int:
     lines = ['# Diagnose: each form of each effect, and two effects at once', '',
              f'Command: `python benchmarks/diagnose_forms.py --seeds {args.seeds} --pair-seeds {args.pair_seeds}` '
              f'({time.time() - started:.0f} s). Window tables of the window-table simulator, form and strength '
-             'drawn at random per seed, two sessions per case; "warm" plan: 5 s rests between runs instead of 30 s.', '',
+             'drawn at random per seed, two sessions per case; "warm" plan: 5 s rests between runs instead of 30 s.',
+             '',
              '| effect | true form | plan | cases | effect named | form right | form among named |',
              '|---|---|---|---|---|---|---|']
     for (effect, form, plan), (n, named, right, among) in sorted(rows.items()):
