@@ -390,22 +390,27 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location) -> S
     return _fit_pair(table, combos, first.fit, other, folds, location)
 
 
-def _second_effect(table, first: Candidate, candidates, folds, location) -> SecondEffect | None:
+def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
     """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
 
     Tried only when the first effect leaves a lack of fit or a located pattern.
+    Returns ``(second or None, tied)``: two that earn with BICs within
+    :data:`BIC_MARGIN` of each other tie, and neither is named.
     """
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
     if not remaining.significant and locate(table, first.fit.log_residual).located == 'none':
-        return None
-    chosen = None
+        return None, []
+    earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
         second = _add_second(table, first, cand, folds, location)
-        if second is not None and (chosen is None or second.fit.cv_rmse < chosen.fit.cv_rmse):
-            chosen = second
-    return chosen
+        if second is not None:
+            earning.append(second)
+    earning.sort(key=lambda second: second.fit.cv_rmse)
+    if len(earning) > 1 and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
+        return None, earning[:2]
+    return (earning[0] if earning else None), []
 
 
 #: Candidates (by held-out gain alone) tried in pairs when none earns its parameters alone.
@@ -589,7 +594,12 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     chosen_test = None
     if best is not None and verdict == best.effect.id:
         if second is None:
-            second = _second_effect(table, best, candidates, folds, location)
+            second, tie = _second_effect(table, best, candidates, folds, location)
+            if tie:
+                a, b = tie
+                notes.append(f'{best.effect.id} leaves a mismatch that {a.effect.id} and {b.effect.id} explain '
+                             'equally well on top of it: no second effect is named')
+                advice = _separation_advice(a.effect, b.effect)
         named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
         final = best.fit if second is None else second.fit
         if second is not None:
