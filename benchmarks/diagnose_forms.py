@@ -5,8 +5,8 @@
 
 Window tables from the window-table simulator
 (:mod:`prsm_lube_ros.simulation.synthetic_tables`), two sessions of the six
-conditions in random order each, each effect's form and
-strength drawn at random over its physical ranges (seed by seed), diagnosed
+conditions in random order each; for every form of each effect ``--seeds``
+cases, the strength drawn by the simulator over its physical ranges, diagnosed
 with :func:`prsm_lube_ros.diagnosis.diagnose_table`.  Per true form: how often
 the verdict names the effect, how often the named form is the true one
 (``form right``: the first-named form; ``form among named``: the true form is
@@ -15,7 +15,7 @@ twice: on the default plan and on a plan with short rests between runs
 (nut and oil warm more).  Pairs of effects: how often both are named.
 Results go to ``benchmarks/results/diagnose_forms.{json,md}``.
 
-Usage: ``python benchmarks/diagnose_forms.py [--seeds 12] [--pair-seeds 6]``
+Usage: ``python benchmarks/diagnose_forms.py [--seeds 3] [--pair-seeds 3]``
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from prsm_lube_ros.diagnosis import diagnose_table
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.simulation.synthetic_tables import _draw_effect, SyntheticPlan, synthetic_table
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Two sessions (relubricated between them) as the diagnose study records: within one session temperature and
@@ -58,8 +58,27 @@ def true_form(effect: str, params: dict) -> str:
     return params['form']
 
 
-def run_single(effect: str, seed: int, plan: SyntheticPlan) -> dict:
-    table, truth = synthetic_table(np.random.default_rng(seed), effect, plan)
+#: The forms the window-table simulator draws, per effect, as the diagnosis names them.
+FORMS = {'position_dependent_stiffness': tuple(ARRANGEMENT_FORMS.values()),
+         'resonance': tuple(f'mode {band} the speed band' for band in ('above', 'inside', 'below')),
+         'thermal_viscosity': tuple(LAW_FORMS.values()),
+         'lubricant_depletion': tuple(f'{kind} in revolutions{rest}' for kind in ('exponential', 'linear')
+                                      for rest in ('', ', partial recovery at rest')),
+         'background_vibration': ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')}
+
+
+def drawn_params(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:
+    """Parameters the simulator draws for ``effect`` (its own ranges), the first draw from ``seed`` on in ``form``."""
+    for attempt in range(1000):
+        params = _draw_effect(effect, np.random.default_rng(1000 * seed + attempt), plan)
+        if true_form(effect, params) == form:
+            return params
+    raise RuntimeError(f'{effect}: no {form} drawn')
+
+
+def run_single(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:
+    table, truth = synthetic_table(np.random.default_rng(seed), effect, plan,
+                                   params=drawn_params(effect, form, seed, plan))
     document = diagnose_table(table).as_json()
     named = document['effects'][0]['form'] if document['verdict'] == effect and document['effects'] else ''
     form = true_form(effect, truth['params'])
@@ -79,19 +98,21 @@ def run_pair(pair: tuple, seed: int) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--seeds', type=int, default=12)
-    parser.add_argument('--pair-seeds', type=int, default=6)
+    parser.add_argument('--seeds', type=int, default=3)
+    parser.add_argument('--pair-seeds', type=int, default=3)
     parser.add_argument('--out', type=Path, default=ROOT / 'benchmarks' / 'results')
     args = parser.parse_args(argv)
     started = time.time()
     singles = []
     for effect in EFFECTS:
+        for form in FORMS[effect]:
+            for seed in range(args.seeds):
+                singles.append({**run_single(effect, form, seed, PLAN), 'plan': 'default'})
+                print(singles[-1], flush=True)
+    for form in FORMS['thermal_viscosity']:
         for seed in range(args.seeds):
-            singles.append({**run_single(effect, seed, PLAN), 'plan': 'default'})
+            singles.append({**run_single('thermal_viscosity', form, seed, WARM), 'plan': 'warm'})
             print(singles[-1], flush=True)
-    for seed in range(args.seeds):
-        singles.append({**run_single('thermal_viscosity', seed, WARM), 'plan': 'warm'})
-        print(singles[-1], flush=True)
     pairs = []
     for pair in PAIRS:
         for seed in range(args.pair_seeds):
@@ -108,7 +129,7 @@ def main(argv=None) -> int:
     lines = ['# Diagnose: each form of each effect, and two effects at once', '',
              f'Command: `python benchmarks/diagnose_forms.py --seeds {args.seeds} --pair-seeds {args.pair_seeds}` '
              f'({time.time() - started:.0f} s). Window tables of the window-table simulator, form and strength '
-             'drawn at random per seed, two sessions per case; "warm" plan: 5 s rests between runs instead of 30 s.',
+             'drawn per seed in its physical range, two sessions per case; "warm": 5 s rests between runs, not 30 s.',
              '',
              '| effect | true form | plan | cases | effect named | form right | form among named |',
              '|---|---|---|---|---|---|---|']

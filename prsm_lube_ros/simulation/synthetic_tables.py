@@ -100,9 +100,9 @@ def _contact_ratio_for(change: float, arrangement: str, stroke: float, before: f
     return float(change / (np.ptp(compliance) - change * np.max(compliance)))
 
 
-#: Power shares (each tone, broadband) of the background by form.
-BACKGROUND_SHARES = {background_vibration.FORMS[0]: (0.35, 0.3), background_vibration.FORMS[1]: (0.0, 1.0),
-                     background_vibration.FORMS[2]: (0.1, 0.8)}
+#: Power shares (each tone, broadband) of the background by form ('': no form given, tones with some floor).
+BACKGROUND_SHARES = {'': (0.35, 0.3), background_vibration.FORMS[0]: (0.5, 0.0),
+                     background_vibration.FORMS[1]: (0.0, 1.0), background_vibration.FORMS[2]: (0.1, 0.8)}
 
 
 def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan | None = None,
@@ -240,7 +240,7 @@ def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, backgroun
         line(order * rotation, share * contact_power)
     psd += 0.4 * contact_power / 2000.0
     if background > 0:
-        tone_share, floor_share = BACKGROUND_SHARES.get(form, BACKGROUND_SHARES[background_vibration.FORMS[0]])
+        tone_share, floor_share = BACKGROUND_SHARES[form]
         for tone in tones if tone_share else ():
             line(tone, tone_share * background ** 2)
         psd += floor_share * background ** 2 / 2000.0
