@@ -50,8 +50,9 @@ def run(args) -> int:
         print(f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
               f'{cand.delta_bic:7.1f}')
     print(f'verdict: {result.verdict}' + (f' (tied: {", ".join(result.tied)})' if result.tied else ''))
-    if result.chosen is not None:
-        print(result.chosen.effect.describe(result.chosen.fit.params))
+    for rank, (effect, form, params) in enumerate(result.named_effects()):
+        print(f'{("effect", "second effect")[rank]}: {effect.id}, form: {form}')
+        print(effect.describe(params))
     for note in result.notes:
         print(f'note: {note}')
     if result.what_to_record:

@@ -6,8 +6,9 @@ Public API::
 
     table = table_from_windows([rec.windows for rec in recordings], theta=1.0)
     result = diagnose_table(table)           # Diagnosis: verdict, baseline, candidates, best, location
-    result.as_json()                          # the contract's diagnose document
-    result.calibration()                      # Calibration with the chosen effect in ``extension``
+    result.named_effects()                    # (effect, form, params) of each named effect (0, 1 or 2)
+    result.as_json()                          # the contract's diagnose document (plus ``effects``, ``form``)
+    result.calibration()                      # Calibration with the first named effect in ``extension``
     write_report(result, 'out/report')        # PNG figures and index.md / index.html
 
 Owns: the window table (``table``), locating the mismatch (``locate``), fitting

@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Two effects at once: used to test whether each adds anything given the other."""
+"""Two effects at once: to test whether each adds anything given the other, and to name both."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,20 +8,37 @@ import numpy as np
 from .effects import Effect
 
 
-class CombinedEffect(Effect):
-    """Eq. 22 extended by two effects: film factors multiply, gains add (``second`` sees the first's gain)."""
+#: Starts of each effect paired in the multi-start grid of a joint fit.
+GRID = 3
 
-    def __init__(self, first: Effect, second: Effect):
+
+class CombinedEffect(Effect):
+    """Eq. 22 extended by two effects: film factors multiply, gains add (``second`` sees the first's gain).
+
+    ``added`` is the effect passed second (the one tried on top of the other),
+    whatever the order the gains are applied in; the combination's ``form`` is
+    its form.  ``first_start`` / ``second_start``: the internal parameters an
+    effect had when fitted alone; the multi-start begins there (paired with
+    each start of an effect without one), then tries a few of the grid of
+    both effects' starts.
+    """
+
+    def __init__(self, first: Effect, second: Effect, first_start=None, second_start=None):
         """Combine ``first`` and ``second``; an amplitude-dependent gain (background) should come second."""
-        if second.id == 'background_vibration':
-            pass
-        elif first.id == 'background_vibration':
+        self.added = second
+        self._anchors = {id(first): first_start, id(second): second_start}
+        if second.id != 'background_vibration' and first.id == 'background_vibration':
             first, second = second, first
         self.first, self.second = first, second
         self.id = f'{first.id}+{second.id}'
         self.title = f'{first.title} and {second.title}'
+        self.form = self.added.form
         self.parameter_names = first.parameter_names + second.parameter_names
         self._split = len(first.parameter_names)
+
+    def applicable(self, table):
+        """Both must be testable."""
+        return self.first.applicable(table) or self.second.applicable(table)
 
     def scales(self, table):
         """Both effects' scales."""
@@ -33,14 +50,25 @@ class CombinedEffect(Effect):
         return np.r_[lo1, lo2], np.r_[hi1, hi2]
 
     def starts(self):
-        """Pairs of both effects' starts."""
-        return [np.r_[a, b] for a in self.first.starts() for b in self.second.starts()]
+        """Both effects at their own fits where given, then a few of the grid of both effects' starts."""
+        grid = [np.r_[a, b] for a in list(self.first.starts())[:GRID] for b in list(self.second.starts())[:GRID]]
+        first = self._anchors[id(self.first)]
+        second = self._anchors[id(self.second)]
+        if first is None and second is None:
+            return grid
+        firsts = [np.asarray(first, dtype=float)] if first is not None else list(self.first.starts())
+        seconds = [np.asarray(second, dtype=float)] if second is not None else list(self.second.starts())
+        return [np.r_[a, b] for a in firsts for b in seconds] + grid[:GRID - 1]
 
     def to_params(self, p, scales):
         """``{'first': params, 'second': params}``."""
         p = np.asarray(p, dtype=float)
         return {'first': self.first.to_params(p[:self._split], scales['first']),
                 'second': self.second.to_params(p[self._split:], scales['second'])}
+
+    def params_of(self, params: dict, effect: Effect) -> dict:
+        """The parameters of ``effect`` (one of the two) in :meth:`to_params`' mapping."""
+        return params['first' if effect is self.first else 'second']
 
     def film_factor(self, params, covariates):
         """Product of both film factors."""
@@ -51,3 +79,8 @@ class CombinedEffect(Effect):
         """Sum of both gains."""
         gain = self.first.log_gain(params['first'], covariates, ln_a22)
         return gain + self.second.log_gain(params['second'], covariates, ln_a22 + gain)
+
+    def describe(self, params):
+        """Both effects in words."""
+        return (self.first.describe(params['first']) + ' Together with: '
+                + self.second.describe(params['second']))

@@ -2,9 +2,24 @@
 # SPDX-License-Identifier: Apache-2.0
 """Diagnosis: fit the paper's model, locate the mismatch, fit every candidate, rank them and decide.
 
-An effect with several forms (:meth:`.effects.Effect.variants`, e.g. the
-shaft compliance of each bearing arrangement) is fitted in each; the form with
-the lowest BIC stands for it.
+An effect with several physical forms (:meth:`.effects.Effect.variants`: the
+shaft stiffness of each bearing arrangement, a mode below, inside or above the
+speed band, the viscosity laws, depletion exponential or linear, with or
+without recovery at rest) is fitted in each on all windows; the form with the
+lowest BIC stands for it, except that a form with more parameters than the
+best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`;
+forms with as many parameters within :data:`FORM_TIE` of it are named with it
+("Vogel or Walther (ASTM D341)": the data fit them equally well).  Only the
+chosen form is scored on held-out runs.  Its name is in the JSON (``form``,
+and ``forms`` with every form's BIC relative to it).
+
+Two effects at once (forward selection): once an effect is named, the
+residual it leaves is tested the same way (lack of fit and located pattern);
+when something remains, each other candidate (in its own chosen form) is
+fitted together with the first, and the best pair is kept when the second
+effect earns its parameters over the first alone (BIC by :data:`BIC_MARGIN`
+and held-out error by :data:`MIN_GAIN`).  Both are then reported (``effects``
+in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
@@ -58,6 +73,10 @@ BIC_MARGIN = 10.0
 MIN_GAIN = 0.05
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative).
 EVIDENCE_TOLERANCE = 0.02
+#: BIC drop a form with more parameters needs over the simpler forms of the same effect.
+FORM_MARGIN = 6.0
+#: BIC difference below which two forms with as many parameters are reported together (a tie).
+FORM_TIE = 2.0
 #: Runner-up gain, relative to the leader's, from which the two are tested against each other.
 TIE_RATIO = 0.5
 #: |Spearman| over runs from which two covariates count as confounded.
@@ -78,11 +97,16 @@ class Candidate:
     delta_bic: float = math.nan
     evidence: str = ''
     evidence_against: str = ''
+    form: str = ''              # the chosen form's name
+    forms: list = field(default_factory=list)   # (form name, BIC relative to the chosen form)
+    family: Effect | None = None                # the registered effect (all its forms)
+    form_vectors: dict = field(default_factory=dict)   # form name -> its fitted internal parameters alone
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
         out = {'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
-               'reason': self.reason, 'equations': self.effect.equations,
+               'reason': self.reason, 'equations': self.effect.equations, 'form': self.form,
+               'forms': [{'form': name, 'delta_bic': _num(delta)} for name, delta in self.forms],
                'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
         if self.fit is not None:
             c = self.fit.constants
@@ -93,6 +117,33 @@ class Candidate:
                         'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
                         'explanation': self.effect.describe(self.fit.params)})
         return out
+
+
+@dataclass
+class SecondEffect:
+    """A second effect named with the first: the pair's fit and what the second adds."""
+
+    candidate: Candidate        # the second effect alone (its first-round fit)
+    fit: ModelFit               # both effects fitted together
+    params: dict                # the second effect's parameters in the joint fit
+    gain: float                 # 1 - cv_rmse(pair) / cv_rmse(first alone)
+    delta_bic: float            # BIC(pair) - BIC(first alone)
+    effect: Effect              # the second effect in the form chosen on top of the first
+    form: str                   # its name
+    first_effect: Effect        # the first effect in its form in the pair
+    first_params: dict          # and its parameters in the joint fit
+    first_form: str
+
+    def as_json(self) -> dict:
+        """Entry of the ``effects`` list."""
+        return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
+                'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
+                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse)}
+
+    def first_as_json(self) -> dict:
+        """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
+        return {'effect': self.first_effect.id, 'form': self.first_form, 'params': _clean(self.first_params),
+                'explanation': self.first_effect.describe(self.first_params)}
 
 
 @dataclass
@@ -111,6 +162,7 @@ class Diagnosis:
     confounding: list = field(default_factory=list)   # Confounding findings
     baseline_fit_test: LackOfFit | None = None
     chosen_fit_test: LackOfFit | None = None
+    second: 'SecondEffect | None' = None     # a second effect named with the first (forward selection)
 
     @property
     def confident(self) -> bool:
@@ -124,6 +176,16 @@ class Diagnosis:
     def chosen(self) -> Candidate | None:
         """The candidate the verdict names (None for adequate, ambiguous, unexplained)."""
         return self.best if self.best is not None and self.verdict == self.best.effect.id else None
+
+    def named_effects(self) -> list:
+        """``(effect, form, params)`` of each effect the verdict names: none, one, or two (both from the joint fit)."""
+        if self.chosen is None:
+            return []
+        if self.second is None:
+            return [(self.chosen.effect, self.chosen.form, self.chosen.fit.params)]
+        second = self.second
+        return [(second.first_effect, second.first_form, second.first_params),
+                (second.effect, second.form, second.params)]
 
     def calibration(self) -> Calibration:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
@@ -145,15 +207,22 @@ class Diagnosis:
         best = None
         if self.best is not None:
             f = self.best.fit
-            best = {'effect': self.best.effect.id, 'rmse': _num(f.rmse), 'cv_rmse': _num(f.cv_rmse),
-                    'cv_run_rmse': _num(f.cv_run_rmse),
+            best = {'effect': self.best.effect.id, 'form': self.best.form, 'rmse': _num(f.rmse),
+                    'cv_rmse': _num(f.cv_rmse), 'cv_run_rmse': _num(f.cv_run_rmse),
                     'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
                     'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
                     'status': self.best.status}
+        effects = []
+        if self.chosen is not None:
+            keys = ('effect', 'form', 'params', 'explanation', 'gain', 'delta_bic', 'cv_rmse')
+            effects.append({key: best[key] for key in keys})
+            if self.second is not None:
+                effects[0].update(self.second.first_as_json())
+                effects.append(self.second.as_json())
         table = self.table
         adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
                     'chosen': self.chosen_fit_test.as_json() if self.chosen_fit_test else None}
-        return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy,
+        return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy, 'effects': effects,
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
                              'cv_run_rmse': _num(base.cv_run_rmse),
@@ -211,20 +280,54 @@ def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
     return own - bic(reference.log_residual, reference.n_params, n_eff)
 
 
+def _choose_form(table, forms: list, folds):
+    """Fit every form (Effects of one ID) on all windows; the chosen form's fit (with held-out scores) and all BICs.
+
+    Forms are compared on one effective sample size: each fit's own would favour the form that leaves the
+    more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
+    """
+    fits = [fit_model(table, form, folds=[]) for form in forms]
+    n_common = min(f.n_eff for f in fits)
+    scores = [bic(f.log_residual, f.n_params, n_common) for f in fits]
+    fewest = min(f.n_params for f in fits)
+    simple = min((i for i, f in enumerate(fits) if f.n_params == fewest), key=lambda i: scores[i])
+    richer = [i for i, f in enumerate(fits) if f.n_params > fewest]
+    chosen = simple
+    if richer:
+        best_richer = min(richer, key=lambda i: scores[i])
+        if scores[best_richer] <= scores[simple] - FORM_MARGIN:
+            chosen = best_richer
+    fit = fit_model(table, forms[chosen], folds) if folds else fits[chosen]
+    ties = [forms[i].form for i, f in enumerate(fits)
+            if i != chosen and f.n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
+    vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
+    return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
+            ties, vectors)
+
+
+def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
+    """The form the fit shows, with the forms that fit as well (each named once)."""
+    form = effect.form_name(params, table, location)
+    others = [t for t in dict.fromkeys(ties) if t not in (form, effect.form)]
+    return ' or '.join([form, *others]) + ' (the data fit these forms equally well)' if others else form
+
+
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
+    family = effect
     reason = effect.applicable(table)
     if reason:
-        return Candidate(effect, None, 'not testable', reason)
-    fits = [(fit_model(table, form, folds), form) for form in effect.variants()]
-    # Forms compared on one effective sample size: each fit's own would favour the form that leaves the
-    # more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).
-    n_common = min(f.n_eff for f, _ in fits)
-    fit, effect = min(fits, key=lambda pair: bic(pair[0].log_residual, pair[0].n_params, n_common))
+        return Candidate(effect, None, 'not testable', reason, form=effect.form, family=family)
+    testable = [form for form in effect.variants() if not form.applicable(table)]
+    effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location)
     unphysical = fit.unphysical()
-    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence)
+    form = _named_form(effect, fit.params, table, location, ties)
+    if len(forms) == 1:
+        forms = [(form, 0.0)]
+    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
+                          form=form, forms=forms, family=family, form_vectors=vectors)
     if unphysical:
         candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
@@ -254,6 +357,90 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -BIC_MARGIN
     runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -BIC_MARGIN
     return leader_adds, runner_adds
+
+
+def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
+    """The best of ``combos`` (CombinedEffects, chosen by BIC) when it earns its parameters over ``reference``.
+
+    Earning: physical constants, BIC lower by :data:`BIC_MARGIN` and held-out
+    error lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
+    """
+    combos = [both for both in combos if not both.applicable(table)]
+    if not combos or not reference.cv_rmse > 0:
+        return None
+    both, fit, _, ties, _ = _choose_form(table, combos, folds)
+    if fit.unphysical():
+        return None
+    gain = 1.0 - fit.cv_rmse / reference.cv_rmse
+    delta = _delta_bic(fit, reference)
+    if delta > -BIC_MARGIN or gain < MIN_GAIN:
+        return None
+    kept = both.first if both.added is both.second else both.second
+    params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
+    return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
+                                                                                 ties),
+                        kept, first_params, kept.form_name(first_params, table, location))
+
+
+def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:
+    """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC."""
+    family = other.family or other.effect
+    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
+              for form in family.variants()]
+    return _fit_pair(table, combos, first.fit, other, folds, location)
+
+
+def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
+    """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
+
+    Tried only when the first effect leaves a lack of fit or a located pattern.
+    Returns ``(second or None, tied)``: two that earn with BICs within
+    :data:`BIC_MARGIN` of each other tie, and neither is named.
+    """
+    remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
+    if not remaining.significant and locate(table, first.fit.log_residual).located == 'none':
+        return None, []
+    earning = []
+    for cand in candidates:
+        if cand.fit is None or cand.effect.id == first.effect.id:
+            continue
+        second = _add_second(table, first, cand, folds, location)
+        if second is not None:
+            earning.append(second)
+    earning.sort(key=lambda second: second.fit.cv_rmse)
+    if len(earning) > 1 and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
+        return None, earning[:2]
+    return (earning[0] if earning else None), []
+
+
+#: Candidates (by held-out gain alone) tried in pairs when none earns its parameters alone.
+PAIR_POOL = 3
+
+
+def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
+    """Two effects that only together explain the mismatch: ``(first, second)`` or None.
+
+    Among the :data:`PAIR_POOL` candidates with the largest held-out gains
+    alone, each pair is fitted (the larger-gain one first); a pair counts when
+    it earns its parameters over the paper's model and over each effect alone.
+    """
+    pool = sorted([c for c in ranked if c.fit is not None and math.isfinite(c.gain)], key=lambda c: -c.gain)
+    pool = pool[:PAIR_POOL]
+    best = None
+    for i, first in enumerate(pool):
+        for other in pool[i + 1:]:
+            combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
+                      for a in (first.family or first.effect).variants()
+                      for b in (other.family or other.effect).variants()]
+            second = _fit_pair(table, combos, first.fit, other, folds, location)
+            if second is None:
+                continue
+            pair = second.fit
+            earns = (_delta_bic(pair, baseline) <= -BIC_MARGIN and _delta_bic(pair, other.fit) <= -BIC_MARGIN
+                     and 1.0 - pair.cv_rmse / baseline.cv_rmse >= MIN_GAIN)
+            if earns and (best is None or pair.cv_rmse < best[1].fit.cv_rmse):
+                best = (first, second)
+    return best
 
 
 def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
@@ -344,7 +531,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     ranked = sorted(fitted, key=lambda c: c.fit.cv_rmse)
     earning = [c for c in ranked if c.status == 'earns']
     best = earning[0] if earning else (ranked[0] if ranked else None)
-    verdict, tied, advice = ADEQUATE, [], ''
+    verdict, tied, advice, second = ADEQUATE, [], '', None
     if earning:
         verdict = best.effect.id
         for runner in earning[1:]:
@@ -381,7 +568,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 break
     else:
         pattern = location.located not in ('none', 'spectrum')
-        if baseline_test.significant or pattern or baseline.unphysical():
+        pair = (_pair_when_none_earns(table, ranked, baseline, folds, location)
+                if baseline_test.significant or pattern or baseline.unphysical() else None)
+        if pair is not None:
+            best, second = pair
+            best.status = 'earns'
+            best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
+            verdict = best.effect.id
+        elif baseline_test.significant or pattern or baseline.unphysical():
             verdict = UNEXPLAINED
             advice = 'a candidate for the located mismatch is missing from the catalogue'
             size = (f'the paper\'s model misses by {100 * baseline_test.residual_rms:.1f} % RMS, '
@@ -399,10 +593,24 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                      'adequacy cannot be confirmed')
     chosen_test = None
     if best is not None and verdict == best.effect.id:
-        chosen_test = lack_of_fit(table, best.fit.log_residual, best.fit.n_params)
+        if second is None:
+            second, tie = _second_effect(table, best, candidates, folds, location)
+            if tie:
+                a, b = tie
+                notes.append(f'{best.effect.id} leaves a mismatch that {a.effect.id} and {b.effect.id} explain '
+                             'equally well on top of it: no second effect is named')
+                advice = _separation_advice(a.effect, b.effect)
+        named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
+        final = best.fit if second is None else second.fit
+        if second is not None:
+            notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
+                         f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '
+                         f'BIC {second.delta_bic:+.0f}')
+        chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
         if chosen_test.significant:
-            notes.append(f'{best.effect.id} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
+            notes.append(f'{named} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
                          f'(p = {chosen_test.p_value:.2g}): it explains part of the mismatch, not all')
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
                      tied=tied, notes=notes, what_to_record=advice, table=table,
-                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test)
+                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
+                     second=second)

@@ -54,6 +54,8 @@ def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
     panels = [('paper\'s model (Eq. 22)', diagnosis.baseline)]
     if diagnosis.chosen is not None:
         panels.append((f'with {diagnosis.chosen.effect.id}', diagnosis.chosen.fit))
+        if diagnosis.second is not None:
+            panels.append((f'and {diagnosis.second.effect.id}', diagnosis.second.fit))
     fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 3.6), dpi=110, sharey=True,
                              squeeze=False)
     for ax, (title, fit) in zip(axes[0], panels):
@@ -141,7 +143,14 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
         cand = diagnosis.chosen
         lines += [f'**Verdict: `{diagnosis.verdict}`** — {cand.effect.title}. Held-out error '
                   f'{100 * base.cv_rmse:.1f} % → {100 * cand.fit.cv_rmse:.1f} % ({100 * cand.gain:.0f} % lower).',
-                  '', cand.effect.describe(cand.fit.params), '', f'Model: `{cand.effect.equations}`']
+                  '']
+        if diagnosis.second is not None:
+            lines += [f'**Two effects at once**: held-out error {100 * diagnosis.second.fit.cv_rmse:.1f} % with both '
+                      f'(BIC {diagnosis.second.delta_bic:+.0f} against the first alone).', '']
+        for effect, form, params in diagnosis.named_effects():
+            lines += [f'**`{effect.id}`, form:** {form}', '', effect.describe(params), '',
+                      f'Model: `{effect.equations}`', '']
+        lines.pop()
     elif diagnosis.verdict == 'adequate':
         lines += ['**Verdict: `adequate`** — no candidate earns its extra parameters; the paper\'s model explains '
                   f'the recording to {100 * base.cv_rmse:.1f} % on held-out runs.']

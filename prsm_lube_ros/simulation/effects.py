@@ -7,7 +7,10 @@ per effect, shared with the diagnosis); this module holds the simulator's
 side: the :class:`Effects` container of active laws written to
 ``truth.json`` (recordings carry no label of them) and a ``draw_*`` function
 per effect that picks its parameters inside a documented physical range, for
-studies of the diagnosis.  All effects are off by default.
+studies of the diagnosis, and among the effect's physical forms (bearing
+arrangement, band position and rotation order of a resonance, viscosity law,
+depletion form, background lines or floor) at random unless one is asked
+for.  All effects are off by default.
 """
 from __future__ import annotations
 
@@ -18,16 +21,30 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..physics.effects import effect_ids, law_type
-from ..physics.effects.background_vibration import BackgroundVibration
-from ..physics.effects.lubricant_depletion import LubricantDepletion
-from ..physics.effects.position_dependent_stiffness import PositionDependentStiffness, shaft_axial_stiffness
+from ..physics.effects.background_vibration import BackgroundVibration, FORMS as BACKGROUND_FORMS
+from ..physics.effects.lubricant_depletion import FORMS as DEPLETION_FORMS, LubricantDepletion
+from ..physics.effects.position_dependent_stiffness import PositionDependentStiffness
 from ..physics.effects.resonance import Resonance
-from ..physics.effects.thermal_viscosity import ThermalViscosity
+from ..physics.effects.thermal_viscosity import LAWS as VISCOSITY_LAWS, ThermalViscosity
 
 #: Drawn range of the amplitude change over one stroke at the reference load (fraction).
 STIFFNESS_CHANGE_RANGE = (0.05, 0.30)
-#: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed.
+#: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).
 RESONANCE_RATIO_RANGE = (0.5, 0.9)
+#: Drawn range of r at the lowest speed for a mode below the band.
+RESONANCE_BELOW_RATIO_RANGE = (1.3, 3.0)
+#: Drawn position of a mode inside the band, ln(omega_r / omega_min) / ln(omega_max / omega_min).
+RESONANCE_INSIDE_RANGE = (0.25, 0.75)
+#: Where the mode lies against the speed band.
+RESONANCE_BANDS = ('above', 'inside', 'below')
+#: Bearing arrangements drawn (fixed-supported has the axial law of fixed-free).
+DRAWN_ARRANGEMENTS = ('fixed-free', 'free-fixed', 'fixed-fixed')
+#: Drawn range of Vogel's T0 - T_V, K (mineral oils).
+VOGEL_DISTANCE_RANGE = (90.0, 150.0)
+#: Drawn range of the kinematic viscosity at ambient for the Walther law, mm^2/s (ISO VG 32-320).
+REFERENCE_VISCOSITY_RANGE = (30.0, 300.0)
+#: Drawn range of background tone frequencies, Hz.
+TONE_FREQUENCY_RANGE = (60.0, 900.0)
 #: Drawn range of the damping ratio of the structural mode.
 RESONANCE_DAMPING_RANGE = (0.02, 0.10)
 #: Drawn range of the steady temperature rise of nut and oil while running, K.
@@ -114,54 +131,116 @@ class Effects:
         return cls(**values)
 
 
+def _choose(rng: np.random.Generator, options, chosen=None):
+    """``chosen`` when given (checked against ``options``), else one of ``options`` at random."""
+    if chosen is None:
+        return options[int(rng.integers(len(options)))]
+    if chosen not in options:
+        raise ConfigError(f'effects: {chosen!r} is not one of {", ".join(map(str, options))}')
+    return chosen
+
+
 def draw_position_dependent_stiffness(rng: np.random.Generator, *, youngs_modulus: float,
                                       root_diameter: float, stroke: float, fixed_end_offset: float,
-                                      reference_load: float) -> PositionDependentStiffness:
-    """Random shaft-compliance effect: 5-30 % amplitude fall over the stroke at reference_load.
+                                      reference_load: float, arrangement: str | None = None
+                                      ) -> PositionDependentStiffness:
+    """Random shaft-compliance effect: 5-30 % amplitude change over the stroke at reference_load.
 
-    The fixed bearing lies fixed_end_offset (m) beyond the end of the stroke,
-    so ``L(0) = stroke + fixed_end_offset`` and ``L(stroke) = fixed_end_offset``.
-    With rho0 = k_c / k_s(0) the relative fall is
-    ``c = rho0 (1 - L(stroke)/L(0)) / (1 + rho0)``; c is drawn uniformly from
-    :data:`STIFFNESS_CHANGE_RANGE` and rho0 solved from it.
+    ``arrangement`` (default: drawn) is one of :data:`DRAWN_ARRANGEMENTS`:
+    the fixed bearing fixed_end_offset (m) beyond the end of the stroke
+    (``fixed-free``: the amplitude falls along the stroke), as far before its
+    start (``free-fixed``: it rises), or both (``fixed-fixed``: an arch,
+    highest mid-travel).  With the shaft compliance q(x) = 1/k_s(x) the
+    amplitude factor is ``1 + k_c q(x)``; its relative change over the stroke
+    ``c = k_c (q_max - q_min) / (1 + k_c q_max)`` is drawn uniformly from
+    :data:`STIFFNESS_CHANGE_RANGE` and k_c solved from it.
     """
-    length_start = stroke + fixed_end_offset
-    shrink = 1.0 - fixed_end_offset / length_start
+    arrangement = _choose(rng, DRAWN_ARRANGEMENTS, arrangement)
     change = rng.uniform(*STIFFNESS_CHANGE_RANGE)
-    if change >= shrink:
+    shape = PositionDependentStiffness(contact_stiffness=1.0, reference_load=reference_load,
+                                       youngs_modulus=youngs_modulus, root_diameter=root_diameter,
+                                       free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                       near_length_at_start=fixed_end_offset)
+    compliance = 1.0 / shape.shaft_stiffness(np.linspace(0.0, stroke, 201))
+    spread, largest = float(np.ptp(compliance)), float(np.max(compliance))
+    if change >= spread / largest:
         raise ConfigError(f'position_dependent_stiffness: a {change:.0%} change is impossible with '
-                          f'fixed_end_offset {fixed_end_offset} m')
-    ratio = change / (shrink - change)
-    contact = ratio * float(shaft_axial_stiffness(youngs_modulus, root_diameter, length_start))
-    return PositionDependentStiffness(contact_stiffness=contact, reference_load=reference_load,
+                          f'fixed_end_offset {fixed_end_offset} m ({arrangement})')
+    contact = change / (spread - change * largest)
+    return PositionDependentStiffness(contact_stiffness=float(contact), reference_load=reference_load,
                                       youngs_modulus=youngs_modulus, root_diameter=root_diameter,
-                                      free_length_at_start=length_start)
+                                      free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                      near_length_at_start=fixed_end_offset)
 
 
-def draw_resonance(rng: np.random.Generator, *, order: float, top_speed: float) -> Resonance:
-    """Random resonance: r at top_speed (rad/s) in :data:`RESONANCE_RATIO_RANGE`, zeta in its range."""
-    ratio = rng.uniform(*RESONANCE_RATIO_RANGE)
+def draw_resonance(rng: np.random.Generator, *, order: float, top_speed: float, bottom_speed: float | None = None,
+                   orders=None, band: str | None = None) -> Resonance:
+    """Random resonance excited by rotation ``order`` (or one of ``orders`` at random), zeta in its range.
+
+    ``band`` (default: drawn when bottom_speed is given, else ``above``): the
+    mode above the speed band (r at top_speed in :data:`RESONANCE_RATIO_RANGE`),
+    inside it (resonant speed log-uniform in the middle of the band) or below it
+    (r at bottom_speed in :data:`RESONANCE_BELOW_RATIO_RANGE`); speeds in rad/s.
+    """
+    order = float(_choose(rng, tuple(orders))) if orders else float(order)
+    bands = RESONANCE_BANDS if bottom_speed is not None else RESONANCE_BANDS[:1]
+    band = _choose(rng, bands, band)
     damping = rng.uniform(*RESONANCE_DAMPING_RANGE)
-    natural = order * abs(top_speed) / (2.0 * math.pi) / ratio
-    return Resonance(order=float(order), natural_frequency=float(natural), damping_ratio=float(damping))
+    top = abs(top_speed)
+    if band == 'above':
+        resonant = top / rng.uniform(*RESONANCE_RATIO_RANGE)
+    elif band == 'inside':
+        low = abs(bottom_speed)
+        resonant = low * (top / low) ** rng.uniform(*RESONANCE_INSIDE_RANGE)
+    else:
+        resonant = abs(bottom_speed) / rng.uniform(*RESONANCE_BELOW_RATIO_RANGE)
+    natural = order * resonant / (2.0 * math.pi)
+    return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(damping))
 
 
-def draw_thermal_viscosity(rng: np.random.Generator, *,
-                           viscosity_temperature_coefficient: float) -> ThermalViscosity:
-    """Random warming: dT and tau uniform in their documented ranges; beta (1/K) is the oil's."""
+def draw_thermal_viscosity(rng: np.random.Generator, *, viscosity_temperature_coefficient: float,
+                           law: str | None = None) -> ThermalViscosity:
+    """Random warming: dT and tau uniform in their ranges; beta (1/K) is the oil's slope at ambient.
+
+    ``law`` (default: drawn) is one of the viscosity laws; Vogel's distance
+    T0 - T_V and Walther's nu_ref are drawn in :data:`VOGEL_DISTANCE_RANGE` and
+    :data:`REFERENCE_VISCOSITY_RANGE`.
+    """
+    law = _choose(rng, VISCOSITY_LAWS, law)
     return ThermalViscosity(temperature_rise=float(rng.uniform(*TEMPERATURE_RISE_RANGE)),
                             time_constant=float(rng.uniform(*THERMAL_TIME_CONSTANT_RANGE)),
-                            viscosity_temperature_coefficient=float(viscosity_temperature_coefficient))
+                            viscosity_temperature_coefficient=float(viscosity_temperature_coefficient),
+                            viscosity_law=law, vogel_distance=float(rng.uniform(*VOGEL_DISTANCE_RANGE)),
+                            reference_viscosity=float(rng.uniform(*REFERENCE_VISCOSITY_RANGE)))
 
 
-def draw_lubricant_depletion(rng: np.random.Generator, *, session_revolutions: float) -> LubricantDepletion:
-    """Random depletion: theta falls by 5-25 % over session_revolutions (one bag)."""
+def draw_lubricant_depletion(rng: np.random.Generator, *, session_revolutions: float,
+                             form: str | None = None) -> LubricantDepletion:
+    """Random depletion: theta falls by 5-25 % over session_revolutions (one bag), exponentially or linearly.
+
+    ``form`` (default: drawn) is ``exponential`` or ``linear``.  The rig
+    simulator has no recovery at rest (the window-table simulator has).
+    """
+    form = _choose(rng, DEPLETION_FORMS, form)
     fall = rng.uniform(*DEPLETION_FALL_RANGE)
-    return LubricantDepletion(depletion_revolutions=float(session_revolutions / -math.log1p(-fall)))
+    revolutions = session_revolutions / -math.log1p(-fall) if form == 'exponential' else session_revolutions / fall
+    return LubricantDepletion(depletion_revolutions=float(revolutions), form=form)
 
 
-def draw_background_vibration(rng: np.random.Generator, *,
-                              reference_amplitude: float) -> BackgroundVibration:
-    """Random background: B = 50-150 % of reference_amplitude (m/s^2, thread contacts at the lowest speed)."""
+def draw_background_vibration(rng: np.random.Generator, *, reference_amplitude: float,
+                              form: str | None = None) -> BackgroundVibration:
+    """Random background: B = 50-150 % of reference_amplitude (m/s^2, thread contacts at the lowest speed).
+
+    ``form`` (default: drawn) is one of the background forms: two fixed
+    tones (drive and frame, frequencies drawn in :data:`TONE_FREQUENCY_RANGE`),
+    a broadband floor, or both (tones 40 % of the power).
+    """
+    form = _choose(rng, BACKGROUND_FORMS, form)
     fraction = rng.uniform(*BACKGROUND_FRACTION_RANGE)
-    return BackgroundVibration(rms=float(fraction * reference_amplitude))
+    tones = tuple(float(f) for f in np.sort(rng.uniform(*TONE_FREQUENCY_RANGE, size=2)))
+    if form == BACKGROUND_FORMS[1]:
+        return BackgroundVibration(rms=float(fraction * reference_amplitude), tone_frequencies=(), tone_shares=(),
+                                   broadband_share=1.0)
+    shares = (0.5, 0.5) if form == BACKGROUND_FORMS[0] else (0.2, 0.2)
+    return BackgroundVibration(rms=float(fraction * reference_amplitude), tone_frequencies=tones,
+                               tone_shares=shares, broadband_share=1.0 - sum(shares))

@@ -49,12 +49,18 @@ class SyntheticPlan:
 
 
 def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> dict:
-    """Effect parameters drawn within physical ranges."""
+    """Effect parameters drawn within physical ranges, the effect's form among its physical forms."""
     top = max(plan.speeds_rpm) * math.pi / 30
+    bottom = min(plan.speeds_rpm) * math.pi / 30
     if effect == 'position_dependent_stiffness':
         change = rng.uniform(0.08, 0.3)                  # amplitude change over the stroke
         offset = rng.uniform(0.02, 0.1)                  # bearing distance beyond the stroke, m
-        far = bool(rng.integers(2))                      # bearing beyond the far end or before the start
+        arrangement = ('fixed-free', 'free-fixed', 'fixed-fixed')[int(rng.integers(3))]
+        if arrangement == 'fixed-fixed':
+            other = rng.uniform(0.02, 0.1)
+            return {'arrangement': arrangement, 'bearing_before': offset, 'bearing_after': other,
+                    'contact_ratio': _contact_ratio_for(change, arrangement, plan.stroke, offset, other)}
+        far = arrangement == 'fixed-free'                # bearing beyond the far end or before the start
         length_end = offset if far else offset + plan.stroke
         length_start = offset + plan.stroke if far else offset
         # 1 + rho L_a/L_ref vs 1 + rho L_b/L_ref: solve rho (at the longer length) for the change.
@@ -62,30 +68,67 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
         # (1 + rho_long) / (1 + rho_long short/long) = 1 / (1 - change)
         rho_long = (1 / (1 - change) - 1) / (1 - (short / long) / (1 - change))
         return {'free_length_start': length_start, 'free_length_end': length_end,
-                'ratio_long': rho_long, 'long_length': long, 'change': change}
+                'ratio_long': rho_long, 'long_length': long, 'change': change, 'arrangement': arrangement}
     if effect == 'resonance':
-        return {'top_ratio': rng.uniform(0.55, 0.9), 'damping_ratio': rng.uniform(0.02, 0.1), 'top_speed': top}
+        band = ('above', 'inside', 'below')[int(rng.integers(3))]
+        if band == 'above':
+            ratio = rng.uniform(0.55, 0.9)
+        elif band == 'inside':
+            ratio = (top / bottom) ** rng.uniform(0.3, 0.7)
+        else:
+            ratio = rng.uniform(1.3, 2.5) * top / bottom
+        return {'top_ratio': ratio, 'damping_ratio': rng.uniform(0.02, 0.1), 'top_speed': top, 'band': band}
     if effect == 'thermal_viscosity':
-        return {'rise': rng.uniform(8.0, 25.0), 'tau': rng.uniform(150.0, 600.0), 'beta': rng.uniform(0.02, 0.04)}
+        law = thermal.LAWS[int(rng.integers(len(thermal.LAWS)))]
+        return {'rise': rng.uniform(8.0, 25.0), 'tau': rng.uniform(150.0, 600.0), 'beta': rng.uniform(0.02, 0.04),
+                'law': law, 'shape': {'vogel': rng.uniform(90.0, 150.0),
+                                      'walther': rng.uniform(30.0, 300.0)}.get(law, math.nan)}
     if effect == 'lubricant_depletion':
-        return {'fall': rng.uniform(0.08, 0.25)}
+        return {'fall': rng.uniform(0.08, 0.25), 'form': depletion.FORMS[int(rng.integers(2))],
+                'recovery_time': None if rng.integers(2) else rng.uniform(30.0, 120.0)}
     if effect == 'background_vibration':
-        return {'fraction': rng.uniform(*BACKGROUND_FRACTION_RANGE), 'tones': tuple(rng.uniform(60, 900, size=2))}
+        return {'fraction': rng.uniform(*BACKGROUND_FRACTION_RANGE), 'tones': tuple(rng.uniform(60, 900, size=2)),
+                'form': background_vibration.FORMS[int(rng.integers(3))]}
     raise ValueError(effect)
 
 
-def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: SyntheticPlan | None = None,
+def _contact_ratio_for(change: float, arrangement: str, stroke: float, before: float, after: float) -> float:
+    """k_c / (E A), 1/m, that changes the amplitude by ``change`` over the stroke (at the mean load)."""
+    x = np.linspace(0.0, stroke, 101)
+    compliance = 1.0 / stiffness.shaft_stiffness_for(arrangement, 1.0, math.sqrt(4 / math.pi), x, stroke, before,
+                                                     after)
+    return float(change / (np.ptp(compliance) - change * np.max(compliance)))
+
+
+#: Power shares (each tone, broadband) of the background by form ('': no form given, tones with some floor).
+BACKGROUND_SHARES = {'': (0.35, 0.3), background_vibration.FORMS[0]: (0.5, 0.0),
+                     background_vibration.FORMS[1]: (0.0, 1.0), background_vibration.FORMS[2]: (0.1, 0.8)}
+
+
+def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan | None = None,
                     params: dict | None = None, order=None) -> tuple[WindowTable, dict]:
     """A window table of ``plan.sessions`` sessions with ``effect`` hidden (None: none) and its truth.
 
+    ``effect`` is one effect ID or a tuple of IDs (several effects at once;
+    ``params`` then maps each ID to its parameters, missing ones drawn).
     ``order``: run order as indices into the condition list (default: random or plan order).
     Returns ``(table, truth)``, truth with the effect, its parameters and the true theta per window.
-    position_dependent_stiffness with ``params`` ``{'arrangement': 'fixed-fixed' (or 'fixed-supported'),
+    position_dependent_stiffness with ``params`` ``{'arrangement': one of the law's ARRANGEMENTS,
     'bearing_before': m, 'bearing_after': m, 'contact_ratio': k_c / (E A) in 1/m}`` uses the law's
-    arrangement (drawn parameters keep the fixed-free form).
+    arrangement.  Forms in ``params``: thermal_viscosity ``law`` (exponential, vogel, walther) with its
+    ``shape`` (K or mm^2/s); lubricant_depletion ``form`` (exponential, linear) and ``recovery_time`` (s at
+    rest, None: none); background_vibration ``form`` (one of the law's FORMS); resonance any ``top_ratio``
+    (r at the top speed: the mode above, inside or below the band).
     """
     plan = plan or SyntheticPlan()
-    params = dict(params) if params is not None else (_draw_effect(effect, rng, plan) if effect else {})
+    if effect is None or isinstance(effect, str):
+        given = {effect: params} if effect else {}
+    else:
+        given = {name: (params or {}).get(name) for name in effect}
+    laws = {name: dict(p) if p is not None else _draw_effect(name, rng, plan) for name, p in given.items()}
+    stiff, res = laws.get('position_dependent_stiffness'), laws.get('resonance')
+    heat, loss, noise_floor = (laws.get('thermal_viscosity'), laws.get('lubricant_depletion'),
+                               laws.get('background_vibration'))
     conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
     if order is None:
         order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
@@ -94,14 +137,15 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
                             'recording')}
     theta_eff, spectra, a22_list = [], [], []
     clock, revs, temp = 0.0, 0.0, plan.ambient
+    depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
     total_revs = sum(plan.stroke / plan.lead for _ in conditions)
     per_session = max(len(order) // plan.sessions, 1)
     for run, index in enumerate(order):
         session = run // per_session
         if run and run % per_session == 0:
-            revs, clock = 0.0, 0.0   # relubricated; a new recording starts
-            if effect == 'thermal_viscosity':
-                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / params['tau'])
+            revs, clock, depleted = 0.0, 0.0, 0.0   # relubricated; a new recording starts
+            if heat:
+                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / heat['tau'])
         speed, load = conditions[index]
         nut_speed = plan.lead * speed / (2 * math.pi)
         n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
@@ -109,40 +153,44 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
         for k in range(n_win):
             clock += plan.window
             revs += speed * plan.window / (2 * math.pi)
-            if effect == 'thermal_viscosity':
-                target = plan.ambient + params['rise']
-                temp = target + (temp - target) * math.exp(-plan.window / params['tau'])
+            depleted += speed * plan.window / (2 * math.pi)
+            if heat:
+                target = plan.ambient + heat['rise']
+                temp = target + (temp - target) * math.exp(-plan.window / heat['tau'])
             position = (k + 0.5) * plan.window * nut_speed
             theta = plan.theta
             film = 1.0
-            if effect == 'lubricant_depletion':
-                theta *= float(depletion.theta_factor(revs, -math.log1p(-params['fall']) / total_revs))
-            if effect == 'thermal_viscosity':
-                film = float(thermal.film_factor(temp, plan.ambient, params['beta']))
+            if loss:
+                form = loss.get('form', 'exponential')
+                fall = -math.log1p(-loss['fall']) if form == 'exponential' else loss['fall']
+                theta *= float(depletion.theta_factor(depleted, fall / total_revs, form))
+            if heat:
+                film = float(thermal.film_factor(temp, plan.ambient, heat['beta'], heat.get('law', 'exponential'),
+                                                 heat.get('shape', math.nan)))
             a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
             amplitude = a22
-            if effect == 'position_dependent_stiffness' and params.get('arrangement', 'fixed-free') != 'fixed-free':
+            if stiff and 'contact_ratio' in stiff:
                 # Any arrangement through the law: EA = 1, contact_ratio = k_c / (E A) in 1/m.
-                shaft = stiffness.shaft_stiffness_for(params['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
-                                                      plan.stroke, params['bearing_before'], params['bearing_after'])
-                contact = stiffness.contact_stiffness_at(load, params['contact_ratio'], float(np.mean(plan.loads)))
+                shaft = stiffness.shaft_stiffness_for(stiff['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
+                                                      plan.stroke, stiff['bearing_before'], stiff['bearing_after'])
+                contact = stiffness.contact_stiffness_at(load, stiff['contact_ratio'], float(np.mean(plan.loads)))
                 amplitude *= float(stiffness.series_stiffness_amplification(contact, shaft))
-            elif effect == 'position_dependent_stiffness':
-                length = params['free_length_start'] + (params['free_length_end']
-                                                        - params['free_length_start']) * position / plan.stroke
-                contact = stiffness.contact_stiffness_at(load, params['ratio_long'] / params['long_length'],
+            elif stiff:
+                length = stiff['free_length_start'] + (stiff['free_length_end']
+                                                       - stiff['free_length_start']) * position / plan.stroke
+                contact = stiffness.contact_stiffness_at(load, stiff['ratio_long'] / stiff['long_length'],
                                                          float(np.mean(plan.loads)))
                 amplitude *= float(stiffness.series_stiffness_amplification(contact, 1.0 / length))
-            elif effect == 'resonance':
-                r = params['top_ratio'] * speed / params['top_speed']
-                amplitude *= float(resonance.magnification(r, params['damping_ratio']))
+            if res:
+                r = res['top_ratio'] * speed / res['top_speed']
+                amplitude *= float(resonance.magnification(r, res['damping_ratio']))
             noise = math.exp(run_gain + rng.normal(0.0, plan.window_noise))
             amplitude *= noise
             background = 0.0
-            if effect == 'background_vibration':
+            if noise_floor:
                 slow = min(plan.speeds_rpm) * math.pi / 30
                 reference = float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants))
-                background = params['fraction'] * reference
+                background = noise_floor['fraction'] * reference
                 amplitude = float(background_vibration.total_amplitude(amplitude, background))
             rows['speed'].append(speed * (1 + rng.normal(0, 0.002)))
             rows['load'].append(load * (1 + rng.normal(0, 0.005)))
@@ -157,20 +205,24 @@ def synthetic_table(rng: np.random.Generator, effect: str | None = None, plan: S
             a22_list.append(a22)
             if plan.spectrum_bins:
                 spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
-                                         params.get('tones', ()), rng))
+                                         (noise_floor or {}).get('tones', ()), rng,
+                                         (noise_floor or {}).get('form', '')))
         clock += plan.rest
-        if effect == 'thermal_viscosity':
-            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / params['tau'])
+        if loss and loss.get('recovery_time'):
+            depleted *= math.exp(-plan.rest / loss['recovery_time'])
+        if heat:
+            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / heat['tau'])
     resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
     table = WindowTable(theta=plan.theta,
                         spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
-    truth = {'effect': effect, 'params': params, 'theta_effective': np.array(theta_eff),
-             'amplitude_eq22': np.array(a22_list)}
+    single = effect is None or isinstance(effect, str)
+    truth = {'effect': effect, 'params': laws.get(effect, {}) if single else laws,
+             'theta_effective': np.array(theta_eff), 'amplitude_eq22': np.array(a22_list)}
     return table, truth
 
 
 def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, background: float, tones,
-              rng: np.random.Generator) -> np.ndarray:
+              rng: np.random.Generator, form: str = '') -> np.ndarray:
     """PSD ((m/s^2)^2/Hz) of one window: order lines + broadband of the contacts, fixed tones + white background."""
     bins = plan.spectrum_bins
     df = 2000.0 / bins
@@ -188,7 +240,8 @@ def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, backgroun
         line(order * rotation, share * contact_power)
     psd += 0.4 * contact_power / 2000.0
     if background > 0:
-        for tone in tones:
-            line(tone, 0.35 * background ** 2)
-        psd += 0.3 * background ** 2 / 2000.0
+        tone_share, floor_share = BACKGROUND_SHARES[form]
+        for tone in tones if tone_share else ():
+            line(tone, tone_share * background ** 2)
+        psd += floor_share * background ** 2 / 2000.0
     return psd * rng.chisquare(8, size=bins) / 8

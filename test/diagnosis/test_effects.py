@@ -104,8 +104,13 @@ def test_fixed_fixed_shaft_is_softest_mid_travel_and_fixed_free_is_monotone():
     assert np.argmin(both) == 4 and both[0] == pytest.approx(both[-1])
     area = np.pi * 0.01 ** 2 / 4
     assert both[4] == pytest.approx(2.1e11 * area * 2 / 0.105)
-    one = law.shaft_stiffness_for('fixed-free', 2.1e11, 0.01, x, 0.17, 0.02, 0.5)
+    # Fixed bearing 20 mm before the stroke start (free-fixed): the shaft softens as the nut moves away.
+    one = law.shaft_stiffness_for('free-fixed', 2.1e11, 0.01, x, 0.17, 0.02, 0.5)
     assert np.all(np.diff(one) < 0)
+    # Fixed bearing 0.5 m beyond the end (fixed-free, and fixed-supported alike): stiffens towards it.
+    far = law.shaft_stiffness_for('fixed-free', 2.1e11, 0.01, x, 0.17, 0.02, 0.5)
+    assert np.all(np.diff(far) > 0)
+    assert law.shaft_stiffness_for('fixed-supported', 2.1e11, 0.01, x, 0.17, 0.02, 0.5) == pytest.approx(far)
     # The quadratic profile is exact for fixed-fixed: c a b / (a + b) with c = k_c / (E A).
     c, s, o1, o2 = 3.0, 0.17, 0.02, 0.05
     a, b = x + o1, s + o2 - x

@@ -15,6 +15,7 @@ from rosbags.highlevel import AnyReader
 
 from prsm_lube_ros.recording import typestore as interfaces
 from prsm_lube_ros.errors import InputError
+from prsm_lube_ros.physics.effects import resonance
 from prsm_lube_ros.simulation.drive import DriveProgram, schedule_session
 from prsm_lube_ros.simulation.recordings import draw_effects, simulate_endurance, simulate_experiment
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, load_experiment_plan, load_rig_config, RigConfig
@@ -406,18 +407,33 @@ def test_drawn_effects_stay_in_their_physical_ranges():
     plan = ExperimentPlan()
     session = 2 * 6 * 0.18 / 0.005                            # revolutions of one bag
     lowest = eq22(100 * RPM, 200.0, 1.0)
+    arrangements, bands, laws, forms = {}, {}, {}, {}
     for seed in range(20):
         effects = draw_effects(list(Effects().as_dict()), seed=seed, plan=plan)
         stiffness = effects.position_dependent_stiffness
-        start, end = stiffness.amplitude_factor(0.0, 100.0), stiffness.amplitude_factor(0.18, 100.0)
-        assert 0.05 - 1e-9 <= 1 - end / start <= 0.30 + 1e-9
-        ratio = effects.resonance.order * 200 * RPM / (2 * math.pi) / effects.resonance.natural_frequency
-        assert 0.5 <= ratio <= 0.9 and 0.02 <= effects.resonance.damping_ratio <= 0.1
+        factor = stiffness.amplitude_factor(np.linspace(0.0, plan.stroke, 201), 100.0)
+        assert 0.05 - 1e-9 <= np.ptp(factor) / np.max(factor) <= 0.30 + 1e-9
+        if stiffness.arrangement == 'fixed-fixed':           # softest mid-travel
+            assert 0 < np.argmax(factor) < factor.size - 1
+        arrangements[stiffness.arrangement] = True
+        # Any order excites the mode; the screw speed where they meet lies above, inside or below the band.
+        mode = effects.resonance
+        resonant = 2 * math.pi * mode.natural_frequency / mode.order
+        top, bottom = 200 * RPM, 100 * RPM
+        assert (0.5 <= top / resonant <= 0.9 or bottom < resonant < top or 1.3 <= bottom / resonant <= 3.0)
+        assert 0.02 <= mode.damping_ratio <= 0.1
+        bands[resonance.band_position(resonant, bottom, top)] = True
         assert 5 <= effects.thermal_viscosity.temperature_rise <= 25
         assert effects.thermal_viscosity.viscosity_temperature_coefficient == 0.03   # the actuator's oil
-        assert 0.05 <= 1 - math.exp(-session / effects.lubricant_depletion.depletion_revolutions) <= 0.25
+        laws[effects.thermal_viscosity.viscosity_law] = True
+        loss = effects.lubricant_depletion
+        fall = 1 - loss.theta_factor(session)
+        assert 0.05 - 1e-9 <= fall <= 0.25 + 1e-9
         assert 0.5 <= effects.background_vibration.rms / lowest <= 1.5
-        assert Effects.from_dict(json.loads(json.dumps(effects.as_dict()))) == effects
+        forms[effects.background_vibration.form] = True
+        assert Effects.from_dict(json.loads(json.dumps(effects.as_dict(), allow_nan=False))) == effects
+    # Every physical form is drawn.
+    assert len(arrangements) == 3 and len(bands) == 3 and len(laws) == 3 and len(forms) == 3
     assert draw_effects(['resonance'], seed=1) == draw_effects(['resonance'], seed=1)
     with pytest.raises(InputError, match='unknown effect'):
         draw_effects(['gremlins'])

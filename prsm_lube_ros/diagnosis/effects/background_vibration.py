@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """How to fit background vibration (the law: :mod:`prsm_lube_ros.physics.effects.background_vibration`).
 
-``A = sqrt(A_22^2 + B^2)``; B shows most at low speed and, in the spectrum, as
-lines at fixed frequencies.  Parameter: B (m/s^2); internally B over the
+``A = sqrt(A_22^2 + B^2)``; B shows most at low speed.  Its forms differ in
+the spectrum only: lines at fixed frequencies, a broadband floor, or both
+(:meth:`BackgroundVibration.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2); internally B over the
 smallest RMS recorded.
 """
 from __future__ import annotations
@@ -17,6 +18,8 @@ from .base import Effect, register
 FRACTION_RANGE = (0.0, 1.5)
 #: Smallest share of the power at the lowest speed in fixed spectral lines that counts as evidence.
 MIN_LINE_SHARE = 1e-3
+#: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
+LINE_SHARE = 0.4
 
 
 @register
@@ -31,6 +34,7 @@ class BackgroundVibration(Effect, law.Extension):
     equations = 'A = sqrt(A_22^2 + B^2)'
     parameter_names = ('background_fraction',)
     covariate = 'speed'
+    form = law.FORMS[0]
     to_separate = ('lower screw speeds (the background dominates there), a record at standstill with the drive '
                    'on, and vibration spectra')
 
@@ -57,12 +61,20 @@ class BackgroundVibration(Effect, law.Extension):
             return ''
         return 'spectrum: ' + lines.note
 
-    def contrary_evidence(self, table, location) -> str:
-        """The spectra could show fixed lines (two speeds or more) and show none."""
+    def form_name(self, params, table, location) -> str:
+        """Lines, floor or both, from the spectrum: lines carrying less than :data:`LINE_SHARE` of B^2 leave a floor.
+
+        Without spectra (or with one speed) the form cannot be told.  The absence of
+        lines is no evidence against a background: a broadband floor has none.
+        """
         lines = location.spectrum if location is not None else None
-        if lines is None or not lines.testable or lines.frequencies:
-            return ''
-        return 'the spectra show no fixed-frequency line, the usual mark of motor, bearing or frame vibration'
+        if lines is None or not lines.testable:
+            return 'form not known (no spectra at two speeds or more): lines or broadband floor'
+        if not lines.frequencies:
+            return law.FORMS[1]
+        if lines.total_power >= LINE_SHARE * params['background_rms'] ** 2:
+            return law.FORMS[0]
+        return law.FORMS[2]
 
     def describe(self, params):
         """B and its share of the smallest RMS."""

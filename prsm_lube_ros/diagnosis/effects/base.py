@@ -50,6 +50,8 @@ class Effect(Extension):
     covariate: str = ''
     #: What to record so this effect can be told apart from the others.
     to_separate: str = ''
+    #: Name of this physical form of the effect (each of :meth:`variants` has its own).
+    form: str = ''
 
     def applicable(self, table) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""
@@ -76,8 +78,16 @@ class Effect(Extension):
         return self.physics
 
     def variants(self) -> Sequence['Effect']:
-        """Alternative forms of this effect (same id), each fitted; the engine keeps the lowest BIC."""
+        """Physical forms of this effect (same id), each fitted; the engine chooses one by BIC.
+
+        A form with more parameters than the best of the fewest-parameter forms
+        must lower the BIC by the engine's form margin to be chosen.
+        """
         return [self]
+
+    def form_name(self, params: dict, table, location) -> str:
+        """The form the fitted parameters and the data show (default :attr:`form`)."""
+        return self.form
 
     def independent_evidence(self, table, location) -> str:
         """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none."""

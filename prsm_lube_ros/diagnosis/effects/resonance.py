@@ -2,35 +2,53 @@
 # SPDX-License-Identifier: Apache-2.0
 """How to fit a resonance (the law: :mod:`prsm_lube_ros.physics.effects.resonance`).
 
-``A = A_22 |H(r)|`` with ``r = omega_S / omega_r``.  Only the screw speed at
-which the excitation meets the mode, ``omega_r = 2 pi f_r / n`` (rad/s), can
-be identified from RMS values, not the order n and f_r separately.
-Parameters: omega_r (rad/s) and the damping ratio zeta; internally r at the
-highest speed recorded.
+``A = A_22 |H(r)|`` with ``r = omega_S / omega_r``.  Any rotation order n may
+excite the mode; from RMS values only the screw speed at which the excitation
+meets the mode, ``omega_r = 2 pi f_r / n`` (rad/s), can be identified, so the
+order enters as ``f_r = n omega_r / (2 pi)`` and the report lists f_r for the
+first orders.  Three forms, each fitted, by where omega_r lies against the
+recorded speeds omega_min..omega_max:
+
+* mode above the band (``omega_r > omega_max``): the amplitude rises faster
+  than omega^2; internally r at the top speed, 0.05-0.98;
+* mode inside the band: a peak between two recorded speeds; internally
+  ``q = ln(omega_r / omega_min) / ln(omega_max / omega_min)`` in 0..1;
+* mode below the band (``omega_r < omega_min``): every speed is past
+  resonance, the amplitude rises more slowly than omega^2 (tending to
+  A_22 / r^2); internally r at the lowest speed, 1.02-20.
+
+Each also fits the damping ratio zeta.  The engine chooses the form by BIC.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from ...physics.effects import resonance as law
 from .base import Effect, register
 
-#: Bounds of the frequency ratio at the highest recorded speed.
-TOP_RATIO_RANGE = (0.05, 3.0)
+#: Bounds of the frequency ratio at the highest recorded speed (mode above the band).
+TOP_RATIO_RANGE = (0.05, 0.98)
+#: Bounds of the frequency ratio at the lowest recorded speed (mode below the band).
+BOTTOM_RATIO_RANGE = (1.02, 20.0)
 #: Bounds of the damping ratio.
 DAMPING_RANGE = (0.005, 0.5)
+#: Rotation orders for which the report gives the mode's natural frequency.
+REPORTED_ORDERS = (1, 2, 3, 4)
 
 
 @register
 class Resonance(Effect, law.Extension):
-    """The excitation frequency approaches a structural mode; amplitude departs from the omega^2 law."""
+    """The excitation frequency approaches a structural mode above the speed band."""
 
     id = 'resonance'
     title = 'structural resonance'
-    physics = ('A rotation-order excitation approaches a lightly damped natural frequency of the structure, so '
-               'the quasi-static step X0 = F0/K0 (Eq. 14) no longer holds: the response is magnified by |H(r)| '
-               'and the amplitude rises faster with speed than the omega^2 law of Eq. 22.')
-    equations = 'A = A_22 / sqrt((1 - r^2)^2 + (2 zeta r)^2), r = omega_S / omega_r'
+    form = 'mode above the speed band'
+    physics = ('A rotation-order excitation (any order) meets a lightly damped natural frequency of the '
+               'structure, so the quasi-static step X0 = F0/K0 (Eq. 14) no longer holds: the response follows '
+               "Eq. 13's magnification |H(r)| and the amplitude departs from the omega^2 law of Eq. 22.")
+    equations = 'A = A_22 / sqrt((1 - r^2)^2 + (2 zeta r)^2), r = omega_S / omega_r, omega_r = 2 pi f_r / n'
     parameter_names = ('top_ratio', 'damping_ratio')
     covariate = 'speed'
     to_separate = 'more screw speeds (at least 4, up to the highest the actuator runs) at each load'
@@ -44,27 +62,84 @@ class Resonance(Effect, law.Extension):
         return ''
 
     def scales(self, table) -> dict:
-        """The highest recorded screw speed, rad/s."""
-        return {'top_speed': float(np.max(np.abs(table.speed)))}
+        """The highest and lowest recorded screw speeds, rad/s."""
+        speed = np.abs(table.speed)
+        return {'top_speed': float(np.max(speed)), 'bottom_speed': float(np.min(speed))}
 
     def bounds(self):
-        """top_ratio and damping_ratio ranges."""
+        """Frequency ratio at the top speed and damping ratio."""
         return (np.array([TOP_RATIO_RANGE[0], DAMPING_RANGE[0]]),
                 np.array([TOP_RATIO_RANGE[1], DAMPING_RANGE[1]]))
 
     def starts(self):
-        """A grid of frequency ratios below and above resonance."""
-        return [np.array([r, z]) for r in (0.4, 0.6, 0.75, 0.85, 0.93, 1.3) for z in (0.03, 0.1)]
+        """A grid of frequency ratios below resonance."""
+        return [np.array([r, z]) for r in (0.4, 0.6, 0.75, 0.85, 0.93) for z in (0.03, 0.1)]
+
+    def _resonant_speed(self, p, scales) -> float:
+        return scales['top_speed'] / p[0]
 
     def to_params(self, p, scales):
-        """resonant_speed (rad/s), damping_ratio and top_speed."""
-        return {'resonant_speed': float(scales['top_speed'] / p[0]), 'damping_ratio': float(p[1]), **scales}
+        """resonant_speed (rad/s), damping_ratio and the band's top and bottom speeds."""
+        return {'resonant_speed': float(self._resonant_speed(p, scales)), 'damping_ratio': float(p[1]), **scales}
+
+    def variants(self):
+        """Mode above, inside and below the speed band."""
+        return [self, ResonanceInBand(), ResonanceBelowBand()]
 
     def describe(self, params):
-        """Where the resonance lies and how much it magnifies the top speed."""
-        top = params['top_speed'] / params['resonant_speed']
-        gain = float(law.magnification(top, params['damping_ratio']))
-        return (f'The excitation meets a mode at a screw speed of {params["resonant_speed"]:.1f} rad/s '
-                f'({params["resonant_speed"] * 30 / np.pi:.0f} r/min), damping ratio '
-                f'{params["damping_ratio"]:.3f}; at the top speed r = {top:.2f} and the response is magnified '
-                f'x{gain:.2f}. ' + self.physics)
+        """Where the resonance lies, the natural frequency per order and the magnification at the band's ends."""
+        speed = params['resonant_speed']
+        top = params['top_speed'] / speed
+        bottom = params.get('bottom_speed', params['top_speed']) / speed
+        gains = [float(law.magnification(r, params['damping_ratio'])) for r in (bottom, top)]
+        orders = ', '.join(f'{law.natural_frequency(speed, n):.1f} Hz (order {n})' for n in REPORTED_ORDERS)
+        return (f'The excitation meets a mode {self.form[5:]} at a screw speed of {speed:.1f} rad/s '
+                f'({speed * 30 / math.pi:.0f} r/min), damping ratio {params["damping_ratio"]:.3f}; the natural '
+                f'frequency is {orders} or n times {speed / (2 * math.pi):.2f} Hz for order n. At the lowest and '
+                f'highest speed r = {bottom:.2f} and {top:.2f}, the response magnified x{gains[0]:.2f} and '
+                f'x{gains[1]:.2f}. ' + self.physics)
+
+
+class ResonanceInBand(Resonance):
+    """The mode inside the recorded speed band: a peak between two speeds."""
+
+    form = 'mode inside the speed band'
+    parameter_names = ('band_position', 'damping_ratio')
+
+    def bounds(self):
+        """Position of omega_r in the band (log scale, 0..1) and damping ratio."""
+        return np.array([0.0, DAMPING_RANGE[0]]), np.array([1.0, DAMPING_RANGE[1]])
+
+    def starts(self):
+        """Across the band, light and moderate damping."""
+        return [np.array([q, z]) for q in (0.15, 0.5, 0.85) for z in (0.03, 0.1)]
+
+    def _resonant_speed(self, p, scales):
+        return scales['bottom_speed'] * (scales['top_speed'] / scales['bottom_speed']) ** float(p[0])
+
+    def variants(self):
+        """Only itself."""
+        return [self]
+
+
+class ResonanceBelowBand(Resonance):
+    """The mode below the recorded speed band: every speed past resonance."""
+
+    form = 'mode below the speed band'
+    parameter_names = ('bottom_ratio', 'damping_ratio')
+
+    def bounds(self):
+        """Frequency ratio at the lowest speed and damping ratio."""
+        return (np.array([BOTTOM_RATIO_RANGE[0], DAMPING_RANGE[0]]),
+                np.array([BOTTOM_RATIO_RANGE[1], DAMPING_RANGE[1]]))
+
+    def starts(self):
+        """Just past resonance to far past it."""
+        return [np.array([r, z]) for r in (1.1, 1.5, 3.0) for z in (0.03, 0.1)]
+
+    def _resonant_speed(self, p, scales):
+        return scales['bottom_speed'] / p[0]
+
+    def variants(self):
+        """Only itself."""
+        return [self]

@@ -9,8 +9,17 @@ the thread-contact excitation, so powers add:
     A = sqrt(A_22^2 + B^2)
 
 B does not follow the screw speed, so it matters most at low speed where A_22
-(~omega^2) is small; in the spectrum it shows as energy at fixed frequencies
-that do not move with the rotation orders.
+(~omega^2) is small.  Its forms (:data:`FORMS`) differ in the spectrum only:
+
+* ``fixed-frequency lines``: tones of the drive (twice the mains frequency,
+  PWM), a bearing or a frame mode, at frequencies that do not move with the
+  rotation orders;
+* ``broadband floor``: white noise of the sensor chain, turbulent air or a
+  rough motor bearing: a floor in the power spectral density that stays put
+  as the speed changes;
+* ``lines and broadband floor``: both.
+
+The RMS law is the same for every form.
 """
 from __future__ import annotations
 
@@ -20,6 +29,10 @@ import numpy as np
 
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
+
+
+#: Spectral forms of the background (see module doc).
+FORMS = ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')
 
 
 def total_amplitude(contact_amplitude, background_rms):
@@ -69,6 +82,13 @@ class BackgroundVibration:
         shares = (*self.tone_shares, self.broadband_share)
         require(min(shares) >= 0 and abs(sum(shares) - 1.0) <= 1e-9,
                 f'background_vibration shares must be >= 0 and add up to 1, got {shares}')
+
+    @property
+    def form(self) -> str:
+        """Which of :data:`FORMS` the power shares make."""
+        lines = bool(self.tone_frequencies) and sum(self.tone_shares) > 0
+        floor = self.broadband_share > 0
+        return FORMS[2] if lines and floor else FORMS[0] if lines else FORMS[1]
 
 
 Law = BackgroundVibration

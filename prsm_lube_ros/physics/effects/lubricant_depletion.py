@@ -1,60 +1,143 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Oil flung out of the contacts as the screw turns: theta_Oil decays with revolutions.
+"""Oil flung out of the contacts as the screw turns: theta_Oil falls with revolutions.
 
 Physics: the paper notes centrifugal loss of oil (Sec. 2.2); between
-lubrications the supply factor falls with the revolutions run,
+lubrications the supply factor falls with the revolutions run.  Two forms
+(:data:`FORMS`), N the (effective) revolutions since the last lubrication:
 
-    theta_eff = theta_Oil exp(-N_rev / N_d)
+* ``exponential``: each revolution loses a fixed share of the oil left,
+  ``theta_eff = theta_Oil exp(-N / N_d)``;
+* ``linear``: each revolution loses a fixed amount (a reservoir draining at a
+  constant rate), ``theta_eff = theta_Oil max(1 - N / N_d, MIN_SUPPLY)``.
 
-so the film term of Eq. 22 carries the factor ``exp(-N_rev / N_d)``.
+The film term of Eq. 22 carries the factor.  At rest oil creeps back into the
+contacts (capillary flow from the thread flanks): the loss recovers with time
+constant tau_r, ``N_eff <- N_eff exp(-t_rest / tau_r)`` for each standstill of
+t_rest, so a long pause restores part of the supply (``tau_r`` infinite: no
+recovery).  Between rests ``N_eff`` grows by the revolutions run.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
 from . import Extension as EffectExtension
-from ...validation import require_all_positive
+from ...validation import require, require_all_positive
+
+#: Forms of the loss (see module doc).
+FORMS = ('exponential', 'linear')
+#: Smallest supply factor the linear form falls to (a film of residual oil stays).
+MIN_SUPPLY = 0.05
+#: A gap between windows longer than their own running time by this factor counts as rest, s per s.
+REST_SLACK = 1.5
 
 
-def theta_factor(revolutions, depletion_per_revolution):
-    """``exp(-N_rev / N_d)`` for revolutions N_rev since the last lubrication, rate 1/N_d per revolution."""
-    return np.exp(-np.asarray(depletion_per_revolution, dtype=float) * np.asarray(revolutions, dtype=float))
+def theta_factor(revolutions, depletion_per_revolution, form: str = 'exponential'):
+    """Supply factor for (effective) revolutions N at rate 1/N_d per revolution: ``exp(-N/N_d)`` or linear."""
+    loss = np.asarray(depletion_per_revolution, dtype=float) * np.asarray(revolutions, dtype=float)
+    if form == 'linear':
+        return np.maximum(1.0 - loss, MIN_SUPPLY)
+    if form != 'exponential':
+        raise ValueError(f'unknown depletion form {form!r}; known: {", ".join(FORMS)}')
+    return np.exp(-loss)
+
+
+def rest_durations(revolutions, time, speed, recording=None) -> np.ndarray:
+    """Standstill before each window, s: the time gap not explained by turning at the window's speed.
+
+    Windows are taken in time order within each recording (the first of a
+    recording has no rest before it).  revolutions since lubrication, time in
+    s, speed in rad/s.
+    """
+    revolutions = np.nan_to_num(np.asarray(revolutions, dtype=float))
+    time = np.asarray(time, dtype=float)
+    speed = np.abs(np.asarray(speed, dtype=float))
+    recording = np.zeros(time.size) if recording is None else np.asarray(recording)
+    rest = np.zeros(time.size)
+    order = np.lexsort((time, recording))
+    same = recording[order][1:] == recording[order][:-1]
+    gap = np.diff(time[order])
+    turning = 2.0 * math.pi * np.abs(np.diff(revolutions[order])) / np.maximum(speed[order][1:], 1e-9)
+    idle = np.where(same & (gap > REST_SLACK * turning), gap - turning, 0.0)
+    rest[order[1:]] = np.where(np.isfinite(idle), np.maximum(idle, 0.0), 0.0)
+    return rest
+
+
+def effective_revolutions(revolutions, rest, recovery_rate: float, recording=None, time=None) -> np.ndarray:
+    """``N_eff``: revolutions since lubrication with the loss recovering at rest, ``exp(-t_rest / tau_r)``.
+
+    rest in s before each window (:func:`rest_durations`), recovery_rate 1/tau_r in 1/s (0: none).
+    """
+    revolutions = np.nan_to_num(np.asarray(revolutions, dtype=float))
+    if recovery_rate <= 0:
+        return revolutions
+    recording = np.zeros(revolutions.size) if recording is None else np.asarray(recording)
+    time = np.arange(revolutions.size, dtype=float) if time is None else np.asarray(time, dtype=float)
+    order = np.lexsort((time, recording))
+    keep = np.exp(-recovery_rate * np.asarray(rest, dtype=float)[order])
+    out = np.empty(revolutions.size)
+    effective, previous, last_recording = 0.0, 0.0, None
+    for i, k in enumerate(order):
+        if recording[k] != last_recording:
+            effective, previous, last_recording = 0.0, 0.0, recording[k]
+        effective = effective * keep[i] + max(revolutions[k] - previous, 0.0)
+        previous = revolutions[k]
+        out[k] = effective
+    return out
 
 
 @dataclass(frozen=True)
 class LubricantDepletion:
-    """Oil flung out of the contacts: ``theta_eff = theta_Oil exp(-N_rev / N_d)``.
+    """Oil flung out of the contacts: ``theta_eff = theta_Oil exp(-N_rev / N_d)`` or linear in N_rev.
 
     N_rev is the screw revolutions (either direction) run since the last
-    lubrication, i.e. since the start of the bag.
+    lubrication, i.e. since the start of the bag.  ``form`` is one of
+    :data:`FORMS`; ``recovery_time`` tau_r (s) of the loss at rest, None
+    for none (the rig simulator runs without recovery; the window-table
+    simulator applies it).
     """
 
     depletion_revolutions: float   # N_d, revolutions
+    form: str = 'exponential'
+    recovery_time: float | None = None   # s, tau_r (None: no recovery)
 
     def __post_init__(self):
         """Reject non-physical parameters."""
-        require_all_positive('lubricant_depletion', **self.__dict__)
+        require_all_positive('lubricant_depletion', depletion_revolutions=self.depletion_revolutions)
+        if self.recovery_time is not None:
+            require_all_positive('lubricant_depletion', recovery_time=self.recovery_time)
+        require(self.form in FORMS, f'lubricant_depletion form must be one of {", ".join(FORMS)}, '
+                                    f'got {self.form!r}')
 
     def theta_factor(self, revolutions):
-        """``exp(-N_rev / N_d)`` for revolutions N_rev since the last lubrication."""
-        return theta_factor(revolutions, 1.0 / self.depletion_revolutions)
+        """Supply factor for (effective) revolutions N_rev since the last lubrication."""
+        return theta_factor(revolutions, 1.0 / self.depletion_revolutions, self.form)
 
 
 Law = LubricantDepletion
 
 
 class Extension(EffectExtension):
-    """theta_Oil in Eq. 22 times ``exp(-N_rev depletion_per_revolution)``."""
+    """theta_Oil in Eq. 22 times the supply factor at ``depletion_per_revolution``.
+
+    Optional parameters: ``linear`` (1 for the linear form) and ``recovery_rate`` 1/tau_r (1/s).
+    """
 
     id = 'lubricant_depletion'
 
     def film_factor(self, params, covariates):
-        """``exp(-N_rev / N_d)``."""
+        """``exp(-N_eff / N_d)`` or ``1 - N_eff / N_d``."""
         revolutions = np.nan_to_num(np.asarray(covariates.revolutions, dtype=float))
-        return theta_factor(revolutions, params['depletion_per_revolution'])
+        rate = params.get('recovery_rate', 0.0)
+        if rate > 0:
+            recording = getattr(covariates, 'recording', None)
+            rest = rest_durations(revolutions, covariates.time, covariates.speed, recording)
+            revolutions = effective_revolutions(revolutions, rest, rate, recording, covariates.time)
+        form = 'linear' if params.get('linear', 0.0) else 'exponential'
+        return theta_factor(revolutions, params['depletion_per_revolution'], form)
 
     def assessment_film_factor(self, params, covariates):
         """1: depletion is a real fall of theta_Oil, which assessment must report."""

@@ -10,22 +10,28 @@ K = k_c k_s / (k_c + k_s) replaces K_0 in Eq. 14, so
 
     X_0 = F_0 / K = (F_0 / k_c) (1 + k_c / k_s(x)),   A = A_22 (1 + k_c(F) / k_s(x)).
 
-How k_s depends on the nut position x depends on the bearing arrangement:
+How k_s depends on the nut position x depends on the bearing arrangement
+(:data:`ARRANGEMENTS`); bearings sit o_1 before the stroke start and o_2 beyond
+its end (stroke s), so the free lengths either side of the nut are
+``a = x + o_1`` and ``b = s + o_2 - x``:
 
-* fixed-free, the fixed bearing at either end (and fixed-supported, whose
-  support bearing carries no axial load): ``k_s = E A / L(x)``, L the shaft
-  length between nut and fixed bearing: the compliance is linear in x,
-  monotone along the stroke;
-* fixed-fixed: the two shaft segments of lengths a = x + o_1 and
-  b = s + o_2 - x (bearings o_1 before the stroke start and o_2 beyond its end,
-  stroke s) carry the load in parallel, ``k_s = E A (1/a + 1/b)``: the
-  compliance ``a b / (E A (a + b))`` is an arch, largest mid-travel.
+* fixed-free, the fixed (axial) bearing beyond the far end of travel
+  (``fixed-free``) or before its start (``free-fixed``): only the segment to
+  the fixed bearing carries the load, ``k_s = E A / b`` or ``E A / a``; the
+  compliance is linear in x, falling or rising along the stroke;
+* fixed-supported: the support bearing only guides the shaft radially and
+  carries no axial load, so the axial law is that of fixed-free with the
+  fixed bearing at the same end (the two cannot be told apart by axial
+  stiffness; reports name both);
+* fixed-fixed: both segments carry the load in parallel,
+  ``k_s = E A (1/a + 1/b)``: the compliance ``a b / (E A (a + b))`` is an
+  arch, largest mid-travel.
 
-Both compliance profiles are quadratics in ``u = x / s``:
+All profiles are quadratics in ``u = x / s``:
 ``rho(u) = rho_0 (1 - u) + rho_1 u + 4 rho_arch u (1 - u)`` with rho = k_c/k_s,
 ``rho_arch = 0`` for fixed-free and ``rho_arch = c s^2 / 4`` for fixed-fixed,
 ``rho_0 = c o_1 (s + o_2)``, ``rho_1 = c o_2 (s + o_1)``, ``c = k_c / (E A (s + o_1 + o_2))``
-(:func:`compliance_ratio_profile`).
+(:func:`compliance_ratio_profile`, :func:`arrangement_ratios`).
 """
 from __future__ import annotations
 
@@ -35,7 +41,7 @@ import math
 import numpy as np
 
 from . import Extension as EffectExtension
-from ...validation import require_all_positive
+from ...validation import require, require_all_positive
 from ..vibration_model import STIFFNESS_EXPONENT
 
 #: Shortest free shaft length the law is evaluated at, m (the nut cannot sit on the bearing).
@@ -63,8 +69,11 @@ def fixed_fixed_shaft_stiffness(youngs_modulus: float, root_diameter: float, len
     return youngs_modulus * area * (1.0 / a + 1.0 / b)
 
 
-#: Bearing arrangements and how the shaft stiffness follows the nut (see module doc).
-ARRANGEMENTS = ('fixed-free', 'fixed-supported', 'fixed-fixed')
+#: Bearing arrangements (see module doc): the fixed bearing beyond the far end (fixed-free, fixed-supported),
+#: before the stroke start (free-fixed, supported-fixed), or both ends fixed.
+ARRANGEMENTS = ('fixed-free', 'free-fixed', 'fixed-supported', 'supported-fixed', 'fixed-fixed')
+#: Arrangements whose axially fixed bearing lies before the stroke start.
+FIXED_BEFORE_START = ('free-fixed', 'supported-fixed')
 
 
 def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: float, nut_position,
@@ -72,8 +81,8 @@ def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: 
     """Shaft stiffness k_s(x), N/m, for a bearing arrangement (one of :data:`ARRANGEMENTS`).
 
     Bearings sit ``bearing_before`` m before the stroke start and ``bearing_after``
-    m beyond its end; for fixed-free and fixed-supported the fixed bearing is the
-    nearer one, the other end is free or only radially supported.
+    m beyond its end; for the fixed-free and fixed-supported arrangements only
+    the segment to the axially fixed bearing carries the load.
     """
     x = np.asarray(nut_position, dtype=float)
     before, after = x + bearing_before, stroke + bearing_after - x
@@ -81,8 +90,25 @@ def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: 
         return fixed_fixed_shaft_stiffness(youngs_modulus, root_diameter, before, after)
     if arrangement not in ARRANGEMENTS:
         raise ValueError(f'unknown bearing arrangement {arrangement!r}; known: {", ".join(ARRANGEMENTS)}')
-    length = before if bearing_before <= bearing_after else after
+    length = before if arrangement in FIXED_BEFORE_START else after
     return shaft_axial_stiffness(youngs_modulus, root_diameter, np.maximum(length, MIN_FREE_LENGTH))
+
+
+def arrangement_ratios(arrangement: str, contact_over_ea: float, stroke: float, bearing_before: float,
+                       bearing_after: float) -> tuple[float, float, float]:
+    """``(rho_0, rho_1, rho_arch)`` of :func:`compliance_ratio_profile` for an arrangement, dimensionless.
+
+    contact_over_ea = k_c / (E A) in 1/m; stroke and bearing offsets in m (see module doc).
+    """
+    if arrangement == 'fixed-fixed':
+        c = contact_over_ea / (stroke + bearing_before + bearing_after)
+        return (c * bearing_before * (stroke + bearing_after), c * bearing_after * (stroke + bearing_before),
+                c * stroke ** 2 / 4.0)
+    if arrangement in FIXED_BEFORE_START:
+        return contact_over_ea * bearing_before, contact_over_ea * (stroke + bearing_before), 0.0
+    if arrangement not in ARRANGEMENTS:
+        raise ValueError(f'unknown bearing arrangement {arrangement!r}; known: {", ".join(ARRANGEMENTS)}')
+    return contact_over_ea * (stroke + bearing_after), contact_over_ea * bearing_after, 0.0
 
 
 def compliance_ratio_profile(u, ratio_at_start: float, ratio_at_end: float, ratio_arch: float = 0.0):
@@ -106,35 +132,50 @@ def contact_stiffness_at(load, contact_stiffness: float, reference_load: float):
 
 @dataclass(frozen=True)
 class PositionDependentStiffness:
-    """Shaft compliance in series with the thread contacts, the fixed bearing beyond the far end of travel.
+    """Shaft compliance in series with the thread contacts, for any bearing arrangement.
 
-    The free shaft length ``L(x) = free_length_at_start - x`` shrinks as the
-    nut travels by x (m, from the start of the stroke) and ``k_s = E A / L``
-    grows: the amplitude falls along the stroke, as the paper saw.
+    Default (fixed-free, the fixed bearing beyond the far end of travel): the
+    free shaft length ``L(x) = free_length_at_start - x`` shrinks as the nut
+    travels by x (m, from the start of the stroke) and ``k_s = E A / L``
+    grows: the amplitude falls along the stroke, as the paper saw.  With a
+    bearing ``near_length_at_start`` m before the stroke start, ``free-fixed``
+    / ``supported-fixed`` load the segment ``near_length_at_start + x`` and
+    ``fixed-fixed`` both segments in parallel.
     """
 
     contact_stiffness: float        # N/m, k_c at reference_load
     reference_load: float           # N
     youngs_modulus: float           # Pa, shaft material
     root_diameter: float            # m, shaft root diameter
-    free_length_at_start: float     # m, nut to fixed bearing at travel 0
+    free_length_at_start: float     # m, nut to the bearing beyond the far end at travel 0
+    arrangement: str = 'fixed-free'
+    near_length_at_start: float = 0.05   # m, nut to the bearing before the stroke start at travel 0
 
     def __post_init__(self):
         """Reject non-physical parameters."""
-        require_all_positive('position_dependent_stiffness', **self.__dict__)
+        require_all_positive('position_dependent_stiffness', contact_stiffness=self.contact_stiffness,
+                             reference_load=self.reference_load, youngs_modulus=self.youngs_modulus,
+                             root_diameter=self.root_diameter, free_length_at_start=self.free_length_at_start,
+                             near_length_at_start=self.near_length_at_start)
+        require(self.arrangement in ARRANGEMENTS, 'position_dependent_stiffness arrangement must be one of '
+                f'{", ".join(ARRANGEMENTS)}, got {self.arrangement!r}')
 
     @property
     def stiffness_ratio_at_start(self) -> float:
         """``k_c / k_s`` at travel 0 and the reference load, dimensionless."""
-        return float(self.contact_stiffness
-                     / shaft_axial_stiffness(self.youngs_modulus, self.root_diameter, self.free_length_at_start))
+        return float(self.contact_stiffness / self.shaft_stiffness(0.0))
+
+    def shaft_stiffness(self, nut_position):
+        """``k_s(x)`` of the arrangement, N/m, for nut_position x in m from the stroke start."""
+        # The far bearing lies free_length_at_start beyond travel 0: stroke + bearing_after in shaft_stiffness_for.
+        return shaft_stiffness_for(self.arrangement, self.youngs_modulus, self.root_diameter, nut_position,
+                                   self.free_length_at_start, self.near_length_at_start, 0.0)
 
     def amplitude_factor(self, nut_position, axial_load):
         """``1 + k_c(F) / k_s(x)`` for nut_position x in m and axial_load F in N."""
-        length = np.maximum(self.free_length_at_start - np.asarray(nut_position, dtype=float), MIN_FREE_LENGTH)
         return series_stiffness_amplification(
             contact_stiffness_at(axial_load, self.contact_stiffness, self.reference_load),
-            shaft_axial_stiffness(self.youngs_modulus, self.root_diameter, length))
+            self.shaft_stiffness(nut_position))
 
 
 Law = PositionDependentStiffness

@@ -10,6 +10,15 @@ damped mode at f_r the full solution of Eq. 13 applies:
     X = (F_0 / K_0) |H(r)|,  |H(r)| = 1 / sqrt((1 - r^2)^2 + (2 zeta r)^2),  r = n f_S / f_r
 
 so ``A = A_22 |H(r)|``.
+
+Any rotation order n can excite the mode (roller passing, nut thread starts,
+a screw run-out at n = 1); the mode may lie below the speed band (every speed
+past resonance, r > 1: the amplitude rises more slowly than omega^2 and
+approaches A_22 / r^2), inside it (a peak at ``omega_S = 2 pi f_r / n``) or
+above it (r < 1 throughout: the amplitude rises faster than omega^2).  The RMS
+amplitude only sees the screw speed at which the excitation meets the mode,
+``omega_r = 2 pi f_r / n``; f_r and n separately need the spectrum
+(:data:`BAND_POSITIONS`, :func:`band_position`).
 """
 from __future__ import annotations
 
@@ -31,6 +40,24 @@ def magnification(frequency_ratio, damping_ratio):
     """
     ratio = np.abs(np.asarray(frequency_ratio, dtype=float))
     return forced_response_amplitude(1.0, 1.0, 1.0, 2.0 * np.asarray(damping_ratio, dtype=float), ratio)
+
+
+#: Where the mode lies relative to the recorded speed band.
+BAND_POSITIONS = ('below the speed band', 'inside the speed band', 'above the speed band')
+
+
+def band_position(resonant_speed: float, lowest_speed: float, highest_speed: float) -> str:
+    """Which of :data:`BAND_POSITIONS` the resonant screw speed omega_r (rad/s) takes against the band."""
+    if resonant_speed < lowest_speed:
+        return BAND_POSITIONS[0]
+    if resonant_speed > highest_speed:
+        return BAND_POSITIONS[2]
+    return BAND_POSITIONS[1]
+
+
+def natural_frequency(resonant_speed: float, order: float) -> float:
+    """``f_r = n omega_r / (2 pi)``, Hz: the mode that order n meets at screw speed omega_r (rad/s)."""
+    return order * resonant_speed / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Is each effect named with the right physical form, and are two effects named together?
+
+Window tables from the window-table simulator
+(:mod:`prsm_lube_ros.simulation.synthetic_tables`), two sessions of the six
+conditions in random order each; for every form of each effect ``--seeds``
+cases, the strength drawn by the simulator over its physical ranges, diagnosed
+with :func:`prsm_lube_ros.diagnosis.diagnose_table`.  Per true form: how often
+the verdict names the effect, how often the named form is the true one
+(``form right``: the first-named form; ``form among named``: the true form is
+among those named when the data fit several equally well).  Thermal cases run
+twice: on the default plan and on a plan with short rests between runs
+(nut and oil warm more).  Pairs of effects: how often both are named.
+Results go to ``benchmarks/results/diagnose_forms.{json,md}``.
+
+Usage: ``python benchmarks/diagnose_forms.py [--seeds 3] [--pair-seeds 3]``
+"""
+from __future__ import annotations
+
+import argparse
+from collections import defaultdict
+import json
+from pathlib import Path
+import time
+
+import numpy as np
+
+from prsm_lube_ros.diagnosis import diagnose_table
+from prsm_lube_ros.simulation.synthetic_tables import _draw_effect, SyntheticPlan, synthetic_table
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Two sessions (relubricated between them) as the diagnose study records: within one session temperature and
+#: revolutions rise together and the film effects cannot be told apart.
+PLAN = SyntheticPlan(spectrum_bins=128, sessions=2)
+WARM = SyntheticPlan(spectrum_bins=128, sessions=2, rest=5.0)
+EFFECTS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
+           'background_vibration')
+PAIRS = (('position_dependent_stiffness', 'lubricant_depletion'), ('resonance', 'background_vibration'),
+         ('position_dependent_stiffness', 'background_vibration'), ('lubricant_depletion', 'resonance'))
+ARRANGEMENT_FORMS = {'fixed-free': 'fixed-free, fixed bearing beyond the stroke end',
+                     'free-fixed': 'fixed-free, fixed bearing before the stroke start', 'fixed-fixed': 'fixed-fixed'}
+LAW_FORMS = {'exponential': 'exponential (Reynolds)', 'vogel': 'Vogel', 'walther': 'Walther (ASTM D341)'}
+
+
+def true_form(effect: str, params: dict) -> str:
+    """The diagnosis' name of the form the simulator drew."""
+    if effect == 'position_dependent_stiffness':
+        return ARRANGEMENT_FORMS[params['arrangement']]
+    if effect == 'resonance':
+        return f'mode {params["band"]} the speed band'
+    if effect == 'thermal_viscosity':
+        return LAW_FORMS[params.get('law', 'exponential')]
+    if effect == 'lubricant_depletion':
+        form = f'{params.get("form", "exponential")} in revolutions'
+        return form + (', partial recovery at rest' if params.get('recovery_time') else '')
+    return params['form']
+
+
+#: The forms the window-table simulator draws, per effect, as the diagnosis names them.
+FORMS = {'position_dependent_stiffness': tuple(ARRANGEMENT_FORMS.values()),
+         'resonance': tuple(f'mode {band} the speed band' for band in ('above', 'inside', 'below')),
+         'thermal_viscosity': tuple(LAW_FORMS.values()),
+         'lubricant_depletion': tuple(f'{kind} in revolutions{rest}' for kind in ('exponential', 'linear')
+                                      for rest in ('', ', partial recovery at rest')),
+         'background_vibration': ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')}
+
+
+def drawn_params(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:
+    """Parameters the simulator draws for ``effect`` (its own ranges), the first draw from ``seed`` on in ``form``."""
+    for attempt in range(1000):
+        params = _draw_effect(effect, np.random.default_rng(1000 * seed + attempt), plan)
+        if true_form(effect, params) == form:
+            return params
+    raise RuntimeError(f'{effect}: no {form} drawn')
+
+
+def run_single(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:
+    table, truth = synthetic_table(np.random.default_rng(seed), effect, plan,
+                                   params=drawn_params(effect, form, seed, plan))
+    document = diagnose_table(table).as_json()
+    named = document['effects'][0]['form'] if document['verdict'] == effect and document['effects'] else ''
+    form = true_form(effect, truth['params'])
+    return {'effect': effect, 'form': form, 'seed': seed, 'verdict': document['verdict'], 'named_form': named,
+            'form_right': named.split(' or ')[0].split(' (the data')[0] == form,
+            'form_among_named': form in named,
+            'named_effects': [e['effect'] for e in document['effects']]}
+
+
+def run_pair(pair: tuple, seed: int) -> dict:
+    table, truth = synthetic_table(np.random.default_rng(seed), pair, PLAN)
+    document = diagnose_table(table).as_json()
+    named = [e['effect'] for e in document['effects']]
+    return {'pair': list(pair), 'seed': seed, 'verdict': document['verdict'], 'named_effects': named,
+            'both': set(named) == set(pair)}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--seeds', type=int, default=3)
+    parser.add_argument('--pair-seeds', type=int, default=3)
+    parser.add_argument('--out', type=Path, default=ROOT / 'benchmarks' / 'results')
+    args = parser.parse_args(argv)
+    started = time.time()
+    singles = []
+    for effect in EFFECTS:
+        for form in FORMS[effect]:
+            for seed in range(args.seeds):
+                singles.append({**run_single(effect, form, seed, PLAN), 'plan': 'default'})
+                print(singles[-1], flush=True)
+    for form in FORMS['thermal_viscosity']:
+        for seed in range(args.seeds):
+            singles.append({**run_single('thermal_viscosity', form, seed, WARM), 'plan': 'warm'})
+            print(singles[-1], flush=True)
+    pairs = []
+    for pair in PAIRS:
+        for seed in range(args.pair_seeds):
+            pairs.append(run_pair(pair, 100 + seed))
+            print(pairs[-1], flush=True)
+    rows = defaultdict(lambda: [0, 0, 0, 0])
+    for case in singles:
+        key = (case['effect'], case['form'], case['plan'])
+        row = rows[key]
+        row[0] += 1
+        row[1] += case['verdict'] == case['effect']
+        row[2] += case['form_right']
+        row[3] += case['form_among_named']
+    lines = ['# Diagnose: each form of each effect, and two effects at once', '',
+             f'Command: `python benchmarks/diagnose_forms.py --seeds {args.seeds} --pair-seeds {args.pair_seeds}` '
+             f'({time.time() - started:.0f} s). Window tables of the window-table simulator, form and strength '
+             'drawn per seed in its physical range, two sessions per case; "warm": 5 s rests between runs, not 30 s.',
+             '',
+             '| effect | true form | plan | cases | effect named | form right | form among named |',
+             '|---|---|---|---|---|---|---|']
+    for (effect, form, plan), (n, named, right, among) in sorted(rows.items()):
+        lines.append(f'| {effect} | {form} | {plan} | {n} | {named} | {right} | {among} |')
+    lines += ['', '| pair | cases | both named | verdicts |', '|---|---|---|---|']
+    for pair in PAIRS:
+        cases = [c for c in pairs if tuple(c['pair']) == pair]
+        verdicts = ', '.join(sorted({'+'.join(c['named_effects']) or c['verdict'] for c in cases}))
+        lines.append(f'| {" + ".join(pair)} | {len(cases)} | {sum(c["both"] for c in cases)} | {verdicts} |')
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / 'diagnose_forms.md').write_text('\n'.join(lines) + '\n')
+    (args.out / 'diagnose_forms.json').write_text(json.dumps({'singles': singles, 'pairs': pairs}, indent=1))
+    print('\n'.join(lines))
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
