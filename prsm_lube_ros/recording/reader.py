@@ -116,6 +116,8 @@ class _McapSource:
                 summary = mcap.summary
                 if summary is None:
                     summary, problems = mcap.scan()
+                    if mcap.summary_problem:
+                        problems.insert(0, mcap.summary_problem)
                     self.problems.extend(self._about(mcap, line) for line in problems)
             except mcap_file.McapProblem as problem:
                 raise RecordingError(f'{path}: {problem}') from None
