@@ -35,14 +35,6 @@ MODES = (('serial', {'jobs': 1}), ('--jobs 2', {'jobs': 2}),
          ('Dask local, 2 workers', {'jobs': 2, 'scheduler': 'local'}))
 
 
-def fingerprint(outcomes) -> str:
-    """Every number of every outcome as text (repr: NaN equals NaN, floats to the last bit)."""
-    return repr([(o.path, o.content, o.error,
-                  [(r.run_index, r.theta_oil, r.theta_oil_std, r.vibration_rms) for r in o.assessment.runs],
-                  [(w.window.start, w.theta_oil, w.theta_oil_std) for w in o.assessment.windows])
-                 if o.assessment else (o.path, o.error) for o in outcomes])
-
-
 def main(argv=None) -> int:
     """Simulate (or reuse) the fleet, time the three modes, write the results."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
@@ -50,7 +42,7 @@ def main(argv=None) -> int:
     parser.add_argument('--data', default=None, help='folder for the fleet (kept; reused when it has one)')
     args = parser.parse_args(argv)
     from prsm_lube_ros.estimation.pipeline import calibrate_recordings, recording_windows
-    from prsm_lube_ros.fleet.parallel import assess_bags, BagJob
+    from prsm_lube_ros.fleet.parallel import assess_bags, BagJob, outcomes_fingerprint
     from prsm_lube_ros.simulation.fleet import FleetPlan, simulate_fleet
     data = Path(args.data) if args.data else Path(tempfile.mkdtemp(prefix='fleet_throughput_'))
     if not (data / 'truth.json').exists():
@@ -68,7 +60,7 @@ def main(argv=None) -> int:
             outcomes = assess_bags(bags, job, **options)
             elapsed = time.perf_counter() - start
             best = elapsed if best is None else min(best, elapsed)
-        prints[name] = fingerprint(outcomes)
+        prints[name] = outcomes_fingerprint(outcomes)
         hours = sum(o.assessment.windows[-1].window.end - o.assessment.windows[0].window.start
                     for o in outcomes if o.assessment) / 3600.0
         rows.append({'mode': name, 'recordings': len(bags), 'failed': sum(bool(o.error) for o in outcomes),

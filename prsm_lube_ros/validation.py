@@ -9,6 +9,7 @@ caller names) with one line naming the value.  Imports only :mod:`.errors`.
 """
 from __future__ import annotations
 
+import datetime
 import math
 from typing import Optional
 
@@ -30,6 +31,12 @@ def finite_or_none(value) -> Optional[float]:
     except (TypeError, ValueError):
         return None
     return value if math.isfinite(value) else None
+
+
+def utc_or_none(seconds) -> Optional[datetime.datetime]:
+    """The UTC time of ``seconds`` since the epoch when it is a finite number, else ``None``."""
+    seconds = finite_or_none(seconds)
+    return None if seconds is None else datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc)
 
 
 def _real(name: str, value, error: type[InputError], what: str) -> float:

@@ -49,10 +49,17 @@ def run(args) -> int:
     settings = WindowSettings(window_length=require_positive('--window', args.window))
     job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
                  hash_content=bool(args.history))
+    to_history = _history_writer(args, calibration) if args.history else None
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
+
+    def done(outcome) -> None:
+        """Write each finished recording into the history at once (this process), so a killed run keeps it."""
+        if to_history is not None and outcome.assessment is not None:
+            to_history(outcome)
+        bar.update(1)
+
     try:
-        outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler,
-                               on_done=lambda outcome: bar.update(1))
+        outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler, on_done=done)
     finally:
         bar.close()
     results = [outcome.assessment for outcome in outcomes if outcome.assessment is not None]
@@ -71,7 +78,7 @@ def run(args) -> int:
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
                   f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
     if args.history and results:
-        _add_to_history(args, [outcome for outcome in outcomes if outcome.assessment is not None], calibration)
+        print(f'history {args.history}: {len(results)} recordings added or replaced')
     if args.json and results:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
@@ -79,16 +86,17 @@ def run(args) -> int:
     return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
 
 
-def _add_to_history(args, outcomes, fit) -> None:
-    """Each assessed recording's runs and windows into the ``--history`` dataset."""
+def _history_writer(args, fit):
+    """A function writing one assessed recording's runs and windows into the ``--history`` dataset."""
     from pathlib import Path
     from ..fleet.history import add_assessment, calibration_id
     identifier = calibration_id(args.calibration)
-    for outcome in outcomes:
+
+    def write(outcome) -> None:
         if args.actuator_id == 'folder':
             actuator_id = Path(outcome.path).resolve().parent.name
         else:
             actuator_id = args.actuator_id or args.namespace
         add_assessment(args.history, outcome.assessment, actuator_id=actuator_id, content=outcome.content,
                        calibration=identifier, namespace=args.namespace, fit=fit)
-    print(f'history {args.history}: {len(outcomes)} recordings added or replaced')
+    return write

@@ -10,7 +10,7 @@ def add_command(subparsers) -> None:
         'trend', help='theta_oil history per actuator and the forecast of the warn and error crossings',
         description='Fit theta_oil = a exp(-t/tau) per lubrication cycle to each actuator\'s history (written '
         'by assess --history), relubrications found as jumps up or given, and forecast when theta_oil crosses '
-        'the warn and error levels, with a 95 %% interval. Table most urgent first, JSON and plots.')
+        'the warn and error levels, with a 95 % interval. Table most urgent first, JSON and plots.')
     parser.add_argument('history', metavar='HISTORY', help='history folder written by prsm-lube assess --history')
     parser.add_argument('--actuator', default=None, metavar='ID', help='only this actuator')
     parser.add_argument('--report', required=True, metavar='DIR', help='folder for trend.json, trend.md, plots')
@@ -31,16 +31,19 @@ def run(args) -> int:
     import numpy as np
     from ..estimation.health import HealthThresholds
     from ..figures import history_with_forecast
+    from ..errors import ConfigError
     from ..fleet.forecast import DAY, forecast_history
     from .common import write_json
     HealthThresholds(warn_below=args.warn_below, error_below=args.error_below)   # checks the order
+    report = Path(args.report)
+    if report.exists() and not report.is_dir():
+        raise ConfigError(f'--report {report}: exists and is not a folder')
     levels = (args.warn_below, args.error_below)
     from ..fleet.service_log import read_odometer, read_relubrications
     relubrications = read_relubrications(args.relubrications) if args.relubrications else None
     odometers = read_odometer(args.odometer) if args.odometer else None
     forecasts = forecast_history(args.history, actuator=args.actuator, relubrications=relubrications,
                                  levels=levels, odometers=odometers)
-    report = Path(args.report)
     rows = [_row(forecast) for forecast in forecasts]
     header = ('| actuator | recordings | relubrications | tau d | theta now | warn crossing (95 % interval) '
               '| error crossing (95 % interval) |')
@@ -69,13 +72,13 @@ def run(args) -> int:
 def _row(forecast) -> str:
     """One Markdown table row of a forecast."""
     import math
+    from ..fleet.forecast import crossing_interval_text
     if forecast.reason:
         return f'| {forecast.actuator} | {len(forecast.points)} | – | – | – | {forecast.reason} | |'
     cells = []
     for crossing in forecast.crossings:
         data = crossing.as_json()
-        cells.append(f'{data["time_utc"] or "never"} ({data["low_utc"] or "never"} .. '
-                     f'{data["high_utc"] or "never"})')
+        cells.append(f'{data["time_utc"]} ({crossing_interval_text(crossing)})' if data['time_utc'] else 'never')
     row = (f'| {forecast.actuator} | {len(forecast.points)} | {len(forecast.relubrications)} | '
            f'{forecast.tau_days:.3g} | {forecast.theta_now:.3f} | ' + ' | '.join(cells) + ' |')
     if math.isfinite(forecast.depletion_revolutions):

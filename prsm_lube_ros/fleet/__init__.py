@@ -8,9 +8,10 @@ assessing many recordings serially, in processes or on a Dask cluster with the
 same results (``parallel``), and the depletion fit and threshold-crossing
 forecast per actuator (``forecast``).
 
-For one actuator, :func:`prsm_lube_ros.fleet.forecast.forecast_summary`
-(history folder, actuator id, warn and error levels) returns the forecast as
-short key/value strings, ready for a diagnostics KeyValue list.
+:func:`prsm_lube_ros.fleet.forecast.forecast_summaries` (history folder,
+actuator ids, warn and error levels) returns each actuator's forecast as short
+key/value strings, ready for a diagnostics KeyValue list, from one read of the
+history; :func:`~prsm_lube_ros.fleet.forecast.forecast_summary` does one.
 
 May import: base, physics, recording, estimation.  pyarrow is imported by
 ``history`` only, dask.distributed by ``parallel`` only when a scheduler is

@@ -40,13 +40,13 @@ the estimator's ``warn_below`` and ``error_below``
 (:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).  With an
 odometer the same filter runs against revolutions (:func:`fit_revolutions`).
 
-:func:`forecast_summary` is the one call for a single actuator from a history
-folder (what the estimator's diagnostics show).
+:func:`forecast_summaries` is the one call for the estimator's diagnostics:
+every actuator it names from a history folder, the table read and the fleet's
+usage scatter fitted once; :func:`forecast_summary` does it for one.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-import datetime
 import math
 from typing import Sequence
 
@@ -54,6 +54,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.health import HealthThresholds
+from ..validation import finite_or_none as _finite, utc_or_none
 
 DAY = 86400.0            # s
 #: probability inside the stated forecast interval
@@ -176,14 +177,10 @@ class ActuatorForecast:
                             'recording_path': p.recording_path} for p in self.points]}
 
 
-def _finite(value):
-    return float(value) if value is not None and math.isfinite(value) else None
-
-
-def _utc(seconds):
-    if seconds is None or not math.isfinite(seconds):
-        return None
-    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='minutes')
+def _utc(seconds) -> str | None:
+    """ISO 8601 UTC to the minute of ``seconds`` since the epoch, None when not finite."""
+    stamp = utc_or_none(seconds)
+    return None if stamp is None else stamp.isoformat(timespec='minutes')
 
 
 def recording_points(runs) -> dict[str, list[RecordingPoint]]:
@@ -256,9 +253,10 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     used = np.unique(cycles)
     index = np.searchsorted(used, cycles)
     result.last_recording = float(times[-1])
-    if len(points) < used.size + 2:
-        result.reason = (f'{len(points)} recordings in {used.size} lubrication cycles: need at least '
-                         f'{used.size + 2} to fit the depletion')
+    distinct = np.unique(times).size
+    if distinct < used.size + 2:
+        result.reason = (f'{len(points)} recordings ({distinct} start times) in {used.size} lubrication cycles: '
+                         f'need at least {used.size + 2} start times to fit the depletion')
         return result
     y = np.log([p.theta_oil for p in points])
     sigma = np.array([p.independent_std / p.theta_oil for p in points])
@@ -401,9 +399,12 @@ class Increments:
 def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray) -> Increments | None:
     """The increments of ln theta ``y`` within cycles; neighbours sharing a recording correlate by -sigma^2.
 
-    None with fewer than two increments.
+    Steps of zero days (recordings starting at the same time: one recording
+    assessed as MCAP and as sqlite3, or copies) are left out: they carry no
+    drift.  None with fewer than two increments.
     """
-    pairs = np.array([j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1]], dtype=int)
+    pairs = np.array([j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1] and days[j + 1] > days[j]],
+                     dtype=int)
     if pairs.size < 2:
         return None
     measurement = np.diag(sigma[pairs] ** 2 + sigma[pairs + 1] ** 2)
@@ -413,11 +414,19 @@ def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.nd
     return Increments(days[pairs + 1] - days[pairs], y[pairs + 1] - y[pairs], measurement)
 
 
-def _walk_likelihood(data: Increments, q: float) -> tuple[float, float, float]:
-    """Gaussian log-likelihood, GLS drift k (1/day) and its variance for diffusion ``q`` (1/day)."""
+def _walk_likelihood(data: Increments, q: float) -> tuple[float, float, float] | None:
+    """Gaussian log-likelihood, GLS drift k (1/day) and its variance for diffusion ``q`` (1/day).
+
+    None when the increments carry no information on the drift.
+    """
     covariance = data.measurement + np.diag(q * data.steps)
-    inverse = np.linalg.inv(covariance)
+    try:
+        inverse = np.linalg.inv(covariance)
+    except np.linalg.LinAlgError:
+        return None
     information = float(data.steps @ inverse @ data.steps)
+    if not information > 0 or not math.isfinite(information):
+        return None
     k = -float(data.steps @ inverse @ data.changes) / information
     residual = data.changes + k * data.steps
     _, logdet = np.linalg.slogdet(covariance)
@@ -434,8 +443,13 @@ def _diffusion(data: Increments, usage_scatter: float) -> float:
     """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
     k = _walk_likelihood(data, 0.0)[1]
     for _ in range(2):
-        k = _walk_likelihood(data, usage_scatter * k ** 2)[1]
+        k = (_walk_likelihood(data, usage_scatter * k ** 2) or (0.0, k))[1]
     return usage_scatter * k ** 2
+
+
+def _informative(data: Increments | None) -> bool:
+    """True when ``data`` determines a drift (increments with information on it)."""
+    return data is not None and _walk_likelihood(data, 0.0) is not None
 
 
 def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
@@ -448,7 +462,7 @@ def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
     likelihood does not reject (a drop of at most ``PROFILE_DROP``) is taken
     rather than its maximum, which sits at zero.
     """
-    sets = [data for data in sets if data is not None]
+    sets = [data for data in sets if _informative(data)]
     if not sets:
         return 0.0
     totals = np.array([sum(_walk_likelihood(data, _diffusion(data, scatter))[0] for data in sets)
@@ -465,10 +479,11 @@ def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = N
     likelihood on this actuator alone.  Returns (k 1/day, variance of k,
     q 1/day, degrees of freedom) or None without increments.
     """
-    if data is None:
+    if not _informative(data):
         return None
     if usage_scatter is None:
-        q = max((_walk_likelihood(data, q)[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57))))[1]
+        q = max((_walk_likelihood(data, q)[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57)))
+                if _walk_likelihood(data, q) is not None)[1]
     else:
         q = _diffusion(data, usage_scatter)
     _, k, k_variance = _walk_likelihood(data, q)
@@ -549,7 +564,7 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
     an actuator id to ``(times, cumulative revolutions)`` for the fit against
     revolutions.
     """
-    from .history import actuator_key, read_table
+    actuator_key, read_table = _history_readers()
     points = recording_points(read_table(history, 'runs'))
     if actuator is not None and actuator_key(actuator) not in points:
         raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
@@ -569,15 +584,29 @@ def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubricatio
     (s since the epoch, cumulative revolutions), interpolated at its
     recordings for the fit against revolutions.
     """
-    given = relubrications or {}
-    found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
-             for name, items in points.items()}
-    scatter = fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
+    found, scatter = _fleet_walk(points, relubrications or {})
     names = [only] if only is not None else list(points)
-    forecasts = [fit_depletion(name, points[name], relubrications=found[name], levels=levels,
-                               usage_scatter=scatter, odometer=_odometer_at(points[name], (odometers or {}).get(name)))
+    forecasts = [_fit_one(name, points[name], found[name], levels, scatter, (odometers or {}).get(name))
                  for name in names]
     return sorted(forecasts, key=urgency_key)
+
+
+def _fleet_walk(points: dict[str, Sequence[RecordingPoint]], given: dict) -> tuple[dict[str, list[float]], float]:
+    """Each actuator's relubrications (given, else detected) and the fleet's usage scatter."""
+    found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
+             for name, items in points.items()}
+    return found, fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
+
+
+def _fit_one(name, points, relubrications, levels, scatter, odometer) -> ActuatorForecast:
+    """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's."""
+    try:
+        return fit_depletion(name, points, relubrications=relubrications, levels=levels, usage_scatter=scatter,
+                             odometer=_odometer_at(points, odometer))
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:   # one bad actuator, not a broken trend
+        result = ActuatorForecast(name, list(points), list(relubrications))
+        result.reason = f'no fit ({exc.__class__.__name__}: {exc})'.replace('\n', ' ')
+        return result
 
 
 #: how far (s) before the first or after the last odometer reading a recording may lie (extrapolated linearly)
@@ -608,20 +637,76 @@ def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[fl
                       np.array([p.independent_std / p.theta_oil for p in points]), cycles)
 
 
+def _history_readers():
+    """``actuator_key`` and ``read_table`` of :mod:`.history`; an :class:`InputError` line without pyarrow."""
+    try:
+        from .history import actuator_key, read_table
+    except ImportError as exc:
+        raise InputError(f'reading the fleet history needs pyarrow ({exc}): pip install "pyarrow>=14"') from None
+    return actuator_key, read_table
+
+
+def forecast_summaries(history, actuator_ids: Sequence[str], *, warn_below: float = HealthThresholds.warn_below,
+                       error_below: float = HealthThresholds.error_below) -> dict[str, dict[str, str]]:
+    """The forecast of each of ``actuator_ids`` as short key/value strings (diagnostics KeyValue lists).
+
+    One call per period for all of an estimator's actuators: the runs table
+    is read and the fleet's usage scatter fitted once.  Keys of each summary:
+    ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
+    ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
+    ``forecast`` holds ``ok`` or the reason there is none, and is the only key
+    (``none: <reason>``) for an id the history has no assessed run of.
+    Raises :class:`InputError` for a history that cannot be read (missing,
+    unreadable, pyarrow not installed).
+    """
+    return {name: {'forecast': f'none: {found}'} if isinstance(found, InputError) else found
+            for name, found in _summaries(history, actuator_ids, (warn_below, error_below)).items()}
+
+
 def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
                      error_below: float = HealthThresholds.error_below) -> dict[str, str]:
-    """The forecast of one actuator as short key/value strings (for a diagnostics KeyValue list).
+    """The forecast of one actuator as :func:`forecast_summaries` gives it.
 
-    Keys: ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
-    ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
-    ``forecast`` holds ``ok`` or the reason there is none.  Raises
-    :class:`InputError` for a missing history or an actuator without runs.
+    Raises :class:`InputError` for a missing history or an actuator without runs.
     """
-    forecast = forecast_history(history, actuator=actuator_id, levels=(warn_below, error_below))[0]
+    found = _summaries(history, [actuator_id], (warn_below, error_below))[actuator_id]
+    if isinstance(found, InputError):
+        raise found
+    return found
+
+
+def _summaries(history, actuator_ids, levels) -> dict[str, dict[str, str] | InputError]:
+    """Summary of each id, or the :class:`InputError` saying why there is none."""
+    actuator_key, read_table = _history_readers()
+    points = recording_points(read_table(history, 'runs'))
+    found, scatter = _fleet_walk(points, {})
+    result: dict[str, dict[str, str] | InputError] = {}
+    for actuator_id in actuator_ids:
+        try:
+            key = actuator_key(actuator_id)
+        except InputError as exc:
+            result[actuator_id] = exc
+            continue
+        if key not in points:
+            result[actuator_id] = InputError(f'{history}: no assessed run of actuator {actuator_id!r}')
+            continue
+        result[actuator_id] = _summary(_fit_one(key, points[key], found[key], levels, scatter, None))
+    return result
+
+
+def _summary(forecast: ActuatorForecast) -> dict[str, str]:
+    """Short key/value strings of a forecast."""
     if forecast.reason:
         return {'forecast': forecast.reason}
     summary = {'forecast': 'ok', 'tau_days': f'{forecast.tau_days:.3g}', 'theta_now': f'{forecast.theta_now:.3f}'}
     for name, crossing in zip(('warn', 'error'), forecast.crossings):
         summary[f'{name}_crossing'] = _utc(crossing.time) or 'never'
-        summary[f'{name}_interval'] = f'{_utc(crossing.low) or "never"} .. {_utc(crossing.high) or "never"}'
+        summary[f'{name}_interval'] = crossing_interval_text(crossing)
     return summary
+
+
+def crossing_interval_text(crossing: Crossing) -> str:
+    """``low .. high`` in UTC minutes (``never`` for an open end); ``never`` alone when no crossing is estimated."""
+    if crossing.time is None:
+        return 'never'
+    return f'{_utc(crossing.low) or "never"} .. {_utc(crossing.high) or "never"}'

@@ -11,15 +11,17 @@ and Spark)::
 One file per recording and table: ``date`` is the UTC day the recording
 starts, ``<path key>`` the first 16 hex digits of the SHA-256 of its resolved
 path and ``<content key>`` those of its content hash (SHA-256 of its files).
-Re-assessing a recording (same path, or same content at another path) writes
-its new file and removes the old ones, so its rows are replaced, never
-duplicated.  Every file is written to a hidden temporary file in the same
+A recording is its content: re-assessing the same content (at the same path
+or another one) writes its new file and removes the old ones, so its rows are
+replaced, never duplicated; new content at a path already seen (a logger
+overwriting ``latest.mcap`` every day) is a new recording, added beside the
+earlier ones.  Every file is written to a hidden temporary file in the same
 folder (readers skip names starting with ``.``), flushed to disk and renamed
 over the final name in one ``os.replace``: a writer killed at any moment leaves
-the dataset readable.  A writer killed between writing the new file and
+the dataset readable.  A writer killed between renaming the new file and
 removing an old one leaves two versions of a recording; :func:`read_table`
-keeps only the newest assessment of each recording, so readers of this module
-never see duplicates.
+keeps only the newest assessment of each content hash, so readers of this
+module never see duplicates.
 
 Columns of both tables: ``recording_path``, ``content_hash``,
 ``calibration_id``, ``assessed_at`` (UTC), ``namespace``, ``run_index``,
@@ -35,7 +37,6 @@ from __future__ import annotations
 
 import datetime
 import hashlib
-import math
 import os
 from pathlib import Path
 import re
@@ -46,6 +47,7 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 
 from ..errors import ConfigError, InputError, RecordingError
+from ..validation import finite_or_none as _finite, utc_or_none as _utc
 
 TABLES = ('runs', 'windows')
 UTC_TIME = pa.timestamp('us', tz='UTC')
@@ -98,16 +100,6 @@ def actuator_key(actuator_id: str) -> str:
 
 def _path_key(recording_path: str) -> str:
     return hashlib.sha256(str(Path(recording_path).resolve()).encode()).hexdigest()[:16]
-
-
-def _utc(seconds: float) -> datetime.datetime | None:
-    if seconds is None or not math.isfinite(seconds):
-        return None
-    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc)
-
-
-def _finite(value) -> float | None:
-    return float(value) if value is not None and math.isfinite(value) else None
 
 
 def assessment_tables(assessment, *, content: str, calibration: str, namespace: str = '/prsm',
@@ -180,13 +172,16 @@ def _first_start(tables: dict[str, pa.Table], fallback: datetime.datetime) -> da
 
 def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,
                    namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
-                   before_replace=None, fit=None) -> list[Path]:
+                   before_replace=None, after_replace=None, fit=None) -> list[Path]:
     """Write one recording's runs and windows into the history, replacing its earlier rows; returns the files.
 
-    ``content`` is the recording's :func:`content_hash`, ``calibration`` the
-    :func:`calibration_id` of the calibration used and ``fit`` the calibration
-    itself (for ``theta_oil_std_calibration``).  ``before_replace`` is passed
-    to :func:`write_table_atomically`.
+    ``content`` is the recording's :func:`content_hash` (the rows of earlier
+    assessments of that content are replaced, wherever it lay),
+    ``calibration`` the :func:`calibration_id` of the calibration used and
+    ``fit`` the calibration itself (for ``theta_oil_std_calibration``).
+    ``before_replace`` is passed to :func:`write_table_atomically`;
+    ``after_replace(path)``, if given, runs after each new file is in place
+    and before the old ones are removed (tests inject a crash there).
     """
     history = Path(history)
     assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
@@ -202,8 +197,9 @@ def add_assessment(history: str | Path, assessment, *, actuator_id: str, content
             target = root / f'actuator={actuator_key(actuator_id)}' / f'date={date}' / name
             write_table_atomically(tables[table_name], target, before_replace=before_replace)
             written.append(target)
-            old = set(root.glob(f'*/*/{path_key}-*.parquet')) | set(root.glob(f'*/*/*-{content_key}.parquet'))
-            for stale in old - {target}:
+            if after_replace is not None:
+                after_replace(target)
+            for stale in set(root.glob(f'*/*/*-{content_key}.parquet')) - {target}:
                 stale.unlink(missing_ok=True)
     except OSError as exc:
         raise ConfigError(f'{history}: cannot write the history ({exc.strerror or exc})') from None
@@ -233,16 +229,12 @@ def read_table(history: str | Path, table: str = 'runs', actuator: str | None = 
 
 
 def _newest_assessments(data: pa.Table) -> pa.Table:
-    """Rows of the newest assessment of each recording (by content hash and by path)."""
+    """Rows of the newest assessment of each recording (content hash)."""
     if data.num_rows == 0:
         return data
-    assessed = data.column('assessed_at').to_pylist()
-    keep_time: dict[tuple[str, str], datetime.datetime] = {}
-    for column in ('content_hash', 'recording_path'):
-        for key, when in zip(data.column(column).to_pylist(), assessed):
-            if when > keep_time.get((column, key), when - datetime.timedelta(1)):
-                keep_time[(column, key)] = when
-    mask = [when == keep_time[('content_hash', c)] and when == keep_time[('recording_path', p)]
-            for c, p, when in zip(data.column('content_hash').to_pylist(),
-                                  data.column('recording_path').to_pylist(), assessed)]
-    return data.filter(pa.array(mask))
+    contents, assessed = data.column('content_hash').to_pylist(), data.column('assessed_at').to_pylist()
+    newest: dict[str, datetime.datetime] = {}
+    for content, when in zip(contents, assessed):
+        if content not in newest or when > newest[content]:
+            newest[content] = when
+    return data.filter(pa.array([when == newest[content] for content, when in zip(contents, assessed)]))

@@ -17,7 +17,7 @@ lost) is an outcome with ``error``, one line naming it; the others go on.
 from __future__ import annotations
 
 from concurrent.futures import as_completed, ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Callable, Sequence
 
 from ..errors import InputError
@@ -122,10 +122,10 @@ def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout='10s')
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:   # ValueError: no port, unknown protocol
         if cluster is not None:
             cluster.close()
-        raise InputError(f'--scheduler {scheduler}: cannot connect ({exc})') from None
+        raise InputError(f'--scheduler {scheduler}: cannot connect ({exc})'.replace('\n', ' ')) from None
     try:
         unique = list(dict.fromkeys(paths))
         job_future = client.scatter(job, broadcast=True)
@@ -142,3 +142,30 @@ def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _compared(item) -> tuple:
+    """Every compared field of a dataclass instance, in declaration order (a window's spectrum is left out)."""
+    return tuple(getattr(item, f.name) for f in fields(item) if f.compare)
+
+
+def outcomes_fingerprint(outcomes: Sequence[BagOutcome]) -> str:
+    """Every number of every outcome as text, for an exact comparison of two ways of assessing.
+
+    Per outcome: path, content hash, error, problems, each run's every field
+    (theta, one-sigma, RMS, speed, load, temperature, times, ...) and each
+    window's every field (its inputs: speed, load, nut position, coverage,
+    ... and its theta and one-sigma).  ``repr``: NaN equals NaN and every
+    float is compared to the last bit.
+    """
+    result = []
+    for outcome in outcomes:
+        assessment = outcome.assessment
+        if assessment is None:
+            result.append((outcome.path, outcome.content, outcome.error))
+            continue
+        result.append((outcome.path, outcome.content, outcome.error, tuple(assessment.problems),
+                       [_compared(run) for run in assessment.runs],
+                       [(_compared(item.window), item.theta_oil, item.theta_oil_std, item.reason)
+                        for item in assessment.windows]))
+    return repr(result)

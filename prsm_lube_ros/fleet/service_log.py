@@ -37,10 +37,14 @@ def read_odometer(path) -> dict[str, tuple[list[float], list[float]]]:
 def _csv_rows(path, columns):
     """Rows of ``columns`` (an id, a time as ISO 8601 or s since the epoch, then numbers); one-line errors."""
     try:
-        with open(path, newline='') as stream:
+        with open(path, newline='', encoding='utf-8') as stream:
             lines = list(csv.reader(stream))
     except OSError as exc:
         raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f'{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})') from None
+    except csv.Error as exc:
+        raise ConfigError(f'{path}: not a CSV file ({exc})') from None
     for number, row in enumerate(lines, start=1):
         if not row or row[0].strip().startswith('#') or (number == 1 and row[0].strip() == columns[0]):
             continue

@@ -41,3 +41,26 @@ def test_the_calibrations_share_of_the_uncertainty_is_recorded(small_fleet):
     assert all(run['theta_oil_std_calibration'] is None for run in runs if run['theta_oil'] is None)
     point = recording_points(read_table(small_fleet['history']))['A01'][0]
     assert 0 < point.calibration_std < point.theta_oil_std and point.independent_std < point.theta_oil_std
+
+
+def test_each_recording_is_in_the_history_as_soon_as_it_is_assessed(small_fleet, tmp_path, monkeypatch):
+    """A run killed after the first recording keeps that recording's rows."""
+    from prsm_lube_ros.fleet import parallel
+    real, calls = parallel.assess_bag, []
+
+    def killed_on_the_second(path, job):
+        calls.append(path)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(path, job)
+
+    monkeypatch.setattr(parallel, 'assess_bag', killed_on_the_second)
+    history = tmp_path / 'history'
+    try:
+        main(['assess', *small_fleet['bags'][:3], '--calibration', str(small_fleet['calibration']),
+              '--history', str(history)])
+    except BaseException:       # noqa: B036 -- the "kill" may surface as KeyboardInterrupt or SystemExit
+        pass
+    assert len(calls) == 2
+    assert set(read_table(history).column('recording_path').to_pylist()) == {
+        str(__import__('pathlib').Path(small_fleet['bags'][0]).resolve())}

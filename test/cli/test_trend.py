@@ -57,3 +57,49 @@ def test_trend_with_an_odometer_fits_the_depletion_revolutions(small_fleet, tmp_
         revolutions = fitted[actuator['actuator_id']]
         assert revolutions['depletion_revolutions'] == pytest.approx(actuator['depletion_revolutions'], rel=0.25)
         assert len(revolutions['crossings']) == 2
+
+
+def test_a_non_utf8_log_and_a_report_that_is_a_file_are_one_line(small_fleet, tmp_path, capsys):
+    binary = tmp_path / 'log.csv'
+    binary.write_bytes(b'A01,\xff\xfe2026\n')
+    for option in ('--relubrications', '--odometer'):
+        assert main(['trend', str(small_fleet['history']), '--report', str(tmp_path / 'r'),
+                     option, str(binary)]) == 2
+    a_file = tmp_path / 'taken'
+    a_file.write_text('x')
+    assert main(['trend', str(small_fleet['history']), '--report', str(a_file)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and 'UTF-8' in err[0] and 'UTF-8' in err[1] and 'taken' in err[2]
+    assert 'Traceback' not in '\n'.join(err)
+
+
+def test_the_help_shows_a_plain_percent_sign(capsys):
+    with pytest.raises(SystemExit):
+        main(['trend', '--help'])
+    out = capsys.readouterr().out
+    assert '95 %' in out and '%%' not in out
+
+
+def test_a_recording_assessed_twice_at_one_start_time_does_not_break_the_trend(small_fleet, tmp_path):
+    """A02's recordings also stored in another format (other bytes, the same start): steps of zero days."""
+    import shutil
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from prsm_lube_ros.fleet.history import read_table
+    history = tmp_path / 'history'
+    shutil.copytree(small_fleet['history'], history)
+    for table in ('runs', 'windows'):
+        for file in sorted((history / table / 'actuator=A02').rglob('*.parquet')):
+            rows = pq.read_table(file)
+            twin = rows.set_column(rows.schema.get_field_index('content_hash'), 'content_hash',
+                                   pa.array(['f' + h[1:] for h in rows.column('content_hash').to_pylist()]))
+            twin = twin.set_column(twin.schema.get_field_index('recording_path'), 'recording_path',
+                                   pa.array([p + '.db3' for p in twin.column('recording_path').to_pylist()]))
+            pq.write_table(twin, file.with_name('twin-' + file.name))
+    starts = read_table(history, actuator='A02').column('start').to_pylist()
+    assert len(starts) == 2 * len(set(starts))
+    report = tmp_path / 'report'
+    assert main(['trend', str(history), '--report', str(report)]) == 0
+    actuators = {a['actuator']: a for a in json.loads((report / 'trend.json').read_text())['actuators']}
+    assert sorted(actuators) == ['A01', 'A02', 'A03', 'A04']
+    assert not actuators['A02']['reason'] and actuators['A02']['tau_days'] > 0

@@ -106,3 +106,53 @@ def test_service_logs_read_iso_and_epoch_times(tmp_path):
     log.write_text('A,2026-01-01,many\n')
     with pytest.raises(InputError, match=r'odometer.csv:1: revolutions .many. is not a number'):
         read_odometer(log)
+
+
+def _daily(actuator_days=10, theta0=0.97, tau=20.0, std=2e-3, seed=0):
+    rng = np.random.default_rng(seed)
+    return [RecordingPoint((day + 0.5) * DAY, theta0 * math.exp(-day / tau) * (1 + std * rng.standard_normal()),
+                           std) for day in range(actuator_days)]
+
+
+def test_recordings_sharing_one_start_time_do_not_break_the_fleet():
+    from prsm_lube_ros.fleet.forecast import forecast_points
+    copies = [RecordingPoint(3 * DAY, 0.9, 2e-3, f'copy{j}') for j in range(3)]
+    twins = [p for point in _daily(seed=1) for p in (point, RecordingPoint(point.time, point.theta_oil * 1.001,
+                                                                           point.theta_oil_std, 'twin'))]
+    forecasts = {f.actuator: f for f in forecast_points({'A': _daily(), 'copies': copies, 'twins': twins})}
+    assert not forecasts['A'].reason and forecasts['A'].crossings
+    assert 'start times' in forecasts['copies'].reason
+    assert not forecasts['twins'].reason and forecasts['twins'].tau_days == pytest.approx(20.0, rel=0.1)
+    # the twins' zero-day steps are left out of the walk, not divided by
+    zero_only = [RecordingPoint(DAY, 0.9, 2e-3), RecordingPoint(DAY, 0.89, 2e-3), RecordingPoint(DAY, 0.88, 2e-3)]
+    from prsm_lube_ros.fleet.forecast import drift_and_diffusion, increments
+    days = np.array([p.time / DAY for p in zero_only])
+    assert increments(days, np.log([p.theta_oil for p in zero_only]), np.full(3, 2e-3), np.zeros(3)) is None
+    assert drift_and_diffusion(None) is None
+
+
+def test_forecast_summaries_of_several_actuators_in_one_call(small_fleet):
+    from prsm_lube_ros.fleet.forecast import forecast_summaries
+    summaries = forecast_summaries(small_fleet['history'], ['A01', 'A03', 'A99', '/'])
+    assert summaries['A01'] == forecast_summary(small_fleet['history'], 'A01')
+    assert summaries['A03']['forecast'] == 'ok'
+    assert summaries['A99'] == {'forecast': f"none: {small_fleet['history']}: no assessed run of actuator 'A99'"}
+    assert summaries['/']['forecast'].startswith('none: actuator id')
+    with pytest.raises(InputError, match='no such history'):
+        forecast_summaries(small_fleet['history'] / 'missing', ['A01'])
+
+
+def test_without_pyarrow_the_forecast_is_one_input_error_line(small_fleet, monkeypatch):
+    import sys
+    from prsm_lube_ros.fleet.forecast import forecast_summaries
+    monkeypatch.delitem(sys.modules, 'prsm_lube_ros.fleet.history', raising=False)
+    for name in [name for name in sys.modules if name == 'pyarrow' or name.startswith('pyarrow.')]:
+        monkeypatch.setitem(sys.modules, name, None)
+    with pytest.raises(InputError, match='needs pyarrow'):
+        forecast_summaries(small_fleet['history'], ['A01'])
+
+
+def test_a_crossing_never_estimated_shows_no_interval():
+    from prsm_lube_ros.fleet.forecast import Crossing, crossing_interval_text
+    assert crossing_interval_text(Crossing(0.85, None, 1.8e9, None)) == 'never'
+    assert crossing_interval_text(Crossing(0.85, 1.8e9, 1.7e9, None)).endswith('.. never')

@@ -150,3 +150,41 @@ def test_not_assessed_runs_are_null_theta(tmp_path):
     runs = read_table(history)
     assert runs.column('theta_oil').to_pylist() == [None] and runs.column('reason').to_pylist() == [
         'axial load below 5 N']
+
+
+def test_new_content_at_a_reused_path_is_a_new_recording(tmp_path):
+    history = tmp_path / 'history'
+    latest = recording(tmp_path, 'latest.mcap', b'monday')
+    add(history, latest, 0.9)
+    latest.write_bytes(b'tuesday')              # the logger overwrites latest.mcap with a new recording
+    add(history, latest, 0.8)
+    runs = read_table(history, 'runs')
+    assert sorted(runs.column('theta_oil').to_pylist()) == [0.8, 0.8, 0.9, 0.9]
+    assert read_table(history, 'windows').num_rows == 12
+    add(history, latest, 0.7)                   # tuesday's recording re-assessed: replaces tuesday's rows only
+    assert sorted(read_table(history, 'runs').column('theta_oil').to_pylist()) == [0.7, 0.7, 0.9, 0.9]
+
+
+def test_a_writer_killed_between_the_rename_and_the_removal_leaves_no_duplicate(tmp_path):
+    history = tmp_path / 'history'
+    bag = recording(tmp_path, 'a.mcap')
+    add(history, bag, 0.9)
+    add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8)
+    moved = tmp_path / 'moved'
+    moved.mkdir()
+    os.replace(bag, moved / 'a.mcap')             # same content at another path: another file name
+    script = textwrap.dedent(f'''
+        import os, signal, sys
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from test_history import add
+        from pathlib import Path
+        def die(target):
+            assert target.exists()
+            os.kill(os.getpid(), signal.SIGKILL)
+        add(Path({str(history)!r}), Path({str(moved / 'a.mcap')!r}), 0.1, after_replace=die)
+    ''')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
+    assert done.returncode == -9, done.stderr.decode()
+    assert len(list((history / 'runs').rglob('*.parquet'))) == 3, 'the old file of a.mcap should be left'
+    runs = read_table(history, 'runs')
+    assert sorted(runs.column('theta_oil').to_pylist()) == [0.1, 0.1, 0.8, 0.8]

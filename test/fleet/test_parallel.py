@@ -4,18 +4,7 @@
 import pytest
 
 from prsm_lube_ros.estimation.calibration_file import load_calibration
-from prsm_lube_ros.fleet.parallel import assess_bags, BagJob
-
-
-def comparable(outcomes):
-    """Every number of every outcome, for exact comparison."""
-    result = []
-    for outcome in outcomes:
-        runs = [(r.run_index, r.theta_oil, r.theta_oil_std, r.vibration_rms) for r in outcome.assessment.runs] \
-            if outcome.assessment else None
-        windows = [(w.window.start, w.theta_oil) for w in outcome.assessment.windows] if outcome.assessment else None
-        result.append((outcome.path, outcome.content, outcome.error, runs, windows))
-    return repr(result)     # repr: NaN equals NaN, and every float to the last bit
+from prsm_lube_ros.fleet.parallel import assess_bags, BagJob, BagOutcome, outcomes_fingerprint
 
 
 @pytest.fixture(scope='module')
@@ -34,9 +23,9 @@ def test_processes_and_a_local_dask_cluster_equal_the_serial_run(small_fleet, jo
     assert [o.path for o in serial] == paths
     assert serial[1].error and str(broken) in serial[1].error and '\n' not in serial[1].error
     assert all(o.assessment is not None and len(o.content) == 64 for i, o in enumerate(serial) if i != 1)
-    assert comparable(assess_bags(paths, job, jobs=2)) == comparable(serial)
+    assert outcomes_fingerprint(assess_bags(paths, job, jobs=2)) == outcomes_fingerprint(serial)
     pytest.importorskip('distributed')
-    assert comparable(assess_bags(paths, job, jobs=2, scheduler='local')) == comparable(serial)
+    assert outcomes_fingerprint(assess_bags(paths, job, jobs=2, scheduler='local')) == outcomes_fingerprint(serial)
 
 
 def test_an_unreachable_scheduler_is_one_line(job, small_fleet):
@@ -50,3 +39,28 @@ def test_jobs_must_be_a_positive_whole_number(job, small_fleet):
     from prsm_lube_ros.errors import InputError
     with pytest.raises(InputError, match='--jobs'):
         assess_bags(small_fleet['bags'][:1], job, jobs=0)
+
+
+@pytest.mark.parametrize('bad', ['foo', 'http://x', 'tcp://'])
+def test_a_malformed_scheduler_address_is_one_line(job, small_fleet, bad):
+    from prsm_lube_ros.errors import InputError
+    pytest.importorskip('distributed')
+    with pytest.raises(InputError, match=f'--scheduler {bad}') as caught:
+        assess_bags(small_fleet['bags'][:1], job, scheduler=bad)
+    assert '\n' not in str(caught.value)
+
+
+def test_the_fingerprint_sees_every_number_of_runs_and_windows(job, small_fleet):
+    import dataclasses
+    outcome = assess_bags(small_fleet['bags'][:1], job)[0]
+    first, run = outcome.assessment.windows[0], outcome.assessment.runs[0]
+    before = outcomes_fingerprint([outcome])
+    changed_window = dataclasses.replace(first, window=dataclasses.replace(
+        first.window, nut_position=0.1234567890123))
+    changed_run = dataclasses.replace(run, axial_load=0.1234567890123)
+    for windows, runs in (([changed_window] + outcome.assessment.windows[1:], outcome.assessment.runs),
+                          (outcome.assessment.windows, [changed_run] + outcome.assessment.runs[1:])):
+        other = BagOutcome(outcome.path, dataclasses.replace(outcome.assessment, windows=windows, runs=runs),
+                           outcome.content)
+        assert outcomes_fingerprint([other]) != before
+    assert outcomes_fingerprint([dataclasses.replace(outcome, content='0' * 64)]) != before
