@@ -71,7 +71,7 @@ from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
 from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
-from ..fleet.forecast import forecast_summary
+from ..fleet.forecast import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
@@ -540,28 +540,38 @@ class LubricationEstimator(Node):
 
     # -- forecast from the fleet history -----------------------------------------------------------
     def _forecast_loop(self, period: float):
-        """Worker thread: each actuator's depletion forecast from ``history_dir``, every ``period`` s."""
+        """Worker thread: the actuators' depletion forecasts from ``history_dir``, every ``period`` s.
+
+        An actuator is looked up in the history by its hardware id (what
+        ``prsm-lube assess --actuator-id`` names it), else by its namespace
+        (the default of ``assess``).  One read of the history serves all.
+        """
         told = set()
+
+        def tell(line: str, error: bool = False):
+            if line not in told:
+                told.add(line)
+                (self.get_logger().error if error else self.get_logger().warning)(line)
+
         while not self._stop_forecast.is_set():
             with self._lock:
                 thresholds = self._thresholds
-            for channel in self.channels:
-                try:
-                    summary = forecast_summary(self._history_dir, channel.name, warn_below=thresholds.warn_below,
-                                               error_below=thresholds.error_below)
-                    values = [('forecast', summary.pop('forecast'))]
-                    values += [(f'forecast_{key}', value) for key, value in summary.items()]
-                except InputError as exc:
-                    values = [('forecast', f'none: {exc}')]
-                    if str(exc) not in told:
-                        told.add(str(exc))
-                        self.get_logger().warning(f'{channel.name}: no forecast: {exc}')
-                except Exception as exc:   # a broken history must not stop the node; say it once
-                    values = [('forecast', f'none: internal error {type(exc).__name__}')]
-                    if type(exc).__name__ not in told:
-                        told.add(type(exc).__name__)
-                        self.get_logger().error(f'{channel.name}: forecast failed (please report): '
-                                                f'{type(exc).__name__}: {exc}')
+            wanted = [(channel, (channel.hardware_id, channel.name)) for channel in self.channels]
+            ids = list(dict.fromkeys(key for _, keys in wanted for key in keys))
+            try:
+                found = forecast_summaries(self._history_dir, ids, warn_below=thresholds.warn_below,
+                                           error_below=thresholds.error_below)
+            except InputError as exc:
+                found = {key: {'forecast': f'none: {exc}'} for key in ids}
+                tell(f'no forecast: {exc}')
+            except Exception as exc:   # a broken history must not stop the node; say it once
+                found = {key: {'forecast': f'none: internal error {type(exc).__name__}'} for key in ids}
+                tell(f'forecast failed (please report): {type(exc).__name__}: {exc}', error=True)
+            for channel, keys in wanted:
+                summary = next((found[key] for key in keys if found[key].get('forecast') == 'ok'), found[keys[0]])
+                summary = dict(summary)
+                values = [('forecast', summary.pop('forecast'))]
+                values += [(f'forecast_{key}', value) for key, value in summary.items()]
                 with self._lock:
                     channel.forecast = values
             self._stop_forecast.wait(period)

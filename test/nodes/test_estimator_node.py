@@ -683,9 +683,13 @@ def test_a_late_subscriber_gets_the_last_states(graph, tmp_path):
 
 
 def test_the_forecast_of_a_fleet_history_is_in_the_diagnostics(graph, tmp_path, small_fleet):
-    """history_dir set: each actuator's depletion forecast (prsm-lube trend's) rides on its status."""
+    """history_dir set: each actuator's depletion forecast (prsm-lube trend's) rides on its status.
+
+    Actuators are found in the history by namespace (/A01) or by hardware id (/prsm as A02).
+    """
     from prsm_lube_ros.fleet.forecast import forecast_summary
-    graph.estimator(tmp_path, actuators=['/A01', '/nowhere'], history_dir=str(small_fleet['history']))
+    graph.estimator(tmp_path, actuators=['/A01', '/prsm', '/nowhere'], hardware_ids=['', 'A02', ''],
+                    history_dir=str(small_fleet['history']))
     diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
 
     def forecast_of(actuator):
@@ -696,6 +700,9 @@ def test_the_forecast_of_a_fleet_history_is_in_the_diagnostics(graph, tmp_path, 
     assert values['forecast'] == expected.pop('forecast') == 'ok'
     assert {f'forecast_{key}': value for key, value in expected.items()}.items() <= values.items()
     assert forecast_of('/nowhere').startswith('none: ') and 'nowhere' in forecast_of('/nowhere')
+    # /prsm is A02 in the history (assess --actuator-id): found through its hardware id
+    assert values_of(status_of(diagnostics[-1], '/prsm'))['forecast_tau_days'] == \
+        forecast_summary(small_fleet['history'], 'A02')['tau_days']
 
 
 def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
