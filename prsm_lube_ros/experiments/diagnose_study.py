@@ -158,15 +158,24 @@ def _safe_random_case(case: tuple) -> dict:
 
 
 def _run_random(args, effects: list[str], command: str) -> int:
+    """Cases seed-major (a stopped run is a balanced subset), results rewritten every ``--save-every`` cases."""
+    from concurrent.futures import as_completed
     from .random_study import NONE, TWO, write_random_outputs
     kinds = effects + [NONE] + ([TWO] if len(effects) >= 2 else [])
-    cases = [(kind, seed, tuple(effects), args.quick) for kind in kinds for seed in range(args.seeds)]
+    cases = [(kind, seed, tuple(effects), args.quick) for seed in range(args.seeds) for kind in kinds]
     records, start = [], time.time()
     with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
-        for record in pool.map(_safe_random_case, cases):
+        futures = [pool.submit(_safe_random_case, case) for case in cases]
+        for future in as_completed(futures):
+            record = future.result()
             records.append(record)
             print(f'{record["kind"]:<30} seed {record["seed"]:>3} -> {record["verdict"]:<30} '
                   f'{"right" if record["right"] else "MISS "} ({record["seconds"]:.1f} s)', file=sys.stderr, flush=True)
+            if len(records) % max(args.save_every, 1) == 0 and len(records) < len(cases):
+                write_random_outputs(Path(args.out), sorted(records, key=lambda r: (r['kind'], r['seed'])),
+                                     command + f'  (partial: {len(records)} of {len(cases)} cases)',
+                                     time.time() - start, args.jobs)
+    records.sort(key=lambda r: (r['kind'], r['seed']))
     print(write_random_outputs(Path(args.out), records, command, time.time() - start, args.jobs))
     return 0
 
@@ -186,6 +195,7 @@ def main(argv=None) -> int:
     parser.add_argument('--sessions', type=int, default=2, help='paper design: sessions (bags) at theta 1 per case')
     parser.add_argument('--effects', nargs='*', default=None, help='effect IDs (default: all and none)')
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     args = parser.parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
