@@ -48,6 +48,29 @@ def _forms(params: dict | None) -> str:
     return ','.join(str(v) for k, v in sorted(params.items()) if isinstance(v, str))
 
 
+def truth_form(name: str, params: dict | None, speeds) -> str:
+    """The physical form of a drawn law, in words, for the per-form rows.
+
+    Text-valued parameters (bearing arrangement, viscosity law, depletion form)
+    name it; besides, a resonance is placed against the plan's ``speeds``
+    (rad/s) and its order, a background is a floor or has lines, and depletion
+    says whether oil creeps back at rest.
+    """
+    params = params or {}
+    words = [_forms(params)] if _forms(params) else []
+    if name == 'resonance' and params.get('natural_frequency') and params.get('order'):
+        resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
+        band = ('mode above the band' if resonant > max(speeds) else
+                'mode below the band' if resonant < min(speeds) else 'mode inside the band')
+        words.append(f'{band}, order {params["order"]:.3g}')
+    elif name == 'background_vibration':
+        lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
+        words.append('lines' if lines else 'floor')
+    elif name == 'lubricant_depletion' and params.get('recovery_time'):
+        words.append('recovery at rest')
+    return ', '.join(words)
+
+
 def _named_effects(document: dict) -> list[str]:
     """Effect IDs a ``diagnose`` JSON document names: its ``effects`` list if any, else the verdict's effect."""
     listed = document.get('effects')
@@ -97,7 +120,8 @@ def run_random_case(case: tuple) -> dict:
     record = {'kind': kind, 'seed': seed}
     try:
         paths, setup, names, truth = simulate_case(kind, seed, list(effect_pool), quick=quick, folder=folder)
-        record.update({'effects': names, 'forms': {n: _forms(truth[n]) for n in names}, 'truth': truth,
+        record.update({'effects': names, 'truth': truth,
+                       'forms': {n: truth_form(n, truth[n], setup.plan.speeds) for n in names},
                        'setup': setup.as_dict()})
         recordings = [recording_windows(p, lead=setup.rig.actuator.lead,
                                         settings=WindowSettings(spectrum_segment=256)) for p in paths]

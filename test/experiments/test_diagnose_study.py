@@ -56,3 +56,14 @@ def test_tables_report_misses_and_wrong_names():
     text = confusion_markdown(records, 'cmd', 60.0, 2)
     assert '## Misses (3)' in text and 'one named' in text
     assert np.isclose(summary['kinds']['two']['median_gain'], 0.5)
+
+
+def test_truth_forms_name_band_lines_and_recovery():
+    from prsm_lube_ros.experiments.random_study import truth_form
+    speeds = [10.0, 20.0]
+    assert truth_form('resonance', {'order': 10.0, 'natural_frequency': 100.0}, speeds).startswith('mode above')
+    assert truth_form('resonance', {'order': 10.0, 'natural_frequency': 5.0}, speeds).startswith('mode below')
+    assert truth_form('background_vibration', {'tone_frequencies': [], 'broadband_share': 1.0}, speeds) == 'floor'
+    assert truth_form('lubricant_depletion', {'form': 'linear', 'recovery_time': 300.0}, speeds) == \
+        'linear, recovery at rest'
+    assert truth_form('position_dependent_stiffness', {'arrangement': 'fixed-fixed'}, speeds) == 'fixed-fixed'
