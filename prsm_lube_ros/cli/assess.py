@@ -68,15 +68,23 @@ def run(args) -> int:
             warn(line)
         if outcome.error:
             print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
+    flagged = []
+    for flag in calibration.flags:
+        print(f'warning: calibration {args.calibration}: {flag}')
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '
           f'{"theta_oil":>9} {"+/-":>6}')
     for rec in results:
         for run_result in rec.runs:
             theta = (f'{run_result.theta_oil:9.3f} {run_result.theta_oil_std:6.3f}' if not run_result.reason
                      else f'{"NaN":>9}  {run_result.reason}')
+            if run_result.flag:
+                flagged.append((Path(rec.path).name, run_result.run_index, run_result.flag))
+                theta += ' !'
             print(f'{Path(rec.path).name[:28]:<28} {run_result.run_index:>4} '
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
                   f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
+    for name, run_index, flag in flagged:
+        print(f'! {name} run {run_index}: {flag}')
     if args.history and results:
         print(f'history {args.history}: {len(results)} recordings added or replaced')
     if args.json and results:

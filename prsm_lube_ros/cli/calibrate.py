@@ -35,5 +35,8 @@ def run(args) -> int:
     print(f'C_F      = {c.c_f:.6g} +/- {calibration.c_f_std:.2g} 1/N')
     print(f'C_lambda = {c.c_lambda:.6g} +/- {calibration.c_lambda_std:.2g} (rad/s)^-0.68 N^0.073')
     print(f'fit: relative RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows '
-          f'({len(calibration.speed_levels)} speeds x {len(calibration.load_levels)} loads); wrote {args.out}')
+          f'({calibration.plan_summary}, {calibration.runs} runs); wrote {args.out}')
+    print(f'standard errors: {calibration.standard_errors}')
+    for flag in calibration.flags:
+        print(f'warning: {flag}')
     return 0

@@ -49,7 +49,11 @@ Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters and the 
 the run order is confounded with speed or load, so adequacy cannot be
 confirmed); ``unexplained`` (the residual is
 strongly structured or the baseline constants are unphysical, yet no
-candidate explains it).
+candidate explains it); ``cannot tell`` (the paper's model fits, but the
+operating plan has too few (speed, load) conditions beyond the three
+constants to test its form, e.g. three conditions on one line: the fit is
+exact whatever the truth, so adequacy means nothing; see
+:func:`~prsm_lube_ros.estimation.calibration.form_flag`).
 """
 from __future__ import annotations
 
@@ -59,7 +63,8 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.calibration import Calibration, check_identifiable, operating_levels
+from ..estimation.calibration import (Calibration, check_identifiable, clustered_covariance, form_flag,
+                                      form_testable, operating_conditions, operating_levels)
 from .adequacy import lack_of_fit, LackOfFit
 from .combined import CombinedEffect
 from .effects import Effect, registered
@@ -82,7 +87,7 @@ TIE_RATIO = 0.5
 #: |Spearman| over runs from which two covariates count as confounded.
 CONFOUNDED = 0.9
 
-ADEQUATE, AMBIGUOUS, UNEXPLAINED = 'adequate', 'ambiguous', 'unexplained'
+ADEQUATE, AMBIGUOUS, UNEXPLAINED, CANNOT_TELL = 'adequate', 'ambiguous', 'unexplained', 'cannot tell'
 
 
 @dataclass
@@ -167,7 +172,7 @@ class Diagnosis:
     @property
     def confident(self) -> bool:
         """A named effect or adequacy backed by the final model passing the lack-of-fit test."""
-        if self.verdict in (AMBIGUOUS, UNEXPLAINED):
+        if self.verdict in (AMBIGUOUS, UNEXPLAINED, CANNOT_TELL):
             return False
         test = self.chosen_fit_test if self.chosen is not None else self.baseline_fit_test
         return test is None or not test.significant
@@ -192,13 +197,16 @@ class Diagnosis:
         fit = self.chosen.fit if self.chosen is not None else self.baseline
         effect = self.chosen.effect if self.chosen is not None else None
         table = self.table
-        covariance, residual_std = _constant_covariance(table, fit, effect)
+        covariance, residual_std, method = _constant_covariance(table, fit, effect)
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
+        conditions = operating_conditions(table.speed, table.load)
+        flag = form_flag(conditions)
         return Calibration(constants=fit.constants, covariance=covariance, fit_rmse=fit.rmse,
                            residual_std=residual_std, windows_used=len(table), reference_theta=table.theta,
                            speed_levels=tuple(operating_levels(table.speed)),
                            load_levels=tuple(operating_levels(table.load)), sources=table.sources,
-                           extension=extension)
+                           extension=extension, conditions=conditions, runs=int(table.runs.size),
+                           standard_errors=method, flags=(flag,) if flag else ())
 
     def as_json(self) -> dict:
         """The contract's ``diagnose`` document (plus location, notes and tied candidates)."""
@@ -255,7 +263,12 @@ def _clean(params: dict) -> dict:
 
 
 def _constant_covariance(table, fit: ModelFit, effect):
-    """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held: s^2 (J^T J)^-1."""
+    """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held, clustered by run.
+
+    The Jacobian J of the log prediction stands for the design matrix of
+    :func:`~prsm_lube_ros.estimation.calibration.clustered_covariance`.
+    Returns (covariance, residual std, how the covariance was computed).
+    """
     scales = effect.scales(table) if effect is not None else {}
     base = predict_log(table, fit.vector, effect, scales)
     jac = np.empty((len(table), 3))
@@ -267,10 +280,10 @@ def _constant_covariance(table, fit: ModelFit, effect):
     dof = max(len(table) - fit.n_params, 1)
     variance = float(fit.log_residual @ fit.log_residual) / dof
     try:
-        covariance = variance * np.linalg.inv(jac.T @ jac)
+        covariance, method = clustered_covariance(jac, np.asarray(fit.log_residual, float), table.run)
     except np.linalg.LinAlgError:
-        covariance = np.full((3, 3), np.nan)
-    return covariance, math.sqrt(variance)
+        covariance, method = np.full((3, 3), np.nan), 'singular'
+    return covariance, math.sqrt(variance), method
 
 
 def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
@@ -591,6 +604,11 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
                      'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
                      'adequacy cannot be confirmed')
+    conditions = operating_conditions(table.speed, table.load)
+    if verdict == ADEQUATE and not form_testable(conditions):
+        verdict = CANNOT_TELL
+        advice = form_flag(conditions).split(': ', 1)[1].split(';')[0]
+        notes.append(f'the paper\'s model fits, but {form_flag(conditions)}: adequacy cannot be confirmed')
     chosen_test = None
     if best is not None and verdict == best.effect.id:
         if second is None:

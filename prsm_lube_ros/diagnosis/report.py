@@ -154,6 +154,10 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     elif diagnosis.verdict == 'adequate':
         lines += ['**Verdict: `adequate`** — no candidate earns its extra parameters; the paper\'s model explains '
                   f'the recording to {100 * base.cv_rmse:.1f} % on held-out runs.']
+    elif diagnosis.verdict == 'cannot tell':
+        lines += ['**Verdict: `cannot tell`** — the paper\'s model fits, but the recordings hold too few speed and '
+                  'load conditions beyond its three constants to test its form: a fit this good would come out '
+                  'whatever the truth.']
     else:
         tied = f' — tied: {", ".join(diagnosis.tied)}' if diagnosis.tied else ''
         lines += [f'**Verdict: `{diagnosis.verdict}`**{tied}']

@@ -16,6 +16,13 @@ With ``g = C_lambda omega^0.68 F^-0.073`` Eq. 23 has the partial derivatives
 Where Eq. 23 means nothing (screw at rest or crawling, no load, no film term,
 no vibration) theta is NaN and ``reason`` says why, in words.
 
+theta_Oil is a supply factor: 0 is no oil film term at all, 1 the reference
+(fully lubricated) state.  A value below 0, or far above 1 (beyond
+:data:`THETA_PLAUSIBLE_MAX`), is not a lubrication state: the vibration lies
+outside what the calibrated model can produce, and :func:`theta_range_flag`
+says so with the likely reason (``theta_oil_flag`` in the JSON, a mark in the
+table).  The value is still reported.
+
 A calibration with a model extension (``Calibration.extension``, written by
 ``prsm-lube diagnose``) is honoured: each window's RMS is first mapped back to
 the amplitude Eq. 22 describes and theta_Oil divided by the extension's film
@@ -34,6 +41,25 @@ from ..validation import finite_or_none
 from .calibration import Calibration
 from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
 
+#: Highest theta_Oil taken as a lubrication state (1 = reference; the paper's stages span 0.72-1).
+THETA_PLAUSIBLE_MAX = 1.5
+
+
+def theta_range_flag(theta: float, std: float = math.nan) -> str:
+    """Why a theta_Oil lies outside its physical range, in words ('' inside it or when NaN)."""
+    if not math.isfinite(theta):
+        return ''
+    sigma = f' +/- {std:.2f}' if math.isfinite(std) else ''
+    if theta < 0:
+        return (f'theta_oil {theta:.2f}{sigma} below 0 is not physical: the vibration is higher than Eq. 22 allows '
+                'with no oil film term, so the calibration does not describe this actuator or these conditions '
+                '(another vibration source, other speeds or loads than calibrated, a changed sensor)')
+    if theta > THETA_PLAUSIBLE_MAX:
+        return (f'theta_oil {theta:.2f}{sigma} far above 1 (the reference state) is not physical: the vibration '
+                'is lower than the calibrated fully lubricated level, so the calibration does not describe this '
+                'actuator or these conditions (other speeds or loads than calibrated, a changed sensor or mounting)')
+    return ''
+
 
 @dataclass(frozen=True)
 class WindowAssessment:
@@ -43,6 +69,11 @@ class WindowAssessment:
     theta_oil: float
     theta_oil_std: float
     reason: str = ''
+
+    @property
+    def flag(self) -> str:
+        """:func:`theta_range_flag` of this window ('' when theta_Oil is in its physical range)."""
+        return theta_range_flag(self.theta_oil, self.theta_oil_std)
 
 
 @dataclass(frozen=True)
@@ -62,12 +93,17 @@ class RunAssessment:
     temperature: float = math.nan
     reason: str = ''
 
+    @property
+    def flag(self) -> str:
+        """:func:`theta_range_flag` of this run ('' when theta_Oil is in its physical range)."""
+        return theta_range_flag(self.theta_oil, self.theta_oil_std)
+
     def as_json(self) -> dict:
         """Mapping for the contract's ``runs`` list (plus extra fields)."""
         return {'bag': self.bag, 'start': self.start, 'end': self.end,
                 'screw_speed': self.screw_speed, 'axial_load': self.axial_load,
                 'vibration_rms': self.vibration_rms, 'theta_oil': self.theta_oil,
-                'theta_oil_std': self.theta_oil_std, 'run_index': self.run_index,
+                'theta_oil_std': self.theta_oil_std, 'theta_oil_flag': self.flag, 'run_index': self.run_index,
                 'windows': self.windows, 'temperature': finite_or_none(self.temperature),
                 'reason': self.reason}
 

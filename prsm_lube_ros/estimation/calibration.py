@@ -7,10 +7,30 @@ With theta_Oil known, Eq. 22 is linear in ``p = (ln C_sys, C_F, C_lambda)``::
     ln(A_0 omega_S^-2 F_a^(1/3)) = ln C_sys + C_F F_a - C_lambda theta_Oil omega_S^0.68 F_a^-0.073
 
 so the constants follow from ordinary least squares on the steady windows of
-reference recordings, with the usual covariance ``s^2 (X^T X)^-1``.  The three
-columns are only independent when the windows span at least two axial loads
-and two screw speeds; anything less gets an :class:`InputError` that says what
-to record, never a fit.
+reference recordings.  The three columns are only independent when the windows
+span at least two axial loads and two screw speeds; anything less gets an
+:class:`InputError` that says what to record, never a fit.
+
+Standard errors are clustered by run.  Windows of one run share its set-up
+(mounting, temperature, the oil film of that traverse), so they are not
+independent: with ``clusters`` (one label per window, a run) the covariance
+is the cluster-robust sandwich (CR1)::
+
+    V = G/(G-1) (n-1)/(n-k) (X^T X)^-1 [sum_g X_g^T e_g e_g^T X_g] (X^T X)^-1
+
+over G runs, n windows and k = 3 constants, when there are at least
+:data:`MIN_CLUSTERS` runs; with fewer runs the sandwich is unreliable and the
+ordinary ``s^2 (X^T X)^-1`` is inflated by the design effect
+``1 + (m - 1) rho`` (m windows per run, rho the intraclass correlation of the
+residuals).  Without labels every window counts as its own run.
+
+The model's *form* is only tested by operating conditions beyond the three
+constants: with three (speed, load) conditions the fit is exact whatever the
+truth.  :class:`Calibration.flags` says so ("form untested: record N more
+conditions") when fewer than :data:`MIN_SPARE_CONDITIONS` conditions are spare.
+Levels closer than :data:`LEVEL_TOLERANCE` merge into one; set-points that
+differ but merge (loads of 4000 and 4200 N) are named in
+:attr:`Calibration.merged`, so a message can say what it counted.
 """
 from __future__ import annotations
 
@@ -28,6 +48,14 @@ from .windowing import MIN_AXIAL_LOAD, usable_windows
 LEVEL_TOLERANCE = 0.05
 #: Fewest windows for a fit with standard errors (three constants and one degree of freedom).
 MIN_WINDOWS = 4
+#: Constants of Eq. 22 fitted (ln C_sys, C_F, C_lambda).
+CONSTANTS = 3
+#: Operating conditions beyond the constants needed before the fit tests the model's form.
+MIN_SPARE_CONDITIONS = 2
+#: Fewest runs for the cluster-robust covariance; with fewer the design effect inflates the ordinary one.
+MIN_CLUSTERS = 6
+#: Relative tolerance within which run set-points count as the same set-point (finer than a level).
+SETPOINT_TOLERANCE = 0.015
 
 
 @dataclass(frozen=True)
@@ -44,6 +72,11 @@ class Calibration:
     load_levels: tuple = ()         # N, distinct axial loads in the data
     sources: tuple = ()             # recordings the fit used
     extension: dict = field(default_factory=dict)  # model extension (effect id and parameters), if any
+    conditions: int = 0             # distinct (speed level, load level) pairs in the data
+    runs: int = 0                   # runs (clusters of the standard errors)
+    standard_errors: str = ''       # how the covariance was computed
+    merged: tuple = ()              # set-points merged into one level, in words ("loads 4000 and 4200 N")
+    flags: tuple = ()               # what the fit cannot vouch for, in words ("form untested: ...")
 
     @property
     def c_sys_std(self) -> float:
@@ -59,6 +92,24 @@ class Calibration:
     def c_lambda_std(self) -> float:
         """One-sigma standard error of C_lambda."""
         return math.sqrt(self.covariance[2, 2])
+
+    @property
+    def plan_summary(self) -> str:
+        """What the fit counted: ``3 speeds x 2 loads (loads 4000 and 4200 N merged), 3 conditions``."""
+        text = f'{len(self.speed_levels)} speeds x {len(self.load_levels)} loads'
+        if self.merged:
+            text += f' ({"; ".join(self.merged)} merged)'
+        if self.conditions:
+            text += f', {self.conditions} conditions'
+        return text
+
+    @property
+    def summary(self) -> str:
+        """One line on the fit for messages: plan, runs, standard errors and flags."""
+        text = (f'fitted on {self.windows_used} windows, {self.plan_summary}'
+                + (f', {self.runs} runs' if self.runs else '')
+                + f'; relative RMS error {100 * self.fit_rmse:.2f} %')
+        return text + ''.join(f'; {flag}' for flag in self.flags)
 
 
 def operating_levels(values: Sequence[float], tolerance: float = LEVEL_TOLERANCE) -> list[float]:
@@ -102,12 +153,92 @@ def _levels(levels, unit):
     return ', '.join(f'{v:.4g} {unit}' for v in levels) or 'none'
 
 
+def _nearest_level(values: np.ndarray, levels: Sequence[float]) -> np.ndarray:
+    levels = np.asarray(levels, dtype=float)
+    return np.argmin(np.abs(np.abs(values)[:, None] - levels[None, :]), axis=1)
+
+
+def _cluster_means(values: np.ndarray, clusters: np.ndarray | None) -> np.ndarray:
+    if clusters is None:
+        return values
+    _, index = np.unique(clusters, return_inverse=True)
+    return np.bincount(index, weights=values) / np.bincount(index)
+
+
+def merged_setpoints(values, clusters=None, unit: str = '', name: str = 'values') -> list[str]:
+    """Set-points (run means, or values without ``clusters``) that differ yet merge into one level, in words."""
+    values = np.abs(np.asarray(values, dtype=float))
+    setpoints = operating_levels(_cluster_means(values, clusters), SETPOINT_TOLERANCE)
+    levels = operating_levels(setpoints)
+    words = []
+    for level_index in np.unique(_nearest_level(np.asarray(setpoints), levels)):
+        group = [p for p, k in zip(setpoints, _nearest_level(np.asarray(setpoints), levels)) if k == level_index]
+        if len(group) > 1:
+            words.append(f'{name} ' + ' and '.join(f'{v:.4g}' for v in group) + (f' {unit}' if unit else ''))
+    return words
+
+
+def operating_conditions(speeds, loads) -> int:
+    """Distinct (speed level, load level) pairs among the windows."""
+    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
+    if speeds.size == 0:
+        return 0
+    pairs = set(zip(_nearest_level(speeds, operating_levels(speeds)).tolist(),
+                    _nearest_level(loads, operating_levels(loads)).tolist()))
+    return len(pairs)
+
+
+def form_testable(conditions: int) -> bool:
+    """Whether ``conditions`` (speed, load) pairs leave any beyond the constants to test the model's form."""
+    return conditions > CONSTANTS
+
+
+def form_flag(conditions: int) -> str:
+    """Flag for a plan with too few conditions beyond the constants to test the model's form ('' if enough)."""
+    spare = conditions - CONSTANTS
+    if spare >= MIN_SPARE_CONDITIONS:
+        return ''
+    more = MIN_SPARE_CONDITIONS - spare
+    if spare <= 0:
+        return (f'form untested: record {more} more conditions (speed and load pairs); {conditions} conditions '
+                f'for {CONSTANTS} constants fit exactly whatever the truth')
+    return (f'form weakly tested: record {more} more condition (speed and load pair); {conditions} conditions '
+            f'leave one beyond the {CONSTANTS} constants')
+
+
+def clustered_covariance(x: np.ndarray, residual: np.ndarray, clusters=None) -> tuple[np.ndarray, str]:
+    """Covariance of least-squares parameters with windows clustered by run (see module doc), and its name."""
+    n, k = x.shape
+    bread = np.linalg.inv(x.T @ x)
+    dof = max(n - k, 1)
+    ordinary = float(residual @ residual) / dof * bread
+    if clusters is None:
+        return ordinary, 'ordinary (each window independent: no run labels)'
+    _, index = np.unique(np.asarray(clusters), return_inverse=True)
+    groups = int(index.max()) + 1
+    if groups >= MIN_CLUSTERS:
+        scores = np.zeros((groups, k))
+        np.add.at(scores, index, x * residual[:, None])
+        meat = scores.T @ scores
+        factor = groups / (groups - 1) * (n - 1) / dof
+        return factor * bread @ meat @ bread, f'clustered by run ({groups} runs, CR1 sandwich)'
+    sizes = np.bincount(index)
+    means = np.bincount(index, weights=residual) / sizes
+    within = float(np.sum((residual - means[index]) ** 2)) / max(n - groups, 1)
+    mean_size = n / groups
+    between = (float(np.sum(sizes * (means - residual.mean()) ** 2)) / max(groups - 1, 1) - within) / mean_size
+    rho = max(between, 0.0) / (max(between, 0.0) + within) if within > 0 else 0.0
+    deff = 1.0 + (mean_size - 1.0) * rho
+    return deff * ordinary, f'ordinary x design effect {deff:.3g} ({groups} runs, too few for clustering)'
+
+
 def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Sequence[str] = (),
-                  ) -> Calibration:
+                  clusters=None) -> Calibration:
     """Fit Eq. 22 by least squares on windows at lubrication state ``theta``.
 
     speeds in rad/s, loads in N, amplitudes (window RMS) in m/s^2, theta
-    dimensionless (the reference state, 1 = fully lubricated).
+    dimensionless (the reference state, 1 = fully lubricated); ``clusters``
+    one run label per window (standard errors clustered by run).
     """
     speeds = np.abs(np.asarray(speeds, dtype=float))
     loads = np.abs(np.asarray(loads, dtype=float))
@@ -117,6 +248,8 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     usable = (np.isfinite(speeds) & np.isfinite(loads) & np.isfinite(amplitudes)
               & (speeds > 0) & (loads > 0) & (amplitudes > 0))
     speeds, loads, amplitudes = speeds[usable], loads[usable], amplitudes[usable]
+    if clusters is not None:
+        clusters = np.asarray(clusters)[usable]
     speed_levels, load_levels = check_identifiable(speeds, loads)
     x = design_matrix(speeds, loads, theta)
     y = reduced_log_amplitude(amplitudes, speeds, loads)
@@ -132,18 +265,33 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     residual = y - x @ params
     dof = max(len(y) - 3, 1)
     residual_var = float(residual @ residual) / dof
-    covariance = residual_var * np.linalg.inv(x.T @ x)
+    covariance, method = clustered_covariance(x, residual, clusters)
     constants = ModelConstants.from_vector(params)
     fitted = acceleration_amplitude(speeds, loads, theta, constants)
     fit_rmse = float(np.sqrt(np.mean((fitted / amplitudes - 1.0) ** 2)))
+    conditions = operating_conditions(speeds, loads)
+    merged = (merged_setpoints(speeds, clusters, 'rad/s', 'speeds')
+              + merged_setpoints(loads, clusters, 'N', 'loads'))
+    flag = form_flag(conditions)
     return Calibration(constants=constants, covariance=covariance, fit_rmse=fit_rmse,
                        residual_std=math.sqrt(residual_var), windows_used=int(len(y)),
                        reference_theta=float(theta), speed_levels=tuple(speed_levels),
-                       load_levels=tuple(load_levels), sources=tuple(str(s) for s in sources))
+                       load_levels=tuple(load_levels), sources=tuple(str(s) for s in sources),
+                       conditions=conditions, runs=int(np.unique(clusters).size) if clusters is not None else 0,
+                       standard_errors=method, merged=tuple(merged), flags=(flag,) if flag else ())
 
 
-def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=()) -> Calibration:
-    """Fit on the steady windows (see :mod:`.windowing`) whose load is at least ``min_axial_load``."""
-    chosen = usable_windows(windows, min_axial_load)
-    return fit_constants([w.screw_speed for w in chosen], [w.axial_load for w in chosen],
-                         [w.vibration_rms for w in chosen], theta, sources=sources)
+def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=(),
+                recordings=None) -> Calibration:
+    """Fit on the steady windows (see :mod:`.windowing`) whose load is at least ``min_axial_load``.
+
+    Standard errors are clustered by run: ``(recording, run_index)``, with
+    ``recordings`` one recording label per window (all one recording if None).
+    """
+    windows = list(windows)
+    labels = list(recordings) if recordings is not None else [0] * len(windows)
+    chosen_ids = {id(w) for w in usable_windows(windows, min_axial_load)}
+    chosen = [(w, label) for w, label in zip(windows, labels) if id(w) in chosen_ids]
+    runs = [f'{label}#{w.run_index}' for w, label in chosen]
+    return fit_constants([w.screw_speed for w, _ in chosen], [w.axial_load for w, _ in chosen],
+                         [w.vibration_rms for w, _ in chosen], theta, sources=sources, clusters=runs)

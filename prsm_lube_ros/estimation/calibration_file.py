@@ -42,6 +42,9 @@ def calibration_to_dict(calibration: Calibration) -> dict:
                 'windows_used': calibration.windows_used, 'reference_theta': calibration.reference_theta,
                 'speed_levels_rad_s': [float(v) for v in calibration.speed_levels],
                 'load_levels_n': [float(v) for v in calibration.load_levels],
+                'conditions': calibration.conditions, 'runs': calibration.runs,
+                'standard_errors': calibration.standard_errors, 'merged_levels': list(calibration.merged),
+                'flags': list(calibration.flags),
                 'sources': list(calibration.sources)},
         'extension': dict(calibration.extension),
     }
@@ -65,7 +68,11 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             speed_levels=tuple(fit.get('speed_levels_rad_s', ())),
             load_levels=tuple(fit.get('load_levels_n', ())),
             sources=tuple(fit.get('sources', ())),
-            extension=dict(data.get('extension') or {}))
+            extension=dict(data.get('extension') or {}),
+            conditions=int(fit.get('conditions', 0)), runs=int(fit.get('runs', 0)),
+            standard_errors=str(fit.get('standard_errors', '')),
+            merged=tuple(str(v) for v in fit.get('merged_levels', ()) or ()),
+            flags=tuple(str(v) for v in fit.get('flags', ()) or ()))
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as exc:

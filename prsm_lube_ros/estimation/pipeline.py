@@ -114,8 +114,9 @@ def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 
                          min_axial_load: float = MIN_AXIAL_LOAD) -> Calibration:
     """Fit C_sys, C_F, C_lambda on the steady windows of recordings at lubrication state ``theta``."""
     windows = [w for rec in recordings for w in rec.windows]
+    labels = [index for index, rec in enumerate(recordings) for _ in rec.windows]
     return fit_windows(windows, theta, min_axial_load=min_axial_load,
-                       sources=[rec.path for rec in recordings])
+                       sources=[rec.path for rec in recordings], recordings=labels)
 
 
 @dataclass
@@ -157,12 +158,15 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
                             'vibration_rms': finite_or_none(w.vibration_rms),
                             'nut_position': finite_or_none(w.nut_position),
                             'theta_oil': finite_or_none(item.theta_oil),
-                            'theta_oil_std': finite_or_none(item.theta_oil_std), 'reason': item.reason})
+                            'theta_oil_std': finite_or_none(item.theta_oil_std), 'theta_oil_flag': item.flag,
+                            'reason': item.reason})
     for run in unassessed:
         run['theta_oil'] = None
         run['theta_oil_std'] = None
     c = calibration.constants
     return {'runs': runs, 'unassessed_runs': unassessed, 'windows': windows,
             'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
-                            'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used},
+                            'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used,
+                            'flags': list(calibration.flags)},
+            'runs_flagged': sum(bool(run['theta_oil_flag']) for run in runs),
             'problems': problems}

@@ -2,12 +2,25 @@
 # SPDX-License-Identifier: Apache-2.0
 """Study: does ``diagnose`` name a concealed effect, and stay quiet without one.
 
-For every effect ID and for no effect, ``--seeds`` recordings are simulated with
-effect strengths drawn in their physical ranges and runs in random order, and
-diagnosed.  Writes ``confusion.md`` / ``confusion.csv`` (true effect x verdict),
-``results.json`` (every case) to ``--out``.
+Two designs:
 
-Simulators:
+* ``--design random`` (default, :mod:`.random_study`): per case the operating
+  plan (3-6 speeds x 2-5 loads), the recording set-up (1-20 kHz, 5-200 ms
+  blocks, joint states 50-1000 Hz, ...), stamp jitter, repeated stamps, lost
+  blocks and the effect's strength and form are drawn at random
+  (:mod:`.study_draws`); ``--seeds`` cases per effect, as many without an
+  effect and as many with two.  Writes ``confusion.md`` (score per kind,
+  confusion per form, every miss) and ``results.json`` to ``--out``.
+  ``--quick``: the smallest plan, for a test of the machinery.
+* ``--design paper``: the paper's plan with only the effect strengths drawn,
+  as the earlier tables (``benchmarks/results/diagnose_study_rig*``,
+  ``diagnose_study_synthetic``); writes ``confusion.md`` / ``confusion.csv`` /
+  ``results.json``.
+
+For the paper design, every effect ID and no effect get ``--seeds`` recordings
+with effect strengths drawn in their physical ranges and runs in random order.
+
+Simulators (paper design):
 
 * ``rig`` — :mod:`prsm_lube_ros.simulation`: bags of vibration blocks, joint
   states, load and temperature, read back through the windowing like any
@@ -18,7 +31,8 @@ Simulators:
 ``--order fixed`` runs the conditions speed-major instead (run order confounded
 with speed), to see how often the diagnosis says it cannot tell.
 
-    python -m prsm_lube_ros.experiments.diagnose_study --out out/diagnose_study [--seeds 20] [--simulator rig]
+    python -m prsm_lube_ros.experiments.diagnose_study --out benchmarks/results/diagnose_study_random --seeds 30
+    python -m prsm_lube_ros.experiments.diagnose_study --design paper --out out/diagnose_study [--seeds 20]
 """
 from __future__ import annotations
 
@@ -132,20 +146,64 @@ def write_outputs(out: Path, records: list[dict], effects: list[str], command: s
     return text
 
 
+def _safe_random_case(case: tuple) -> dict:
+    """:func:`.random_study.run_random_case`, an unexpected failure recorded as the case's verdict."""
+    from .random_study import run_random_case
+    try:
+        return run_random_case(case)
+    except Exception as exc:  # noqa: BLE001 - one broken case must not lose the study
+        kind, seed = case[0], case[1]
+        return {'kind': kind, 'seed': seed, 'effects': [], 'verdict': f'failed: {type(exc).__name__}: {exc}',
+                'named': [], 'right': False, 'seconds': 0.0}
+
+
+def _run_random(args, effects: list[str], command: str) -> int:
+    """Cases seed-major (a stopped run is a balanced subset), results rewritten every ``--save-every`` cases."""
+    from concurrent.futures import as_completed
+    from .random_study import NONE, TWO, write_random_outputs
+    kinds = effects + [NONE] + ([TWO] if len(effects) >= 2 else [])
+    cases = [(kind, seed, tuple(effects), args.quick) for seed in range(args.seeds) for kind in kinds]
+    records, start = [], time.time()
+    with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
+        futures = [pool.submit(_safe_random_case, case) for case in cases]
+        for future in as_completed(futures):
+            record = future.result()
+            records.append(record)
+            print(f'{record["kind"]:<30} seed {record["seed"]:>3} -> {record["verdict"]:<30} '
+                  f'{"right" if record["right"] else "MISS "} ({record["seconds"]:.1f} s)', file=sys.stderr, flush=True)
+            if len(records) % max(args.save_every, 1) == 0 and len(records) < len(cases):
+                write_random_outputs(Path(args.out), sorted(records, key=lambda r: (r['kind'], r['seed'])),
+                                     command + f'  (partial: {len(records)} of {len(cases)} cases)',
+                                     time.time() - start, args.jobs)
+    records.sort(key=lambda r: (r['kind'], r['seed']))
+    print(write_random_outputs(Path(args.out), records, command, time.time() - start, args.jobs))
+    return 0
+
+
 def main(argv=None) -> int:
     """Command line of the study."""
     from ..diagnosis.effects import effect_ids
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.diagnose_study',
                                      description=__doc__.split('\n')[0])
     parser.add_argument('--out', default='out/diagnose_study')
-    parser.add_argument('--seeds', type=int, default=20)
-    parser.add_argument('--simulator', choices=('rig', 'synthetic'), default='rig')
-    parser.add_argument('--order', choices=('random', 'fixed'), default='random')
-    parser.add_argument('--sessions', type=int, default=2, help='sessions (bags) at theta 1 per case (default 2)')
+    parser.add_argument('--design', choices=('random', 'paper'), default='random',
+                        help='random plans, set-ups, nuisances and effects (default) or the paper\'s plan')
+    parser.add_argument('--seeds', type=int, default=None, help='cases per kind (default 30 random, 20 paper)')
+    parser.add_argument('--quick', action='store_true', help='random design: smallest plans, 1 seed unless --seeds')
+    parser.add_argument('--simulator', choices=('rig', 'synthetic'), default='rig', help='paper design only')
+    parser.add_argument('--order', choices=('random', 'fixed'), default='random', help='paper design only')
+    parser.add_argument('--sessions', type=int, default=2, help='paper design: sessions (bags) at theta 1 per case')
     parser.add_argument('--effects', nargs='*', default=None, help='effect IDs (default: all and none)')
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     args = parser.parse_args(argv)
+    if args.seeds is None:
+        args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
     effects = list(args.effects) if args.effects else list(effect_ids())
+    command = ('python -m prsm_lube_ros.experiments.diagnose_study '
+               + ' '.join(argv if argv is not None else sys.argv[1:]))
+    if args.design == 'random':
+        return _run_random(args, [e for e in effects if e != NONE], command)
     classes = [e for e in effects if e != NONE] + [NONE]
     cases = [(args.simulator, e, seed, args.order, args.sessions) for e in classes for seed in range(args.seeds)]
     records = []
@@ -154,8 +212,6 @@ def main(argv=None) -> int:
             records.append(record)
             print(f'{record["effect"]:<30} seed {record["seed"]:>3} -> {record["verdict"]:<30} '
                   f'({record["seconds"]:.1f} s)', file=sys.stderr, flush=True)
-    command = ('python -m prsm_lube_ros.experiments.diagnose_study '
-               + ' '.join(argv if argv is not None else sys.argv[1:]))
     print(write_outputs(Path(args.out), records, [e for e in classes if e != NONE], command))
     return 0
 

@@ -659,12 +659,10 @@ class LubricationEstimator(Node):
             with self._lock:
                 self._swap_calibration(channel, calibration)
             return calibration, (
-                f'fitted on {calibration.windows_used} windows of {len(outcome.recordings)} recording(s) '
-                + (f'under {namespace} ' if namespace != channel.name else '')
-                + f'({len(calibration.speed_levels)} speeds x {len(calibration.load_levels)} loads), relative '
-                f'RMS error {100 * calibration.fit_rmse:.2f} %, in {time.monotonic() - started:.1f} s; '
-                f'swapped in{written}' + (f'; {len(outcome.problems)} problem(s) in the recordings'
-                                          if outcome.problems else ''))
+                f'{calibration.summary}; {len(outcome.recordings)} recording(s)'
+                + (f' under {namespace}' if namespace != channel.name else '')
+                + f' in {time.monotonic() - started:.1f} s; swapped in{written}'
+                + (f'; {len(outcome.problems)} problem(s) in the recordings' if outcome.problems else ''))
 
     # -- parameters --------------------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:

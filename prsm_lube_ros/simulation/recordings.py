@@ -17,6 +17,7 @@ from ..validation import as_number, require
 from .drive import DriveProgram, schedule_session, Stroke
 from .effects import (draw_background_vibration, draw_lubricant_depletion, draw_position_dependent_stiffness,
                       draw_resonance, draw_thermal_viscosity, Effects)
+from .nuisances import RecordingNuisances
 from .rig_config import CHUNK_DURATION, ExperimentPlan, ProgressCallback, RigConfig
 from .signal import RigStream, thread_contact_amplitude
 
@@ -32,26 +33,36 @@ def _latencies(rng: np.random.Generator, rig: RigConfig, count: int) -> np.ndarr
 
 def _record(path: Path, storage: str, stream: RigStream, first_block: int, stop_block: int,
             theta_oil: float, latency_rng: np.random.Generator,
-            progress: Callable[[int], None] | None, compression: str | None = None) -> None:
-    """Write blocks ``[first_block, stop_block)`` of the stream to a new bag."""
+            progress: Callable[[int], None] | None, compression: str | None = None,
+            nuisances: RecordingNuisances | None = None, nuisance_rng: np.random.Generator | None = None) -> None:
+    """Write blocks ``[first_block, stop_block)`` of the stream to a new bag, with the recording nuisances."""
     rig = stream.rig
+    nuisances = nuisances or RecordingNuisances()
+    nuisance_rng = nuisance_rng if nuisance_rng is not None else np.random.default_rng(0)
     step = max(1, int(round(CHUNK_DURATION / rig.vibration_block)))
     block_ns = int(round(rig.vibration_block * 1e9))
+
+    def stamped(true_ns, rate, repeats=False):
+        stamps = nuisances.jitter(nuisance_rng, true_ns, 1.0 / rate)
+        return nuisances.repeat(nuisance_rng, stamps) if repeats else stamps
+
     with ContractBagWriter(path, storage=storage, namespace=rig.namespace, compression=compression) as writer:
         for start in range(first_block, stop_block, step):
             stop = min(start + step, stop_block)
             chunk = stream.advance(start, stop, theta_oil)
-            writer.add_vibration(chunk.block_stamps,
-                                 chunk.block_stamps + block_ns + _latencies(latency_rng, rig,
-                                                                            len(chunk.block_stamps)),
-                                 chunk.sample_rate, chunk.samples, rig.vibration_frame_id)
-            writer.add_joint_states(chunk.joint_stamps, chunk.joint_stamps
+            kept = nuisances.kept_blocks(nuisance_rng, len(chunk.block_stamps))
+            blocks = chunk.block_stamps[kept]
+            writer.add_vibration(stamped(blocks, 1.0 / rig.vibration_block),
+                                 blocks + block_ns + _latencies(latency_rng, rig, len(blocks)),
+                                 chunk.sample_rate, chunk.samples[kept], rig.vibration_frame_id)
+            writer.add_joint_states(stamped(chunk.joint_stamps, rig.joint_state_rate, True), chunk.joint_stamps
                                     + _latencies(latency_rng, rig, chunk.joint_stamps.size),
                                     chunk.joint_angles, chunk.joint_speeds)
-            writer.add_axial_loads(chunk.load_stamps, chunk.load_stamps
+            writer.add_axial_loads(stamped(chunk.load_stamps, rig.load_rate, True), chunk.load_stamps
                                    + _latencies(latency_rng, rig, chunk.load_stamps.size),
                                    chunk.loads, rig.load_frame_id)
-            writer.add_temperatures(chunk.temperature_stamps, chunk.temperature_stamps
+            writer.add_temperatures(stamped(chunk.temperature_stamps, rig.temperature_rate),
+                                    chunk.temperature_stamps
                                     + _latencies(latency_rng, rig, chunk.temperature_stamps.size),
                                     chunk.temperatures, rig.temperature_noise ** 2, rig.temperature_frame_id)
             writer.flush(stream.origin_ns + stop * block_ns)
@@ -64,9 +75,12 @@ def _blocks(seconds: float, rig: RigConfig) -> int:
     return int(math.ceil(seconds / rig.vibration_block - 1e-9))
 
 
-def _streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Generator, np.random.Generator]:
-    rig_seed, latency_seed, order_seed = np.random.SeedSequence(seed).spawn(3)
-    return rig_seed, np.random.default_rng(latency_seed), np.random.default_rng(order_seed)
+def _streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Generator, np.random.Generator,
+                                 np.random.Generator]:
+    """Rig seed, latency, run order and nuisance streams (SeedSequence children: adding one keeps the others)."""
+    rig_seed, latency_seed, order_seed, nuisance_seed = np.random.SeedSequence(seed).spawn(4)
+    return (rig_seed, np.random.default_rng(latency_seed), np.random.default_rng(order_seed),
+            np.random.default_rng(nuisance_seed))
 
 
 def session_revolutions(plan: ExperimentPlan, rig: RigConfig) -> float:
@@ -107,11 +121,12 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
 
 
 def _truth(rig: RigConfig, plan: ExperimentPlan | None, seed: int, effects: Effects, storage: str,
-           bags: list[dict]) -> dict:
+           bags: list[dict], nuisances: RecordingNuisances | None = None) -> dict:
     return {'generator': 'prsm_lube_ros.simulation', 'seed': seed, 'storage': storage,
             'constants': asdict(rig.constants), 'rig': rig.as_dict(),
             'plan': plan.as_dict() if plan is not None else None,
-            'effects': effects.as_dict(), 'bags': bags}
+            'effects': effects.as_dict(), 'nuisances': (nuisances or RecordingNuisances()).as_dict(),
+            'bags': bags}
 
 
 def _origin_seconds(stream: RigStream) -> float:
@@ -122,7 +137,8 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
                         rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
                         storage: str = 'mcap', run_order: str | None = None,
                         stage_thetas: Sequence[float] | None = None,
-                        progress: ProgressCallback | None = None, compression: str | None = None) -> list[Path]:
+                        progress: ProgressCallback | None = None, compression: str | None = None,
+                        nuisances: RecordingNuisances | None = None) -> list[Path]:
     """Record the paper's experiment: one bag per lubrication stage in ``out_dir``, plus ``truth.json``.
 
     Bags are named ``stage_1``, ``stage_2``, ... (storage per
@@ -131,7 +147,9 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     ``'random'``, seeded) and ``stage_thetas`` (true theta_Oil per stage)
     override the plan's.  Stages follow each other after
     ``plan.stage_pause``.  ``progress(done_s, total_s)`` is called with simulated
-    seconds.  ``compression='zstd'`` compresses the mcap chunks.  Returns the bag paths.
+    seconds.  ``compression='zstd'`` compresses the mcap chunks.  ``nuisances``
+    adds stamp jitter, repeated stamps and lost blocks (the physics stays that
+    of ``seed``).  Returns the bag paths.
     """
     rig, plan, effects = rig or RigConfig(), plan or ExperimentPlan(), effects or Effects()
     check_storage(storage)
@@ -140,7 +158,7 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     if stage_thetas is not None:
         plan = replace(plan, stage_thetas=tuple(stage_thetas))
     out_dir = Path(out_dir)
-    rig_seed, latency_rng, order_rng = _streams(seed)
+    rig_seed, latency_rng, order_rng, nuisance_rng = _streams(seed)
 
     program = DriveProgram()
     schedule, now = [], 0.0
@@ -171,13 +189,14 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     origin = _origin_seconds(stream)
     for (name, theta, first, stop, strokes), path in zip(schedule, paths):
         stream.relubricate()
-        _record(path, storage, stream, first, stop, theta, latency_rng, advance, compression)
+        _record(path, storage, stream, first, stop, theta, latency_rng, advance, compression, nuisances, nuisance_rng)
         bags.append({'name': name, 'path': path.name, 'theta_oil': theta,
                      'start': origin + first * rig.vibration_block,
                      'end': origin + stop * rig.vibration_block,
                      'runs': [_run_truth(stroke, origin, theta, rig) for stroke in strokes]})
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / 'truth.json').write_text(json.dumps(_truth(rig, plan, seed, effects, storage, bags), indent=2))
+    truth = _truth(rig, plan, seed, effects, storage, bags, nuisances)
+    (out_dir / 'truth.json').write_text(json.dumps(truth, indent=2))
     return paths
 
 
@@ -202,7 +221,7 @@ def simulate_endurance(path: str | Path, duration: float, *, plan: ExperimentPla
     duration = as_number('duration', duration)
     require(duration > 0, f'duration must be > 0 s, got {duration}')
     path = Path(path)
-    rig_seed, latency_rng, _ = _streams(seed)
+    rig_seed, latency_rng, _, _ = _streams(seed)
     program = DriveProgram()
     strokes, now = [], 0.0
     while now < duration:

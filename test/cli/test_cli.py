@@ -21,7 +21,10 @@ def experiment(paper_experiment):
 def test_calibrate_then_assess_follows_the_contract_and_recovers_the_stages(experiment, tmp_path, capsys):
     calib = tmp_path / 'calib.yaml'
     assert main(['calibrate', str(experiment / 'stage_3'), '--out', str(calib)]) == 0
-    assert 'C_lambda' in capsys.readouterr().out and calib.is_file()
+    printed = capsys.readouterr().out
+    assert 'C_lambda' in printed and calib.is_file()
+    assert '(3 speeds x 2 loads, 6 conditions, 6 runs)' in printed and 'warning' not in printed
+    assert 'standard errors: clustered by run (6 runs' in printed
     out = tmp_path / 'assess.json'
     bags = [str(experiment / f'stage_{i}') for i in (1, 2, 3)]
     assert main(['assess', *bags, '--calibration', str(calib), '--json', str(out)]) == 0
@@ -36,6 +39,7 @@ def test_calibrate_then_assess_follows_the_contract_and_recovers_the_stages(expe
                           ('theta_oil_std', float)]:
             assert isinstance(run[key], kind), key
         assert run['start'] > 1.7e9 and run['end'] > run['start']   # seconds since the epoch
+        assert run['theta_oil_flag'] == ''                             # every stage's theta is physical
     stage_truth = truth['plan']['stage_thetas']
     for i, bag in enumerate(bags):
         thetas = np.array([r['theta_oil'] for r in runs if r['bag'] == bag])

@@ -126,3 +126,31 @@ def test_an_off_centre_fixed_fixed_arch_still_chooses_the_arched_form():
     assert result.verdict == 'position_dependent_stiffness'
     assert result.chosen.fit.params['ratio_arch'] > 0
     assert result.as_json()['confident'] is True
+
+
+def _on_a_line(effect=None, seed=21, params=None):
+    """Three conditions on one line (speed and load rising together), three runs each: as many conditions as
+    constants, so the paper's model fits them exactly whatever the truth."""
+    plan = SyntheticPlan(repeats=3, spectrum_bins=128)
+    table, _ = synthetic_table(np.random.default_rng(seed), effect, plan, params=params)
+    speed = np.rint(table.speed * 30 / np.pi / 50) * 50
+    load = np.rint(table.load / 100) * 100
+    keep = ((speed == 100) & (load == 100)) | ((speed == 150) & (load == 200)) | ((speed == 200) & (load == 200))
+    assert keep.sum() > 50
+    return table.subset(keep)
+
+
+def test_three_conditions_on_a_line_cannot_tell_never_adequate():
+    result = diagnose_table(_on_a_line())
+    assert result.verdict == 'cannot tell'
+    document = result.as_json()
+    assert document['confident'] is False
+    assert 'record 2 more conditions' in document['what_to_record']
+    assert any('form untested' in note for note in document['notes'])
+    assert result.calibration().flags[0].startswith('form untested')
+
+
+def test_a_within_run_effect_is_still_named_on_three_conditions():
+    """What the plan cannot test is the speed and load form; a shape along the stroke it can."""
+    result = diagnose_table(_on_a_line('position_dependent_stiffness', seed=22))
+    assert result.verdict == 'position_dependent_stiffness'

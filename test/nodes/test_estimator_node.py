@@ -518,6 +518,18 @@ def test_calibrate_reads_the_namespace_the_request_names(graph, tmp_path):
     assert response.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
 
 
+def test_calibrate_on_three_conditions_fits_but_says_the_form_is_untested(graph, tmp_path):
+    graph.estimator(tmp_path)
+    segments = []
+    for speed, load in ((8.0, 100.0), (12.0, 200.0), (16.0, 200.0)):      # three conditions for three constants
+        segments += [(1.0, 0.01, 0.0, load), (3.0, float(acceleration_amplitude(speed, load, 1.0, TRUE)), speed, load)]
+    write_reference_bag(tmp_path / 'three', segments + [(1.0, 0.01, 0.0, 200.0)])
+    response = call(graph, '/prsm/calibrate', ['three'], theta=1.0, persist=False)
+    assert response.success, response.message
+    assert 'form untested: record 2 more conditions' in response.message
+    assert '3 speeds x 2 loads, 3 conditions' in response.message
+
+
 def test_a_slow_fit_does_not_hold_up_the_inputs(graph, tmp_path, monkeypatch):
     """While a calibration is being fitted (here: made to take 3 s) windows keep being assessed."""
     from prsm_lube_ros.nodes import lubrication_estimator as module

@@ -1,0 +1,277 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The diagnosis study on randomly drawn cases: run one case, tabulate many.
+
+A case is a kind (an effect ID, ``none`` or ``two`` effects) and a seed.  From
+them :mod:`.study_draws` draws the operating plan, the recording set-up and its
+nuisances, and :func:`~prsm_lube_ros.simulation.recordings.draw_effects` the
+effects (their strengths and, where the draw functions offer several, their
+physical form).  The rig simulator writes the bags, they are read back through
+the windowing like any recording, and :func:`~prsm_lube_ros.diagnosis.engine.diagnose_table`
+gives the verdict.  Nothing of the truth reaches the diagnosis.
+
+Scored per case: whether the verdict is right (the concealed effect named;
+``adequate`` without one; both named, or at least one, with two), the held-out
+gain of the chosen model against the paper's (``1 - cv_rmse / cv_rmse_paper``)
+and, for the issue's rule "never adequate when the baseline error is more than
+twice the window scatter", the paper's model's relative RMS error against the
+pure-error RMS of the lack-of-fit test.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+import shutil
+import tempfile
+import time
+import zlib
+
+import numpy as np
+
+NONE, TWO = 'none', 'two'
+#: Verdict columns besides effect IDs.
+OTHER_VERDICTS = ('adequate', 'ambiguous', 'unexplained', 'cannot tell')
+#: Held-out gain an effect must bring when it is named (the issue's target).
+TARGET_GAIN = 0.30
+
+
+def case_rng(kind: str, seed: int) -> np.random.Generator:
+    """The case's generator: the same for (kind, seed) in every process (crc32, not Python's salted hash)."""
+    return np.random.default_rng(np.random.SeedSequence([seed, zlib.crc32(kind.encode())]))
+
+
+def _forms(params: dict | None) -> str:
+    """A drawn law's form: its text-valued parameters joined (``''`` for a law with one form)."""
+    if not params:
+        return ''
+    return ','.join(str(v) for k, v in sorted(params.items()) if isinstance(v, str))
+
+
+def truth_form(name: str, params: dict | None, speeds) -> str:
+    """The physical form of a drawn law, in words, for the per-form rows.
+
+    Text-valued parameters (bearing arrangement, viscosity law, depletion form)
+    name it; besides, a resonance is placed against the plan's ``speeds``
+    (rad/s) and its order, a background is a floor or has lines, and depletion
+    says whether oil creeps back at rest.
+    """
+    params = params or {}
+    words = [_forms(params)] if _forms(params) else []
+    if name == 'resonance' and params.get('natural_frequency') and params.get('order'):
+        resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
+        band = ('mode above the band' if resonant > max(speeds) else
+                'mode below the band' if resonant < min(speeds) else 'mode inside the band')
+        words.append(f'{band}, order {params["order"]:.3g}')
+    elif name == 'background_vibration':
+        lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
+        words.append('lines' if lines else 'floor')
+    elif name == 'lubricant_depletion' and params.get('recovery_time'):
+        words.append('recovery at rest')
+    return ', '.join(words)
+
+
+def _named_effects(document: dict) -> list[str]:
+    """Effect IDs a ``diagnose`` JSON document names: its ``effects`` list if any, else the verdict's effect."""
+    listed = document.get('effects')
+    if isinstance(listed, list) and listed:
+        return [item.get('effect') if isinstance(item, dict) else str(item) for item in listed]
+    verdict = document.get('verdict')
+    return [verdict] if verdict not in OTHER_VERDICTS else []
+
+
+def _chosen_form(document: dict) -> str:
+    best = document.get('best') or {}
+    if best.get('effect') != document.get('verdict'):
+        return ''
+    form = best.get('form')
+    return str(form) if form else _forms(best.get('params') or {})
+
+
+def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False, folder: Path):
+    """Bags of one case in ``folder``; returns (paths, setup, effect names, truth of each effect)."""
+    from ..simulation.recordings import draw_effects, simulate_experiment
+    from .study_draws import draw_setup
+    rng = case_rng(kind, seed)
+    setup = draw_setup(rng, quick=quick)
+    if kind == NONE:
+        names = []
+    elif kind == TWO:
+        names = sorted(rng.choice(effect_pool, size=2, replace=False).tolist())
+    else:
+        names = [kind]
+    effects = draw_effects(names, seed=seed, rig=setup.rig, plan=setup.plan)
+    paths = simulate_experiment(folder / 'sim', plan=setup.plan, rig=setup.rig, seed=seed, effects=effects,
+                                nuisances=setup.nuisances)
+    truth = effects.as_dict()
+    return paths, setup, names, {name: truth.get(name) for name in names}
+
+
+def run_random_case(case: tuple) -> dict:
+    """Simulate, read and diagnose one (kind, seed, effect pool, quick) case; the case's record."""
+    kind, seed, effect_pool, quick = case
+    from ..diagnosis.engine import diagnose_table
+    from ..diagnosis.table import table_from_windows
+    from ..estimation.pipeline import recording_windows
+    from ..estimation.windowing import WindowSettings
+    from ..errors import InputError
+    start = time.time()
+    folder = Path(tempfile.mkdtemp(prefix='prsm_study_'))
+    record = {'kind': kind, 'seed': seed}
+    try:
+        paths, setup, names, truth = simulate_case(kind, seed, list(effect_pool), quick=quick, folder=folder)
+        record.update({'effects': names, 'truth': truth,
+                       'forms': {n: truth_form(n, truth[n], setup.plan.speeds) for n in names},
+                       'setup': setup.as_dict()})
+        recordings = [recording_windows(p, lead=setup.rig.actuator.lead,
+                                        settings=WindowSettings(spectrum_segment=256)) for p in paths]
+        record['problems'] = sum(len(r.problems) for r in recordings)
+        try:
+            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths])
+            result = diagnose_table(table)
+        except InputError as exc:      # diagnose refuses the data: what a user would see
+            record.update({'verdict': 'cannot tell', 'named': [], 'error': str(exc)})
+            result = None
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    if result is None:
+        record['seconds'] = round(time.time() - start, 2)
+        record['right'] = _right(record)
+        return record
+    document = json.loads(json.dumps(result.as_json(), default=float))
+    test = result.baseline_fit_test
+    chosen = result.chosen
+    record.update({
+        'verdict': result.verdict, 'confident': result.confident, 'named': _named_effects(document),
+        'chosen_form': _chosen_form(document), 'tied': list(result.tied),
+        'windows': len(table), 'runs': int(table.runs.size),
+        'baseline_cv_rmse': result.baseline.cv_rmse,
+        'chosen_cv_rmse': chosen.fit.cv_rmse if chosen is not None else None,
+        'gain': chosen.gain if chosen is not None else None,
+        'baseline_rms': test.residual_rms if test else None,
+        'pure_error_rms': test.pure_error_rms if test else None,
+        'seconds': round(time.time() - start, 2)})
+    record['right'] = _right(record)
+    return record
+
+
+def _right(record: dict) -> bool:
+    effects, named = record['effects'], record.get('named', [])
+    if not effects:
+        return record['verdict'] == 'adequate'
+    if len(effects) == 1:
+        return effects[0] in named
+    return set(effects) <= set(named)
+
+
+def _row_key(record: dict) -> str:
+    if record['kind'] == TWO:
+        return 'two: ' + ' + '.join(record['effects'])
+    if record['kind'] == NONE:
+        return NONE
+    form = record.get('forms', {}).get(record['kind'], '')
+    return record['kind'] + (f' ({form})' if form else '')
+
+
+def _cell(record: dict) -> str:
+    """The confusion-table column of one record."""
+    named = record.get('named', [])
+    if record['kind'] == TWO:
+        hit = len(set(record['effects']) & set(named))
+        if hit == 2:
+            return 'both named'
+        if hit == 1:
+            return 'one named'
+    if named:
+        return named[0] if len(named) == 1 else '+'.join(named)
+    return record['verdict']
+
+
+def _pct(values, fmt='{:.0f} %') -> str:
+    values = [v for v in values if v is not None and math.isfinite(v)]
+    return fmt.format(100 * float(np.median(values))) if values else '-'
+
+
+def summarise(records: list[dict]) -> dict:
+    """Counts and scores for the JSON summary and the Markdown tables."""
+    by_kind: dict[str, list[dict]] = {}
+    for record in records:
+        by_kind.setdefault(record['kind'], []).append(record)
+    kinds = {}
+    for kind, group in sorted(by_kind.items()):
+        gains = [r['gain'] for r in group if r.get('gain') is not None]
+        kinds[kind] = {'cases': len(group), 'right': sum(r['right'] for r in group),
+                       'median_gain': float(np.median(gains)) if gains else None,
+                       'gain_at_least_target': sum(g >= TARGET_GAIN for g in gains), 'named': len(gains)}
+    unaffected = by_kind.get(NONE, [])
+    big_miss = [r for r in records if r.get('baseline_rms') and r.get('pure_error_rms')
+                and r['baseline_rms'] > 2 * r['pure_error_rms']]
+    return {'kinds': kinds, 'cases': len(records), 'right': sum(r['right'] for r in records),
+            'adequate_on_unaffected': sum(r['verdict'] == 'adequate' for r in unaffected),
+            'unaffected': len(unaffected),
+            'baseline_over_twice_scatter': len(big_miss),
+            'adequate_over_twice_scatter': sum(r['verdict'] == 'adequate' for r in big_miss),
+            'wrong_effect_named': sum(bool(set(r.get('named', [])) - set(r['effects'])) for r in records),
+            'seconds_total_cpu': round(sum(r.get('seconds', 0) for r in records), 1)}
+
+
+def confusion_markdown(records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
+    """The study's Markdown: summary, confusion per form, misses listed."""
+    summary = summarise(records)
+    rows: dict[str, dict[str, int]] = {}
+    columns: list[str] = []
+    for record in sorted(records, key=lambda r: (r['kind'] == NONE, r['kind'] == TWO, _row_key(r))):
+        key, cell = _row_key(record), _cell(record)
+        rows.setdefault(key, {})
+        rows[key][cell] = rows[key].get(cell, 0) + 1
+        if cell not in columns:
+            columns.append(cell)
+    columns.sort(key=lambda c: (c in OTHER_VERDICTS, c in ('both named', 'one named'), c))
+    lines = ['# Diagnose study, random cases', '', f'Command: `{command}`', '',
+             f'{summary["cases"]} cases in {wall_seconds / 60:.1f} min wall time with {jobs} process(es) '
+             f'({summary["seconds_total_cpu"] / 60:.1f} min of case time). Plans, recording set-up, nuisances '
+             'and effect strengths are drawn at random per case (see `prsm_lube_ros/experiments/study_draws.py`).',
+             '', '## Score per kind', '',
+             '| concealed | right | median held-out gain when named | gain >= 30 % |', '|---|---|---|---|']
+    for kind, row in summary['kinds'].items():
+        gain = f'{100 * row["median_gain"]:.0f} %' if row['median_gain'] is not None and kind != NONE else '-'
+        at_least = f'{row["gain_at_least_target"]}/{row["named"]}' if kind != NONE else '-'
+        lines.append(f'| {kind} | {row["right"]}/{row["cases"]} ({100 * row["right"] / row["cases"]:.0f} %) '
+                     f'| {gain} | {at_least} |')
+    lines += ['', f'Unaffected recordings called `adequate`: {summary["adequate_on_unaffected"]}/'
+              f'{summary["unaffected"]}. Cases where the paper\'s model misses by more than twice the window '
+              f'scatter: {summary["baseline_over_twice_scatter"]}, of them called `adequate`: '
+              f'{summary["adequate_over_twice_scatter"]}. Cases naming an effect that was not concealed: '
+              f'{summary["wrong_effect_named"]}.', '',
+              '## Confusion per form (rows: concealed effect and its drawn form; columns: what diagnose said)', '',
+              '| concealed | ' + ' | '.join(columns) + ' |', '|---|' + '---|' * len(columns)]
+    for key, row in rows.items():
+        lines.append(f'| {key} | ' + ' | '.join(str(row.get(c, '')) for c in columns) + ' |')
+    misses = [r for r in records if not r['right']]
+    lines += ['', f'## Misses ({len(misses)})', '']
+    if misses:
+        lines += ['| concealed | seed | verdict | named | rate kHz | block ms | speeds x loads | held-out gain |',
+                  '|---|---|---|---|---|---|---|---|']
+        for r in misses:
+            s = r.get('setup', {})
+            plan = f'{len(s.get("speeds_rpm", []))} x {len(s.get("loads_n", []))}'
+            gain = f'{100 * r["gain"]:.0f} %' if r.get('gain') is not None else '-'
+            lines.append(f'| {_row_key(r)} | {r["seed"]} | {r["verdict"]} | {", ".join(r.get("named", [])) or "-"} '
+                         f'| {s.get("sample_rate", 0) / 1000:g} | {1000 * s.get("block", 0):g} | {plan} | {gain} |')
+    else:
+        lines.append('none')
+    lines += ['', '"held-out gain": 1 - cv_rmse(chosen) / cv_rmse(paper\'s model), leave-one-run-out relative RMS '
+              'error per window, over the cases where an effect was named. "two" rows are right when both '
+              'effects are named.', '']
+    return '\n'.join(lines)
+
+
+def write_random_outputs(out: Path, records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
+    """Write ``confusion.md`` and ``results.json`` (summary and every case) to ``out``; return the Markdown."""
+    text = confusion_markdown(records, command, wall_seconds, jobs)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / 'confusion.md').write_text(text)
+    document = {'command': command, 'wall_seconds': round(wall_seconds, 1), 'jobs': jobs,
+                'summary': summarise(records), 'cases': records}
+    (out / 'results.json').write_text(json.dumps(document, indent=1, default=float))
+    return text

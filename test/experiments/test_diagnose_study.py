@@ -1,0 +1,69 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The random-case study's machinery (not its score): draws, one quick run end to end, the tables."""
+import json
+
+import numpy as np
+
+from prsm_lube_ros.experiments import diagnose_study
+from prsm_lube_ros.experiments.random_study import case_rng, confusion_markdown, summarise
+from prsm_lube_ros.experiments.study_draws import draw_setup, recording_pairs
+
+
+def test_draws_cover_the_contract_rates_and_are_reproducible():
+    setups = [draw_setup(case_rng('none', seed)) for seed in range(40)]
+    rates = {s.rig.vibration_rate for s in setups}
+    assert min(rates) < 2500 and max(rates) > 10000
+    for setup in setups:
+        assert 3 <= len(setup.plan.speeds) <= 6 and 2 <= len(setup.plan.loads) <= 5
+        assert 0.005 <= setup.rig.vibration_block <= 0.2
+        assert 50 <= setup.rig.joint_state_rate <= 1000
+        assert setup.rig.block_size == setup.rig.vibration_rate * setup.rig.vibration_block
+        assert setup.rig.contact_mode_frequency < 0.45 * setup.rig.vibration_rate
+    assert draw_setup(case_rng('resonance', 3)) == draw_setup(case_rng('resonance', 3))
+    assert draw_setup(case_rng('resonance', 3)) != draw_setup(case_rng('none', 3))
+    assert all(abs(r * b - round(r * b)) < 1e-6 for r, b in recording_pairs())
+
+
+def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
+    out = tmp_path / 'study'
+    assert diagnose_study.main(['--quick', '--out', str(out), '--jobs', '2',
+                                '--effects', 'background_vibration', 'resonance']) == 0
+    document = json.loads((out / 'results.json').read_text())
+    kinds = sorted(case['kind'] for case in document['cases'])
+    assert kinds == ['background_vibration', 'none', 'resonance', 'two']
+    two = next(case for case in document['cases'] if case['kind'] == 'two')
+    assert sorted(two['effects']) == ['background_vibration', 'resonance']
+    for case in document['cases']:
+        assert not case['verdict'].startswith('failed'), case['verdict']
+        assert isinstance(case['right'], bool) and case['setup']['sample_rate'] > 0
+    text = (out / 'confusion.md').read_text()
+    assert '## Confusion per form' in text and '## Misses' in text
+    assert document['summary']['cases'] == 4
+
+
+def test_tables_report_misses_and_wrong_names():
+    records = [
+        {'kind': 'resonance', 'seed': 0, 'effects': ['resonance'], 'forms': {'resonance': ''}, 'verdict': 'adequate',
+         'named': [], 'right': False, 'gain': None, 'baseline_rms': 0.3, 'pure_error_rms': 0.05, 'seconds': 1.0},
+        {'kind': 'none', 'seed': 0, 'effects': [], 'verdict': 'resonance', 'named': ['resonance'], 'right': False,
+         'gain': 0.1, 'baseline_rms': 0.05, 'pure_error_rms': 0.05, 'seconds': 1.0},
+        {'kind': 'two', 'seed': 0, 'effects': ['a', 'b'], 'verdict': 'a', 'named': ['a'], 'right': False,
+         'gain': 0.5, 'seconds': 1.0}]
+    summary = summarise(records)
+    assert summary['right'] == 0 and summary['adequate_over_twice_scatter'] == 1
+    assert summary['wrong_effect_named'] == 1 and summary['adequate_on_unaffected'] == 0
+    text = confusion_markdown(records, 'cmd', 60.0, 2)
+    assert '## Misses (3)' in text and 'one named' in text
+    assert np.isclose(summary['kinds']['two']['median_gain'], 0.5)
+
+
+def test_truth_forms_name_band_lines_and_recovery():
+    from prsm_lube_ros.experiments.random_study import truth_form
+    speeds = [10.0, 20.0]
+    assert truth_form('resonance', {'order': 10.0, 'natural_frequency': 100.0}, speeds).startswith('mode above')
+    assert truth_form('resonance', {'order': 10.0, 'natural_frequency': 5.0}, speeds).startswith('mode below')
+    assert truth_form('background_vibration', {'tone_frequencies': [], 'broadband_share': 1.0}, speeds) == 'floor'
+    assert truth_form('lubricant_depletion', {'form': 'linear', 'recovery_time': 300.0}, speeds) == \
+        'linear, recovery at rest'
+    assert truth_form('position_dependent_stiffness', {'arrangement': 'fixed-fixed'}, speeds) == 'fixed-fixed'
