@@ -212,6 +212,17 @@ def uncalibrated(status: HealthStatus, note: str) -> HealthStatus:
     return replace(status, level=WARN, message=f'not calibrated: {note}' if note else 'not calibrated')
 
 
+def out_of_range(status: HealthStatus, flag: str) -> HealthStatus:
+    """``status`` when the last theta_Oil lies outside its physical range (``flag`` says why): at least WARN.
+
+    A theta_Oil far above 1 would otherwise read "lubrication good"; the
+    calibration does not describe what is measured, and the status says so.
+    """
+    if not flag or status.level != OK:
+        return status
+    return replace(status, level=WARN, message=f'theta_oil outside its physical range: {flag}')
+
+
 def format_value(value) -> str:
     """A diagnostic KeyValue string: numbers with 6 significant digits, NaN as 'nan'."""
     if isinstance(value, float):

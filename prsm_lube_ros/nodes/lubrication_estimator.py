@@ -69,7 +69,8 @@ from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
-from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, uncalibrated
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, STALE, \
+    uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
 from ..fleet.forecast import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
@@ -206,6 +207,7 @@ class ActuatorChannel:
     last_window: object = None
     last_theta: float = math.nan
     last_theta_std: float = math.nan
+    last_flag: str = ''                              # theta_range_flag of the last assessed theta
     last_level: int | None = None
     windows: int = 0
     input_errors: dict = field(default_factory=dict)
@@ -478,11 +480,12 @@ class LubricationEstimator(Node):
 
     def _evaluate(self, channel: ActuatorChannel, window):
         assessor = channel.assessor      # one read: a calibration swapped meanwhile applies to the next window
+        flag = ''
         if assessor is None:
             theta, std, reason = math.nan, math.nan, channel.calibration_note
         else:
             assessed = assessor.assess_window(window)
-            theta, std, reason = assessed.theta_oil, assessed.theta_oil_std, assessed.reason
+            theta, std, reason, flag = assessed.theta_oil, assessed.theta_oil_std, assessed.reason, assessed.flag
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
         channel.monitor.observe(theta, std, reason, moving=moving)
@@ -490,10 +493,11 @@ class LubricationEstimator(Node):
         channel.last_window = window
         channel.windows += 1
         if math.isfinite(theta):
-            channel.last_theta, channel.last_theta_std = theta, std
+            channel.last_theta, channel.last_theta_std, channel.last_flag = theta, std, flag
+            status = self._health(channel, self.now())
         channel.publisher.publish(ros_convert.lubrication_state_msg(
             channel.name, window, theta, std, status.level, status.message,
-            frame_id=channel.frame_id or actuator_label(channel.name)))
+            frame_id=channel.frame_id or actuator_label(channel.name), theta_oil_flag=flag))
         if status.level != channel.last_level:
             self._publish_diagnostics()
 
@@ -501,7 +505,9 @@ class LubricationEstimator(Node):
     def _health(self, channel: ActuatorChannel, now: float):
         """The monitor's status; without calibration at best WARN 'not calibrated'."""
         status = channel.monitor.status(now)
-        return uncalibrated(status, channel.calibration_note) if channel.assessor is None else status
+        if channel.assessor is None:
+            return uncalibrated(status, channel.calibration_note)
+        return out_of_range(status, channel.last_flag) if status.level != STALE else status
 
     def _status(self, channel: ActuatorChannel, now: float):
         status = self._health(channel, now)
@@ -509,6 +515,7 @@ class LubricationEstimator(Node):
         values = [
             ('theta_oil', channel.last_theta),
             ('theta_oil_std', channel.last_theta_std),
+            ('theta_oil_flag', channel.last_flag),
             ('vibration_rms', w.vibration_rms if w else math.nan),
             ('screw_speed', w.screw_speed if w else math.nan),
             ('axial_load', w.axial_load if w else math.nan),

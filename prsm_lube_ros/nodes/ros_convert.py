@@ -163,10 +163,11 @@ def batch_messages(batch):
 
 # -- results -> outputs ------------------------------------------------------------------------------
 def lubrication_state_msg(actuator: str, window, theta: float, theta_std: float, level: int,
-                          message: str, frame_id: str = '') -> LubricationState:
+                          message: str, frame_id: str = '', theta_oil_flag: str = '') -> LubricationState:
     """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.estimation.windowing.Window`).
 
-    ``frame_id``: the frame of the vibration the window was measured in.
+    ``frame_id``: the frame of the vibration the window was measured in;
+    ``theta_oil_flag``: why theta lies outside its physical range ('' inside).
     """
     msg = LubricationState()
     msg.header.stamp = time_msg(window.end)
@@ -183,6 +184,7 @@ def lubrication_state_msg(actuator: str, window, theta: float, theta_std: float,
     msg.nut_position = float(window.nut_position)
     msg.temperature = float(window.temperature)
     msg.run_index = max(int(window.run_index), 0)
+    msg.theta_oil_flag = theta_oil_flag
     return msg
 
 

@@ -79,6 +79,16 @@ def test_a_restart_of_the_smoothing_judges_the_next_window_alone():
     assert monitor.observe(1.0) == OK
 
 
+def test_a_theta_out_of_its_range_is_at_least_warn_with_the_reason():
+    from prsm_lube_ros.estimation.health import HealthStatus, out_of_range
+    good = HealthStatus(OK, 'lubrication good: theta_oil 2.000', OK, 0)
+    flagged = out_of_range(good, 'theta_oil 2.00 far above 1')
+    assert flagged.level == WARN and flagged.message.endswith('far above 1')
+    assert out_of_range(good, '') is good
+    bad = HealthStatus(ERROR, 'lubrication insufficient', ERROR, 0)
+    assert out_of_range(bad, 'theta_oil -0.48 below 0') is bad
+
+
 def test_level_smoothing_must_be_a_positive_integer():
     with pytest.raises(InputError, match='level_smoothing'):
         HealthThresholds(level_smoothing=0)

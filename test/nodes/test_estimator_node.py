@@ -717,6 +717,22 @@ def test_the_forecast_of_a_fleet_history_is_in_the_diagnostics(graph, tmp_path, 
         forecast_summary(small_fleet['history'], 'A02')['tau_days']
 
 
+def test_a_theta_outside_its_physical_range_is_flagged_live(graph, tmp_path):
+    """theta 2.0 (vibration far below the calibrated reference) is no 'lubrication good': WARN with the reason."""
+    node = graph.estimator(tmp_path, level_smoothing=1)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(2.0, rms_for(2.0), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 2, 10, 'states')
+    state = states[0]
+    assert state.theta_oil == pytest.approx(2.0, abs=0.02)
+    assert 'far above 1' in state.theta_oil_flag and state.level == WARN
+    assert state.message.startswith('theta_oil outside its physical range')
+    wait_for(lambda: diagnostics and 'far above 1' in values_of(status_of(diagnostics[-1], '/prsm')).get(
+        'theta_oil_flag', ''), 10, 'the flag in the diagnostics')
+
+
 def test_an_uncalibrated_estimator_never_reports_ok(graph, tmp_path):
     node = graph.estimator(tmp_path, calibration_file='')
     states = graph.collect(LubricationState, '/prsm/lubrication_state')
