@@ -131,7 +131,7 @@ def _reference(out_dir: Path, rig: RigConfig, plan: ExperimentPlan, seed: int, s
 def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condition, theta: float,
                      start_seconds: float, seed, storage: str) -> None:
     """One forward run at ``condition`` and its rewind, recorded from ``start_seconds`` (epoch s)."""
-    rig_seed, latency_rng, _ = _streams(seed)
+    rig_seed, latency_rng, *_ = _streams(seed)
     program = DriveProgram()
     _, end = schedule_session(program, 0.0, [condition], plan, rig)
     stream = RigStream(rig, program, seed=rig_seed, origin_ns=int(round(start_seconds * 1e9)))
