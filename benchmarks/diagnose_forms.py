@@ -12,15 +12,18 @@ the verdict names the effect, how often the named form is the true one
 (``form right``: the first-named form; ``form among named``: the true form is
 among those named when the data fit several equally well).  Thermal cases run
 twice: on the default plan and on a plan with short rests between runs
-(nut and oil warm more).  Pairs of effects: how often both are named.
+(nut and oil warm more).  ``--seeds`` cases with no effect: how often the
+verdict is ``adequate``.  Every pair of two effects: how often both are named.
 Results go to ``benchmarks/results/diagnose_forms.{json,md}``.
 
-Usage: ``python benchmarks/diagnose_forms.py [--seeds 3] [--pair-seeds 3]``
+Usage: ``python benchmarks/diagnose_forms.py [--seeds 3] [--pair-seeds 3] [--jobs 2]``
 """
 from __future__ import annotations
 
 import argparse
 from collections import defaultdict
+from concurrent.futures import ProcessPoolExecutor
+from itertools import combinations
 import json
 from pathlib import Path
 import time
@@ -37,8 +40,7 @@ PLAN = SyntheticPlan(spectrum_bins=128, sessions=2)
 WARM = SyntheticPlan(spectrum_bins=128, sessions=2, rest=5.0)
 EFFECTS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
            'background_vibration')
-PAIRS = (('position_dependent_stiffness', 'lubricant_depletion'), ('resonance', 'background_vibration'),
-         ('position_dependent_stiffness', 'background_vibration'), ('lubricant_depletion', 'resonance'))
+PAIRS = tuple(combinations(EFFECTS, 2))
 ARRANGEMENT_FORMS = {'fixed-free': 'fixed-free, fixed bearing beyond the stroke end',
                      'free-fixed': 'fixed-free, fixed bearing before the stroke start', 'fixed-fixed': 'fixed-fixed'}
 LAW_FORMS = {'exponential': 'exponential (Reynolds)', 'vogel': 'Vogel', 'walther': 'Walther (ASTM D341)'}
@@ -76,10 +78,15 @@ def drawn_params(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict
     raise RuntimeError(f'{effect}: no {form} drawn')
 
 
-def run_single(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:
-    table, truth = synthetic_table(np.random.default_rng(seed), effect, plan,
-                                   params=drawn_params(effect, form, seed, plan))
+def run_single(effect: str | None, form: str, seed: int, plan: SyntheticPlan) -> dict:
+    """One case of ``effect`` in ``form`` (``effect`` None: no effect, right when ``adequate``)."""
+    params = drawn_params(effect, form, seed, plan) if effect else None
+    table, truth = synthetic_table(np.random.default_rng(seed), effect, plan, params=params)
     document = diagnose_table(table).as_json()
+    if effect is None:
+        return {'effect': 'none', 'form': '', 'seed': seed, 'verdict': document['verdict'], 'named_form': '',
+                'form_right': document['verdict'] == 'adequate', 'form_among_named': document['verdict'] == 'adequate',
+                'named_effects': [e['effect'] for e in document['effects']]}
     named = document['effects'][0]['form'] if document['verdict'] == effect and document['effects'] else ''
     form = true_form(effect, truth['params'])
     return {'effect': effect, 'form': form, 'seed': seed, 'verdict': document['verdict'], 'named_form': named,
@@ -101,40 +108,51 @@ def main(argv=None) -> int:
     parser.add_argument('--seeds', type=int, default=3)
     parser.add_argument('--pair-seeds', type=int, default=3)
     parser.add_argument('--out', type=Path, default=ROOT / 'benchmarks' / 'results')
+    parser.add_argument('--jobs', type=int, default=1, help='processes (cases are independent)')
     args = parser.parse_args(argv)
     started = time.time()
-    singles = []
-    for effect in EFFECTS:
-        for form in FORMS[effect]:
-            for seed in range(args.seeds):
-                singles.append({**run_single(effect, form, seed, PLAN), 'plan': 'default'})
-                print(singles[-1], flush=True)
-    for form in FORMS['thermal_viscosity']:
-        for seed in range(args.seeds):
-            singles.append({**run_single('thermal_viscosity', form, seed, WARM), 'plan': 'warm'})
+    single_cases = [(effect, form, seed, PLAN, 'default') for effect in EFFECTS for form in FORMS[effect]
+                    for seed in range(args.seeds)]
+    single_cases += [('thermal_viscosity', form, seed, WARM, 'warm') for form in FORMS['thermal_viscosity']
+                     for seed in range(args.seeds)]
+    single_cases += [(None, '', seed, PLAN, 'default') for seed in range(args.seeds)]
+    pair_cases = [(pair, 100 + seed) for pair in PAIRS for seed in range(args.pair_seeds)]
+    with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
+        single_futures = [pool.submit(run_single, *case[:4]) for case in single_cases]
+        pair_futures = [pool.submit(run_pair, *case) for case in pair_cases]
+        singles = []
+        for case, future in zip(single_cases, single_futures):
+            singles.append({**future.result(), 'plan': case[4]})
             print(singles[-1], flush=True)
-    pairs = []
-    for pair in PAIRS:
-        for seed in range(args.pair_seeds):
-            pairs.append(run_pair(pair, 100 + seed))
+        pairs = []
+        for future in pair_futures:
+            pairs.append(future.result())
             print(pairs[-1], flush=True)
     rows = defaultdict(lambda: [0, 0, 0, 0])
     for case in singles:
         key = (case['effect'], case['form'], case['plan'])
         row = rows[key]
         row[0] += 1
-        row[1] += case['verdict'] == case['effect']
+        row[1] += case['verdict'] == (case['effect'] if case['effect'] != 'none' else 'adequate')
         row[2] += case['form_right']
         row[3] += case['form_among_named']
     lines = ['# Diagnose: each form of each effect, and two effects at once', '',
-             f'Command: `python benchmarks/diagnose_forms.py --seeds {args.seeds} --pair-seeds {args.pair_seeds}` '
-             f'({time.time() - started:.0f} s). Window tables of the window-table simulator, form and strength '
-             'drawn per seed in its physical range, two sessions per case; "warm": 5 s rests between runs, not 30 s.',
+             f'Command: `python benchmarks/diagnose_forms.py --seeds {args.seeds} --pair-seeds {args.pair_seeds} '
+             f'--jobs {args.jobs}` ({time.time() - started:.0f} s wall). Window tables of the window-table simulator, '
+             'form and strength drawn per seed in its physical range, two sessions per case; "warm": 5 s rests '
+             'between runs, not 30 s. "none" rows: no effect, "effect named" counts `adequate` verdicts.',
              '',
              '| effect | true form | plan | cases | effect named | form right | form among named |',
              '|---|---|---|---|---|---|---|']
     for (effect, form, plan), (n, named, right, among) in sorted(rows.items()):
         lines.append(f'| {effect} | {form} | {plan} | {n} | {named} | {right} | {among} |')
+    effect_cases = [c for c in singles if c['effect'] != 'none']
+    unaffected = [c for c in singles if c['effect'] == 'none']
+    lines += ['', f'Totals: effect named in {sum(c["verdict"] == c["effect"] for c in effect_cases)} of '
+              f'{len(effect_cases)} single-effect cases; `adequate` on '
+              f'{sum(c["verdict"] == "adequate" for c in unaffected)} of {len(unaffected)} unaffected cases; '
+              f'both effects named in {sum(c["both"] for c in pairs)} of '
+              f'{len(pairs)} two-effect cases.']
     lines += ['', '| pair | cases | both named | verdicts |', '|---|---|---|---|']
     for pair in PAIRS:
         cases = [c for c in pairs if tuple(c['pair']) == pair]
