@@ -429,6 +429,24 @@ def _compression_name(raw: bytes) -> str:
         raise McapProblem('record string is not UTF-8') from None
 
 
+def _chunk_header(content, at: int) -> Tuple[int, int, int, str, int, int]:
+    """A Chunk record's fields before its data, read from ``content`` at ``at``.
+
+    Returns ``(message_start_time, uncompressed_size, uncompressed_crc,
+    compression, data_offset, compressed_size)``; ``data_offset`` is where the
+    compressed records begin in ``content``.
+    """
+    head_end = at + _CHUNK_HEAD.size
+    if head_end > len(content):
+        raise McapProblem('record field runs past the end of its record')
+    start_time, _, size, crc, name_length = _CHUNK_HEAD.unpack_from(content, at)
+    name_end = head_end + name_length
+    if name_end + 8 > len(content):
+        raise McapProblem('record field runs past the end of its record')
+    compression = _compression_name(bytes(content[head_end:name_end]))
+    return start_time, size, crc, compression, name_end + 8, _U64.unpack_from(content, name_end)[0]
+
+
 class _Gathered:
     """Top-level messages and the records of small chunks, gathered into pseudo-chunks of about ``size`` bytes.
 
@@ -693,15 +711,7 @@ class McapFile:
 
     def _open_chunk(self, content: bytes, pos: int, on_problem):
         """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
-        if len(content) < _CHUNK_HEAD.size:
-            raise McapProblem('record field runs past the end of its record')
-        start_time, _, size, crc, name_length = _CHUNK_HEAD.unpack_from(content, 0)
-        at = _CHUNK_HEAD.size + name_length
-        if at + 8 > len(content):
-            raise McapProblem('record field runs past the end of its record')
-        compression = _compression_name(bytes(content[_CHUNK_HEAD.size:at]))
-        compressed_size = _U64.unpack_from(content, at)[0]
-        at += 8
+        start_time, size, crc, compression, at, compressed_size = _chunk_header(content, 0)
         if compressed_size > len(content) - at:
             raise McapProblem('compressed data runs past its chunk record')
         compressed = memoryview(content)[at:at + compressed_size]
@@ -726,14 +736,8 @@ class McapFile:
         if len(content) < RECORD_PREFIX + 28 or content[0] != OP_CHUNK:
             return None
         try:
-            fields = _Fields(content, RECORD_PREFIX)
-            start_time = fields.u64()
-            fields.u64()
-            size = fields.u64()
-            fields.u32()
-            compression = fields.string()
-            fields.u64()
-            records = decompress(memoryview(content)[fields.pos:], compression, size, partial=True)
+            start_time, size, _, compression, at, _ = _chunk_header(content, RECORD_PREFIX)
+            records = decompress(memoryview(content)[at:], compression, size, partial=True)
         except McapProblem:
             return None
         chunk, _ = split_sequential(records, signed(start_time), cut, on_record)
@@ -748,10 +752,6 @@ class DataLayout:
     times: np.ndarray       # (n,) int64 ns: a chunk's message_start_time, a message's log time
     only_chunks: bool       # no message outside a chunk
     complete: bool          # every record fits and the section ends with DataEnd or the Footer
-
-    def in_time_order(self) -> bool:
-        """True when no record starts before the one in front of it."""
-        return bool(np.all(self.times[1:] >= self.times[:-1]))
 
 
 def data_layout(path, size: int) -> DataLayout:

@@ -97,6 +97,23 @@ class _RawChunk:
     progress: float                                   # fraction of the recording read
 
 
+def _list_topic(source, name: str, msgtype: str, count: int, definition: tuple) -> None:
+    """Add ``count`` messages of ``name`` to a source's listing (the first file to name a topic defines it)."""
+    if name in source.topics:
+        source.topics[name].message_count += count
+        return
+    source.topics[name] = TopicInfo(name, msgtype, count)
+    source.definitions[name] = definition
+
+
+def _widen_span(source, start: Optional[int], end: Optional[int]) -> None:
+    """Widen a source's ``start_time``/``end_time`` (ns) to cover ``start``/``end`` (None: not known)."""
+    if start is not None:
+        source.start_time = start if source.start_time is None else min(source.start_time, start)
+    if end is not None:
+        source.end_time = end if source.end_time is None else max(source.end_time, end)
+
+
 class _McapSource:
     """One or more MCAP files (a bare file, or the files of a rosbag2 directory)."""
 
@@ -135,18 +152,11 @@ class _McapSource:
         for channel_id, channel in summary.channels.items():
             schema = summary.schemas.get(channel.schema_id)
             msgtype = schema.name if schema else '(no schema)'
-            count = summary.message_counts.get(channel_id, 0)
-            if channel.topic in self.topics:
-                self.topics[channel.topic].message_count += count
-                continue
-            self.topics[channel.topic] = TopicInfo(channel.topic, msgtype, count)
             text = schema.data.decode('utf-8', 'replace') if schema else ''
-            self.definitions[channel.topic] = (msgtype, schema.encoding if schema else '', text,
-                                               channel.message_encoding)
-        for name, value, pick in (('start_time', summary.start_time, min), ('end_time', summary.end_time, max)):
-            if value is not None and (summary.message_counts or summary.complete):
-                old = getattr(self, name)
-                setattr(self, name, value if old is None else pick(old, value))
+            _list_topic(self, channel.topic, msgtype, summary.message_counts.get(channel_id, 0),
+                        (msgtype, schema.encoding if schema else '', text, channel.message_encoding))
+        if summary.message_counts or summary.complete:
+            _widen_span(self, summary.start_time, summary.end_time)
 
     def layout_problem(self, topic: str, kind: str) -> Optional[str]:
         msgtype, encoding, text, message_encoding = self.definitions[topic]
@@ -197,18 +207,18 @@ class _McapSource:
         times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
         if times.size and np.any(times[1:] < times[:-1]) and all(
                 layout.complete and layout.only_chunks for layout in layouts):
-            return self._chunks_by_start_time(layouts, topics, on_problem)
-        return self._chunks_in_file_order(layouts, topics, on_problem)
+            return self._chunks_by_start_time(layouts, times, topics, on_problem)
+        return self._chunks_in_file_order(layouts, times, topics, on_problem)
 
-    def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+    def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
                               on_problem: ProblemSink) -> Iterator[_RawChunk]:
         """Chunks that go back in time (reversed, shuffled, topic after topic), read by seeking.
 
         Sorted by their start times across all files, as the reference readers
         read them: each slice is complete once a chunk starting after its end
-        is reached, so memory stays at about one chunk and one slice.
+        is reached, so memory stays at about one chunk and one slice.  ``times``:
+        every file's chunk start times, one after the other (ns).
         """
-        times = np.concatenate([layout.times for layout in layouts])
         offsets = np.concatenate([layout.offsets for layout in layouts])
         files = np.concatenate([np.full(layout.times.size, index) for index, layout in enumerate(layouts)])
         order = np.lexsort((offsets, files, times))
@@ -223,9 +233,8 @@ class _McapSource:
                 yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
                                 (chunk.start_time - first) / span)
 
-    def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], topics: List[str],
+    def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
                               on_problem: ProblemSink) -> Iterator[_RawChunk]:
-        times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
         back = float(np.max(np.maximum.accumulate(times) - times)) * 1e-9 if times.size else 0.0
         if back > HELD_BACK_SECONDS:
             on_problem(f'chunks go back in log time by up to {back:.0f} s and cannot be read by seeking (damaged, '
@@ -300,15 +309,10 @@ class _SqliteSource:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(db)
             for topic in db.topics.values():
-                if topic.start_time is not None:
-                    self.start_time = min(topic.start_time, self.start_time or topic.start_time)
-                    self.end_time = max(topic.end_time, self.end_time or topic.end_time)
-                if topic.name in self.topics:
-                    self.topics[topic.name].message_count += topic.message_count
-                    continue
-                self.topics[topic.name] = TopicInfo(topic.name, topic.msgtype, topic.message_count)
+                _widen_span(self, topic.start_time, topic.end_time)
                 encoding, text = db.definitions.get(topic.msgtype, ('', ''))
-                self.definitions[topic.name] = (topic.msgtype, encoding, text, topic.serialization_format)
+                _list_topic(self, topic.name, topic.msgtype, topic.message_count,
+                            (topic.msgtype, encoding, text, topic.serialization_format))
 
     layout_problem = _McapSource.layout_problem
 

@@ -65,7 +65,6 @@ class SqliteFile:
 
     def __init__(self, path, compressed_messages: bool = False):
         self.path = Path(path)
-        self.size = self.path.stat().st_size
         #: every message blob is a zstd frame (rosbag2's ``compression_mode: message``)
         self.compressed_messages = compressed_messages
         self.topics: Dict[int, SqliteTopic] = {}
