@@ -170,9 +170,10 @@ def merged_setpoints(values, clusters=None, unit: str = '', name: str = 'values'
     values = np.abs(np.asarray(values, dtype=float))
     setpoints = operating_levels(_cluster_means(values, clusters), SETPOINT_TOLERANCE)
     levels = operating_levels(setpoints)
+    nearest = _nearest_level(np.asarray(setpoints), levels)
     words = []
-    for level_index in np.unique(_nearest_level(np.asarray(setpoints), levels)):
-        group = [p for p, k in zip(setpoints, _nearest_level(np.asarray(setpoints), levels)) if k == level_index]
+    for level_index in np.unique(nearest):
+        group = [p for p, k in zip(setpoints, nearest) if k == level_index]
         if len(group) > 1:
             words.append(f'{name} ' + ' and '.join(f'{v:.4g}' for v in group) + (f' {unit}' if unit else ''))
     return words

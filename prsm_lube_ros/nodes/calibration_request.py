@@ -64,7 +64,7 @@ def recording_namespace(requested: str, live: str) -> str:
     name = (requested or '').strip()
     if not name:
         return live
-    if not _NAMESPACE.fullmatch(name) or '//' in name:
+    if not _NAMESPACE.fullmatch(name):
         raise InputError(f'calibrate: recording_namespace {requested!r} is not a ROS namespace or topic prefix '
                          "(letters, digits, '_' and '/', e.g. /rig/left)")
     return name if name.startswith('/') else '/' + name

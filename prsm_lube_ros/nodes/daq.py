@@ -114,9 +114,7 @@ class NiDaqAccelerometer:
             task.timing.cfg_samp_clk_timing(settings.sample_rate, sample_mode=constants.AcquisitionType.CONTINUOUS,
                                             samps_per_chan=settings.buffer_size)
         except Exception as exc:     # driver missing, no such device, unsupported setting: one line
-            self.close()
-            raise InputError(f'source hardware: NI-DAQmx cannot acquire from {settings.channel}: '
-                             f'{_one_line(exc)}') from None
+            raise self._cannot_acquire(exc) from None
         self.start_ns, self.samples_read, self.running = 0, 0, False
         self._timeout = max(2.0, 4.0 * settings.block_size / settings.sample_rate)
         if start:
@@ -129,10 +127,14 @@ class NiDaqAccelerometer:
         try:
             self._task.start()
         except Exception as exc:
-            self.close()
-            raise InputError(f'source hardware: NI-DAQmx cannot acquire from {self.settings.channel}: '
-                             f'{_one_line(exc)}') from None
+            raise self._cannot_acquire(exc) from None
         self.start_ns, self.samples_read, self.running = int(self._clock_ns()), 0, True
+
+    def _cannot_acquire(self, exc: Exception) -> InputError:
+        """Close the task; the one-line error to raise for ``exc`` from the driver."""
+        self.close()
+        return InputError(f'source hardware: NI-DAQmx cannot acquire from {self.settings.channel}: '
+                          f'{_one_line(exc)}')
 
     def stop(self) -> None:
         """Stop acquiring (the task stays set up; :meth:`start` again to resume)."""

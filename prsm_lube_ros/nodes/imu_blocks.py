@@ -82,7 +82,6 @@ class ImuBlockAssembler:
             if not ok:
                 raise InputError(f'parameter {name}: {locals()[name]!r} is out of range')
         self.block_length = float(block_length)
-        self.nominal_rate = float(sample_rate)
         self.rate_tolerance = float(rate_tolerance)
         self.jitter_tolerance = float(jitter_tolerance)
         self.on_problem = on_problem
@@ -91,11 +90,10 @@ class ImuBlockAssembler:
         self.lost_samples = 0
         self.dropped_samples = 0
         self.last_problem = ''
-        self.samples_in = 0
         self._rate_checked = False
         self._last_stamp: Optional[int] = None
         self._intervals: deque = deque(maxlen=RATE_WINDOW)
-        self._stamps: List[int] = []
+        self._first_stamp = 0             # ns, stamp of the current block's first sample
         self._values: List[float] = []
 
     @property
@@ -112,7 +110,6 @@ class ImuBlockAssembler:
         """Add one sample; return the blocks it completed or closed (none, one, or two)."""
         stamp_ns = int(stamp_ns)
         done: List[AssembledBlock] = []
-        self.samples_in += 1
         if self._last_stamp is not None:
             interval = stamp_ns - self._last_stamp
             kind = self._problem_of(interval)
@@ -121,7 +118,8 @@ class ImuBlockAssembler:
             if interval > 0:
                 self._intervals.append(interval)
                 done += self._follow_rate()
-        self._stamps.append(stamp_ns)
+        if not self._values:
+            self._first_stamp = stamp_ns
         self._values.append(float(value))
         self._last_stamp = stamp_ns
         size = self.block_size
@@ -204,11 +202,11 @@ class ImuBlockAssembler:
         intervals) a block closed by a stamp problem cannot be stamped with a
         rate: its samples are dropped and counted in :attr:`dropped_samples`.
         """
-        stamps, values = self._stamps, self._values
-        self._stamps, self._values = [], []
+        first_stamp, values = self._first_stamp, self._values
+        self._values = []
         if not values:
             return []
         if self.period_ns is None:
             self.dropped_samples += len(values)
             return []
-        return [AssembledBlock(stamps[0], self.sample_rate, np.asarray(values, dtype=np.float32))]
+        return [AssembledBlock(first_stamp, self.sample_rate, np.asarray(values, dtype=np.float32))]

@@ -69,7 +69,7 @@ from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import load_calibration, save_calibration
-from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, STALE, \
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, \
     uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
 from ..fleet.forecast import forecast_summaries
@@ -489,12 +489,11 @@ class LubricationEstimator(Node):
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
         channel.monitor.observe(theta, std, reason, moving=moving)
-        status = self._health(channel, self.now())
         channel.last_window = window
         channel.windows += 1
         if math.isfinite(theta):
             channel.last_theta, channel.last_theta_std, channel.last_flag = theta, std, flag
-            status = self._health(channel, self.now())
+        status = self._health(channel, self.now())
         channel.publisher.publish(ros_convert.lubrication_state_msg(
             channel.name, window, theta, std, status.level, status.message,
             frame_id=channel.frame_id or actuator_label(channel.name), theta_oil_flag=flag))
@@ -507,7 +506,7 @@ class LubricationEstimator(Node):
         status = channel.monitor.status(now)
         if channel.assessor is None:
             return uncalibrated(status, channel.calibration_note)
-        return out_of_range(status, channel.last_flag) if status.level != STALE else status
+        return out_of_range(status, channel.last_flag)
 
     def _status(self, channel: ActuatorChannel, now: float):
         status = self._health(channel, now)

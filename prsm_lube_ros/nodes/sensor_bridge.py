@@ -187,6 +187,12 @@ class BridgeCore:
     :class:`ManagedSensorBridge` does each step on a lifecycle transition.
     """
 
+    def destroy_node(self):
+        """Stop the worker (and the acquisition) and close the source before the node goes."""
+        # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
+        self._close()
+        return super().destroy_node()
+
     def _read_parameters(self) -> dict:
         """Declare the parameters; check the source; the values by name."""
         values = declare_parameter_table(self, PARAMETERS)
@@ -516,14 +522,10 @@ class BridgeCore:
         settings = daq.settings
         self.get_logger().info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
                                f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
-        vibration = self._outputs['vibration']
         try:
             while not self._stop.is_set():
                 stamp_ns, samples = daq.read_block()
-                block = vibration_block_msg(time_from_ns(stamp_ns), settings.sample_rate, samples, self.frame_id)
-                vibration.publish(block)
-                self.messages_published += 1
-                self.health.block(time.monotonic(), settings.sample_rate)
+                self._publish('vibration', stamp_ns, (settings.sample_rate, samples))
         finally:
             if not self._stop.is_set():      # a failed read: the acquisition is over (halted: it stays open)
                 daq.close()
@@ -586,12 +588,6 @@ class SensorBridge(BridgeCore, Node):
         self._open()
         self._start()
 
-    def destroy_node(self):
-        """Stop the worker (and the acquisition) before the node goes."""
-        # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
-        self._close()
-        return super().destroy_node()
-
 
 class ManagedSensorBridge(BridgeCore, LifecycleNode):
     """The bridge as a lifecycle (managed) node: each step of :class:`BridgeCore` on a transition.
@@ -651,11 +647,6 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
         """A transition raised: close everything and go back to unconfigured."""
         self._close()
         return TransitionCallbackReturn.SUCCESS
-
-    def destroy_node(self):
-        """Stop and close before the node goes."""
-        self._close()
-        return super().destroy_node()
 
 
 def create_node(**kwargs) -> SensorBridge:
