@@ -31,6 +31,8 @@ import time
 import numpy as np
 
 from prsm_lube_ros.diagnosis import diagnose_table
+from prsm_lube_ros.diagnosis.effects import registered
+from prsm_lube_ros.physics.effects.background_vibration import FORMS as BACKGROUND_FORMS
 from prsm_lube_ros.simulation.synthetic_tables import _draw_effect, SyntheticPlan, synthetic_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,8 +43,11 @@ WARM = SyntheticPlan(spectrum_bins=128, sessions=2, rest=5.0)
 EFFECTS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
            'background_vibration')
 PAIRS = tuple(combinations(EFFECTS, 2))
-ARRANGEMENT_FORMS = {'fixed-free': 'fixed-free, fixed bearing beyond the stroke end',
-                     'free-fixed': 'fixed-free, fixed bearing before the stroke start', 'fixed-fixed': 'fixed-fixed'}
+#: The diagnosis' forms of each effect, by the names it reports (background: the law's forms, one fitted model).
+FORMS = {**{effect: tuple(sorted(form.form for form in registered()[effect].variants()))
+            for effect in EFFECTS if effect != 'background_vibration'},
+         'background_vibration': BACKGROUND_FORMS}
+ARRANGEMENT_FORMS = {form.arrangement: form.form for form in registered()['position_dependent_stiffness'].variants()}
 LAW_FORMS = {'exponential': 'exponential (Reynolds)', 'vogel': 'Vogel', 'walther': 'Walther (ASTM D341)'}
 
 
@@ -58,15 +63,6 @@ def true_form(effect: str, params: dict) -> str:
         form = f'{params.get("form", "exponential")} in revolutions'
         return form + (', partial recovery at rest' if params.get('recovery_time') else '')
     return params['form']
-
-
-#: The forms the window-table simulator draws, per effect, as the diagnosis names them.
-FORMS = {'position_dependent_stiffness': tuple(ARRANGEMENT_FORMS.values()),
-         'resonance': tuple(f'mode {band} the speed band' for band in ('above', 'inside', 'below')),
-         'thermal_viscosity': tuple(LAW_FORMS.values()),
-         'lubricant_depletion': tuple(f'{kind} in revolutions{rest}' for kind in ('exponential', 'linear')
-                                      for rest in ('', ', partial recovery at rest')),
-         'background_vibration': ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')}
 
 
 def drawn_params(effect: str, form: str, seed: int, plan: SyntheticPlan) -> dict:

@@ -63,12 +63,13 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.calibration import (Calibration, check_identifiable, clustered_covariance, form_flag,
-                                      form_testable, operating_conditions, operating_levels)
+from ..estimation.calibration import (Calibration, check_identifiable, clustered_covariance, form_advice,
+                                      form_flag, form_testable, operating_conditions, operating_levels)
 from .adequacy import lack_of_fit, LackOfFit
 from .combined import CombinedEffect
 from .effects import Effect, registered
-from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log
+from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log, \
+    score_held_out
 from .locate import locate, Location
 from .table import WindowTable
 
@@ -104,7 +105,7 @@ class Candidate:
     evidence_against: str = ''
     form: str = ''              # the chosen form's name
     forms: list = field(default_factory=list)   # (form name, BIC relative to the chosen form)
-    family: Effect | None = None                # the registered effect (all its forms)
+    family: Effect | None = None                # the registered effect (all its forms); set by _evaluate
     form_vectors: dict = field(default_factory=dict)   # form name -> its fitted internal parameters alone
 
     def as_json(self) -> dict:
@@ -310,7 +311,7 @@ def _choose_form(table, forms: list, folds):
         best_richer = min(richer, key=lambda i: scores[i])
         if scores[best_richer] <= scores[simple] - FORM_MARGIN:
             chosen = best_richer
-    fit = fit_model(table, forms[chosen], folds) if folds else fits[chosen]
+    fit = score_held_out(table, fits[chosen], forms[chosen], folds) if folds else fits[chosen]
     ties = [forms[i].form for i, f in enumerate(fits)
             if i != chosen and f.n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
     vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
@@ -397,7 +398,7 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
 
 def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:
     """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC."""
-    family = other.family or other.effect
+    family = other.family
     combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
               for form in family.variants()]
     return _fit_pair(table, combos, first.fit, other, folds, location)
@@ -443,8 +444,8 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
     for i, first in enumerate(pool):
         for other in pool[i + 1:]:
             combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
-                      for a in (first.family or first.effect).variants()
-                      for b in (other.family or other.effect).variants()]
+                      for a in first.family.variants()
+                      for b in other.family.variants()]
             second = _fit_pair(table, combos, first.fit, other, folds, location)
             if second is None:
                 continue
@@ -607,7 +608,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     conditions = operating_conditions(table.speed, table.load)
     if verdict == ADEQUATE and not form_testable(conditions):
         verdict = CANNOT_TELL
-        advice = form_flag(conditions).split(': ', 1)[1].split(';')[0]
+        advice = form_advice(conditions)
         notes.append(f'the paper\'s model fits, but {form_flag(conditions)}: adequacy cannot be confirmed')
     chosen_test = None
     if best is not None and verdict == best.effect.id:

@@ -21,7 +21,7 @@ Scores:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 
 import numpy as np
@@ -249,11 +249,21 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds=None, star
     vector = fit_vector(table, effect, scales, starts=starts)
     residual = predict_log(table, vector, effect, scales) - table.log_rms
     folds = cv_folds(table) if folds is None else folds
-    cv = held_out_log_residuals(table, effect, scales, vector, folds)
     params = effect.to_params(vector[3:], scales) if effect is not None else {}
     n_params = BASE_PARAMETERS + (len(effect.parameter_names) if effect is not None else 0)
     return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
-                    log_residual=residual, cv_log_residual=cv, n_params=n_params,
-                    rmse=relative_rmse(residual), cv_rmse=relative_rmse(cv),
-                    cv_run_rmse=run_level_rmse(table, cv),
-                    n_eff=effective_sample_size(residual, table.run))
+                    log_residual=residual, n_params=n_params, rmse=relative_rmse(residual),
+                    n_eff=effective_sample_size(residual, table.run),
+                    **_held_out(table, effect, scales, vector, folds))
+
+
+def score_held_out(table: WindowTable, fit: ModelFit, effect: Effect | None, folds) -> ModelFit:
+    """``fit`` (made with ``folds=[]``) with its held-out scores on ``folds``, without fitting all windows again."""
+    scales = effect.scales(table) if effect is not None else {}
+    return replace(fit, **_held_out(table, effect, scales, fit.vector, folds))
+
+
+def _held_out(table: WindowTable, effect: Effect | None, scales: dict, vector: np.ndarray, folds) -> dict:
+    """ModelFit's held-out fields: each fold refitted from ``vector`` and scored on its runs."""
+    cv = held_out_log_residuals(table, effect, scales, vector, folds)
+    return {'cv_log_residual': cv, 'cv_rmse': relative_rmse(cv), 'cv_run_rmse': run_level_rmse(table, cv)}

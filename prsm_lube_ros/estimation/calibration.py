@@ -194,17 +194,25 @@ def form_testable(conditions: int) -> bool:
     return conditions > CONSTANTS
 
 
+def form_advice(conditions: int) -> str:
+    """What to record so that a plan of ``conditions`` tests the model's form ('' if it does)."""
+    more = MIN_SPARE_CONDITIONS - (conditions - CONSTANTS)
+    if more <= 0:
+        return ''
+    return f'record {more} more condition (speed and load pair)' if more == 1 else \
+        f'record {more} more conditions (speed and load pairs)'
+
+
 def form_flag(conditions: int) -> str:
     """Flag for a plan with too few conditions beyond the constants to test the model's form ('' if enough)."""
     spare = conditions - CONSTANTS
-    if spare >= MIN_SPARE_CONDITIONS:
+    advice = form_advice(conditions)
+    if not advice:
         return ''
-    more = MIN_SPARE_CONDITIONS - spare
     if spare <= 0:
-        return (f'form untested: record {more} more conditions (speed and load pairs); {conditions} conditions '
+        return (f'form untested: {advice}; {conditions} conditions '
                 f'for {CONSTANTS} constants fit exactly whatever the truth')
-    return (f'form weakly tested: record {more} more condition (speed and load pair); {conditions} conditions '
-            f'leave one beyond the {CONSTANTS} constants')
+    return f'form weakly tested: {advice}; {conditions} conditions leave one beyond the {CONSTANTS} constants'
 
 
 def clustered_covariance(x: np.ndarray, residual: np.ndarray, clusters=None) -> tuple[np.ndarray, str]:

@@ -29,6 +29,8 @@ import zlib
 
 import numpy as np
 
+from ..physics.effects.resonance import band_position
+
 NONE, TWO = 'none', 'two'
 #: Verdict columns besides effect IDs.
 OTHER_VERDICTS = ('adequate', 'ambiguous', 'unexplained', 'cannot tell')
@@ -60,9 +62,8 @@ def truth_form(name: str, params: dict | None, speeds) -> str:
     words = [_forms(params)] if _forms(params) else []
     if name == 'resonance' and params.get('natural_frequency') and params.get('order'):
         resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
-        band = ('mode above the band' if resonant > max(speeds) else
-                'mode below the band' if resonant < min(speeds) else 'mode inside the band')
-        words.append(f'{band}, order {params["order"]:.3g}')
+        band = band_position(resonant, min(speeds), max(speeds)).replace('speed band', 'band')
+        words.append(f'mode {band}, order {params["order"]:.3g}')
     elif name == 'background_vibration':
         lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
         words.append('lines' if lines else 'floor')
