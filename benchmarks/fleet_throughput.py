@@ -43,12 +43,13 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from prsm_lube_ros.estimation.pipeline import calibrate_recordings, recording_windows
     from prsm_lube_ros.fleet.parallel import assess_bags, BagJob, outcomes_fingerprint
+    from prsm_lube_ros.physics.actuator import load_actuator
     from prsm_lube_ros.simulation.fleet import FleetPlan, simulate_fleet
     data = Path(args.data) if args.data else Path(tempfile.mkdtemp(prefix='fleet_throughput_'))
     if not (data / 'truth.json').exists():
         simulate_fleet(data, fleet=FleetPlan(actuators=20, days=10), seed=0)
     bags = sorted(str(p) for p in data.glob('A*/*') if p.is_dir())
-    lead = 0.005
+    lead = load_actuator(None).lead
     calibration = calibrate_recordings([recording_windows(data / 'reference', lead=lead)])
     job = BagJob(calibration, lead, hash_content=True)
     rows, prints = [], {}

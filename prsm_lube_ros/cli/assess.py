@@ -49,12 +49,16 @@ def run(args) -> int:
     settings = WindowSettings(window_length=require_positive('--window', args.window))
     job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
                  hash_content=bool(args.history))
-    to_history = _history_writer(args, calibration) if args.history else None
+    to_history = None
+    if args.history:
+        from ..fleet.history import history_writer
+        to_history = history_writer(args.history, args.calibration, calibration,
+                                    actuator_id=args.actuator_id or args.namespace, namespace=args.namespace)
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
 
     def done(outcome) -> None:
         """Write each finished recording into the history at once (this process), so a killed run keeps it."""
-        if to_history is not None and outcome.assessment is not None:
+        if to_history is not None:
             to_history(outcome)
         bar.update(1)
 
@@ -92,19 +96,3 @@ def run(args) -> int:
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
     return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
-
-
-def _history_writer(args, fit):
-    """A function writing one assessed recording's runs and windows into the ``--history`` dataset."""
-    from pathlib import Path
-    from ..fleet.history import add_assessment, calibration_id
-    identifier = calibration_id(args.calibration)
-
-    def write(outcome) -> None:
-        if args.actuator_id == 'folder':
-            actuator_id = Path(outcome.path).resolve().parent.name
-        else:
-            actuator_id = args.actuator_id or args.namespace
-        add_assessment(args.history, outcome.assessment, actuator_id=actuator_id, content=outcome.content,
-                       calibration=identifier, namespace=args.namespace, fit=fit)
-    return write

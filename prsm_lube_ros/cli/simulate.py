@@ -46,6 +46,8 @@ def run(args) -> int:
     rig = load_rig_config(args.config)
     plan = load_experiment_plan(args.config)
     effects = draw_effects(args.effect, seed=args.seed, rig=rig, plan=plan) if args.effect else None
+    if args.fleet:
+        return _simulate_fleet(args, rig, plan)
     bar = progress_bar(100, 'simulating')
     done = [0]
 
@@ -55,8 +57,6 @@ def run(args) -> int:
             bar.update(step - done[0])
             done[0] = step
 
-    if args.fleet:
-        return _simulate_fleet(args, rig, plan)
     try:
         if args.endurance:
             paths = [simulate_endurance(bag_path(args.out, 'endurance', args.storage), args.endurance, plan=plan,

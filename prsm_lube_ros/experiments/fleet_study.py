@@ -30,7 +30,7 @@ def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, 
     """Simulate the fleet into ``out/fleet``, calibrate, assess into ``out/history``; return timings and counts."""
     from ..estimation.calibration_file import save_calibration
     from ..estimation.pipeline import calibrate_recordings, recording_windows
-    from ..fleet.history import add_assessment, calibration_id
+    from ..fleet.history import history_writer
     from ..fleet.parallel import assess_bags, BagJob
     from ..physics.actuator import load_actuator
     from ..recording.writer import bag_path
@@ -42,13 +42,9 @@ def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, 
     lead = load_actuator(None).lead
     calibration = calibrate_recordings([recording_windows(bag_path(fleet_dir, 'reference', storage), lead=lead)])
     calibration_path = save_calibration(calibration, out / 'calibration.yaml')
-    outcomes = assess_bags(paths, BagJob(calibration, lead, hash_content=True), jobs=jobs, scheduler=scheduler)
+    outcomes = assess_bags(paths, BagJob(calibration, lead, hash_content=True), jobs=jobs, scheduler=scheduler,
+                           on_done=history_writer(history, calibration_path, calibration, actuator_id='folder'))
     failed = [o.error for o in outcomes if o.error]
-    identifier = calibration_id(calibration_path)
-    for outcome in outcomes:
-        if outcome.assessment is not None:
-            add_assessment(history, outcome.assessment, actuator_id=Path(outcome.path).parent.name,
-                           content=outcome.content, calibration=identifier, fit=calibration)
     return {'recordings': len(paths), 'failed': failed, 'simulate_s': simulated - started,
             'assess_s': time.perf_counter() - simulated}
 

@@ -25,8 +25,8 @@ Relubrications are given, or found as a jump up in theta_Oil between two
 consecutive recordings larger than ``min_jump`` and than ``jump_sigmas`` times
 their combined own uncertainty (placed half-way between them).
 
-Fit.  Weighted least squares of ``ln a_c`` and ``k`` for the time constant,
-the law drawn in the plots and crossings already seen in the data; a Kalman
+Fit.  Weighted least squares of ``ln a_c`` and ``k`` for the time constant
+and crossings already seen in the data; a Kalman
 filter of (ln theta, k), the level reset at each relubrication, for the state
 at the last recording (:func:`depletion_state`).
 
@@ -47,6 +47,7 @@ usage scatter fitted once; :func:`forecast_summary` does it for one.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 import math
 from typing import Sequence
 
@@ -119,8 +120,6 @@ class ActuatorForecast:
     crossings: list[Crossing] = field(default_factory=list)
     reason: str = ''                               # why there is no forecast
     fit_rmse: float = math.nan                     # RMS of ln theta residuals
-    parameters: np.ndarray | None = None           # ln a_c per cycle, then 1/tau (1/s)
-    covariance: np.ndarray | None = None
     #: state of ln theta at the last recording: mean (ln theta, k 1/day), covariance, Student-t degrees of
     #: freedom (0: normal) and the diffusion q (1/day) of the usage scatter
     state: np.ndarray | None = None
@@ -138,10 +137,6 @@ class ActuatorForecast:
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
         return next((c for c in self.crossings if math.isclose(c.level, level)), None)
-
-    def law(self, times: np.ndarray) -> np.ndarray:
-        """The fitted last-cycle law at ``times`` (s since the epoch)."""
-        return np.exp(self.parameters[-2] - self.parameters[-1] * np.asarray(times, float))
 
     def band(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """theta_Oil expected after the last recording at ``times`` (s since the epoch), with the interval.
@@ -275,9 +270,6 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     if scaled:
         covariance = covariance * (chi2 / dof)
     rate = solution[-1]                                  # 1/day
-    # back to absolute time: ln a_c = b_c + rate * origin / DAY
-    result.parameters = np.concatenate((solution[:-1] + solution[-1] * origin / DAY, [rate / DAY]))
-    result.covariance = covariance
     result.fit_rmse = float(np.sqrt(np.mean(residual ** 2)))
     rate_std = math.sqrt(covariance[-1, -1])
     result.tau_days = 1.0 / rate if rate > 0 else math.inf
@@ -288,10 +280,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     rng = np.random.default_rng(seed)
     pair = np.array([last, design.shape[1] - 1])
     block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
-    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(block + 1e-18 * np.eye(2)).T
-    if scaled:
-        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
-    draws = np.array([last_level, rate]) + normal
+    draws = _posterior_draws(np.array([last_level, rate]), block, dof if scaled else 0, rng)
     walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
     if walk is not None:
         result.diffusion = walk[2]
@@ -343,10 +332,7 @@ def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarra
     result.odometer_last = float(odometer[-1])
     result.depletion_revolutions = KILO / k if k > 0 else math.inf
     result.depletion_revolutions_std = KILO * math.sqrt(cov[1, 1]) / k ** 2 if k > 0 else math.inf
-    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
-    if dof:
-        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
-    draws = state + normal
+    draws = _posterior_draws(state, cov, dof, rng)
     tail = (1.0 - INTERVAL) / 2.0
     for level in levels:
         if not state[0] > math.log(level):
@@ -395,6 +381,11 @@ class Increments:
     changes: np.ndarray        # of ln theta
     measurement: np.ndarray    # covariance from the recordings' own uncertainty
 
+    @cached_property
+    def without_diffusion(self) -> tuple[float, float, float] | None:
+        """:func:`_walk_likelihood` at q = 0, worked out once (the usage-scatter search asks for it per grid point)."""
+        return _walk_likelihood(self, 0.0)
+
 
 def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray) -> Increments | None:
     """The increments of ln theta ``y`` within cycles; neighbours sharing a recording correlate by -sigma^2.
@@ -441,7 +432,7 @@ USAGE_SCATTER_GRID = np.concatenate(([0.0], np.logspace(-4, 0, 81)))
 
 def _diffusion(data: Increments, usage_scatter: float) -> float:
     """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
-    k = _walk_likelihood(data, 0.0)[1]
+    k = data.without_diffusion[1]
     for _ in range(2):
         k = (_walk_likelihood(data, usage_scatter * k ** 2) or (0.0, k))[1]
     return usage_scatter * k ** 2
@@ -449,7 +440,7 @@ def _diffusion(data: Increments, usage_scatter: float) -> float:
 
 def _informative(data: Increments | None) -> bool:
     """True when ``data`` determines a drift (increments with information on it)."""
-    return data is not None and _walk_likelihood(data, 0.0) is not None
+    return data is not None and data.without_diffusion is not None
 
 
 def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
@@ -482,8 +473,8 @@ def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = N
     if not _informative(data):
         return None
     if usage_scatter is None:
-        q = max((_walk_likelihood(data, q)[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57)))
-                if _walk_likelihood(data, q) is not None)[1]
+        q = max((walk[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57)))
+                if (walk := _walk_likelihood(data, q)) is not None)[1]
     else:
         q = _diffusion(data, usage_scatter)
     _, k, k_variance = _walk_likelihood(data, q)
@@ -524,6 +515,14 @@ def depletion_state(days, y, sigma, cycles, q):
     return state, cov, 0
 
 
+def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng) -> np.ndarray:
+    """:data:`DRAWS` draws of a 2-vector: normal around ``mean``, Student-t with ``dof`` degrees of freedom if > 0."""
+    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(covariance + 1e-18 * np.eye(2)).T
+    if dof:
+        normal /= np.sqrt(rng.chisquare(dof, (DRAWS, 1)) / dof)
+    return mean + normal
+
+
 def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     """Days from the last recording until ln theta first falls to ``level``: estimate and interval.
 
@@ -532,11 +531,7 @@ def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     the filter's posterior (Student-t when its covariance was scaled).  A
     draw with k <= 0 never crosses (the interval is open: ``inf``).
     """
-    cov = forecast.state_covariance
-    normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(cov + 1e-18 * np.eye(2)).T
-    if forecast.state_dof:
-        normal /= np.sqrt(rng.chisquare(forecast.state_dof, (DRAWS, 1)) / forecast.state_dof)
-    draws = forecast.state + normal
+    draws = _posterior_draws(forecast.state, forecast.state_covariance, forecast.state_dof, rng)
     distance = np.maximum(draws[:, 0] - level, 1e-12)
     days = np.full(DRAWS, math.inf)
     falling = draws[:, 1] > 0

@@ -170,6 +170,24 @@ def _first_start(tables: dict[str, pa.Table], fallback: datetime.datetime) -> da
     return min(starts) if starts else fallback
 
 
+def history_writer(history: str | Path, calibration_path: str | Path, fit, *, actuator_id: str,
+                   namespace: str = '/prsm'):
+    """``on_done`` for :func:`~.parallel.assess_bags`: each assessed recording into the history as it finishes.
+
+    ``actuator_id`` ``folder`` names each recording's actuator by the folder it
+    lies in; any other value names them all.  Recordings that failed are left out.
+    """
+    identifier = calibration_id(calibration_path)
+
+    def write(outcome) -> None:
+        if outcome.assessment is None:
+            return
+        actuator = Path(outcome.path).resolve().parent.name if actuator_id == 'folder' else actuator_id
+        add_assessment(history, outcome.assessment, actuator_id=actuator, content=outcome.content,
+                       calibration=identifier, namespace=namespace, fit=fit)
+    return write
+
+
 def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,
                    namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
                    before_replace=None, after_replace=None, fit=None) -> list[Path]:

@@ -52,10 +52,8 @@ class BagJob:
 def assess_bag(path: str, job: BagJob) -> BagOutcome:
     """Assess one recording; never raises for a bad recording (the outcome carries the error line)."""
     try:
-        problems: list[str] = []
         recording = require_usable(recording_windows(path, lead=job.lead, settings=job.settings,
-                                                     namespace=job.namespace, on_problem=problems.append),
-                                   job.settings)
+                                                     namespace=job.namespace), job.settings)
         content = ''
         if job.hash_content:
             from .history import content_hash
