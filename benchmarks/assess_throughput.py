@@ -73,14 +73,8 @@ def child(kind: str, bag: str, calibration: str) -> None:
 
 def measure(kind: str, bag: Path, calibration: Path, repeat: int) -> dict:
     """Best of ``repeat`` fresh subprocesses."""
-    runs = []
-    for _ in range(repeat):
-        out = subprocess.run([sys.executable, __file__, '--child', kind, str(bag), str(calibration)],
-                             check=True, capture_output=True, text=True).stdout
-        runs.append(json.loads(out.strip().splitlines()[-1]))
-    best = min(runs, key=lambda r: r['seconds'])
-    best['peak_rss_mib'] = max(r['peak_rss_mib'] for r in runs)
-    return best
+    from read_memory import best_of_children   # beside this file
+    return best_of_children([sys.executable, __file__, '--child', kind, str(bag), str(calibration)], repeat)
 
 
 def whole_process(argv: list[str], repeat: int) -> float:

@@ -74,17 +74,25 @@ def child(path: str) -> None:
                       'slices': slices, 'messages': messages, 'checksum': checksum, 'problems': problems}))
 
 
-def measure(path: Path, repeat: int, root: Path) -> dict:
-    """Best time of ``repeat`` fresh subprocesses; the largest peak memory among them."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get('PYTHONPATH', '')]))
+def best_of_children(argv: list[str], repeat: int, env: dict | None = None, cwd: Path | None = None) -> dict:
+    """Run ``argv`` ``repeat`` times as fresh processes, each printing a JSON line last.
+
+    Returns the fastest run's record (by ``seconds``) with ``peak_rss_mib`` the
+    largest among all runs.
+    """
     runs = []
     for _ in range(repeat):
-        out = subprocess.run([sys.executable, __file__, '--child', str(path)], check=True, capture_output=True,
-                             text=True, env=env, cwd=root).stdout
+        out = subprocess.run(argv, check=True, capture_output=True, text=True, env=env, cwd=cwd).stdout
         runs.append(json.loads(out.strip().splitlines()[-1]))
     best = min(runs, key=lambda run: run['seconds'])
     best['peak_rss_mib'] = max(run['peak_rss_mib'] for run in runs)
     return best
+
+
+def measure(path: Path, repeat: int, root: Path) -> dict:
+    """Best time of ``repeat`` fresh subprocesses; the largest peak memory among them."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get('PYTHONPATH', '')]))
+    return best_of_children([sys.executable, __file__, '--child', str(path)], repeat, env=env, cwd=root)
 
 
 def prepare(data: Path) -> dict:
