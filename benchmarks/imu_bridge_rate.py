@@ -24,7 +24,6 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
-import threading
 import time
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,8 +40,6 @@ def cpu_seconds(pid: int) -> float:
 
 def measure(rate: float, seconds: float) -> dict:
     """One bridge process at ``rate`` Hz: published, delivered, lost, CPU."""
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import Imu
@@ -54,13 +51,10 @@ def measure(rate: float, seconds: float) -> dict:
                                '-p', 'imu_topic:=/bench_imu/data', '-p', f'sample_rate:={rate}',
                                '-p', 'qos_depth:=20000', '-p', 'diagnostics_period:=0.2'],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=DOMAIN_ID)
-    node = rclpy.create_node('bench_imu_driver', context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    sys.path.insert(0, str(ROOT / 'test' / 'support'))
+    from spinning import SpinningContext      # the tests' graph side: own context, executor thread
+    driver = SpinningContext(DOMAIN_ID, 'bench_imu_driver')
+    node = driver.probe
     received, statuses = [0], []
     node.create_subscription(VibrationBlock, '/bench/vibration', lambda m: received.__setitem__(
         0, received[0] + len(m.samples)), QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
@@ -98,9 +92,7 @@ def measure(rate: float, seconds: float) -> dict:
             bridge.communicate(timeout=15)
         except subprocess.TimeoutExpired:
             bridge.kill()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        driver.close()
     return {'rate_hz': rate, 'published': sent, 'publish_rate_hz': sent / elapsed,
             'delivered_share': received[0] / (sent - sent % block) if sent >= block else 0.0,
             'lost_samples': int(values.get('lost samples', -1)), 'bridge_cpu_share': cpu / (elapsed + 2.0)}
