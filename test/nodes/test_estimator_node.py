@@ -39,6 +39,7 @@ from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, film_s
 from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings  # noqa: E402
 
 import synthetic_inputs  # noqa: E402
+from bridge_graph import values_of  # noqa: E402
 from polling import settle, stop_process, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(60)]
@@ -184,11 +185,6 @@ def by_window(states):
 def status_of(array, name_part):
     """The status whose name contains ``name_part`` in a DiagnosticArray."""
     return next(s for s in array.status if name_part in s.name)
-
-
-def values_of(status):
-    """KeyValues of a status as a dict."""
-    return {kv.key: kv.value for kv in status.values}
 
 
 # -- tests -----------------------------------------------------------------------------------------

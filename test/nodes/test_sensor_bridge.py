@@ -17,7 +17,6 @@ import time
 
 import numpy as np
 import pytest
-from spinning import SpinningContext
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
@@ -35,10 +34,11 @@ from prsm_lube_ros.estimation.calibration_file import save_calibration  # noqa: 
 from prsm_lube_ros.errors import InputError  # noqa: E402
 from prsm_lube_ros.msg import LubricationState, VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # noqa: E402
-from prsm_lube_ros.nodes.sensor_bridge import publisher_qos, SensorBridge  # noqa: E402
+from prsm_lube_ros.nodes.sensor_bridge import NODE_NAME, publisher_qos, SensorBridge  # noqa: E402
 from prsm_lube_ros.simulation.recordings import simulate_experiment  # noqa: E402
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, RigConfig  # noqa: E402
 from prsm_lube_ros.estimation.windowing import WindowSettings  # noqa: E402
+from bridge_graph import BridgeGraph  # noqa: E402
 from polling import settle, stop_process, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
@@ -97,7 +97,7 @@ def assert_live_equals_offline(states, stage):
     assert abs(np.median(thetas) - 0.8) < 0.1      # and it is the stage's theta, not some constant
 
 
-class Graph(SpinningContext):
+class Graph(BridgeGraph):
     """A context on this module's domain, an executor thread, a probe node, and the nodes started in it."""
 
     def __init__(self):
@@ -105,20 +105,13 @@ class Graph(SpinningContext):
 
     def bridge(self, **params):
         """A SensorBridge in this process."""
-        return self.add(SensorBridge(context=self.context, parameter_overrides=[
-            Parameter(k, value=v) for k, v in params.items()]))
+        return super().bridge(SensorBridge, NODE_NAME, **params)
 
     def estimator(self, folder):
         """A LubricationEstimator with the estimator's default windows and the stage's calibration."""
         return self.add(LubricationEstimator(context=self.context, parameter_overrides=[
             Parameter('calibration_file', value=str(folder / 'calibration_{actuator}.yaml')),
             Parameter('recordings_dir', value=str(folder)), Parameter('qos_depth', value=2000)]))
-
-    def collect(self, msg_type, topic, qos=1000):
-        """List that fills with the messages arriving on ``topic``."""
-        received = []
-        self.probe.create_subscription(msg_type, topic, received.append, qos)
-        return received
 
 
 @pytest.fixture

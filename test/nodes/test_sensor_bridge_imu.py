@@ -22,7 +22,8 @@ from prsm_lube_ros.errors import InputError  # noqa: E402
 from prsm_lube_ros.msg import VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes.ros_convert import status_level  # noqa: E402
 from prsm_lube_ros.nodes.sensor_bridge import SensorBridge  # noqa: E402
-from bridge_graph import BridgeGraph, block_stamp, imu_message, MS, publish_at_1khz, T0  # noqa: E402
+from bridge_graph import (BridgeGraph, block_stamp, imu_message, MS, publish_at_1khz, T0,  # noqa: E402
+                          values_of)
 from polling import wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
@@ -86,8 +87,6 @@ def test_the_bridge_status_goes_stale_ok_warn_and_stale_again(graph):
     wait_for(lambda: publisher.get_subscription_count() >= 1, 20, 'the bridge subscribed to the IMU')
     publish_at_1khz(publisher, range(300))
 
-    def values_of(status):
-        return {kv.key: kv.value for kv in status.values}
     wait_for(lambda: status_level(statuses[-1]) == OK and values_of(statuses[-1])['blocks published'] == '6', 20,
              'status OK with the six blocks of 300 samples')
     values = values_of(statuses[-1])

@@ -75,6 +75,11 @@ def publish_at_1khz(publisher, indices):
                 time.sleep(delay)
 
 
+def values_of(status):
+    """KeyValues of a DiagnosticStatus as a dict."""
+    return {kv.key: kv.value for kv in status.values}
+
+
 def block_stamp(block):
     """Header stamp of a block as int ns."""
     return block.header.stamp.sec * 10**9 + block.header.stamp.nanosec
