@@ -93,17 +93,14 @@ def prepare(data: Path) -> tuple[dict, Path]:
     from prsm_lube_ros.physics.actuator import Actuator
     from prsm_lube_ros.estimation.pipeline import calibrate_recordings, recording_windows
     from prsm_lube_ros.estimation.calibration_file import save_calibration
-    from prsm_lube_ros.simulation.recordings import simulate_endurance, simulate_experiment
+    from prsm_lube_ros.simulation.recordings import simulate_experiment
+    from read_memory import endurance_bag   # beside this file
     from prsm_lube_ros.simulation.rig_config import ExperimentPlan
     data.mkdir(parents=True, exist_ok=True)
     bags = {}
     for label, seconds, compression in (('15 min', 900.0, None), ('1 h', 3600.0, None),
                                         ('1 h, zstd chunks', 3600.0, 'zstd')):
-        path = data / f'endurance_{int(seconds)}s{"_" + compression if compression else ""}'
-        if not path.exists():
-            print(f'simulating {label} at 4 kHz into {path} ...', file=sys.stderr, flush=True)
-            simulate_endurance(path, seconds, seed=1, compression=compression)
-        bags[label] = (path, seconds)
+        bags[label] = (endurance_bag(data, seconds, compression=compression), seconds)
     calibration = data / 'calibration.yaml'
     if not calibration.exists():
         reference = data / 'reference'

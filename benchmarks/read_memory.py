@@ -95,18 +95,28 @@ def measure(path: Path, repeat: int, root: Path) -> dict:
     return best_of_children([sys.executable, __file__, '--child', str(path)], repeat, env=env, cwd=root)
 
 
+def endurance_bag(data: Path, seconds: float, storage: str = 'mcap', compression: str | None = None) -> Path:
+    """The rig simulator's endurance recording (4 kHz, seed 1) in ``data``, simulated the first time only.
+
+    Shared by the benchmarks so that each finds the same bag under the same name.
+    """
+    sys.path.insert(0, str(ROOT))
+    from prsm_lube_ros.simulation.recordings import simulate_endurance
+    name = f'endurance_{int(seconds)}s' + (f'_{storage}' if storage != 'mcap' else '') + \
+        (f'_{compression}' if compression else '')
+    path = Path(data) / name
+    if not path.exists():
+        print(f'simulating {seconds:g} s at 4 kHz into {path} ...', file=sys.stderr, flush=True)
+        simulate_endurance(path, seconds, seed=1, storage=storage, compression=compression)
+    return path
+
+
 def prepare(data: Path) -> dict:
     """The hour in time order, reversed, shuffled and one message per chunk: {label: path}."""
-    sys.path.insert(0, str(ROOT))
     sys.path.insert(0, str(ROOT / 'test' / 'support'))
     import numpy as np
     import bagfactory
-    from prsm_lube_ros.simulation.recordings import simulate_endurance
-    bag = data / 'endurance_3600s'
-    if not bag.exists():
-        print(f'simulating 1 h at 4 kHz into {bag} ...', file=sys.stderr, flush=True)
-        simulate_endurance(bag, 3600.0, seed=1)
-    (plain,) = sorted(bag.glob('*.mcap'))
+    (plain,) = sorted(endurance_bag(data, 3600.0).glob('*.mcap'))
     files = {'time order': plain}
     for label, order in (('reversed', lambda n: range(n)[::-1]),
                          ('shuffled', np.random.default_rng(1).permutation)):

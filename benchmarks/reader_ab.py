@@ -48,19 +48,11 @@ print(json.dumps([bare, time.process_time() - start]))
 
 def recordings(data: Path) -> dict:
     """{label: path} of the recordings, simulated once into ``data``."""
-    sys.path.insert(0, str(ROOT))
-    from prsm_lube_ros.simulation.recordings import simulate_endurance
-    wanted = {'1 h mcap': ('endurance_3600s', 3600.0, 'mcap', None),
-              '1 h mcap, zstd chunks': ('endurance_3600s_zstd', 3600.0, 'mcap', 'zstd'),
-              '5 min sqlite3': ('endurance_300s_sqlite3', 300.0, 'sqlite3', None)}
-    out = {}
-    for label, (name, seconds, storage, compression) in wanted.items():
-        path = data / name
-        if not path.exists():
-            print(f'simulating {label} into {path} ...', file=sys.stderr, flush=True)
-            simulate_endurance(path, seconds, seed=1, storage=storage, compression=compression)
-        out[label] = path
-    return out
+    from read_memory import endurance_bag   # beside this file
+    wanted = {'1 h mcap': (3600.0, 'mcap', None), '1 h mcap, zstd chunks': (3600.0, 'mcap', 'zstd'),
+              '5 min sqlite3': (300.0, 'sqlite3', None)}
+    return {label: endurance_bag(data, seconds, storage, compression)
+            for label, (seconds, storage, compression) in wanted.items()}
 
 
 def unpack(commit: str, into: Path) -> Path:
