@@ -1,26 +1,37 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Does a model fit within the noise?  A lack-of-fit F test with replicates inside runs.
+"""Does a model fit within the noise?  The classic lack-of-fit F test, at the level of runs.
 
-Windows of one run share speed and load, so they are replicates of the model's
-prediction up to whatever drifts slowly inside the run.  Per run the log
-residual ``ln A_model - ln A`` is fitted by a smooth trend (a quadratic in the
-window's place in the run, fewer terms in short runs); the scatter around those
-trends is *pure error* (window noise), with ``n - sum(terms per run)`` degrees
-of freedom.  What the per-run trends carry beyond the model is *lack of fit*:
+Every run (traverse) of a real rig has its own amplitude factor (sensor
+coupling, preload, temperature: 1-4 %), so windows are not the units of
+replication: runs are.  A run's *level* is the mean of its windows' log
+residuals ``ln A_model - ln A``; runs at the same (speed, load) condition are
+replicates of the model's prediction.  With ``G`` runs at ``C`` conditions,
+the scatter of run levels around their condition's mean is *pure error* (run
+scatter, whatever its cause), and what the condition means carry beyond it is
+*lack of fit*::
 
-    SS_lof = SS_residual - SS_pe,   df_lof = sum(terms per run) - model parameters,
+    SS_pe = sum_c sum_g (r_g - r_c)^2,   df_pe = G - C
+    SS_lof = sum_c n_c r_c^2,            df_lof = C - parameters
     F = (SS_lof / df_lof) / (SS_pe / df_pe).
 
-The lack-of-fit degrees of freedom are counted in runs (three per run), not in
-windows: windows of one run are correlated through the run's trend, and the
-test asks whether the run trends agree with the model.  With hundreds of
-windows any set-up scatter between runs (mounting, sensor coupling) makes
-``p`` tiny although the model is fine, so lack of fit counts as *material*
-only when also its size, the excess RMS per window
-``sqrt(max(SS_lof - df_lof MS_pe, 0) / n)``, exceeds :data:`LOF_TOLERANCE` and
-half the pure-error RMS: the model then misses by more than the set-up scatter
-and a good fraction of the window scatter.
+Without a repeated condition (``G = C``) there is no pure error: run scatter
+and model error cannot be told apart on that plan, and :attr:`LackOfFit.testable`
+says so (``reason``); the same when the model has as many parameters as there
+are conditions.  Structure inside runs (a trend along the stroke) is not
+tested here but by :mod:`.locate`.
+
+Lack of fit counts as *material* only when it is significant (``p`` below
+:data:`LOF_P`) and its size, the excess RMS per run
+``sqrt(max(SS_lof - df_lof MS_pe, 0) / G)``, exceeds :data:`LOF_TOLERANCE`.
+The window scatter inside runs is reported beside it for reference.
+
+The pure error itself is tested too: repeated runs of one unit scatter by
+what its set-up gives (1-4 % on rigs), so a scatter significantly above
+:data:`SETUP_SCATTER` (chi-square on ``df_pe``, ``p`` below :data:`LOF_P`)
+is not noise but something that varies between runs and that the model
+leaves out (a step in time, a cycle in revolutions).  Either finding makes the
+model's misfit :attr:`LackOfFit.significant`.
 """
 from __future__ import annotations
 
@@ -30,69 +41,130 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..estimation.calibration import operating_levels
+from ..validation import finite_or_none
+
 #: p-value below which lack of fit is significant.
-LOF_P = 1e-3
-#: Smallest relative excess RMS that counts as a material lack of fit.
+LOF_P = 0.01
+#: Smallest relative excess RMS per run that counts as a material lack of fit.
 LOF_TOLERANCE = 0.01
-#: Terms of the smooth within-run trend (quadratic).
-TREND_TERMS = 3
+#: Largest run-to-run scatter (relative) a rig's set-up gives repeated runs of one unit (1-4 %, with margin).
+SETUP_SCATTER = 0.05
 
 
 @dataclass
 class LackOfFit:
-    """Pure error and lack of fit of one model's log residuals."""
+    """Pure error (between replicate runs) and lack of fit of one model's run levels."""
 
     statistic: float        # F
     p_value: float
     dof_lack: float
     dof_pure: float
-    pure_error_rms: float   # relative window scatter around the run trends
-    excess_rms: float       # relative size of the lack of fit per window
-    residual_rms: float     # relative RMS of all residuals
+    pure_error_rms: float   # relative scatter of run levels around their condition (replicate runs)
+    excess_rms: float       # relative size of the lack of fit per run
+    residual_rms: float     # relative RMS of all window residuals
+    window_scatter_rms: float = math.nan    # relative scatter of windows around their run's level
+    runs: int = 0
+    conditions: int = 0
+    reason: str = ''        # why the test cannot be made on this plan ('' when it can)
+    scatter_p: float = math.nan     # p of the pure error being no larger than SETUP_SCATTER (chi-square)
+
+    @property
+    def testable(self) -> bool:
+        """Whether the plan has pure error and lack-of-fit degrees of freedom."""
+        return not self.reason
+
+    @property
+    def lack_of_fit(self) -> bool:
+        """The condition means miss the model: significant and material (see module doc)."""
+        return self.testable and self.p_value < LOF_P and self.excess_rms > LOF_TOLERANCE
+
+    @property
+    def excess_scatter(self) -> bool:
+        """Repeated runs scatter significantly more than a rig's set-up makes them."""
+        return self.scatter_p < LOF_P
 
     @property
     def significant(self) -> bool:
-        """Significant and material (see module doc)."""
-        return (self.p_value < LOF_P
-                and self.excess_rms > max(LOF_TOLERANCE, 0.5 * self.pure_error_rms))
+        """The model misses: lack of fit, or run scatter beyond set-up scatter (see module doc)."""
+        return self.lack_of_fit or self.excess_scatter
+
+    @property
+    def finding(self) -> str:
+        """What the test found, in words ('' when the model fits within the noise or cannot be tested)."""
+        words = []
+        if self.lack_of_fit:
+            words.append(f'the model misses the condition means by {100 * self.excess_rms:.1f} % RMS per run '
+                         f'beyond the {100 * self.pure_error_rms:.1f} % scatter of repeated runs (lack of fit '
+                         f'F = {self.statistic:.3g}, p = {self.p_value:.2g})')
+        if self.excess_scatter:
+            words.append(f'repeated runs of one condition scatter by {100 * self.pure_error_rms:.1f} %, beyond the '
+                         f'{100 * SETUP_SCATTER:.0f} % a rig\'s set-up gives (chi-square p = {self.scatter_p:.2g}): '
+                         'something that varies between runs is not in the model')
+        return '; '.join(words)
 
     def as_json(self) -> dict:
         """Plain mapping."""
-        return {'test': 'lack-of-fit F (pure error within runs, run-clustered dof)',
-                'f': _num(self.statistic), 'p_value': _num(self.p_value), 'dof_lack_of_fit': _num(self.dof_lack),
-                'dof_pure_error': _num(self.dof_pure), 'pure_error_rms': _num(self.pure_error_rms),
-                'lack_of_fit_rms': _num(self.excess_rms), 'residual_rms': _num(self.residual_rms),
-                'significant': self.significant}
+        return {'test': 'lack-of-fit F (condition means against replicate runs)', 'testable': self.testable,
+                'reason': self.reason, 'runs': self.runs, 'conditions': self.conditions,
+                'f': finite_or_none(self.statistic), 'p_value': finite_or_none(self.p_value),
+                'dof_lack_of_fit': finite_or_none(self.dof_lack), 'dof_pure_error': finite_or_none(self.dof_pure),
+                'pure_error_rms': finite_or_none(self.pure_error_rms),
+                'lack_of_fit_rms': finite_or_none(self.excess_rms),
+                'window_scatter_rms': finite_or_none(self.window_scatter_rms),
+                'residual_rms': finite_or_none(self.residual_rms), 'lack_of_fit': self.lack_of_fit,
+                'scatter_p_value': finite_or_none(self.scatter_p), 'excess_scatter': self.excess_scatter,
+                'setup_scatter_limit': SETUP_SCATTER, 'significant': self.significant}
 
 
-def _num(value):
-    return float(value) if value is not None and math.isfinite(value) else None
+def run_conditions(table) -> np.ndarray:
+    """Condition index of each run (in :attr:`WindowTable.runs` order): its (speed level, load level) pair."""
+    speed, load = table.run_means('speed'), table.run_means('load')
+    pairs = []
+    for values in (speed, load):
+        levels = np.asarray(operating_levels(values))
+        pairs.append(np.argmin(np.abs(np.abs(values)[:, None] - levels[None, :]), axis=1))
+    _, condition = np.unique(np.column_stack(pairs), axis=0, return_inverse=True)
+    return np.asarray(condition).reshape(-1)
+
+
+REPEAT_ADVICE = 'record each (speed, load) condition in two runs or more'
 
 
 def lack_of_fit(table, log_residual, n_params: int) -> LackOfFit:
     """The lack-of-fit test of a model with ``n_params`` fitted parameters (see module doc)."""
     residual = np.asarray(log_residual, dtype=float)
-    ss_pe, terms = 0.0, 0
-    for r in table.runs:
-        sel = np.flatnonzero(table.run == r)
-        y = residual[sel]
-        order = np.argsort(table.time[sel], kind='stable')
-        k = int(min(TREND_TERMS, max(y.size - 2, 1)))
-        u = np.linspace(-1.0, 1.0, y.size)
-        basis = np.vander(u, k, increasing=True)
-        coef, *_ = np.linalg.lstsq(basis, y[order], rcond=None)
-        e = y[order] - basis @ coef
-        ss_pe += float(e @ e)
-        terms += k
     n = residual.size
-    ss_total = float(residual @ residual)
-    dof_pure = n - terms
-    dof_lack = terms - n_params
-    if dof_pure <= 0 or dof_lack <= 0 or ss_pe <= 0:
-        return LackOfFit(math.nan, math.nan, dof_lack, dof_pure, math.nan, math.nan, math.sqrt(ss_total / n))
+    residual_rms = math.sqrt(float(residual @ residual) / n)
+    levels = table.run_means(residual)
+    _, index = np.unique(table.run, return_inverse=True)
+    within = residual - levels[index]
+    groups = levels.size
+    window_scatter = math.sqrt(float(within @ within) / (n - groups)) if n > groups else math.nan
+    condition = run_conditions(table)
+    conditions = int(condition.max()) + 1
+    dof_pure, dof_lack = groups - conditions, conditions - n_params
+    counts = np.bincount(condition, minlength=conditions)
+    means = np.bincount(condition, weights=levels, minlength=conditions) / counts
+    ss_pe = float(np.sum((levels - means[condition]) ** 2))
+    scatter_p = float(stats.chi2.sf(ss_pe / SETUP_SCATTER ** 2, dof_pure)) if dof_pure > 0 else math.nan
+    reason = ''
+    if dof_pure <= 0:
+        reason = (f'no condition repeated ({groups} runs at {conditions} conditions): run-to-run scatter and '
+                  f'model error cannot be told apart; {REPEAT_ADVICE}')
+    elif dof_lack <= 0:
+        reason = (f'{conditions} conditions for {n_params} parameters leave no degree of freedom to test the '
+                  'model\'s form; record more (speed, load) conditions')
+    elif ss_pe <= 0:
+        reason = 'the repeated runs agree exactly: no pure error to test against'
+    if reason:
+        pure = math.sqrt(ss_pe / dof_pure) if dof_pure > 0 else math.nan
+        return LackOfFit(math.nan, math.nan, dof_lack, dof_pure, pure, math.nan, residual_rms, window_scatter,
+                         groups, conditions, reason, scatter_p)
     ms_pe = ss_pe / dof_pure
-    ss_lof = max(ss_total - ss_pe, 0.0)
+    ss_lof = float(np.sum(counts * means ** 2))
     f = (ss_lof / dof_lack) / ms_pe
     p = float(stats.f.sf(f, dof_lack, dof_pure))
-    excess = math.sqrt(max(ss_lof - dof_lack * ms_pe, 0.0) / n)
-    return LackOfFit(f, p, dof_lack, dof_pure, math.sqrt(ms_pe), excess, math.sqrt(ss_total / n))
+    excess = math.sqrt(max(ss_lof - dof_lack * ms_pe, 0.0) / groups)
+    return LackOfFit(f, p, dof_lack, dof_pure, math.sqrt(ms_pe), excess, residual_rms, window_scatter,
+                     groups, conditions, scatter_p=scatter_p)

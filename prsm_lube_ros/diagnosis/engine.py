@@ -63,9 +63,10 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.calibration import (Calibration, check_identifiable, clustered_covariance, form_advice,
-                                      form_flag, form_testable, operating_conditions, operating_levels)
-from .adequacy import lack_of_fit, LackOfFit
+from ..estimation.calibration import (Calibration, calibration_flags, check_identifiable, form_advice, form_flag,
+                                      form_testable, operating_conditions, operating_levels, replicated_conditions,
+                                      run_level_covariance)
+from .adequacy import lack_of_fit, LackOfFit, REPEAT_ADVICE
 from .combined import CombinedEffect
 from .effects import Effect, registered
 from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log, \
@@ -198,16 +199,17 @@ class Diagnosis:
         fit = self.chosen.fit if self.chosen is not None else self.baseline
         effect = self.chosen.effect if self.chosen is not None else None
         table = self.table
-        covariance, residual_std, method = _constant_covariance(table, fit, effect)
+        covariance, scatter, residual_std, method = _constant_covariance(table, fit, effect)
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
         conditions = operating_conditions(table.speed, table.load)
-        flag = form_flag(conditions)
+        flags = calibration_flags(conditions, scatter, replicated_conditions(table.speed, table.load, table.run),
+                                  fit.constants)
         return Calibration(constants=fit.constants, covariance=covariance, fit_rmse=fit.rmse,
                            residual_std=residual_std, windows_used=len(table), reference_theta=table.theta,
                            speed_levels=tuple(operating_levels(table.speed)),
                            load_levels=tuple(operating_levels(table.load)), sources=table.sources,
                            extension=extension, conditions=conditions, runs=int(table.runs.size),
-                           standard_errors=method, flags=(flag,) if flag else ())
+                           standard_errors=method, flags=flags, scatter=scatter)
 
     def as_json(self) -> dict:
         """The contract's ``diagnose`` document (plus location, notes and tied candidates)."""
@@ -264,11 +266,11 @@ def _clean(params: dict) -> dict:
 
 
 def _constant_covariance(table, fit: ModelFit, effect):
-    """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held, clustered by run.
+    """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held, under the run-effect model.
 
     The Jacobian J of the log prediction stands for the design matrix of
-    :func:`~prsm_lube_ros.estimation.calibration.clustered_covariance`.
-    Returns (covariance, residual std, how the covariance was computed).
+    :func:`~prsm_lube_ros.estimation.calibration.run_level_covariance`.
+    Returns (covariance, run scatter, residual std, how the covariance was computed).
     """
     scales = effect.scales(table) if effect is not None else {}
     base = predict_log(table, fit.vector, effect, scales)
@@ -281,10 +283,11 @@ def _constant_covariance(table, fit: ModelFit, effect):
     dof = max(len(table) - fit.n_params, 1)
     variance = float(fit.log_residual @ fit.log_residual) / dof
     try:
-        covariance, method = clustered_covariance(jac, np.asarray(fit.log_residual, float), table.run)
+        covariance, scatter, method = run_level_covariance(jac, np.asarray(fit.log_residual, float), table.run)
     except np.linalg.LinAlgError:
-        covariance, method = np.full((3, 3), np.nan), 'singular'
-    return covariance, math.sqrt(variance), method
+        raise InputError('diagnose: the constants of the chosen model cannot be identified on these recordings '
+                         '(singular fit); record more distinct speeds and loads') from None
+    return covariance, scatter, math.sqrt(variance), method
 
 
 def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
@@ -326,9 +329,26 @@ def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
     return ' or '.join([form, *others]) + ' (the data fit these forms equally well)' if others else form
 
 
+def _too_few_conditions(table, effect: Effect, location: Location) -> str:
+    """Why an effect that acts only through speed and load cannot be tested on this plan ('' if it can).
+
+    Its law is a function of the (speed, load) condition, so it needs at least
+    as many conditions as the constants and its parameters; evidence from
+    outside the amplitude fit (the spectrum) still tests it.
+    """
+    if effect.covariate not in ('speed', 'load'):
+        return ''
+    conditions = operating_conditions(table.speed, table.load)
+    needed = 3 + min(len(form.parameter_names) for form in effect.variants())
+    if conditions >= needed or effect.independent_evidence(table, location):
+        return ''
+    return (f'{conditions} (speed, load) conditions for 3 constants and its {needed - 3} parameter(s): a law of '
+            f'speed and load cannot be tested on so few conditions (record {needed - conditions} more)')
+
+
 def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
     family = effect
-    reason = effect.applicable(table)
+    reason = effect.applicable(table) or _too_few_conditions(table, effect, location)
     if reason:
         return Candidate(effect, None, 'not testable', reason, form=effect.form, family=family)
     testable = [form for form in effect.variants() if not form.applicable(table)]
@@ -520,6 +540,32 @@ def _separation_advice(a: Effect, b: Effect) -> str:
     return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
 
 
+def _mismatch_note(location: Location, test: LackOfFit, pattern: bool) -> str:
+    """What is real about an unexplained mismatch, saying only what was shown."""
+    parts = [location.summary] if pattern else []
+    if test.significant:
+        parts.append(test.finding + ('' if pattern else '; no covariate carries it'))
+    if not parts:
+        parts.append('the paper\'s model fits with unphysical constants')
+    return f'the mismatch is real ({"; ".join(parts)}) but no candidate explains it'
+
+
+def _unexplained_advice(pattern: bool, test: LackOfFit) -> str:
+    if pattern:
+        return 'a candidate for the located mismatch is missing from the catalogue'
+    if test.lack_of_fit:
+        return ('the condition means depart from the model in a way no candidate and no recorded covariate '
+                'follows; record more (speed, load) conditions to see its shape')
+    if test.excess_scatter:
+        return ('repeated runs differ by more than set-up scatter and no recorded covariate follows it; record '
+                'temperature and keep the sensor mounting unchanged between runs to find what varies')
+    return 'the constants are unphysical and no candidate makes them physical'
+
+
+def _untestable_advice(test: LackOfFit) -> str:
+    return REPEAT_ADVICE if test.dof_pure <= 0 else 'record more (speed, load) conditions'
+
+
 def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis:
     """Run the whole diagnosis on a window table (see module doc)."""
     check_identifiable(table.speed, table.load)
@@ -536,6 +582,8 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits with unphysical constants (' + '; '.join(baseline.unphysical())
                      + '): evidence that its form misses something')
     confounded_with = confounding(table)
+    confounded = bool(confounded_with)
+    conditions = operating_conditions(table.speed, table.load)
     notes.extend(c.note for c in confounded_with)
     if len(folds) < table.runs.size:
         notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
@@ -582,21 +630,22 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 break
     else:
         pattern = location.located not in ('none', 'spectrum')
-        pair = (_pair_when_none_earns(table, ranked, baseline, folds, location)
-                if baseline_test.significant or pattern or baseline.unphysical() else None)
+        mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
+        if mismatch and not pattern and not baseline.unphysical() and not form_testable(conditions):
+            # Three conditions fit the constants exactly: run scatter alone is no evidence against the form.
+            mismatch = False
+            notes.append(f'{baseline_test.finding}; on {conditions} conditions this may be scatter between units '
+                         'or set-ups as well as a model error')
+        pair = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
         if pair is not None:
             best, second = pair
             best.status = 'earns'
             best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
             verdict = best.effect.id
-        elif baseline_test.significant or pattern or baseline.unphysical():
+        elif mismatch:
             verdict = UNEXPLAINED
-            advice = 'a candidate for the located mismatch is missing from the catalogue'
-            size = (f'the paper\'s model misses by {100 * baseline_test.residual_rms:.1f} % RMS, '
-                    f'{100 * baseline_test.excess_rms:.1f} % beyond the {100 * baseline_test.pure_error_rms:.1f} % '
-                    f'window scatter (lack of fit F = {baseline_test.statistic:.3g}, p = {baseline_test.p_value:.2g})')
-            notes.append(f'the mismatch is real ({location.summary}; {size}) but no candidate explains it')
-    confounded = bool(confounded_with)
+            advice = _unexplained_advice(pattern, baseline_test)
+            notes.append(_mismatch_note(location, baseline_test, pattern))
     if verdict == AMBIGUOUS and confounded:
         advice = 'runs in random order of speed and load; ' + advice
     if verdict == ADEQUATE and confounded:
@@ -605,11 +654,17 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
                      'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
                      'adequacy cannot be confirmed')
-    conditions = operating_conditions(table.speed, table.load)
     if verdict == ADEQUATE and not form_testable(conditions):
         verdict = CANNOT_TELL
         advice = form_advice(conditions)
         notes.append(f'the paper\'s model fits, but {form_flag(conditions)}: adequacy cannot be confirmed')
+    if verdict in (ADEQUATE, CANNOT_TELL) and not baseline_test.testable and form_testable(conditions):
+        verdict = CANNOT_TELL
+        advice = _untestable_advice(baseline_test)
+        notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}; adequacy cannot be confirmed')
+    elif verdict == CANNOT_TELL and baseline_test.dof_pure <= 0:
+        advice += f'; {REPEAT_ADVICE}'
+        notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
     chosen_test = None
     if best is not None and verdict == best.effect.id:
         if second is None:

@@ -88,7 +88,7 @@ class CovariateTest:
         out = {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
                'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
                'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
-        if self.kind == 'binned means':
+        if self.kind in ('binned means', 'segment of runs'):
             out.update({'shape': self.shape, 'bin_centres': [_finite(v) for v in self.bin_centres],
                         'bin_amplitudes': [_finite(v) for v in self.bin_amplitudes]})
         return out
@@ -270,6 +270,68 @@ def _binned_means(residual, covariate, groups, name, within_run: bool) -> Covari
                          bin_amplitudes=[float(v) for v in amplitude])
 
 
+#: Fewest runs inside a segment and outside it.
+MIN_SEGMENT_RUNS = 2
+
+
+def _segment_statistics(cumulative: np.ndarray, starts: np.ndarray, stops: np.ndarray, total: int) -> np.ndarray:
+    """Between-group sum of squares of every (segment, rest) split; ``cumulative`` is the cumsum of centred y."""
+    inside = stops - starts
+    sums = cumulative[..., stops] - cumulative[..., starts]
+    return sums ** 2 * total / (inside * (total - inside))
+
+
+def _segment_run_means(table, residual) -> CovariateTest | None:
+    """A step or a segment in time: run levels in recording order, one stretch of runs against the rest.
+
+    Runs are ordered by recording (as given) and time inside it.  For every
+    stretch of consecutive runs (at least :data:`MIN_SEGMENT_RUNS` inside and
+    outside) the two-group F of the stretch against the rest is computed on
+    ``(1, runs - 2)`` degrees of freedom; the largest F is kept and its p-value
+    multiplied by the number of stretches tried (Bonferroni), so that looking
+    everywhere does not make chance stretches significant.  A stretch touching
+    either end is a step.
+    """
+    levels = table.run_means(residual)
+    times = table.run_means('time')
+    recordings = table.run_means(table.recording.astype(float))
+    ok = np.isfinite(levels) & np.isfinite(times)
+    n_runs = int(ok.sum())
+    if n_runs < 2 * MIN_SEGMENT_RUNS + 2:
+        return None
+    order = np.lexsort((times[ok], recordings[ok]))
+    y = levels[ok][order]
+    y = y - y.mean()
+    total_ss = float(y @ y)
+    if total_ss <= 0:
+        return None
+    starts, stops = np.triu_indices(n_runs + 1, k=MIN_SEGMENT_RUNS)
+    keep = (stops - starts) <= n_runs - MIN_SEGMENT_RUNS
+    starts, stops = starts[keep], stops[keep]
+    between = _segment_statistics(np.r_[0.0, np.cumsum(y)], starts, stops, n_runs)
+    best = int(np.argmax(between))
+    within = max(total_ss - float(between[best]), 1e-300)
+    f = float(between[best]) / (within / (n_runs - 2))
+    p = min(1.0, float(stats.f.sf(f, 1, n_runs - 2)) * starts.size)
+    first, stop = int(starts[best]), int(stops[best])
+    inside = np.zeros(n_runs, dtype=bool)
+    inside[first:stop] = True
+    change = -(float(y[inside].mean()) - float(y[~inside].mean()))     # residual is ln A_model - ln A
+    run_times = times[ok][order]
+    if first == 0 or stop == n_runs:
+        at = stop if first == 0 else first
+        direction = 'rises' if (change > 0) == (first > 0) else 'falls'
+        shape = (f'a step in time: amplitude {direction} by {100 * abs(change):.1f} % after run {at} of {n_runs} '
+                 f'(in recording order, at {run_times[at]:.0f} s into its recording)')
+    else:
+        shape = (f'a stretch in time: amplitude {100 * abs(change):.1f} % {"higher" if change > 0 else "lower"} '
+                 f'in runs {first + 1}-{stop} of {n_runs} (in recording order) than before and after')
+    amplitude = np.where(inside, change, 0.0)
+    return CovariateTest('time', 'segment of runs', float(between[best] / total_ss), f, p,
+                         shape=shape, bin_centres=[float(v) for v in run_times],
+                         bin_amplitudes=[float(v) for v in amplitude - amplitude.mean()])
+
+
 def _level_means(residual, values, groups, name) -> CovariateTest | None:
     """F test of residual means per operating level, with the effective sample size."""
     levels = operating_levels(values)
@@ -307,6 +369,7 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
     flexible = [_binned_means(centred_r, table.position, table.run, 'position', True)]
     for name in ('revolutions', 'time', 'temperature'):
         flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
+    flexible.append(_segment_run_means(table, residual))
     flexible = [t for t in flexible if t is not None]
     flexible.sort(key=lambda t: (t.p_value, -t.r_squared))
     return tests + flexible

@@ -4,10 +4,16 @@
 
 Uncertainty is propagated to first order from two sources:
 
-* the scatter of the measured RMS: for a window, the window-to-window scatter
-  of ln(RMS) seen at calibration (``Calibration.residual_std``); for a run,
-  the scatter of its own windows' ln(RMS) divided by sqrt(n);
-* the covariance of (ln C_sys, C_F, C_lambda) from the calibration fit.
+* the scatter of the measured RMS as a *new run* shows it: every run (traverse)
+  has its own amplitude factor (sensor coupling, preload, temperature), so a
+  run's ln(RMS) scatters by the run-to-run scatter ``tau`` learnt at
+  calibration plus its windows' scatter over sqrt(n) (its own windows' with
+  three or more, else the calibration's); a single window by
+  ``sqrt(tau^2 + sigma_w^2)``.  Both are the standard deviation of a Student t
+  with the calibration's run degrees of freedom
+  (:meth:`.run_scatter.RunScatter.new_run_variance`), never 0;
+* the covariance of (ln C_sys, C_F, C_lambda) from the calibration fit (the
+  run-level model, :mod:`.calibration`).
 
 With ``g = C_lambda omega^0.68 F^-0.073`` Eq. 23 has the partial derivatives
 ``d theta/d ln A = -1/g``, ``d theta/d ln C_sys = 1/g``,
@@ -175,8 +181,8 @@ class Assessor:
             rows = [steady[j] for j in np.flatnonzero(ok).tolist()]
             if rows:
                 amplitude, factor = self._through_extension([windows[i] for i in rows])
-                values, errors = self.thetas(amplitude, speed[ok], load[ok],
-                                             np.full(len(rows), self.calibration.residual_std ** 2))
+                window_variance = self.calibration.run_scatter.new_run_variance(1)
+                values, errors = self.thetas(amplitude, speed[ok], load[ok], np.full(len(rows), window_variance))
                 with np.errstate(divide='ignore', invalid='ignore'):
                     values, errors = values / factor, errors / np.abs(factor)
                 finite = np.isfinite(values)
@@ -217,6 +223,7 @@ class Assessor:
         temp_known = ~np.isnan(temps_all)
         temps_zeroed = np.where(temp_known, temps_all, 0.0)
         temp_finite = np.isfinite(temps_all)
+        scatter = self.calibration.run_scatter
         pooled = []
         first = 0
         for windows in runs:
@@ -231,12 +238,12 @@ class Assessor:
                 temperature = float(np.sum(temps_zeroed[first:last]) / np.count_nonzero(temp_known[first:last]))
             else:
                 temperature = math.nan
+            own_variance = None
             if n >= 3:
                 logs = log_rms_all[first:last]
                 deviation = logs - np.sum(logs) / n
-                ln_var = float(np.sum(deviation * deviation) / (n - 1)) / n
-            else:
-                ln_var = self.calibration.residual_std ** 2 / n
+                own_variance = float(np.sum(deviation * deviation) / (n - 1))
+            ln_var = scatter.new_run_variance(n, own_variance)
             pooled.append((rms, amplitude, factor, speed, load, temperature, ln_var,
                            not_assessable_reason(speed, load, rms, self.min_axial_load)))
             first = last

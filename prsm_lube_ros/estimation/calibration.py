@@ -11,18 +11,15 @@ reference recordings.  The three columns are only independent when the windows
 span at least two axial loads and two screw speeds; anything less gets an
 :class:`InputError` that says what to record, never a fit.
 
-Standard errors are clustered by run.  Windows of one run share its set-up
-(mounting, temperature, the oil film of that traverse), so they are not
-independent: with ``clusters`` (one label per window, a run) the covariance
-is the cluster-robust sandwich (CR1)::
-
-    V = G/(G-1) (n-1)/(n-k) (X^T X)^-1 [sum_g X_g^T e_g e_g^T X_g] (X^T X)^-1
-
-over G runs, n windows and k = 3 constants, when there are at least
-:data:`MIN_CLUSTERS` runs; with fewer runs the sandwich is unreliable and the
-ordinary ``s^2 (X^T X)^-1`` is inflated by the design effect
-``1 + (m - 1) rho`` (m windows per run, rho the intraclass correlation of the
-residuals).  Without labels every window counts as its own run.
+Standard errors come from a run-level variance model.  Windows of one run
+share its set-up (mounting, sensor coupling, temperature, the oil film of that
+traverse), so they are not independent: every run carries its own amplitude
+factor.  :mod:`.run_scatter` estimates the run-to-run scatter ``tau`` and the
+window scatter ``sigma_w`` by REML, and the constants' covariance is that of
+the least-squares estimates under that model, as the standard deviation of a
+Student t with ``runs - 3`` degrees of freedom (:class:`.run_scatter.RunScatter`).
+The run scatter is kept in the calibration: a new run's theta_Oil carries it
+(:mod:`.assessment`).  Without run labels every window counts as its own run.
 
 The model's *form* is only tested by operating conditions beyond the three
 constants: with three (speed, load) conditions the fit is exact whatever the
@@ -42,6 +39,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
+from .run_scatter import estimate_run_scatter, ols_covariance, RunScatter
 from .windowing import MIN_AXIAL_LOAD, usable_windows
 
 #: Relative tolerance within which two speeds or loads count as one operating level.
@@ -52,8 +50,6 @@ MIN_WINDOWS = 4
 CONSTANTS = 3
 #: Operating conditions beyond the constants needed before the fit tests the model's form.
 MIN_SPARE_CONDITIONS = 2
-#: Fewest runs for the cluster-robust covariance; with fewer the design effect inflates the ordinary one.
-MIN_CLUSTERS = 6
 #: Relative tolerance within which run set-points count as the same set-point (finer than a level).
 SETPOINT_TOLERANCE = 0.015
 
@@ -77,11 +73,31 @@ class Calibration:
     standard_errors: str = ''       # how the covariance was computed
     merged: tuple = ()              # set-points merged into one level, in words ("loads 4000 and 4200 N")
     flags: tuple = ()               # what the fit cannot vouch for, in words ("form untested: ...")
+    scatter: RunScatter | None = None   # run-to-run and window scatter (None: a file from before they were kept)
+
+    @property
+    def run_scatter(self) -> RunScatter:
+        """The run-level variance model; for a calibration file without one, its window scatter as run scatter."""
+        if self.scatter is not None:
+            return self.scatter
+        return RunScatter(self.residual_std if math.isfinite(self.residual_std) else 0.0, 0.0, self.runs, 10 ** 6,
+                          estimated=False, note='a calibration file without run-level scatter: its window '
+                          'scatter taken as run scatter')
+
+    @property
+    def c_sys_factor(self) -> float:
+        """One-sigma factor of C_sys: it is fitted in log space, so C_sys is known within x/ this factor."""
+        return math.exp(math.sqrt(self.covariance[0, 0]))
 
     @property
     def c_sys_std(self) -> float:
         """One-sigma standard error of C_sys (delta method from ln C_sys)."""
         return self.constants.c_sys * math.sqrt(self.covariance[0, 0])
+
+    @property
+    def c_sys_text(self) -> str:
+        """``C_sys = 0.0073 (x/ 1.04, 1 sigma)``: a factor, since C_sys is fitted as ln C_sys."""
+        return f'{self.constants.c_sys:.6g} (x/ {self.c_sys_factor:.3g}, one sigma)'
 
     @property
     def c_f_std(self) -> float:
@@ -142,6 +158,11 @@ def check_identifiable(speeds, loads) -> tuple[list[float], list[float]]:
     if len(speed_levels) < 2:
         missing.append(f'a second screw speed (all windows at {_levels(speed_levels, "rad/s")}); '
                        'C_lambda cannot be told from C_F with one speed')
+    conditions = operating_conditions(speeds, loads) if n else 0
+    if len(load_levels) >= 2 and len(speed_levels) >= 2 and conditions < CONSTANTS:
+        missing.append(f'{CONSTANTS - conditions} more distinct (speed, load) condition(s): '
+                       f'{len(speed_levels)} speeds x {len(load_levels)} loads were recorded as only {conditions} '
+                       f'conditions, and {CONSTANTS} constants need {CONSTANTS}')
     if n < MIN_WINDOWS:
         missing.append(f'more windows ({n} steady, need at least {MIN_WINDOWS}): longer runs or shorter windows')
     if missing:
@@ -215,30 +236,58 @@ def form_flag(conditions: int) -> str:
     return f'form weakly tested: {advice}; {conditions} conditions leave one beyond the {CONSTANTS} constants'
 
 
-def clustered_covariance(x: np.ndarray, residual: np.ndarray, clusters=None) -> tuple[np.ndarray, str]:
-    """Covariance of least-squares parameters with windows clustered by run (see module doc), and its name."""
-    n, k = x.shape
-    bread = np.linalg.inv(x.T @ x)
-    dof = max(n - k, 1)
-    ordinary = float(residual @ residual) / dof * bread
-    if clusters is None:
-        return ordinary, 'ordinary (each window independent: no run labels)'
-    _, index = np.unique(np.asarray(clusters), return_inverse=True)
-    groups = int(index.max()) + 1
-    if groups >= MIN_CLUSTERS:
-        scores = np.zeros((groups, k))
-        np.add.at(scores, index, x * residual[:, None])
-        meat = scores.T @ scores
-        factor = groups / (groups - 1) * (n - 1) / dof
-        return factor * bread @ meat @ bread, f'clustered by run ({groups} runs, CR1 sandwich)'
-    sizes = np.bincount(index)
-    means = np.bincount(index, weights=residual) / sizes
-    within = float(np.sum((residual - means[index]) ** 2)) / max(n - groups, 1)
-    mean_size = n / groups
-    between = (float(np.sum(sizes * (means - residual.mean()) ** 2)) / max(groups - 1, 1) - within) / mean_size
-    rho = max(between, 0.0) / (max(between, 0.0) + within) if within > 0 else 0.0
-    deff = 1.0 + (mean_size - 1.0) * rho
-    return deff * ordinary, f'ordinary x design effect {deff:.3g} ({groups} runs, too few for clustering)'
+def run_level_covariance(x: np.ndarray, residual: np.ndarray, clusters=None) -> tuple[np.ndarray, RunScatter, str]:
+    """Covariance of least-squares parameters under the run-effect model (see module doc).
+
+    ``x`` the design (or an extended model's Jacobian), ``residual`` its ln
+    residuals, ``clusters`` one run label per window (None: each window a run).
+    Returns the covariance, the run scatter and how it was computed, in words.
+    """
+    runs = np.arange(len(residual)) if clusters is None else np.asarray(clusters)
+    scatter = estimate_run_scatter(x, residual, runs)
+    covariance = ols_covariance(x, runs, scatter)
+    labels = '' if clusters is not None else '; no run labels: each window taken as its own run'
+    return covariance, scatter, f'least squares under a random run effect ({scatter.summary}{labels})'
+
+
+def scatter_flags(scatter: RunScatter, replicated: bool) -> list[str]:
+    """What the run-level variance model cannot vouch for, in words."""
+    if not scatter.estimated and scatter.note:
+        return []
+    if not scatter.estimated:
+        return [f'run scatter not estimable: {scatter.runs} runs for {CONSTANTS} constants; theta\'s sigma '
+                f'assumes {100 * scatter.run_std:.0f} % run-to-run scatter (record each condition in two runs '
+                'or more)']
+    if not replicated:
+        return ['no condition repeated: the run-to-run scatter is estimated from the model\'s residuals and '
+                'includes whatever the model misses (record each condition in two runs or more)']
+    return []
+
+
+def sign_flags(constants) -> list[str]:
+    """Constants with a sign Eq. 18-22 do not allow, in words (flagged like an unphysical theta_Oil)."""
+    flags = []
+    if constants.c_f < 0:
+        flags.append(f'C_F = {constants.c_f:.3g} 1/N < 0 is unphysical: the load excitation factor '
+                     'exp(C_F F_a) (Eq. 18) would fall as the load rises; the fit absorbs something the model '
+                     'leaves out (check the load signal and the speed and load range)')
+    if not constants.c_lambda > 0:
+        flags.append(f'C_lambda = {constants.c_lambda:.3g} <= 0 is unphysical: the oil film would raise the '
+                     'vibration (Eq. 19)')
+    return flags
+
+
+def replicated_conditions(speeds, loads, clusters) -> bool:
+    """Whether some (speed, load) condition was recorded in two runs or more."""
+    if clusters is None or len(speeds) == 0:
+        return False
+    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
+    pairs = np.column_stack([_nearest_level(speeds, operating_levels(speeds)),
+                             _nearest_level(loads, operating_levels(loads))])
+    runs_of = {}
+    for (i, j), run in zip(pairs.tolist(), np.asarray(clusters).tolist()):
+        runs_of.setdefault((i, j), set()).add(run)
+    return any(len(runs) > 1 for runs in runs_of.values())
 
 
 def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Sequence[str] = (),
@@ -247,7 +296,7 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
 
     speeds in rad/s, loads in N, amplitudes (window RMS) in m/s^2, theta
     dimensionless (the reference state, 1 = fully lubricated); ``clusters``
-    one run label per window (standard errors clustered by run).
+    one run label per window (the runs of the run-level variance model).
     """
     speeds = np.abs(np.asarray(speeds, dtype=float))
     loads = np.abs(np.asarray(loads, dtype=float))
@@ -274,27 +323,33 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     residual = y - x @ params
     dof = max(len(y) - 3, 1)
     residual_var = float(residual @ residual) / dof
-    covariance, method = clustered_covariance(x, residual, clusters)
+    covariance, scatter, method = run_level_covariance(x, residual, clusters)
     constants = ModelConstants.from_vector(params)
     fitted = acceleration_amplitude(speeds, loads, theta, constants)
     fit_rmse = float(np.sqrt(np.mean((fitted / amplitudes - 1.0) ** 2)))
     conditions = operating_conditions(speeds, loads)
     merged = (merged_setpoints(speeds, clusters, 'rad/s', 'speeds')
               + merged_setpoints(loads, clusters, 'N', 'loads'))
-    flag = form_flag(conditions)
+    flags = calibration_flags(conditions, scatter, replicated_conditions(speeds, loads, clusters), constants)
     return Calibration(constants=constants, covariance=covariance, fit_rmse=fit_rmse,
                        residual_std=math.sqrt(residual_var), windows_used=int(len(y)),
                        reference_theta=float(theta), speed_levels=tuple(speed_levels),
                        load_levels=tuple(load_levels), sources=tuple(str(s) for s in sources),
                        conditions=conditions, runs=int(np.unique(clusters).size) if clusters is not None else 0,
-                       standard_errors=method, merged=tuple(merged), flags=(flag,) if flag else ())
+                       standard_errors=method, merged=tuple(merged), flags=flags, scatter=scatter)
+
+
+def calibration_flags(conditions: int, scatter: RunScatter, replicated: bool, constants) -> tuple[str, ...]:
+    """Every flag of a fit: untested form, run scatter it cannot estimate, unphysical signs."""
+    form = form_flag(conditions)
+    return tuple(([form] if form else []) + scatter_flags(scatter, replicated) + sign_flags(constants))
 
 
 def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=(),
                 recordings=None) -> Calibration:
     """Fit on the steady windows (see :mod:`.windowing`) whose load is at least ``min_axial_load``.
 
-    Standard errors are clustered by run: ``(recording, run_index)``, with
+    Runs of the variance model are ``(recording, run_index)``, with
     ``recordings`` one recording label per window (all one recording if None).
     """
     windows = list(windows)

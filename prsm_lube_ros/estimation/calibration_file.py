@@ -21,6 +21,7 @@ from ..config_file import read_yaml
 from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
+from .run_scatter import RunScatter
 
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
@@ -36,6 +37,8 @@ def calibration_to_dict(calibration: Calibration) -> dict:
         'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
         'std': {'c_sys': calibration.c_sys_std, 'c_f': calibration.c_f_std,
                 'c_lambda': calibration.c_lambda_std},
+        # C_sys is fitted as ln C_sys: one sigma is a factor (C_sys x/ c_sys_factor), the std above its linearisation.
+        'c_sys_factor': calibration.c_sys_factor,
         'units': {'c_sys': 'm N^(1/3)', 'c_f': '1/N', 'c_lambda': '(rad/s)^-0.68 N^0.073'},
         'covariance_ln_csys_cf_clambda': [[float(v) for v in row] for row in calibration.covariance],
         'fit': {'rmse_relative': calibration.fit_rmse, 'residual_std_ln': calibration.residual_std,
@@ -45,7 +48,7 @@ def calibration_to_dict(calibration: Calibration) -> dict:
                 'conditions': calibration.conditions, 'runs': calibration.runs,
                 'standard_errors': calibration.standard_errors, 'merged_levels': list(calibration.merged),
                 'flags': list(calibration.flags),
-                'sources': list(calibration.sources)},
+                'sources': list(calibration.sources), **_scatter_to_dict(calibration.scatter)},
         'extension': dict(calibration.extension),
     }
 
@@ -72,7 +75,8 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             conditions=int(fit.get('conditions', 0)), runs=int(fit.get('runs', 0)),
             standard_errors=str(fit.get('standard_errors', '')),
             merged=tuple(str(v) for v in fit.get('merged_levels', ()) or ()),
-            flags=tuple(str(v) for v in fit.get('flags', ()) or ()))
+            flags=tuple(str(v) for v in fit.get('flags', ()) or ()),
+            scatter=_scatter_from_dict(fit))
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -82,6 +86,27 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
     if constants.c_lambda == 0:
         raise ConfigError(f'{origin}: C_lambda is 0, theta_Oil (Eq. 23) cannot be computed')
     return calibration
+
+
+def _scatter_to_dict(scatter: RunScatter | None) -> dict:
+    """The run-level variance model's keys under ``fit:`` (none for a calibration without one)."""
+    if scatter is None:
+        return {}
+    return {'run_std_ln': scatter.run_std, 'window_std_ln': scatter.window_std, 'run_dof': scatter.dof,
+            'run_scatter_estimated': scatter.estimated, 'run_scatter': scatter.summary}
+
+
+def _scatter_from_dict(fit: dict) -> RunScatter | None:
+    """Inverse of :func:`_scatter_to_dict`; None for a file written before run-level scatter was kept."""
+    if 'run_std_ln' not in fit:
+        return None
+    scatter = RunScatter(run_std=float(fit['run_std_ln']), window_std=float(fit.get('window_std_ln', 0.0)),
+                         runs=int(fit.get('runs', 0)), dof=int(fit.get('run_dof', 0)),
+                         estimated=bool(fit.get('run_scatter_estimated', True)))
+    for name, value in (('run_std_ln', scatter.run_std), ('window_std_ln', scatter.window_std)):
+        if not (math.isfinite(value) and 0 <= value < 1):
+            raise ValueError(f'fit: {name} must be a number in [0, 1), got {value!r}')
+    return scatter
 
 
 def save_calibration(calibration: Calibration, path: str | Path) -> Path:

@@ -25,11 +25,18 @@ def test_unaffected_table_passes_the_lack_of_fit_test_and_is_adequate():
     assert document['adequacy']['baseline']['p_value'] is not None
 
 
-def test_pure_error_is_the_window_scatter():
-    table, _ = synthetic_table(np.random.default_rng(2), None, PLAN)
+@pytest.mark.parametrize('run_noise', [0.005, 0.03])
+def test_pure_error_is_the_scatter_of_repeated_runs(run_noise):
+    """Run levels scatter by the run noise plus the window noise averaged over the run's windows."""
+    plan = dataclasses.replace(PLAN, run_noise=run_noise, repeats=4)
+    table, _ = synthetic_table(np.random.default_rng(2), None, plan)
     test = lack_of_fit(table, fit_model(table).log_residual, 3)
-    assert test.pure_error_rms == pytest.approx(PLAN.window_noise, rel=0.2)
-    assert not test.significant
+    windows_per_run = len(table) / table.runs.size
+    expected = np.sqrt(run_noise ** 2 + PLAN.window_noise ** 2 / windows_per_run)
+    assert test.pure_error_rms == pytest.approx(expected, rel=0.3)
+    assert test.window_scatter_rms == pytest.approx(PLAN.window_noise, rel=0.15)
+    assert test.testable and not test.significant
+    assert (test.runs, test.conditions, test.dof_pure) == (24, 6, 18)
 
 
 def _with(table, factor):
@@ -49,6 +56,8 @@ def test_a_miss_no_candidate_makes_is_unexplained_not_adequate(shape):
     assert result.verdict == 'unexplained'
     document = result.as_json()
     assert document['confident'] is False
-    assert document['adequacy']['baseline']['significant'] is True
-    assert document['adequacy']['baseline']['lack_of_fit_rms'] > 0.03
-    assert any('no candidate explains it' in note and '% RMS' in note for note in result.notes)
+    baseline = document['adequacy']['baseline']
+    assert baseline['significant'] is True
+    # Repeated runs of one condition differ far beyond set-up scatter: not noise.
+    assert baseline['excess_scatter'] is True and baseline['pure_error_rms'] > 0.05
+    assert any('no candidate explains it' in note and 'beyond the 5 % a rig' in note for note in result.notes)
