@@ -29,6 +29,7 @@ class DriveProgram:
         self._motion = [[0.0], [float(angle)], [0.0], [0.0]]   # start, angle, speed, acceleration
         self._load = [[0.0], [0.0], [0.0]]                      # start, load, rate
         self._arrays = None
+        self.traverse_starts: list[float] = []                  # s, start of every stroke appended
 
     def _tables(self):
         if self._arrays is None:
@@ -110,7 +111,7 @@ class DriveProgram:
 class Stroke:
     """One traverse of the nut in the schedule (times in s since simulated time zero)."""
 
-    kind: str            # 'forward' (measured run under load) or 'rewind' (return, load off)
+    kind: str            # 'forward' (measured run under load), 'return' (back under load) or 'rewind' (load off)
     speed: float         # rad/s, signed (rewind negative)
     load: float          # N, applied (0 for rewind)
     start: float         # s, motion starts
@@ -144,6 +145,7 @@ def append_stroke(program: DriveProgram, start: float, speed: float, travel: flo
     program.append_motion(steady_start, 0.0, speed)
     program.append_motion(steady_end, -acceleration, speed)
     program.append_motion(end, 0.0, 0.0)
+    program.traverse_starts.append(float(start))
     return Stroke(kind, float(speed), float(load), start, end, steady_start, steady_end)
 
 
@@ -153,6 +155,9 @@ def schedule_session(program: DriveProgram, start: float, conditions: Sequence[t
 
     The load actuator ramps the load up in the ``load_ramp_time`` before each
     forward run and down after it; rewinds run unloaded at ``-rewind_speed``.
+    With ``plan.return_under_load`` the nut comes back at the run's speed under
+    its load instead (a ``'return'`` stroke: out and back both measured), and
+    the load ramps down after the return.
     Returns the strokes and the end time (after a final standstill).
     """
     require(rig.load_ramp_time <= plan.standstill,
@@ -165,6 +170,15 @@ def schedule_session(program: DriveProgram, start: float, conditions: Sequence[t
             program.append_load(now - rig.load_ramp_time, load / rig.load_ramp_time, 0.0)
         program.append_load(now, 0.0, load)
         run = append_stroke(program, now, speed, plan.stroke, plan.ramp_travel, lead, load, 'forward')
+        if plan.return_under_load:
+            back = append_stroke(program, run.end + plan.standstill, -speed, plan.stroke, plan.ramp_travel, lead,
+                                 load, 'return')
+            if rig.load_ramp_time > 0:
+                program.append_load(back.end, -load / rig.load_ramp_time, load)
+            program.append_load(back.end + rig.load_ramp_time, 0.0, 0.0)
+            strokes += [run, back]
+            now = back.end + plan.standstill
+            continue
         if rig.load_ramp_time > 0:
             program.append_load(run.end, -load / rig.load_ramp_time, load)
         program.append_load(run.end + rig.load_ramp_time, 0.0, 0.0)

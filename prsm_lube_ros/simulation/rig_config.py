@@ -48,6 +48,9 @@ class RigConfig:
     harmonic_orders: tuple = (1.0, ROLLER_PASS)
     harmonic_shares: tuple = (0.10, 0.15)
     sensor_noise: float = 0.003
+    run_scatter: float = 0.0
+    run_wander: float = 0.0
+    wander_period: tuple = (20.0, 120.0)
     vibration_rate: float = 4000.0
     vibration_block: float = 0.1
     joint_state_rate: float = 100.0
@@ -82,6 +85,12 @@ class RigConfig:
                      'load_ramp_time', 'temperature_noise', 'transport_latency', 'latency_jitter'):
             require(getattr(self, name) >= 0, f'rig {name} must be >= 0, got {getattr(self, name)!r}')
         require(self.contact_mode_damping < 1, 'rig contact_mode_damping must be below 1')
+        for name in ('run_scatter', 'run_wander'):
+            require(0 <= getattr(self, name) < 0.5, f'rig {name} must lie in [0, 0.5), got {getattr(self, name)!r}')
+        object.__setattr__(self, 'wander_period', tuple(as_number('rig wander_period', v)
+                                                        for v in self.wander_period))
+        require(len(self.wander_period) == 2 and 0 < self.wander_period[0] <= self.wander_period[1],
+                f'rig wander_period must be [shortest, longest] s > 0, got {self.wander_period!r}')
         require(len(self.harmonic_orders) == len(self.harmonic_shares),
                 'rig harmonic_orders and harmonic_shares differ in length')
         require(all(order == ROLLER_PASS or order > 0 for order in self.harmonic_orders),
@@ -140,6 +149,7 @@ class RigConfig:
         result = asdict(self)
         result['harmonic_orders'] = list(self.harmonic_orders)
         result['harmonic_shares'] = list(self.harmonic_shares)
+        result['wander_period'] = list(self.wander_period)
         result['roller_pass_order'] = self.roller_pass_order
         return result
 
@@ -151,7 +161,9 @@ class ExperimentPlan:
     speeds in rad/s (forward feed), loads in N, stage_thetas the true theta_Oil
     after each lubrication step (one bag each), stroke and ramp_travel (per
     ramp) in m, rewind_speed in rad/s, standstill and stage_pause in s,
-    run_order ``'fixed'`` (speed-major, as listed) or ``'random'`` (seeded).
+    run_order ``'fixed'`` (speed-major, as listed) or ``'random'`` (seeded);
+    return_under_load: the return stroke runs back at the run's speed and load
+    (out and back, both measured) instead of an unloaded rewind.
     """
 
     speeds: tuple[float, ...] = (100 * RPM, 150 * RPM, 200 * RPM)
@@ -163,6 +175,7 @@ class ExperimentPlan:
     standstill: float = 1.0
     stage_pause: float = 60.0
     run_order: str = 'fixed'
+    return_under_load: bool = False
 
     def __post_init__(self):
         """Check every field; raise :class:`InputError` naming the first bad one."""

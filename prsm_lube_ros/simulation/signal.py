@@ -98,6 +98,10 @@ def _index_range(start: float, stop: float, rate: float) -> np.ndarray:
     return np.arange(math.ceil(start * rate - 1e-9), math.ceil(stop * rate - 1e-9), dtype=np.int64)
 
 
+#: Sinusoids summed into the slow wander of the set-up (:attr:`RigConfig.run_wander`).
+WANDER_TERMS = 4
+
+
 class RigStream:
     """The rig's state machine: turns a :class:`DriveProgram` into sensor data block by block.
 
@@ -127,6 +131,12 @@ class RigStream:
         background = self.effects.background_vibration
         tones = len(background.tone_frequencies) if background is not None else 0
         self._tone_phases = phase_rng.uniform(0.0, 2.0 * math.pi, tones)
+        # Set-up scatter: keyed off the seed without spawning from it (the caller's sequence is left as it was).
+        self._set_up_key = (sequence.entropy, tuple(sequence.spawn_key) + (1000,))
+        wander_rng = np.random.default_rng(np.random.SeedSequence(sequence.entropy,
+                                                                  spawn_key=self._set_up_key[1] + (1,)))
+        self._wander_periods = wander_rng.uniform(*rig.wander_period, WANDER_TERMS)
+        self._wander_phases = wander_rng.uniform(0.0, 2.0 * math.pi, WANDER_TERMS)
         self._next_index: int | None = None
         self._last_angle = float(program.motion(0.0)[0])
         self.temperature = rig.ambient_temperature
@@ -151,6 +161,28 @@ class RigStream:
         result, _ = lfilter([1.0 - decay], [1.0, -decay], target, zi=[decay * self.temperature])
         self.temperature = float(result[-1])
         return result
+
+    def _set_up_factor(self, times: np.ndarray) -> np.ndarray:
+        """Amplitude factor of the set-up: one log-normal draw per traverse times a slow wander of time.
+
+        Each traverse (stroke of the drive program) has its own factor
+        ``exp(run_scatter z_k)`` (sensor coupling, preload, temperature), drawn
+        from the seed and the traverse number alone, so chunking changes
+        nothing; the wander is ``run_wander sqrt(2 / J) sum_j sin(2 pi t / T_j + phi_j)``.
+        """
+        rig = self.rig
+        log_factor = np.zeros(times.size)
+        if rig.run_scatter:
+            starts = np.asarray(self.program.traverse_starts, dtype=float)
+            traverse = np.clip(np.searchsorted(starts, times, side='right') - 1, 0, None)
+            entropy, key = self._set_up_key
+            for k in np.unique(traverse).tolist():
+                z = np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=key + (2, k))).standard_normal()
+                log_factor[traverse == k] += rig.run_scatter * z
+        if rig.run_wander:
+            phases = 2.0 * math.pi * times[:, None] / self._wander_periods[None, :] + self._wander_phases[None, :]
+            log_factor += rig.run_wander * math.sqrt(2.0 / WANDER_TERMS) * np.sin(phases).sum(axis=1)
+        return np.exp(log_factor)
 
     def advance(self, first_block: int, stop_block: int, theta_oil: float) -> RigChunk:
         """Sensor data for blocks ``[first_block, stop_block)`` at lubrication ``theta_oil``.
@@ -194,6 +226,8 @@ class RigStream:
             if background.broadband_share > 0:
                 part += math.sqrt(background.broadband_share) * self._background_rng.standard_normal(count)
             signal += background.rms * part
+        if rig.run_scatter or rig.run_wander:
+            signal *= self._set_up_factor(times)
         signal += rig.sensor_noise * self._sensor_rng.standard_normal(count)
 
         start, stop = first / fs, (first + count) / fs

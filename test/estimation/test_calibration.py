@@ -125,7 +125,9 @@ def test_assessment_recovers_theta_and_its_uncertainty_covers_the_truth():
     assert 0.7 < np.std(z) < 1.4     # the one-sigma figure describes the real scatter
     run = assessor.assess_run([window(s, f, a) for s, f, a in zip(speeds[:20], loads[:20], rms[:20])])
     assert run.theta_oil == pytest.approx(0.72, abs=3 * run.theta_oil_std + 0.01)
-    assert run.theta_oil_std < np.mean(stds[:20])
+    # Without run labels every window counts as its own run: all scatter may be run scatter, so pooling twenty
+    # windows of one run does not shrink its sigma (a new run carries the run-to-run scatter whole).
+    assert run.theta_oil_std == pytest.approx(np.mean(stds[:20]), rel=0.1)
 
 
 @pytest.mark.parametrize('speed, load, rms, steady, reason', [

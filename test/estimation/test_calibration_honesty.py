@@ -66,28 +66,61 @@ def test_merged_set_points_are_named_in_the_plan_summary():
     assert fit_windows(runs_of(PAPER)).merged == ()      # window scatter of one set-point is not a merge
 
 
-def test_standard_errors_are_clustered_by_run():
-    """Runs with their own offset (set-up scatter): window-independent errors are far too small, clustered ones
-    match the spread of repeated calibrations."""
+def test_standard_errors_come_from_the_run_level_model():
+    """Runs with their own offset (set-up scatter): window-independent errors are far too small, the run-level
+    model's match the spread of repeated calibrations and its run scatter is the one drawn."""
     fits = [fit_windows(runs_of(PAPER, runs_each=2, run_scatter=0.03, window_scatter=0.01, seed=s))
             for s in range(150)]
     spread = np.std([f.constants.c_lambda for f in fits])
-    clustered = np.median([f.c_lambda_std for f in fits])
-    assert 'clustered by run (12 runs' in fits[0].standard_errors
-    assert clustered == pytest.approx(spread, rel=0.35)
+    run_level = np.median([f.c_lambda_std for f in fits])
+    assert 'random run effect' in fits[0].standard_errors and 'REML over 12 runs' in fits[0].standard_errors
+    assert run_level == pytest.approx(spread, rel=0.35)
+    assert np.median([f.run_scatter.run_std for f in fits]) == pytest.approx(0.03, rel=0.2)
+    assert np.median([f.run_scatter.window_std for f in fits]) == pytest.approx(0.01, rel=0.1)
     windows = runs_of(PAPER, runs_each=2, run_scatter=0.03, window_scatter=0.01, seed=0)
     ordinary = fit_constants([w.screw_speed for w in windows], [w.axial_load for w in windows],
                              [w.vibration_rms for w in windows])
     assert ordinary.c_lambda_std < 0.5 * spread
 
 
-def test_few_runs_inflate_the_ordinary_errors_by_the_design_effect():
+def test_few_runs_without_repeats_are_flagged_and_widen_the_errors():
     windows = runs_of(PAPER[:4] + PAPER[5:], runs_each=1, run_scatter=0.05, window_scatter=0.01, seed=3)
     cal = fit_windows(windows)
     ordinary = fit_constants([w.screw_speed for w in windows], [w.axial_load for w in windows],
                              [w.vibration_rms for w in windows])
-    assert 'design effect' in cal.standard_errors
+    assert cal.run_scatter.dof == 2 and cal.run_scatter.predictive_factor == 3.0
+    assert any(flag.startswith('no condition repeated') for flag in cal.flags)
     assert cal.c_lambda_std > 2 * ordinary.c_lambda_std
+
+
+def test_too_few_runs_assume_a_run_scatter_and_say_so():
+    windows = runs_of(PAPER[:2] + PAPER[3:4], runs_each=1, window_scatter=0.01, seed=4)
+    cal = fit_windows(windows)
+    assert not cal.run_scatter.estimated and cal.run_scatter.run_std == 0.03
+    assert any(flag.startswith('run scatter not estimable: 3 runs for 3 constants') for flag in cal.flags)
+
+
+def test_a_negative_c_f_is_flagged_unphysical():
+    falling = ModelConstants(c_sys=0.08, c_f=-2e-3, c_lambda=0.30)
+    rng = np.random.default_rng(5)
+    speeds, loads, rms, runs = [], [], [], []
+    for run, (speed, load) in enumerate(PAPER * 2):
+        for _ in range(10):
+            speeds.append(speed)
+            loads.append(load)
+            rms.append(float(acceleration_amplitude(speed, load, 1.0, falling)) * math.exp(0.01 * rng.normal()))
+            runs.append(run)
+    cal = fit_constants(speeds, loads, rms, clusters=runs)
+    assert any(flag.startswith('C_F = -0.002') and 'unphysical' in flag for flag in cal.flags)
+    assert not any('C_F' in flag for flag in fit_windows(runs_of(PAPER)).flags)
+
+
+def test_c_sys_is_reported_as_a_factor(tmp_path):
+    cal = fit_windows(runs_of(PAPER, runs_each=2, run_scatter=0.03, seed=6))
+    assert cal.c_sys_factor == pytest.approx(math.exp(math.sqrt(cal.covariance[0, 0])))
+    assert cal.c_sys_text.startswith(f'{cal.constants.c_sys:.6g} (x/ ') and 'one sigma' in cal.c_sys_text
+    back = load_calibration(save_calibration(cal, tmp_path / 'calib.yaml'))
+    assert back.run_scatter == cal.run_scatter and back.c_sys_factor == pytest.approx(cal.c_sys_factor)
 
 
 @pytest.mark.parametrize('theta, words', [(-0.48, 'below 0 is not physical'), (1.8, 'far above 1')])
