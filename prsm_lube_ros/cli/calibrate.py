@@ -31,7 +31,7 @@ def run(args) -> int:
     calibration = calibrate_recordings(recordings, theta)
     save_calibration(calibration, args.out)
     c = calibration.constants
-    print(f'C_sys    = {c.c_sys:.6g} +/- {calibration.c_sys_std:.2g} m N^(1/3)')
+    print(f'C_sys    = {calibration.c_sys_text} m N^(1/3)')
     print(f'C_F      = {c.c_f:.6g} +/- {calibration.c_f_std:.2g} 1/N')
     print(f'C_lambda = {c.c_lambda:.6g} +/- {calibration.c_lambda_std:.2g} (rad/s)^-0.68 N^0.073')
     print(f'fit: relative RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows '

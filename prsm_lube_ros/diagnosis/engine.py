@@ -203,7 +203,7 @@ class Diagnosis:
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
         conditions = operating_conditions(table.speed, table.load)
         flags = calibration_flags(conditions, scatter, replicated_conditions(table.speed, table.load, table.run),
-                                  fit.constants)
+                                  fit.constants, covariance)
         return Calibration(constants=fit.constants, covariance=covariance, fit_rmse=fit.rmse,
                            residual_std=residual_std, windows_used=len(table), reference_theta=table.theta,
                            speed_levels=tuple(operating_levels(table.speed)),

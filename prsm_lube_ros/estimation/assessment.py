@@ -17,7 +17,16 @@ Uncertainty is propagated to first order from two sources:
 
 With ``g = C_lambda omega^0.68 F^-0.073`` Eq. 23 has the partial derivatives
 ``d theta/d ln A = -1/g``, ``d theta/d ln C_sys = 1/g``,
-``d theta/d C_F = F/g`` and ``d theta/d C_lambda = -theta/C_lambda``.
+``d theta/d C_F = F/g`` and ``d theta/d C_lambda = -theta/C_lambda``.  The
+last is taken at the reference state (``theta = theta_ref``, 1 by default),
+so the sigma is that of the reading against the reference: there the three
+derivatives are the model's prediction of ln A at the run's speed and load
+over ``g``, and the constants contribute the uncertainty of that prediction.
+Taken at the reading instead, an ill-determined C_lambda (three conditions on
+a line leave it near zero +/- several times itself) would make sigma grow
+with the reading's own noise, so that readings scattered far from 1 by noise
+carry the largest sigma; how well C_lambda, the scale of theta, is known is
+said by the calibration instead (``C_lambda not identified`` flag).
 
 Where Eq. 23 means nothing (screw at rest or crawling, no load, no film term,
 no vibration) theta is NaN and ``reason`` says why, in words.
@@ -145,7 +154,8 @@ class Assessor:
         theta[~ok] = math.nan
         if ok.any():
             g = constants.c_lambda * film_speed_load_term(speed[ok], load[ok])
-            gradient = np.stack((1.0 / g, np.abs(load[ok]) / g, -theta[ok] / constants.c_lambda), axis=-1)
+            reference = np.full(g.shape, self.calibration.reference_theta)
+            gradient = np.stack((1.0 / g, np.abs(load[ok]) / g, -reference / constants.c_lambda), axis=-1)
             parameters = (gradient[:, None, :] @ self.calibration.covariance @ gradient[:, :, None])[:, 0, 0]
             variance = ln_rms_var[ok] / g ** 2 + parameters
             std[ok] = np.sqrt(np.maximum(variance, 0.0))

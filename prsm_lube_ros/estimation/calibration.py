@@ -277,6 +277,20 @@ def sign_flags(constants) -> list[str]:
     return flags
 
 
+#: Relative one-sigma of C_lambda above which theta_Oil's scale counts as not identified.
+C_LAMBDA_IDENTIFIED = 0.3
+
+
+def scale_flag(constants, covariance) -> str:
+    """When C_lambda, the scale of theta_Oil - 1 (Eq. 23), is not identified by the fit ('' when it is)."""
+    relative = math.sqrt(max(float(covariance[2, 2]), 0.0)) / abs(constants.c_lambda) if constants.c_lambda else math.inf
+    if relative <= C_LAMBDA_IDENTIFIED:
+        return ''
+    return (f'C_lambda not identified (one sigma {100 * relative:.0f} % of its value): a change of theta_oil is '
+            'detected against its sigma, but how large it is is uncertain by that factor; record speeds and loads '
+            'that vary independently (3 speeds x 2 loads)')
+
+
 def replicated_conditions(speeds, loads, clusters) -> bool:
     """Whether some (speed, load) condition was recorded in two runs or more."""
     if clusters is None or len(speeds) == 0:
@@ -330,7 +344,8 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     conditions = operating_conditions(speeds, loads)
     merged = (merged_setpoints(speeds, clusters, 'rad/s', 'speeds')
               + merged_setpoints(loads, clusters, 'N', 'loads'))
-    flags = calibration_flags(conditions, scatter, replicated_conditions(speeds, loads, clusters), constants)
+    flags = calibration_flags(conditions, scatter, replicated_conditions(speeds, loads, clusters), constants,
+                              covariance)
     return Calibration(constants=constants, covariance=covariance, fit_rmse=fit_rmse,
                        residual_std=math.sqrt(residual_var), windows_used=int(len(y)),
                        reference_theta=float(theta), speed_levels=tuple(speed_levels),
@@ -339,10 +354,11 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
                        standard_errors=method, merged=tuple(merged), flags=flags, scatter=scatter)
 
 
-def calibration_flags(conditions: int, scatter: RunScatter, replicated: bool, constants) -> tuple[str, ...]:
-    """Every flag of a fit: untested form, run scatter it cannot estimate, unphysical signs."""
-    form = form_flag(conditions)
-    return tuple(([form] if form else []) + scatter_flags(scatter, replicated) + sign_flags(constants))
+def calibration_flags(conditions: int, scatter: RunScatter, replicated: bool, constants,
+                      covariance) -> tuple[str, ...]:
+    """Every flag of a fit: untested form, run scatter it cannot estimate, unphysical signs, theta's scale."""
+    flags = [form_flag(conditions)] + scatter_flags(scatter, replicated) + sign_flags(constants)
+    return tuple(flag for flag in flags + [scale_flag(constants, covariance)] if flag)
 
 
 def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=(),

@@ -61,7 +61,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
     calibration = calibrate_recordings([recordings[-1]], theta=1.0)
     save_calibration(calibration, out / 'calibration.yaml')
     c = calibration.constants
-    say(f'    C_sys = {c.c_sys:.5g} +/- {calibration.c_sys_std:.2g} m N^(1/3), '
+    say(f'    C_sys = {calibration.c_sys_text} m N^(1/3), '
         f'C_F = {c.c_f:.4g} +/- {calibration.c_f_std:.2g} 1/N, '
         f'C_lambda = {c.c_lambda:.4g} +/- {calibration.c_lambda_std:.2g}; '
         f'fit RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows')
