@@ -39,9 +39,9 @@ def run(args) -> int:
     print(f'located: {result.location.summary}')
     lof = result.baseline_fit_test
     if lof is not None:
-        verdict = 'significant' if lof.significant else 'within the noise'
-        print(f'lack of fit: {100 * lof.excess_rms:.1f} % beyond the {100 * lof.pure_error_rms:.1f} % '
-              f'window scatter (F = {lof.statistic:.3g}, p = {lof.p_value:.2g}, {verdict})')
+        print(f'lack of fit: {lof.sentence}')
+    for flag in result.calibration_flags:
+        print(f'warning: {flag}')
     print(f'{"candidate":<30} {"status":<13} {"cv_rmse":>8} {"gain":>7} {"dBIC":>7}')
     for cand in sorted(result.candidates, key=lambda c: c.fit.cv_rmse if c.fit else math.inf):
         if cand.fit is None:

@@ -30,10 +30,18 @@ __all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Ef
 
 
 def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = MIN_AXIAL_LOAD) -> Diagnosis:
-    """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``."""
+    """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``.
+
+    Recordings ``prsm-lube calibrate`` refuses are refused here with the same line: the calibration is fitted
+    first, and its flags (what the fit cannot vouch for) are carried into the diagnosis.
+    """
+    from ..estimation.pipeline import calibrate_recordings
+    calibration = calibrate_recordings(recordings, theta, min_axial_load)
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
                                sources=[rec.path for rec in recordings])
-    return diagnose_table(table)
+    result = diagnose_table(table)
+    result.calibration_flags = list(calibration.flags)
+    return result
 
 
 def write_report(diagnosis: Diagnosis, folder):

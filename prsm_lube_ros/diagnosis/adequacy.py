@@ -103,6 +103,17 @@ class LackOfFit:
                          'something that varies between runs is not in the model')
         return '; '.join(words)
 
+    @property
+    def sentence(self) -> str:
+        """The test in one sentence for the command line and the report."""
+        if not self.testable:
+            return f'not testable: {self.reason}'
+        scatter = (f'; window scatter inside runs {100 * self.window_scatter_rms:.1f} %'
+                   if math.isfinite(self.window_scatter_rms) else '')
+        return (f'{self.finding or "within the noise"} (condition means against the {100 * self.pure_error_rms:.1f} % '
+                f'scatter of {self.runs} runs at {self.conditions} conditions: F = {self.statistic:.3g}, '
+                f'p = {self.p_value:.2g}{scatter})')
+
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'test': 'lack-of-fit F (condition means against replicate runs)', 'testable': self.testable,

@@ -35,14 +35,19 @@ favours one (a background shows fixed spectral lines, or the spectra could
 show them and do not); otherwise the verdict is ``ambiguous`` with both listed
 and what to record to separate them.
 
-Adequacy is tested, not assumed: :func:`.adequacy.lack_of_fit` separates the
-window scatter around smooth within-run trends (pure error) from what the
-model misses (lack of fit).  ``adequate`` needs no candidate to earn its
-parameters, no material lack of fit *and* no covariate left carrying the
-residual; otherwise, with no candidate, the verdict is ``unexplained`` with
-where the residual lives and its relative size.  ``confident`` is true only
-when the chosen model (the paper's for ``adequate``) passes the lack-of-fit
-test; the statistics are in the JSON under ``adequacy``.
+Adequacy is tested, not assumed, at the level of runs (every traverse has its
+own set-up factor, so run-to-run scatter is noise, not physics):
+:func:`.adequacy.lack_of_fit` tests the condition means against the scatter
+of repeated runs (pure error), and that scatter against what a rig's set-up
+gives.  ``adequate`` needs no candidate to earn its parameters, no lack of
+fit, no excess run scatter *and* no covariate left carrying the residual;
+otherwise, with no candidate, the verdict is ``unexplained`` with where the
+residual lives and its size.  A plan with no repeated condition cannot tell
+run scatter from model error: ``cannot tell``, with what to record.
+``confident`` is true only when the chosen model (the paper's for
+``adequate``) passes the lack-of-fit test; the statistics are in the JSON
+under ``adequacy``.  Calibration flags (``prsm-lube calibrate``'s warnings)
+are carried into the JSON as ``flags``.
 
 Verdicts: an effect ID; ``adequate`` (no candidate earns its parameters and the model fits within the noise);
 ``ambiguous`` (tied candidates in ``tied``, or none earns its parameters but
@@ -170,6 +175,7 @@ class Diagnosis:
     baseline_fit_test: LackOfFit | None = None
     chosen_fit_test: LackOfFit | None = None
     second: 'SecondEffect | None' = None     # a second effect named with the first (forward selection)
+    calibration_flags: list = field(default_factory=list)   # what calibrate says the recordings cannot vouch for
 
     @property
     def confident(self) -> bool:
@@ -234,6 +240,7 @@ class Diagnosis:
         adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
                     'chosen': self.chosen_fit_test.as_json() if self.chosen_fit_test else None}
         return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy, 'effects': effects,
+                'flags': list(self.calibration_flags),
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
                              'cv_run_rmse': _num(base.cv_run_rmse),
@@ -682,8 +689,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                          f'BIC {second.delta_bic:+.0f}')
         chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
         if chosen_test.significant:
-            notes.append(f'{named} leaves a lack of fit of {100 * chosen_test.excess_rms:.1f} % '
-                         f'(p = {chosen_test.p_value:.2g}): it explains part of the mismatch, not all')
+            notes.append(f'{named} leaves a misfit ({chosen_test.finding}): it explains part of the mismatch, not all')
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
                      tied=tied, notes=notes, what_to_record=advice, table=table,
                      confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,

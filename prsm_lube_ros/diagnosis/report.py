@@ -166,9 +166,9 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.']
     for label, test in (('paper\'s model', diagnosis.baseline_fit_test), ('chosen model', diagnosis.chosen_fit_test)):
         if test is not None:
-            lines += ['', f'**Lack of fit, {label}:** {100 * test.excess_rms:.1f} % beyond the '
-                      f'{100 * test.pure_error_rms:.1f} % window scatter (F = {test.statistic:.3g}, '
-                      f'p = {test.p_value:.2g}): {"significant" if test.significant else "within the noise"}.']
+            lines += ['', f'**Lack of fit, {label}:** {test.sentence}.']
+    for flag in diagnosis.calibration_flags:
+        lines += ['', f'**Calibration flag:** {flag}.']
     lines.append('')
     for note in diagnosis.notes:
         lines.append(f'- {note}')

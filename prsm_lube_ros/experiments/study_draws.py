@@ -15,6 +15,10 @@ issue name:
 * nuisances (:class:`~prsm_lube_ros.simulation.nuisances.RecordingNuisances`):
   stamp jitter 0-1 ms, 0-5 % repeated joint-state and load stamps, 0-3 %
   lost vibration blocks;
+* set-up scatter of a real rig: every traverse's amplitude factor log-normal
+  with a standard deviation drawn in 0-4 %, a slow wander of 0-1 % RMS, and
+  in half the cases the return traverse run back at the same speed and load
+  (out and back, both measured);
 * effects: drawn by :func:`~prsm_lube_ros.simulation.recordings.draw_effects`
   (the ``draw_*`` functions' own physical ranges and forms), for the case's
   plan and rig.
@@ -52,6 +56,9 @@ LOAD_SPAN = (1.5, 4.0)
 STAMP_JITTER = (0.0, 0.001)
 REPEATED_STAMPS = (0.0, 0.05)
 LOST_BLOCKS = (0.0, 0.03)
+#: Set-up scatter: std of a traverse's ln amplitude factor, RMS of the slow wander.
+RUN_SCATTER = (0.0, 0.04)
+RUN_WANDER = (0.0, 0.01)
 #: Highest contact-mode frequency relative to the sample rate.
 CONTACT_MODE_SHARE = 0.4
 
@@ -70,7 +77,9 @@ class CaseSetup:
                 'loads_n': [round(f, 1) for f in self.plan.loads],
                 'sample_rate': self.rig.vibration_rate, 'block': self.rig.vibration_block,
                 'joint_state_rate': self.rig.joint_state_rate, 'load_rate': self.rig.load_rate,
-                'temperature_rate': self.rig.temperature_rate, 'nuisances': self.nuisances.as_dict()}
+                'temperature_rate': self.rig.temperature_rate, 'nuisances': self.nuisances.as_dict(),
+                'run_scatter': self.rig.run_scatter, 'run_wander': self.rig.run_wander,
+                'return_under_load': self.plan.return_under_load}
 
 
 def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
@@ -113,4 +122,7 @@ def draw_setup(rng: np.random.Generator, *, sessions: int = 2, quick: bool = Fal
     nuisances = RecordingNuisances(stamp_jitter=float(rng.uniform(*STAMP_JITTER)),
                                    repeated_stamp_fraction=float(rng.uniform(*REPEATED_STAMPS)),
                                    lost_block_fraction=float(rng.uniform(*LOST_BLOCKS)))
+    # Drawn last, so the draws above stay those of the study before set-up scatter was added.
+    rig = replace(rig, run_scatter=float(rng.uniform(*RUN_SCATTER)), run_wander=float(rng.uniform(*RUN_WANDER)))
+    plan = replace(plan, return_under_load=bool(rng.integers(2)))
     return CaseSetup(plan, rig, nuisances)
