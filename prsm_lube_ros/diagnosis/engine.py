@@ -638,11 +638,13 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     else:
         pattern = location.located not in ('none', 'spectrum')
         mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
-        if mismatch and not pattern and not baseline.unphysical() and not form_testable(conditions):
-            # Three conditions fit the constants exactly: run scatter alone is no evidence against the form.
+        if mismatch and not pattern and not form_testable(conditions):
+            # Three conditions fit the constants exactly: run scatter or unphysical constants are no evidence
+            # against the form on such a plan (unit-to-unit scatter moves the constants anywhere).
             mismatch = False
-            notes.append(f'{baseline_test.finding}; on {conditions} conditions this may be scatter between units '
-                         'or set-ups as well as a model error')
+            found = baseline_test.finding or 'the constants are unphysical'
+            notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
+                         'well as a model error')
         pair = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
         if pair is not None:
             best, second = pair
