@@ -283,7 +283,8 @@ C_LAMBDA_IDENTIFIED = 0.3
 
 def scale_flag(constants, covariance) -> str:
     """When C_lambda, the scale of theta_Oil - 1 (Eq. 23), is not identified by the fit ('' when it is)."""
-    relative = math.sqrt(max(float(covariance[2, 2]), 0.0)) / abs(constants.c_lambda) if constants.c_lambda else math.inf
+    spread = math.sqrt(max(float(covariance[2, 2]), 0.0))
+    relative = spread / abs(constants.c_lambda) if constants.c_lambda else math.inf
     if relative <= C_LAMBDA_IDENTIFIED:
         return ''
     return (f'C_lambda not identified (one sigma {100 * relative:.0f} % of its value): a change of theta_oil is '

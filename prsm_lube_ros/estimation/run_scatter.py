@@ -84,8 +84,12 @@ class RunScatter:
     @property
     def summary(self) -> str:
         """In words, for messages and the calibration file."""
-        source = self.note or (f'REML over {self.runs} runs, {self.dof} degrees of freedom' if self.estimated
-                  else f'assumed: {self.runs} runs leave none beyond the fixed parameters')
+        if self.note:
+            source = self.note
+        elif self.estimated:
+            source = f'REML over {self.runs} runs, {self.dof} degrees of freedom'
+        else:
+            source = f'assumed: {self.runs} runs leave none beyond the fixed parameters'
         return (f'run-to-run scatter {100 * self.run_std:.2f} % ({source}), '
                 f'window scatter {100 * self.window_std:.2f} %')
 
