@@ -282,7 +282,9 @@ def test_staleness_follows_the_node_clock_under_sim_time(graph, tmp_path):
     assert diagnostics[-1].header.stamp.sec == 1000
     tick(1001.6)                                     # 1.6 s of node clock without vibration > 1.0 s
     wait_for(lambda: status_of(diagnostics[-1], '/prsm').level == bytes([STALE]), 10, 'STALE on /clock')
-    assert 'no vibration for 1.6 s' in status_of(diagnostics[-1], '/prsm').message
+    status = status_of(diagnostics[-1], '/prsm')
+    assert 'no vibration for more than stale_timeout' in status.message
+    assert values_of(status)['last_vibration_age'] == '1.6'
 
 
 def test_bad_inputs_are_left_out_and_the_node_keeps_publishing(graph, tmp_path):
@@ -636,15 +638,17 @@ def test_run_overrides_and_a_missing_parameter_file():
 def test_the_launch_file_parses_and_starts_the_installed_executables():
     import ast
     from pathlib import Path
+    from prsm_lube_ros.nodes.launch_arguments import bringup_plan, LAUNCH_ARGUMENTS
     root = Path(__file__).resolve().parents[2]
     tree = ast.parse((root / 'launch' / 'prsm_lube.launch.py').read_text())
     functions = {node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)}
     assert 'generate_launch_description' in functions
-    executables = {kw.value.value for node in ast.walk(tree) if isinstance(node, ast.Call)
-                   for kw in node.keywords if kw.arg == 'executable'}
+    plan = bringup_plan({}, str(root / 'config'))
+    executables = {plan.estimator.executable, plan.bridge.executable}
     installed = (root / 'CMakeLists.txt').read_text()
-    assert executables == {'sensor_bridge', 'lubrication_estimator'}
+    assert executables == {'sensor_bridge_managed', 'lubrication_estimator'}
     assert all(f'scripts/{name}' in installed for name in executables)
+    assert {'namespace', 'log_level', 'use_sim_time', 'params_file', 'autostart'} <= {a[0] for a in LAUNCH_ARGUMENTS}
 
 
 def test_without_the_private_drain_api_windows_still_come_out(graph, tmp_path, monkeypatch, capfd):
