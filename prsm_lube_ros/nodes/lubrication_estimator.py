@@ -696,8 +696,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             arguments = calibration_arguments(goal_handle.request)
 
             def progress(stage: str, read: int, count: int, windows: int):
-                goal_handle.publish_feedback(CalibrateAction.Feedback(
-                    stage=stage, bags_read=read, bag_count=count, windows_read=windows))
+                try:
+                    goal_handle.publish_feedback(CalibrateAction.Feedback(
+                        stage=stage, bags_read=read, bag_count=count, windows_read=windows))
+                except Exception as exc:   # feedback is a courtesy: the calibration goes on without it
+                    self.get_logger().debug(f'calibrate: feedback not sent ({exc})')
 
             progress('queued', 0, len(arguments[0]), 0)
             try:
