@@ -79,4 +79,3 @@ def namespace_of(topic: str, leaf: str = VIBRATION_TOPIC) -> Optional[str]:
     if topic.endswith('_' + leaf):
         return topic[:-len(leaf)]
     return None
-

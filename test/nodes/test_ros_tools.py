@@ -227,8 +227,8 @@ def test_each_lifecycle_transition_is_logged_once(sides):
 def test_the_launch_arguments_become_namespace_log_level_parameter_files_and_autostart(tmp_path):
     site = tmp_path / 'site.yaml'
     site.write_text("'/**/lubrication_estimator':\n  ros__parameters:\n    warn_below: 0.9\n")
-    assert [a[0] for a in LAUNCH_ARGUMENTS][:5] == ['namespace', 'log_level', 'use_sim_time', 'params_file',
-                                                     'autostart']
+    names = [a[0] for a in LAUNCH_ARGUMENTS]
+    assert names[:5] == ['namespace', 'log_level', 'use_sim_time', 'params_file', 'autostart']
     default = bringup_plan({}, '/share/config')
     assert default.autostart and default.estimator.namespace == 'prsm' == default.bridge.namespace
     assert default.estimator.parameters == ('/share/config/estimator.yaml', {'use_sim_time': False})
