@@ -11,10 +11,9 @@ Topic names: an actuator's topics are ``<namespace>/<leaf>`` (``/prsm`` +
 name their topics; a leaf that starts with ``/`` is already absolute; an empty
 namespace leaves the leaf relative (ROS resolves it in the node's namespace).
 
-Node namespaces: a node started in a namespace (``-r __ns:=/ema_left``) with
-the default actuator namespace ``/prsm`` uses relative names, so every topic
-and service lands in its own namespace (``/ema_left/vibration``); see
-:func:`topic_prefix`.  In the root namespace the default stays ``/prsm``.
+Node namespaces: the nodes use relative names in their own namespace, ``/prsm``
+(:data:`DEFAULT_NAMESPACE`) unless remapped, so the contract's ``/prsm/...`` is
+what the default namespace gives and ``-r __ns:=/ema_left`` moves every name.
 """
 from __future__ import annotations
 
@@ -33,7 +32,7 @@ VIBRATION_BLOCK_LAYOUT = (('header', 'std_msgs/msg/Header'),
                           ('sample_rate', 'float64'),
                           ('samples', 'float32[]'))
 
-#: Default namespace of an actuator's topics.
+#: Default namespace of an actuator's topics, and of the nodes (their names are relative).
 DEFAULT_NAMESPACE = '/prsm'
 #: Topic leaves below the namespace.
 VIBRATION_TOPIC = 'vibration'
@@ -80,15 +79,3 @@ def namespace_of(topic: str, leaf: str = VIBRATION_TOPIC) -> Optional[str]:
     if topic.endswith('_' + leaf):
         return topic[:-len(leaf)]
     return None
-
-
-def topic_prefix(namespace: str, node_namespace: str) -> str:
-    """The prefix a node in ``node_namespace`` puts before its topic leaves for actuator ``namespace``.
-
-    The default ``/prsm`` in a node pushed into a namespace (not ``/``) becomes
-    '' (relative names, resolved in the node's namespace); any other value is
-    kept as given.
-    """
-    if namespace == DEFAULT_NAMESPACE and node_namespace not in ('', '/'):
-        return ''
-    return namespace

@@ -27,7 +27,7 @@ ALLOWED = {
     'fleet': {'physics', 'recording', 'estimation'},
     'simulation': {'physics', 'recording', 'estimation', 'diagnosis'},
     'experiments': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'fleet'},
-    'nodes': {'physics', 'recording', 'estimation', 'simulation', 'fleet', 'msg', 'srv'},
+    'nodes': {'physics', 'recording', 'estimation', 'simulation', 'fleet', 'msg', 'srv', 'action'},
     'cli': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'experiments', 'nodes', 'fleet'},
 }
 #: ROS Python packages (the generated interfaces are checked as the layers 'msg' and 'srv').

@@ -3,6 +3,7 @@
 """package.xml declares every ROS package the code imports; CMakeLists.txt lets colcon test run pytest."""
 import ast
 import os
+import re
 from pathlib import Path
 import xml.etree.ElementTree as ElementTree
 
@@ -10,10 +11,18 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Python modules that are ROS packages of the same name (rosdep keys), as far as this code goes.
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'std_msgs', 'sensor_msgs', 'geometry_msgs',
                 'diagnostic_msgs', 'rosgraph_msgs', 'ament_index_python', 'launch', 'launch_ros'}
-#: System rosdep keys this package may declare: each one looked up in rosdistro's rosdep/python.yaml (2026).
-#: Anything else (rosbags, mcap, tqdm, lz4, zstandard have no key) is installed with pip from
-#: requirements/core.txt, as the README and package.xml say.
-CHECKED_KEYS = {'python3-numpy', 'python3-scipy', 'python3-yaml', 'python3-matplotlib', 'python3-pytest'}
+#: System rosdep keys this package declares, each one found in rosdistro's rosdep/python.yaml as published
+#: (ros/rosdistro 8468e88, 2026-08-22): python3-rosbags-pip and python3-tqdm exist, so do the test tools'.
+CHECKED_KEYS = {'python3-numpy', 'python3-scipy', 'python3-yaml', 'python3-matplotlib', 'python3-tqdm',
+                'python3-rosbags-pip', 'python3-pytest', 'python3-pytest-timeout', 'python3-flake8', 'pydocstyle'}
+#: Python packages the code or the tests use that have no key in that file (searched by name and by the
+#: pip package a key installs): pip installs them from requirements/core.txt and requirements/test.txt.
+NO_ROSDEP_KEY = {'mcap', 'lz4', 'zstandard', 'isal', 'pyarrow', 'dask', 'distributed', 'duckdb', 'polars'}
+#: Key of each requirement that has one (requirements/*.txt name -> rosdep key).
+KEY_OF = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'pyyaml': 'python3-yaml',
+          'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm', 'rosbags': 'python3-rosbags-pip',
+          'pytest': 'python3-pytest', 'pytest-timeout': 'python3-pytest-timeout', 'flake8': 'python3-flake8',
+          'pydocstyle': 'pydocstyle'}
 
 
 def imported_top_level_modules():
@@ -44,8 +53,31 @@ def test_every_imported_ros_package_is_declared():
     run = deps.get('exec_depend', set()) | deps.get('depend', set())
     missing = (imported_top_level_modules() & ROS_PACKAGES) - run
     assert not missing, f'imported but not in package.xml: {sorted(missing)}'
-    system_keys = {name for name in set().union(*deps.values()) if name.startswith('python3-')}
+    system_keys = {name for name in set().union(*deps.values()) if name.startswith('python3-') or name in KEY_OF}
     assert system_keys <= CHECKED_KEYS, f'rosdep keys not checked to exist: {sorted(system_keys - CHECKED_KEYS)}'
+
+
+def requirement_names(name: str) -> set:
+    """Package names (lower case) of requirements/<name>."""
+    names = set()
+    for line in (ROOT / 'requirements' / name).read_text().splitlines():
+        line = line.split('#')[0].strip()
+        if line:
+            names.add(re.split(r'[<>=\[ ;]', line, maxsplit=1)[0].lower())
+    return names
+
+
+def test_every_requirement_with_a_rosdep_key_is_declared_with_it():
+    """rosdep installs what has a key (runtime: exec_depend, tests: test_depend); pip only the rest."""
+    deps = manifest_dependencies()
+    run = deps.get('exec_depend', set()) | deps.get('depend', set())
+    for requirements, declared in (('core.txt', run), ('test.txt', deps.get('test_depend', set()))):
+        names = requirement_names(requirements)
+        assert names <= set(KEY_OF) | NO_ROSDEP_KEY, f'{requirements}: rosdep key not looked up for ' \
+            f'{sorted(names - set(KEY_OF) - NO_ROSDEP_KEY)}'
+        missing = {KEY_OF[n] for n in names & set(KEY_OF)} - declared
+        assert not missing, f'{requirements}: has a rosdep key but is not in package.xml: {sorted(missing)}'
+    assert 'action_msgs' in deps.get('depend', set())          # action/Calibrate.action
 
 
 def test_what_rosdep_cannot_install_is_in_the_pip_requirements():

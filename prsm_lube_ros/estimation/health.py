@@ -28,6 +28,12 @@ STALE=3.  The rules:
 * STALE when no vibration arrived for ``stale_timeout`` s of node clock (and
   before the first one); the theta level is kept and comes back with the
   inputs.
+
+Messages stay the same while the state does (diagnostic aggregators and
+loggers de-duplicate on them): they name the level's cause and the
+thresholds, never a number that changes window by window.  The numbers
+(theta_Oil, its mean, windows not assessed, seconds without vibration, the
+window's reason in full) are in :class:`HealthStatus` for the KeyValues.
 """
 from __future__ import annotations
 
@@ -44,6 +50,18 @@ ERROR = 2
 STALE = 3
 
 LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
+
+#: Why a window was not assessed, in words without numbers, by ``Window.reason_kind`` (and ``low_load``).
+REASON_WORDS = {
+    'no_vibration': 'no vibration samples in the window',
+    'blocks_lost': 'vibration blocks lost (coverage below min_coverage)',
+    'no_speed': 'no screw speed in the window',
+    'at_rest': 'screw at rest or crawling (below min_speed)',
+    'speed_changing': 'screw speed not steady (acceleration or deceleration)',
+    'spans_runs': 'window spans the end of one run and the start of the next',
+    'no_load': 'no axial load in the window',
+    'low_load': 'axial load below min_axial_load',
+}
 
 
 @dataclass(frozen=True)
@@ -106,6 +124,9 @@ class HealthStatus:
     message: str
     theta_level: int | None        # level from the last assessed theta (None before the first)
     unassessed_windows: int        # consecutive windows without a theta
+    theta_mean: float = math.nan   # mean theta_Oil of the windows that set the level
+    unassessed_moving: int = 0     # consecutive windows without a theta while the screw moves
+    reason: str = ''               # the last unassessed window's reason, in full (with its numbers)
 
 
 class HealthMonitor:
@@ -120,6 +141,8 @@ class HealthMonitor:
         self._unassessed = 0
         self._unassessed_moving = 0
         self._reason = ''
+        self._reason_words = ''
+        self._judged = math.nan
         self._last_input: float | None = None
         self._message = 'no window evaluated yet'
 
@@ -139,11 +162,13 @@ class HealthMonitor:
         self._last_input = now
 
     def observe(self, theta: float, theta_std: float = math.nan, reason: str = '',
-                moving: bool = True) -> int:
+                moving: bool = True, kind: str = '') -> int:
         """Take one window's theta_Oil (NaN with ``reason`` when not assessable); return the theta level.
 
         ``moving`` says whether the screw turned in that window (a NaN window at
-        rest is a pause, not a problem).
+        rest is a pause, not a problem); ``kind`` is the reason's code
+        (:data:`REASON_WORDS`), whose words go into the message instead of
+        ``reason`` (which may carry the window's numbers).
         """
         if math.isfinite(theta):
             t = self.thresholds
@@ -152,31 +177,30 @@ class HealthMonitor:
                 self._recent.popleft()
             judged = statistics.fmean(self._recent)
             self._theta_level = theta_level(judged, self._theta_level, t)
-            self._theta, self._theta_std = theta, theta_std
+            self._theta, self._theta_std, self._judged = theta, theta_std, judged
             self._unassessed = self._unassessed_moving = 0
-            self._reason = ''
-            said = f'theta_oil {theta:.3f}' + (f' +/- {theta_std:.3f}' if math.isfinite(theta_std) else '')
-            if len(self._recent) > 1:
-                said += f', mean of the last {len(self._recent)} windows {judged:.3f}'
+            self._reason = self._reason_words = ''
             if self._theta_level == ERROR:
                 why = (f'below the error threshold {t.error_below:g}' if judged < t.error_below else
                        f'not yet above {t.error_below + t.hysteresis:g} (error threshold + hysteresis)')
-                self._message = f'lubrication insufficient: {said}, {why}'
+                self._message = f'lubrication insufficient: mean theta_oil {why}'
             elif self._theta_level == WARN:
                 why = (f'below the warning threshold {t.warn_below:g}' if judged < t.warn_below else
                        f'not yet above {t.warn_below + t.hysteresis:g} (warning threshold + hysteresis)')
-                self._message = f'lubrication degraded: {said}, {why}'
+                self._message = f'lubrication degraded: mean theta_oil {why}'
             else:
-                self._message = f'lubrication good: {said}'
+                self._message = 'lubrication good'
         else:
             self._unassessed += 1
             self._unassessed_moving = self._unassessed_moving + 1 if moving else 0
             self._reason = reason or 'theta_oil is not a number'
-            self._message = f'not assessable: {self._reason}'
-            if self._theta_level is not None:
-                self._message += (f'; last theta_oil {self._theta:.3f} '
-                                  f'({LEVEL_NAMES[self._theta_level]})')
+            self._reason_words = REASON_WORDS.get(kind, self._reason)
+            self._message = f'not assessable: {self._reason_words}' + self._last_level()
         return self._theta_level if self._theta_level is not None else OK
+
+    def _last_level(self) -> str:
+        """'; last level WARN' once a theta was assessed ('' before)."""
+        return '' if self._theta_level is None else f'; last level {LEVEL_NAMES[self._theta_level]}'
 
     def stale_for(self, now: float) -> float:
         """Seconds since the last vibration message (inf before the first)."""
@@ -186,23 +210,20 @@ class HealthMonitor:
         """Level and message at node-clock time ``now`` (s)."""
         t = self.thresholds
         silent = self.stale_for(now)
+        numbers = dict(theta_mean=self._judged, unassessed_moving=self._unassessed_moving, reason=self._reason)
         if silent > t.stale_timeout:
             if self._last_input is None:
                 message = 'no vibration received yet'
             else:
-                message = f'inputs stopped: no vibration for {silent:.1f} s (stale_timeout {t.stale_timeout:g} s)'
-            if self._theta_level is not None:
-                message += f'; last theta_oil {self._theta:.3f} ({LEVEL_NAMES[self._theta_level]})'
-            return HealthStatus(STALE, message, self._theta_level, self._unassessed)
+                message = f'inputs stopped: no vibration for more than stale_timeout ({t.stale_timeout:g} s)'
+            return HealthStatus(STALE, message + self._last_level(), self._theta_level, self._unassessed, **numbers)
         level = self._theta_level if self._theta_level is not None else OK
         message = self._message
         if t.max_unassessed_windows and self._unassessed_moving >= t.max_unassessed_windows:
             level = max(level, WARN)
-            message = (f'not assessable for {self._unassessed_moving} windows while the screw moves: '
-                       f'{self._reason}')
-            if self._theta_level is not None:
-                message += f'; last theta_oil {self._theta:.3f} ({LEVEL_NAMES[self._theta_level]})'
-        return HealthStatus(level, message, self._theta_level, self._unassessed)
+            message = (f'not assessable while the screw moves (max_unassessed_windows {t.max_unassessed_windows} '
+                       f'reached): {self._reason_words}' + self._last_level())
+        return HealthStatus(level, message, self._theta_level, self._unassessed, **numbers)
 
 
 def uncalibrated(status: HealthStatus, note: str) -> HealthStatus:

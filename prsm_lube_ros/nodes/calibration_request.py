@@ -86,10 +86,14 @@ class CalibrationOutcome:
 
 def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: str | Path, lead: float,
                            settings: WindowSettings, namespace: str, min_axial_load: float,
-                           on_problem: Callable[[str], None] | None = None) -> CalibrationOutcome:
+                           on_problem: Callable[[str], None] | None = None,
+                           on_progress: Callable[[str, int, int, int], None] | None = None) -> CalibrationOutcome:
     """Check a request, read its recordings and fit C_sys, C_F, C_lambda (seconds per recording).
 
-    Raises :class:`InputError` for anything wrong with the request or the data.
+    ``on_progress(stage, recordings_read, recording_count, steady_windows)``
+    is called before each recording is read (stage ``reading``) and before
+    the fit (``fitting``).  Raises :class:`InputError` for anything wrong with
+    the request or the data.
     """
     theta = reference_theta(theta)
     paths = resolve_bag_paths(bag_paths, folder)
@@ -105,13 +109,19 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
             on_problem(line)
 
     recordings = []
-    for path in paths:
+    steady = 0
+    for read, path in enumerate(paths):
+        if on_progress:
+            on_progress('reading', read, len(paths), steady)
         recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
                                       on_problem=report)
         if not any(w.steady for w in recording.windows):
             raise InputError(f'calibrate: {path}: no steady window under {namespace}: '
                              f'{_main_reason(recording.windows)}')
         recordings.append(recording)
+        steady += sum(1 for w in recording.windows if w.steady)
+    if on_progress:
+        on_progress('fitting', len(paths), len(paths), steady)
     calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)
     return CalibrationOutcome(calibration, tuple(str(p) for p in paths), tuple(problems))
 

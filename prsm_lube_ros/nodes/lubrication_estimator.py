@@ -22,22 +22,33 @@ That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
 checks them at start-up; without them the node logs one warning and takes the
 auxiliary inputs through plain subscription callbacks (same windows, more CPU).
 
-The service ``/prsm/calibrate`` (parameter ``calibrate_service``) calibrates
-the first actuator, ``<ns>/calibrate`` each one.
+Each actuator has the service ``<ns>/calibrate`` and, beside it, the action
+``<ns>/calibrate`` (``prsm_lube_ros/action/Calibrate``: the same request, feedback
+with the stage and the recordings and windows read, and a cancel that only
+withdraws a calibration still waiting for another to finish: one that runs is
+left untouched and delivers its result).  Parameter ``calibrate_service``
+names one more service for the first actuator.
 
-Namespaces: started in the root namespace the node watches ``/prsm`` (the
-default of ``actuators``).  Started in a namespace (``--ros-args -r
-__ns:=/ema_left``, or ``Node(namespace=...)``), the default ``/prsm`` means
-"this node's namespace": inputs, ``lubrication_state`` and ``calibrate`` are
-relative names (``/ema_left/vibration``, ``/ema_left/calibrate``), the actuator
-is called after the namespace (calibration file ``calibration_ema_left.yaml``),
-and ``/prsm/calibrate`` is not served.  Any other entry of ``actuators`` is used
-as given.  One estimator per namespace thus serves calibrate in its own
-namespace only.  ``/diagnostics`` stays absolute, as diagnostic aggregators expect.  Fitting runs on a worker
-thread: the service callback is a coroutine that awaits it, so subscriptions
-keep flowing with any executor; the new constants replace the old in one
-reference swap.  Bad input never stops the node: it is left out and reported
-once per kind.
+Names: relative, resolved in the node's namespace, as ROS packages do.  The
+node's default namespace is ``/prsm`` (``DEFAULT_NAMESPACE``), so ``ros2 run``
+gives the contract's ``/prsm/vibration`` ... ``/prsm/calibrate``; ``-r
+__ns:=/ema_left`` (or ``Node(namespace=...)``, the launch file's
+``namespace``) moves them all to ``/ema_left/...``, and the actuator is called
+after the namespace (calibration file ``calibration_ema_left.yaml``).  An
+``actuators`` entry '' is the node's namespace; others are resolved in it
+(absolute ones stay as they are).  ``actuators`` and ``calibrate_service``
+report the resolved names (``ros2 param get``).  ``/diagnostics`` stays
+absolute, as diagnostic aggregators expect.
+
+Parameters that decide what may be read or written (``recordings_dir``,
+``calibration_file``, ``history_dir``, ``actuator_file``), and those that
+shape the graph, are read-only after start-up: a change is refused with its
+reason, a set to the current value (``ros2 param load`` of the node's own
+dump) passes (:class:`~.parameters.ReadOnlyAfterStartUp`).  Fitting runs on a
+worker thread: the service and action callbacks are coroutines that await
+it, so subscriptions keep flowing with any executor; the new constants
+replace the old in one reference swap.  Bad input never stops the node: it is
+left out and reported once per kind.
 """
 from __future__ import annotations
 
@@ -55,6 +66,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import ParameterType, SetParametersResult
+from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -64,7 +76,8 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
 from . import ros_convert
-from ..contract import LUBRICATION_TASK, status_name, topic_name, topic_prefix
+from ..action import Calibrate as CalibrateAction
+from ..contract import DEFAULT_NAMESPACE, LUBRICATION_TASK, status_name, topic_name
 from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
@@ -76,9 +89,9 @@ from ..fleet.forecast import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate
-from .calibration_request import calibrate_from_request, recording_namespace, recordings_folder
+from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .parameters import declare_parameter_table
+from .parameters import declare_parameter_table, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 
 NODE_NAME = 'lubrication_estimator'
@@ -91,20 +104,22 @@ _STRINGS = ParameterType.PARAMETER_STRING_ARRAY
 
 #: name: (default, type, description, range (low, high) or None, read_only)
 PARAMETERS = {
-    'actuators': (['/prsm'], _STRINGS, 'namespace or topic prefix of each actuator watched; inputs are '
-                  '<ns>/vibration, <ns>/joint_states, <ns>/axial_load, <ns>/temperature', None, True),
+    'actuators': ([''], _STRINGS, 'namespace or topic prefix of each actuator watched; inputs are '
+                  '<ns>/vibration, <ns>/joint_states, <ns>/axial_load, <ns>/temperature; \'\' is the node\'s '
+                  'namespace, relative entries are resolved in it (reported resolved)', None, True),
     'hardware_ids': ([''], _STRINGS, 'diagnostic hardware_id of each actuator, in the order of actuators '
                      '(missing or empty: the actuator name)', None, True),
     'calibration_file': ('~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
                          'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name '
-                         'with / as _ (e.g. prsm); empty: none. Loaded at start and when changed; the '
-                         'calibrate service writes it when persist is set', None, False),
+                         'with / as _ (e.g. prsm); empty: none. Loaded at start; the calibrate service '
+                         'writes it when persist is set (read-only: it decides where the node writes)', None, True),
     'history_dir': ('', _STRING, 'Parquet assessment history of the fleet (prsm-lube assess --history); when '
                     'set, each actuator\'s depletion forecast (prsm-lube trend) is added to its diagnostics', None,
                     True),
     'forecast_period': (600.0, _DOUBLE, 's between re-reads of history_dir for the forecast', (1.0, 86400.0), True),
     'recordings_dir': ('~/prsm_recordings', _STRING, 'folder the calibrate service may read bags from; '
-                       'relative bag paths are taken from it, paths outside it are refused', None, False),
+                       'relative bag paths are taken from it, paths outside it are refused (read-only: it '
+                       'decides what the node reads)', None, True),
     'actuator_file': ('', _STRING, 'actuator geometry YAML (config/actuator.yaml layout) for the screw lead; '
                       'empty: the contract\'s default actuator', None, True),
     'window_length': (1.0, _DOUBLE, 'window length in s of header-stamp time for the vibration RMS',
@@ -140,8 +155,8 @@ PARAMETERS = {
                           'input)', None, True),
     'state_topic': ('lubrication_state', _STRING, 'output topic below each actuator namespace', None, True),
     'diagnostics_topic': ('/diagnostics', _STRING, 'diagnostics topic', None, True),
-    'calibrate_service': ('/prsm/calibrate', _STRING, 'calibration service of the first actuator (each '
-                          'actuator also has <ns>/calibrate)', None, True),
+    'calibrate_service': ('calibrate', _STRING, 'calibration service of the first actuator (each '
+                          'actuator also has <ns>/calibrate); reported resolved', None, True),
     'screw_joint': ('screw', _STRING, 'name of the screw entry in JointState', None, True),
     'qos_depth': (500, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data); joint '
                   'states, load and temperature are taken once per vibration block (at most every 0.2 s without '
@@ -162,6 +177,13 @@ WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_cove
                      'stream_timeout')
 HEALTH_PARAMETERS = ('warn_below', 'error_below', 'hysteresis', 'stale_timeout', 'max_unassessed_windows',
                      'level_smoothing')
+#: Why the parameters that decide what the node reads or writes are fixed after start-up (refusal reasons).
+FIXED_REASONS = {
+    'recordings_dir': 'it confines what the calibrate service may read',
+    'calibration_file': 'it decides where calibrate writes when persist is set',
+    'history_dir': 'it decides what the node reads',
+    'actuator_file': 'it decides what the node reads',
+}
 
 
 def actuator_label(actuator: str) -> str:
@@ -227,14 +249,44 @@ class ActuatorChannel:
         return sum(self.builder.problem_summary().values()) + sum(self.input_errors.values())
 
 
-class LubricationEstimator(Node):
+class CalibrationWithdrawn(Exception):
+    """A calibration action cancelled while it waited for another calibration: it never started."""
+
+
+class CalibrationJob:
+    """Whether one calibration action has started (then a cancel is refused) or was withdrawn before."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self.started = False
+        self.withdrawn = False
+
+    def withdraw(self) -> bool:
+        """Cancel: True (withdrawn) if the calibration has not started, else False (it runs on, untouched)."""
+        with self._lock:
+            self.withdrawn = self.withdrawn or not self.started
+            return self.withdrawn
+
+    def start(self) -> bool:
+        """Mark it started; False when it was withdrawn first."""
+        with self._lock:
+            self.started = not self.withdrawn
+            return self.started
+
+
+class LubricationEstimator(ReadOnlyAfterStartUp, Node):
     """The estimator node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`."""
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs):
-        super().__init__(node_name, **kwargs)
+    fixed_reasons = FIXED_REASONS
+
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+        super().__init__(node_name, namespace=namespace, **kwargs)
         self._lock = threading.RLock()
         self._fit_lock = threading.Lock()
-        declare_parameter_table(self, PARAMETERS)
+        self._jobs: dict = {}
+        declare_parameter_table(self, PARAMETERS, resolve={
+            'actuators': lambda entries: [self._resolve_namespace(e) for e in entries],
+            'calibrate_service': resolved_names(self)})
         values = self._values()
         self._settings = window_settings(values)
         self._thresholds = health_thresholds(values)
@@ -255,10 +307,9 @@ class LubricationEstimator(Node):
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
         self._calibrate_services = []
-        node_namespace = self.get_namespace()
-        for i, entry in enumerate(actuators):
-            prefix = topic_prefix(entry, node_namespace)
-            name = entry if prefix else node_namespace
+        self._calibrate_actions = []
+        for i, name in enumerate(actuators):
+            prefix = '' if name == self.get_namespace() else name      # the node's own: relative names
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
             channel = ActuatorChannel(name=name, hardware_id=hw, prefix=prefix,
                                       builder=WindowBuilder(self._settings, lead=self._lead),
@@ -271,16 +322,16 @@ class LubricationEstimator(Node):
             self._subscribe(channel, values, qos)
             self.channels.append(channel)
             service_names = [topic_name(prefix, 'calibrate')]
-            # The default /prsm/calibrate names the first actuator's own service: in a namespace that is <ns>/calibrate.
             extra = values['calibrate_service']
-            if not prefix and extra == PARAMETERS['calibrate_service'][0]:
-                extra = service_names[0]
-            if i == 0 and extra not in service_names:
+            if i == 0 and extra and extra != self.resolve_service_name(service_names[0]):
                 service_names.insert(0, extra)
             for service_name in service_names:
                 self._calibrate_services.append(self.create_service(
                     Calibrate, service_name, self._calibrate_handler(channel),
                     callback_group=self._service_group))
+                self._calibrate_actions.append(ActionServer(
+                    self, CalibrateAction, service_name, execute_callback=self._calibrate_action(channel),
+                    cancel_callback=self._cancel_calibration, callback_group=self._service_group))
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
         self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
                                         callback_group=self._input_group)
@@ -301,6 +352,22 @@ class LubricationEstimator(Node):
     # -- set-up ------------------------------------------------------------------------------------
     def _values(self) -> dict:
         return {name: self.get_parameter(name).value for name in PARAMETERS}
+
+    def _resolve_namespace(self, entry: str) -> str:
+        """An ``actuators`` entry resolved in the node's namespace: '' is the namespace itself.
+
+        A trailing ``_`` (topic prefix) is kept; a trailing ``/`` dropped.
+        """
+        entry = str(entry).strip()
+        if not entry:
+            return self.get_namespace()
+        suffix = '_' if entry.endswith('_') else ''
+        core = entry[:-1] if suffix else entry.rstrip('/') or '/'
+        try:
+            return self.resolve_topic_name(core) + suffix
+        except Exception as exc:       # rclpy's InvalidTopicNameException and kin
+            raise InputError(f'parameter actuators: {entry!r} is not a ROS namespace or topic prefix ({exc})') \
+                from None
 
     def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
         """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
@@ -488,14 +555,17 @@ class LubricationEstimator(Node):
             theta, std, reason, flag = assessed.theta_oil, assessed.theta_oil_std, assessed.reason, assessed.flag
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
-        channel.monitor.observe(theta, std, reason, moving=moving)
+        kind = window.reason_kind or ('low_load' if assessor is not None and not math.isfinite(theta)
+                                      and not window.axial_load >= self._min_axial_load else '')
+        channel.monitor.observe(theta, std, reason, moving=moving, kind=kind)
         channel.last_window = window
         channel.windows += 1
         if math.isfinite(theta):
             channel.last_theta, channel.last_theta_std, channel.last_flag = theta, std, flag
         status = self._health(channel, self.now())
+        message = status.message if math.isfinite(theta) or not reason else f'{status.message} ({reason})'
         channel.publisher.publish(ros_convert.lubrication_state_msg(
-            channel.name, window, theta, std, status.level, status.message,
+            channel.name, window, theta, std, status.level, message,
             frame_id=channel.frame_id or actuator_label(channel.name), theta_oil_flag=flag))
         if status.level != channel.last_level:
             self._publish_diagnostics()
@@ -519,8 +589,11 @@ class LubricationEstimator(Node):
             ('screw_speed', w.screw_speed if w else math.nan),
             ('axial_load', w.axial_load if w else math.nan),
             ('window', f'{w.start:.3f} .. {w.end:.3f}' if w else 'none yet'),
+            ('theta_oil_mean', status.theta_mean),
             ('windows', channel.windows),
             ('unassessed_windows', status.unassessed_windows),
+            ('unassessed_moving_windows', status.unassessed_moving),
+            ('unassessed_reason', status.reason or 'none'),
             ('calibration_file', channel.calibration_file or 'none'),
             ('calibration', 'loaded' if channel.assessor else channel.calibration_note),
             ('problems', channel.problem_count()),
@@ -595,25 +668,69 @@ class LubricationEstimator(Node):
             return await self._calibrate(channel, request, response)
         return handler
 
-    async def _calibrate(self, channel: ActuatorChannel, request, response):
-        """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
+    def _off_thread(self, channel: ActuatorChannel, work: Callable) -> Future:
+        """Run ``work()`` on a worker thread; a future (woken on this node's executor) of its result or exception."""
         done = Future(executor=self.executor)
         done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
-        request_paths = list(request.bag_paths)
-        theta, persist = float(request.reference_theta), bool(request.persist)
-        requested_namespace = str(getattr(request, 'recording_namespace', ''))
 
-        def work():
+        def run():
             try:
-                done.set_result(self._run_calibration(channel, request_paths, theta, persist, requested_namespace))
+                done.set_result(work())
             except BaseException as exc:   # never lose the answer: the request gets success=false
                 done.set_result(exc)
 
-        threading.Thread(target=work, name=f'calibrate {channel.name}', daemon=True).start()
-        outcome = await done
+        threading.Thread(target=run, name=f'calibrate {channel.name}', daemon=True).start()
+        return done
+
+    async def _calibrate(self, channel: ActuatorChannel, request, response):
+        """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
+        arguments = calibration_arguments(request)
+        outcome = await self._off_thread(channel, lambda: self._run_calibration(channel, *arguments))
+        return self._answer(channel, response, outcome, persist=arguments[2])
+
+    def _calibrate_action(self, channel: ActuatorChannel):
+        """Execute callback of the Calibrate action: as the service, with feedback; see :class:`CalibrationJob`."""
+        async def execute(goal_handle):
+            key = bytes(goal_handle.goal_id.uuid)
+            job = self._jobs.setdefault(key, CalibrationJob())
+            arguments = calibration_arguments(goal_handle.request)
+
+            def progress(stage: str, read: int, count: int, windows: int):
+                try:
+                    goal_handle.publish_feedback(CalibrateAction.Feedback(
+                        stage=stage, bags_read=read, bag_count=count, windows_read=windows))
+                except Exception as exc:   # feedback is a courtesy: the calibration goes on without it
+                    self.get_logger().debug(f'calibrate: feedback not sent ({exc})')
+
+            progress('queued', 0, len(arguments[0]), 0)
+            try:
+                outcome = await self._off_thread(channel, lambda: self._run_calibration(
+                    channel, *arguments, progress=progress, job=job))
+            finally:
+                self._jobs.pop(key, None)
+            result = self._answer(channel, CalibrateAction.Result(), outcome, persist=arguments[2])
+            if isinstance(outcome, CalibrationWithdrawn):
+                goal_handle.canceled()
+            elif result.success:
+                goal_handle.succeed()
+            else:
+                goal_handle.abort()
+            return result
+        return execute
+
+    def _cancel_calibration(self, goal_handle) -> CancelResponse:
+        """Accept a cancel only for a calibration that has not started; a running one is left untouched."""
+        job = self._jobs.setdefault(bytes(goal_handle.goal_id.uuid), CalibrationJob())
+        if job.withdraw():
+            return CancelResponse.ACCEPT
+        self.get_logger().info('calibrate: cancel refused: the calibration is running and will finish')
+        return CancelResponse.REJECT
+
+    def _answer(self, channel: ActuatorChannel, response, outcome, persist: bool):
+        """Fill a service response or action result (same fields) from a calibration's outcome."""
         if isinstance(outcome, BaseException):
             response.success = False
-            if isinstance(outcome, (InputError, ValueError, OSError)):
+            if isinstance(outcome, (InputError, ValueError, OSError, CalibrationWithdrawn)):
                 response.message = str(outcome)
             else:
                 response.message = f'calibrate: internal error {type(outcome).__name__}: {outcome}'
@@ -636,58 +753,78 @@ class LubricationEstimator(Node):
         return response
 
     def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool,
-                         requested_namespace: str = ''):
-        """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message)."""
+                         requested_namespace: str = '', progress: Callable | None = None,
+                         job: CalibrationJob | None = None):
+        """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message).
+
+        One calibration at a time: the others wait; a ``job`` withdrawn while
+        it waits raises :class:`CalibrationWithdrawn` without doing anything.
+        """
         namespace = recording_namespace(requested_namespace, channel.name)
-        with self._fit_lock:
-            with self._lock:
-                settings, folder = self._settings, self._recordings_dir
-                min_load = self._min_axial_load
-            logged = set()
+        while not self._fit_lock.acquire(timeout=0.05):
+            if job is not None and job.withdrawn:
+                break
+        else:
+            try:
+                if job is not None and not job.start():
+                    raise CalibrationWithdrawn('calibrate: cancelled before it started; nothing was read or '
+                                               'changed')
+                return self._calibrate_now(channel, paths, theta, persist, namespace, progress)
+            finally:
+                self._fit_lock.release()
+        raise CalibrationWithdrawn('calibrate: cancelled while waiting for another calibration; nothing was read '
+                                   'or changed')
 
-            def on_problem(line: str):
-                if line not in logged and len(logged) < 20:
-                    logged.add(line)
-                    self.get_logger().warning(f'{channel.name}: calibrate: {line}')
+    def _calibrate_now(self, channel: ActuatorChannel, paths, theta: float, persist: bool, namespace: str,
+                       progress: Callable | None):
+        """:meth:`_run_calibration` holding the fit lock."""
+        with self._lock:
+            settings, folder = self._settings, self._recordings_dir
+            min_load = self._min_axial_load
+        logged = set()
 
-            started = time.monotonic()
-            outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
-                                             namespace=namespace, min_axial_load=min_load,
-                                             on_problem=on_problem)
-            calibration = outcome.calibration
-            written = ''
-            if persist:
-                if not channel.calibration_file:
-                    raise InputError('calibrate: persist is set but parameter calibration_file is empty; '
-                                     'constants not swapped in')
-                save_calibration(calibration, channel.calibration_file)
-                written = f'; written to {channel.calibration_file}'
-            with self._lock:
-                self._swap_calibration(channel, calibration)
-            return calibration, (
-                f'{calibration.summary}; {len(outcome.recordings)} recording(s)'
-                + (f' under {namespace}' if namespace != channel.name else '')
-                + f' in {time.monotonic() - started:.1f} s; swapped in{written}'
-                + (f'; {len(outcome.problems)} problem(s) in the recordings' if outcome.problems else ''))
+        def on_problem(line: str):
+            if line not in logged and len(logged) < 20:
+                logged.add(line)
+                self.get_logger().warning(f'{channel.name}: calibrate: {line}')
+
+        started = time.monotonic()
+        outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
+                                         namespace=namespace, min_axial_load=min_load,
+                                         on_problem=on_problem, on_progress=progress)
+        calibration = outcome.calibration
+        written = ''
+        if persist:
+            if not channel.calibration_file:
+                raise InputError('calibrate: persist is set but parameter calibration_file is empty; '
+                                 'constants not swapped in')
+            if progress:
+                progress('writing', len(outcome.recordings), len(outcome.recordings), calibration.windows_used)
+            save_calibration(calibration, channel.calibration_file)
+            written = f'; written to {channel.calibration_file}'
+        with self._lock:
+            self._swap_calibration(channel, calibration)
+        return calibration, (
+            f'{calibration.summary}; {len(outcome.recordings)} recording(s)'
+            + (f' under {namespace}' if namespace != channel.name else '')
+            + f' in {time.monotonic() - started:.1f} s; swapped in{written}'
+            + (f'; {len(outcome.problems)} problem(s) in the recordings' if outcome.problems else ''))
 
     # -- parameters --------------------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
-        """Validate and apply changed parameters; refuse with a reason and change nothing otherwise."""
+        """Validate and apply changed parameters; refuse with a reason and change nothing otherwise.
+
+        A parameter set to its current value changes nothing (``ros2 param load`` of the node's own dump
+        must not drop the open windows).
+        """
         values = self._values()
+        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             values[parameter.name] = parameter.value
         names = {p.name for p in parameters}
         try:
             settings = window_settings(values) if names & set(WINDOW_PARAMETERS) else None
             thresholds = health_thresholds(values) if names & set(HEALTH_PARAMETERS) else None
-            calibrations = {}
-            if 'calibration_file' in names:
-                for channel in self.channels:
-                    path = calibration_path(values['calibration_file'], channel.name)
-                    calibrations[channel.name] = (path, load_calibration(path) if path and Path(path).exists()
-                                                  else None)
-            if 'recordings_dir' in names and not recordings_folder(values['recordings_dir']).is_dir():
-                raise InputError(f'parameter recordings_dir: {values["recordings_dir"]} is not a folder')
         except InputError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         with self._lock:
@@ -706,16 +843,13 @@ class LubricationEstimator(Node):
                 for channel in self.channels:
                     if channel.assessor is not None:
                         self._swap_calibration(channel, channel.assessor.calibration)
-            if 'recordings_dir' in names:
-                self._recordings_dir = str(values['recordings_dir'])
-            for channel in self.channels:
-                if channel.name in calibrations:
-                    path, calibration = calibrations[channel.name]
-                    channel.calibration_file = path
-                    if calibration is not None:
-                        self._swap_calibration(channel, calibration)
-                        self.get_logger().info(f'{channel.name}: calibration {path} loaded')
         return SetParametersResult(successful=True)
+
+
+def calibration_arguments(request) -> tuple:
+    """(bag paths, reference theta, persist, recording namespace) of a Calibrate request or action goal."""
+    return (list(request.bag_paths), float(request.reference_theta), bool(request.persist),
+            str(getattr(request, 'recording_namespace', '')))
 
 
 def join_batches(batches: list):

@@ -7,11 +7,26 @@ bounds, read_only)}``; :func:`declare_parameter_table` declares them so that
 ``ros2 param describe`` shows the description and range, and turns a value a
 user passed (``--ros-args -p``, a params file) that breaks its range or type
 into an :class:`InputError` naming the parameter, instead of a traceback.
+
+Read-only parameters (``read_only`` in the table, ``ParameterDescriptor.read_only``
+on the graph, so ``ros2 param describe`` says so) are fixed after start-up.
+rclpy refuses every set of a read-only parameter before any callback runs, even
+one to its current value, so ``ros2 param load`` of a node's own ``ros2 param
+dump`` failed on each of them (and on rclpy's own ``start_type_description_service``).
+:class:`ReadOnlyAfterStartUp`, mixed in before the rclpy node class, takes
+those sets first, in ``set_parameters_atomically`` (what the ``set_parameters``
+and ``set_parameters_atomically`` services call): a read-only parameter set to
+its current value passes without effect, a change is refused with its reason,
+and the other parameters go on to rclpy and the node's own callback.
 """
 from __future__ import annotations
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
+from typing import Callable, Optional
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
+    SetParametersResult
 from rclpy.exceptions import ParameterException
+from rclpy.parameter import Parameter
 
 from ..errors import InputError
 
@@ -30,19 +45,79 @@ def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_o
     return descriptor
 
 
-def declare_parameter_table(node, table: dict) -> dict:
+def declare_parameter_table(node, table: dict, resolve: Optional[dict] = None) -> dict:
     """Declare every parameter of ``table`` on ``node``; return their values by name.
 
-    Raises :class:`InputError` (one line naming the parameter, its value and
-    its range) when an override does not fit.
+    ``resolve`` maps names of read-only parameters that hold ROS names to a
+    function giving the resolved name(s) of a value: such a parameter is
+    declared, set to what its value resolves to in this node (``calibrate`` ->
+    ``/prsm/calibrate``, or ``/ema_left/calibrate`` after ``-r __ns:=/ema_left``),
+    and only then made read-only, so ``ros2 param get`` reports the names the
+    node uses.  Raises :class:`InputError` (one line naming the parameter, its
+    value and its range) when an override does not fit.
     """
+    resolve = resolve or {}
     for name, (default, ptype, description, bounds, read_only) in table.items():
+        descriptor = parameter_descriptor(name, ptype, description, bounds, read_only)
         try:
-            node.declare_parameter(name, default, parameter_descriptor(name, ptype, description, bounds,
-                                                                       read_only))
+            if name not in resolve:
+                node.declare_parameter(name, default, descriptor)
+                continue
+            writable = parameter_descriptor(name, ptype, description, bounds, False)
+            value = node.declare_parameter(name, default, writable).value
+            resolved = resolve[name](value)
+            if resolved != value:
+                node.set_parameters([Parameter(name, value=resolved)])
+            node.set_descriptor(name, descriptor)
         except ParameterException as exc:
             raise InputError(f'parameter {name}: {_reason(exc, name)}') from None
     return {name: node.get_parameter(name).value for name in table}
+
+
+def same_value(parameter: Parameter, current: Parameter) -> bool:
+    """Whether a parameter being set holds the value (and type) it has now."""
+    if parameter.type_ != current.type_:
+        return False
+    new, old = parameter.value, current.value
+    if isinstance(new, (list, tuple)) or isinstance(old, (list, tuple)) or hasattr(new, 'tolist'):
+        return list(new) == list(old)
+    return new == old
+
+
+class ReadOnlyAfterStartUp:
+    """Mixin before an rclpy ``Node``: read-only parameters set to their value pass; a change gets its reason.
+
+    See the module docstring.  ``fixed_reasons`` (name: why) adds why a
+    parameter is fixed to the refusal, e.g. what a change would let a caller do.
+    """
+
+    fixed_reasons: dict = {}
+
+    def set_parameters_atomically(self, parameter_list) -> SetParametersResult:
+        """rclpy's, after taking the read-only parameters out: unchanged ones pass, a change refuses all."""
+        changing = []
+        for parameter in parameter_list:
+            if not (self.has_parameter(parameter.name) and self.describe_parameter(parameter.name).read_only):
+                changing.append(parameter)
+                continue
+            current = self.get_parameter(parameter.name)
+            if not same_value(parameter, current):
+                why = self.fixed_reasons.get(parameter.name, '')
+                return SetParametersResult(successful=False, reason=(
+                    f'parameter {parameter.name} is read-only after start-up{": " + why if why else ""}; it stays '
+                    f'{current.value!r} (restart the node with the new value)'))
+        if not changing:
+            return SetParametersResult(successful=True)
+        return super().set_parameters_atomically(changing)
+
+    def set_parameters(self, parameter_list) -> list:
+        """One :meth:`set_parameters_atomically` per parameter, as rclpy's own does."""
+        return [self.set_parameters_atomically([parameter]) for parameter in parameter_list]
+
+
+def resolved_names(node) -> Callable[[str], str]:
+    """A resolver for :func:`declare_parameter_table`: a service or topic name resolved in ``node``."""
+    return lambda value: node.resolve_service_name(value) if str(value).strip() else value
 
 
 def _reason(exc: ParameterException, name: str) -> str:

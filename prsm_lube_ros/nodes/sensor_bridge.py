@@ -45,10 +45,15 @@ ERROR (the source failed) or STALE (no block for ``stale_timeout`` s)
 variant (:class:`ManagedSensorBridge`).
 
 Topics are ``<namespace>/vibration``, ``/joint_states``, ``/axial_load`` and
-``/temperature`` (CONTRACT.md).  In a node started in a namespace (``-r
-__ns:=/ema_left``) the default ``namespace`` ``/prsm`` means the node's own
-namespace: the topics are relative names (``/ema_left/vibration``), and the
-bag's actuator (``bag_namespace`` left empty) is looked up under that namespace.  Publishers are RELIABLE / KEEP_LAST by
+``/temperature`` (CONTRACT.md).  Names are relative, as in ROS packages: the
+default ``namespace`` '' is the node's own, ``/prsm`` unless remapped (``-r
+__ns:=/ema_left`` gives ``/ema_left/vibration``), and the bag's actuator
+(``bag_namespace`` left empty) is looked up under it; ``namespace`` and
+``imu_topic`` report the resolved names.  Parameters fixed after start-up
+refuse a change with the reason and accept their current value (``ros2 param
+load`` of the node's own dump; :class:`~.parameters.ReadOnlyAfterStartUp`); so
+do the settings of another source.  Each lifecycle transition of
+``sensor_bridge_managed`` is logged once.  Publishers are RELIABLE / KEEP_LAST by
 default: a reliable writer serves best-effort readers (the estimator's
 sensor-data subscriptions) and reliable ones (``ros2 bag record``) alike,
 whereas a best-effort writer would be silently ignored by a reliable reader;
@@ -71,7 +76,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, qos_profile_s
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState, Temperature
 
-from ..contract import DIAGNOSTICS_TOPIC, SOURCE_TASK, status_name, topic_name, topic_prefix
+from ..contract import DEFAULT_NAMESPACE, DIAGNOSTICS_TOPIC, SOURCE_TASK, status_name, topic_name
 from ..errors import InputError
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
@@ -82,7 +87,7 @@ from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .fast_drain import FastDrain, missing_api
 from .imu_blocks import check_axis, ImuBlockAssembler
-from .parameters import declare_parameter_table
+from .parameters import declare_parameter_table, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
 from .startup import run_node
@@ -100,8 +105,9 @@ PARAMETERS = {
     'source': ('simulator', _STRING, 'where the data come from: playback (a recorded bag), simulator (the rig '
                'simulator in real time), hardware (NI-DAQmx accelerometer) or imu (a sensor_msgs/Imu topic)', None,
                True),
-    'namespace': ('/prsm', _STRING, 'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature '
-                  '(a namespace ending in / or _ is a plain prefix)', None, True),
+    'namespace': ('', _STRING, 'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature '
+                  '(a namespace ending in _ is a plain prefix); \'\': the node\'s namespace; reported resolved', None,
+                  True),
     'reliability': ('reliable', _STRING, 'QoS of the publishers: reliable (serves best-effort and reliable '
                     'readers) or best_effort', None, True),
     'qos_depth': (100, _INTEGER, 'KEEP_LAST depth of the publishers', (1, 100000), True),
@@ -151,8 +157,8 @@ PARAMETERS = {
     'buffer_seconds': (10.0, _DOUBLE, 'hardware: ring buffer of the continuous acquisition in s', (0.1, 3600.0),
                        True),
     # imu
-    'imu_topic': ('imu/data', _STRING, 'imu: sensor_msgs/Imu topic (relative: in the node\'s namespace)', None,
-                  True),
+    'imu_topic': ('imu/data', _STRING, 'imu: sensor_msgs/Imu topic (relative: in the node\'s namespace); reported '
+                  'resolved', None, True),
     'imu_axis': ('z', _STRING, 'imu: axis of linear_acceleration along the screw: x, y or z', None, True),
     'rate_tolerance': (0.05, _DOUBLE, 'imu: largest relative difference between the rate of the stamps and '
                        'sample_rate before the measured rate is used (reported once)', (0.001, 0.5), True),
@@ -180,7 +186,7 @@ def publisher_qos(reliability: str, depth: int) -> QoSProfile:
                       durability=DurabilityPolicy.VOLATILE)
 
 
-class BridgeCore:
+class BridgeCore(ReadOnlyAfterStartUp):
     """The bridge's source and publishers, opened, started, halted and closed; mixed into a ROS node class.
 
     :class:`SensorBridge` opens and starts at construction;
@@ -195,14 +201,13 @@ class BridgeCore:
 
     def _read_parameters(self) -> dict:
         """Declare the parameters; check the source; the values by name."""
-        values = declare_parameter_table(self, PARAMETERS)
+        values = declare_parameter_table(self, PARAMETERS, resolve={
+            'namespace': self._resolve_namespace, 'imu_topic': resolved_names(self)})
         self.source = str(values['source']).strip()
         if self.source not in SOURCES:
             raise InputError(f'parameter source: {self.source!r} is not one of {", ".join(SOURCES)}')
-        namespace = str(values['namespace']).strip() or '/prsm'
-        # The default /prsm in a node started in a namespace means that namespace (relative names; contract).
-        self._prefix = topic_prefix(namespace, self.get_namespace())
-        self.namespace = self._prefix or self.get_namespace()
+        self.namespace = values['namespace']
+        self._prefix = '' if self.namespace == self.get_namespace() else self.namespace   # own: relative names
         self.finished = threading.Event()
         self.exit_status = 0
         self.messages_published = 0
@@ -216,6 +221,18 @@ class BridgeCore:
         self.health = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         return values
+
+    def _resolve_namespace(self, namespace: str) -> str:
+        """The ``namespace`` parameter resolved in the node's namespace ('' is that namespace; a trailing _ stays)."""
+        namespace = str(namespace).strip()
+        if not namespace:
+            return self.get_namespace()
+        suffix = '_' if namespace.endswith('_') else ''
+        try:
+            return self.resolve_topic_name(namespace[:-1] if suffix else namespace.rstrip('/') or '/') + suffix
+        except Exception as exc:       # rclpy's InvalidTopicNameException and kin
+            raise InputError(f'parameter namespace: {namespace!r} is not a ROS namespace or topic prefix ({exc})') \
+                from None
 
     def _open(self) -> None:
         """Open the source (InputError, nothing published, when it cannot be used), then the publishers."""
@@ -552,7 +569,11 @@ class BridgeCore:
 
     # -- parameters --------------------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
-        """Simulator: speed, load and theta_oil act from the next block; playback: playback_rate at once."""
+        """Simulator: speed, load and theta_oil act from the next block; playback: playback_rate at once.
+
+        A value equal to the current one changes nothing and passes, also for another source's setting.
+        """
+        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             if parameter.name in SIMULATOR_PARAMETERS and self.source != 'simulator':
                 return SetParametersResult(successful=False,
@@ -582,8 +603,8 @@ class SensorBridge(BridgeCore, Node):
     (playback done, acquisition failed), with :attr:`exit_status` 0 or 1.
     """
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs):
-        super().__init__(node_name, **kwargs)
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+        super().__init__(node_name, namespace=namespace, **kwargs)
         self._read_parameters()
         self._open()
         self._start()
@@ -604,8 +625,8 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
     wall clock by the time it was inactive).
     """
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs):
-        super().__init__(node_name, **kwargs)
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+        super().__init__(node_name, namespace=namespace, **kwargs)
         self._read_parameters()
 
     def _step(self, what: str, action) -> TransitionCallbackReturn:
@@ -616,37 +637,47 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
             return TransitionCallbackReturn.FAILURE
         return TransitionCallbackReturn.SUCCESS
 
+    def _transition(self, what: str, state: LifecycleState, goal: str, result) -> TransitionCallbackReturn:
+        """Log a transition once: ``configure: unconfigured -> inactive`` (or that it failed)."""
+        if result == TransitionCallbackReturn.SUCCESS:
+            self.get_logger().info(f'{what}: {state.label} -> {goal}')
+        else:
+            self.get_logger().warning(f'{what}: failed, stays {state.label}')
+        return result
+
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Open the source and create the publishers (FAILURE, all closed again, when it cannot be used)."""
         result = self._step('configure', self._open)
         if result != TransitionCallbackReturn.SUCCESS:
             self._close()
-        return result
+        return self._transition('configure', state, 'inactive', result)
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start publishing."""
         result = self._step('activate', self._start)
-        return super().on_activate(state) if result == TransitionCallbackReturn.SUCCESS else result
+        if result == TransitionCallbackReturn.SUCCESS:
+            result = super().on_activate(state)
+        return self._transition('activate', state, 'active', result)
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Stop publishing; the source stays open."""
         self._halt()
-        return super().on_deactivate(state)
+        return self._transition('deactivate', state, 'inactive', super().on_deactivate(state))
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close the source and remove the publishers."""
         self._close()
-        return TransitionCallbackReturn.SUCCESS
+        return self._transition('cleanup', state, 'unconfigured', TransitionCallbackReturn.SUCCESS)
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
         """As cleanup, from any state."""
         self._close()
-        return TransitionCallbackReturn.SUCCESS
+        return self._transition('shutdown', state, 'finalized', TransitionCallbackReturn.SUCCESS)
 
     def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
         """A transition raised: close everything and go back to unconfigured."""
         self._close()
-        return TransitionCallbackReturn.SUCCESS
+        return self._transition('error', state, 'unconfigured', TransitionCallbackReturn.SUCCESS)
 
 
 def create_node(**kwargs) -> SensorBridge:

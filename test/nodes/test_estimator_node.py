@@ -23,6 +23,8 @@ pytest.importorskip('prsm_lube_ros.msg')
 
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
+from action_msgs.msg import GoalStatus  # noqa: E402
+from rclpy.action import ActionClient  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState, Temperature  # noqa: E402
@@ -34,6 +36,7 @@ from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN  # noqa: E402
 from prsm_lube_ros.msg import LubricationState, VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes import ros_convert  # noqa: E402
 from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # noqa: E402
+from prsm_lube_ros.action import Calibrate as CalibrateAction  # noqa: E402
 from prsm_lube_ros.srv import Calibrate  # noqa: E402
 from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, film_speed_load_term, ModelConstants  # noqa
 from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings  # noqa: E402
@@ -282,7 +285,9 @@ def test_staleness_follows_the_node_clock_under_sim_time(graph, tmp_path):
     assert diagnostics[-1].header.stamp.sec == 1000
     tick(1001.6)                                     # 1.6 s of node clock without vibration > 1.0 s
     wait_for(lambda: status_of(diagnostics[-1], '/prsm').level == bytes([STALE]), 10, 'STALE on /clock')
-    assert 'no vibration for 1.6 s' in status_of(diagnostics[-1], '/prsm').message
+    status = status_of(diagnostics[-1], '/prsm')
+    assert 'no vibration for more than stale_timeout' in status.message
+    assert values_of(status)['last_vibration_age'] == '1.6'
 
 
 def test_bad_inputs_are_left_out_and_the_node_keeps_publishing(graph, tmp_path):
@@ -550,6 +555,99 @@ def test_a_slow_fit_does_not_hold_up_the_inputs(graph, tmp_path, monkeypatch):
     assert not future.result().success and 'stopped on purpose' in future.result().message
 
 
+# -- calibrate action ------------------------------------------------------------------------------
+def send_goal(graph, name, bag_paths, theta=1.0, persist=False, feedback=None):
+    """Send a Calibrate action goal from the probe (as ros2 action send_goal); the accepted goal handle."""
+    client = ActionClient(graph.probe, CalibrateAction, name)
+    assert client.wait_for_server(timeout_sec=10), f'action {name} not offered'
+    goal = CalibrateAction.Goal(bag_paths=[str(p) for p in bag_paths], reference_theta=theta, persist=persist)
+    sent = client.send_goal_async(goal, feedback_callback=None if feedback is None else (
+        lambda message: feedback.append(message.feedback)))
+    wait_for(sent.done, 10, f'goal of {name} answered')
+    assert sent.result().accepted
+    return sent.result()
+
+
+def outcome_of(handle, timeout=30):
+    """(status, result) of an action goal."""
+    future = handle.get_result_async()
+    wait_for(future.done, timeout, 'the action result')
+    return future.result().status, future.result().result
+
+
+def test_the_calibrate_action_reports_its_progress_and_fits_as_the_service_does(graph, tmp_path):
+    node = graph.estimator(tmp_path)
+    for name in ('a', 'b'):
+        write_reference_bag(tmp_path / name, reference_segments(theta=0.95))
+    feedback = []
+    status, result = outcome_of(send_goal(graph, '/prsm/calibrate', ['a', 'b'], theta=0.95, persist=True,
+                                          feedback=feedback))
+    assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
+    assert result.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
+    assert result.calibration_file == str(tmp_path / 'calibration_prsm.yaml')
+    assert node.channels[0].assessor.calibration.constants.c_lambda == result.c_lambda      # swapped in
+    wait_for(lambda: any(f.stage == 'writing' for f in feedback), 10, 'the last feedback')
+    assert [(f.stage, f.bags_read, f.bag_count) for f in feedback] == [
+        ('queued', 0, 2), ('reading', 0, 2), ('reading', 1, 2), ('fitting', 2, 2), ('writing', 2, 2)]
+    assert 0 < feedback[2].windows_read < feedback[3].windows_read
+    service = call(graph, '/prsm/calibrate', ['a', 'b'], theta=0.95)
+    assert (service.c_sys, service.c_f, service.c_lambda) == (result.c_sys, result.c_f, result.c_lambda)
+    status, result = outcome_of(send_goal(graph, '/prsm/calibrate', []))
+    assert status == GoalStatus.STATUS_ABORTED and not result.success and 'bag_paths is empty' in result.message
+
+
+def test_cancel_withdraws_a_waiting_calibration_and_leaves_a_running_one_untouched(graph, tmp_path, monkeypatch):
+    from prsm_lube_ros.nodes import lubrication_estimator as module
+    real, entered, release = module.calibrate_from_request, threading.Event(), threading.Event()
+
+    def held(*args, **kwargs):
+        entered.set()
+        release.wait(20)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, 'calibrate_from_request', held)
+    node = graph.estimator(tmp_path)
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    running = send_goal(graph, '/prsm/calibrate', ['reference'], theta=0.95)
+    wait_for(entered.is_set, 10, 'the first calibration running')
+    waiting = send_goal(graph, '/prsm/calibrate', ['reference'], theta=0.5)
+    refused = running.cancel_goal_async()
+    wait_for(refused.done, 10, 'the answer to the first cancel')
+    assert not refused.result().goals_canceling                    # rclpy answers a refusal with none canceling
+    accepted = waiting.cancel_goal_async()
+    wait_for(accepted.done, 10, 'the answer to the second cancel')
+    assert [bytes(g.goal_id.uuid) for g in accepted.result().goals_canceling] == [bytes(waiting.goal_id.uuid)]
+    status, result = outcome_of(waiting)
+    assert status == GoalStatus.STATUS_CANCELED and not result.success and 'nothing was read' in result.message
+    release.set()
+    status, result = outcome_of(running)
+    assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
+    assert node.channels[0].assessor.calibration.constants.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
+    assert node.channels[0].assessor.calibration.reference_theta == pytest.approx(0.95)
+
+
+# -- diagnostics -----------------------------------------------------------------------------------
+def test_status_messages_stay_the_same_while_the_state_does(graph, tmp_path):
+    """Aggregators and loggers de-duplicate on the message: the counts change in the KeyValues only."""
+    graph.estimator(tmp_path, max_unassessed_windows=3)
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: diagnostics, 10, 'diagnostics')
+    # 4 s at theta 0.95 (OK), then 5 s moving with no load (not assessable, WARN after 3 windows).
+    graph.publish(graph.publishers(), segments_stream([(4.0, rms_for(0.95), SPEED, LOAD),
+                                                       (5.0, rms_for(0.95), SPEED, 0.0)]), speedup=2.0)
+    settle(diagnostics, quiet=0.5)
+    statuses = [status_of(a, '/prsm') for a in diagnostics]
+    good = [s for s in statuses if s.level == bytes([OK]) and values_of(s)['unassessed_windows'] == '0'
+            and values_of(s)['theta_oil'] != 'nan']
+    assert {s.message for s in good} == {'lubrication good'}
+    assert len({values_of(s)['windows'] for s in good}) >= 2                       # the count moved meanwhile
+    warned = [s for s in statuses if s.level == bytes([WARN])]
+    assert {s.message for s in warned} == {'not assessable while the screw moves (max_unassessed_windows 3 '
+                                           'reached): axial load below min_axial_load; last level OK'}
+    assert len({values_of(s)['unassessed_moving_windows'] for s in warned}) >= 2
+    assert 'below 5 N' in values_of(warned[-1])['unassessed_reason']              # the full reason is kept
+
+
 def test_the_estimator_runs_as_its_own_process(tmp_path):
     """python -m ...lubrication_estimator: publishes, refuses a bad request, exits cleanly on SIGINT."""
     save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
@@ -636,15 +734,17 @@ def test_run_overrides_and_a_missing_parameter_file():
 def test_the_launch_file_parses_and_starts_the_installed_executables():
     import ast
     from pathlib import Path
+    from prsm_lube_ros.nodes.launch_arguments import bringup_plan, LAUNCH_ARGUMENTS
     root = Path(__file__).resolve().parents[2]
     tree = ast.parse((root / 'launch' / 'prsm_lube.launch.py').read_text())
     functions = {node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)}
     assert 'generate_launch_description' in functions
-    executables = {kw.value.value for node in ast.walk(tree) if isinstance(node, ast.Call)
-                   for kw in node.keywords if kw.arg == 'executable'}
+    plan = bringup_plan({}, str(root / 'config'))
+    executables = {plan.estimator.executable, plan.bridge.executable}
     installed = (root / 'CMakeLists.txt').read_text()
-    assert executables == {'sensor_bridge', 'lubrication_estimator'}
+    assert executables == {'sensor_bridge_managed', 'lubrication_estimator'}
     assert all(f'scripts/{name}' in installed for name in executables)
+    assert {'namespace', 'log_level', 'use_sim_time', 'params_file', 'autostart'} <= {a[0] for a in LAUNCH_ARGUMENTS}
 
 
 def test_without_the_private_drain_api_windows_still_come_out(graph, tmp_path, monkeypatch, capfd):

@@ -76,7 +76,7 @@ def double(value):
 
 def check_parameter_services(probe, node_name, name, valid, invalid, reason_words):
     """list, describe, get, set ``name`` to ``valid`` (accepted) and ``invalid`` (refused with a reason)."""
-    base = f'/{node_name}'
+    base = f'/prsm/{node_name}'   # the nodes' default namespace
     listed = call(probe, ListParameters, f'{base}/list_parameters', ListParameters.Request())
     assert name in listed.result.names
 
@@ -125,7 +125,7 @@ def test_a_setting_for_another_source_is_refused_with_its_reason(sides):
     nodes, probe = sides
     nodes.add(SensorBridge(context=nodes.context, parameter_overrides=[
         Parameter('source', value='simulator'), Parameter('namespace', value='/paramtest/prsm')]))
-    refused = call(probe, SetParameters, '/sensor_bridge/set_parameters',
+    refused = call(probe, SetParameters, '/prsm/sensor_bridge/set_parameters',
                    SetParameters.Request(parameters=[ParameterMsg(name='playback_rate', value=double(2.0))]))
     assert not refused.results[0].successful
     assert 'playback' in refused.results[0].reason

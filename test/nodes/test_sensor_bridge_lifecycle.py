@@ -55,11 +55,11 @@ class Graph(BridgeGraph):
 
     def state(self, node):
         """Label of the node's lifecycle state, read through ``<node>/get_state``."""
-        return self.call(GetState, f'/{node}/get_state', GetState.Request()).current_state.label
+        return self.call(GetState, f'/prsm/{node}/get_state', GetState.Request()).current_state.label
 
     def transition(self, node, transition_id):
         """Ask ``<node>/change_state`` for a transition; whether it succeeded."""
-        return self.call(ChangeState, f'/{node}/change_state',
+        return self.call(ChangeState, f'/prsm/{node}/change_state',
                          ChangeState.Request(transition=Transition(id=transition_id))).success
 
 

@@ -43,8 +43,8 @@ class BridgeGraph(SpinningContext):
         lines = []
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.probe.create_subscription(Log, '/rosout', lambda m: lines.append(m) if m.name == node_name else None,
-                                       qos)
+        self.probe.create_subscription(
+            Log, '/rosout', lambda m: lines.append(m) if m.name.split('.')[-1] == node_name else None, qos)
         return lines
 
     def statuses(self, status_name):
