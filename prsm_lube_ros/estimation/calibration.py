@@ -42,6 +42,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
+from .conditioning import AnalysisBand
+from .domain import CalibrationDomain
 from .windowing import MIN_AXIAL_LOAD, usable_windows
 
 #: Relative tolerance within which two speeds or loads count as one operating level.
@@ -77,6 +79,8 @@ class Calibration:
     standard_errors: str = ''       # how the covariance was computed
     merged: tuple = ()              # set-points merged into one level, in words ("loads 4000 and 4200 N")
     flags: tuple = ()               # what the fit cannot vouch for, in words ("form untested: ...")
+    band: AnalysisBand | None = None      # band of the window RMS fitted (conditioning); None: raw RMS (old files)
+    domain: CalibrationDomain | None = None  # speed, load, temperature and sample-rate ranges fitted in
 
     @property
     def c_sys_std(self) -> float:

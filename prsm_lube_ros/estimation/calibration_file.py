@@ -21,6 +21,8 @@ from ..config_file import read_yaml
 from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
+from .conditioning import AnalysisBand, RAW_BAND_TEXT
+from .domain import CalibrationDomain
 
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
@@ -47,6 +49,9 @@ def calibration_to_dict(calibration: Calibration) -> dict:
                 'flags': list(calibration.flags),
                 'sources': list(calibration.sources)},
         'extension': dict(calibration.extension),
+        # Band of the window RMS the constants fit (absent: raw RMS, as files before bands; see band_note).
+        **({'band': calibration.band.as_dict()} if calibration.band is not None else {}),
+        'domain': calibration.domain.as_dict() if calibration.domain is not None else None,
     }
 
 
@@ -72,7 +77,11 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             conditions=int(fit.get('conditions', 0)), runs=int(fit.get('runs', 0)),
             standard_errors=str(fit.get('standard_errors', '')),
             merged=tuple(str(v) for v in fit.get('merged_levels', ()) or ()),
-            flags=tuple(str(v) for v in fit.get('flags', ()) or ()))
+            flags=tuple(str(v) for v in fit.get('flags', ()) or ()),
+            band=AnalysisBand.from_dict(data['band']) if data.get('band') else None,
+            domain=(CalibrationDomain.from_dict(data['domain']) if data.get('domain')
+                    else CalibrationDomain.of_levels(fit.get('speed_levels_rad_s', ()),
+                                                     fit.get('load_levels_n', ()))))
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -82,6 +91,11 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
     if constants.c_lambda == 0:
         raise ConfigError(f'{origin}: C_lambda is 0, theta_Oil (Eq. 23) cannot be computed')
     return calibration
+
+
+def band_note(calibration: Calibration) -> str:
+    """The band a calibration's RMS is in, in words (a file without ``band:`` implies the raw RMS)."""
+    return f'band {calibration.band.text}' if calibration.band is not None else RAW_BAND_TEXT
 
 
 def save_calibration(calibration: Calibration, path: str | Path) -> Path:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from .conditioning import AnalysisBand, BandFilter, DEFAULT_BAND, rate_refusal, spectrum_segment
 
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
@@ -46,9 +47,16 @@ class WindowSettings:
     stale_timeout: float = 3.0
     reset_after_backstep: float = 5.0
     spectrum_segment: int = 0
+    #: Band of the window RMS (see :mod:`.conditioning`); None: raw RMS (calibrations without a band).
+    band: AnalysisBand | None = DEFAULT_BAND
+    #: Hz; > 0: spectra resolve this frequency (lowest order at the lowest speed), segment from
+    #: :func:`.conditioning.spectrum_segment` (overrides ``spectrum_segment``'s length).
+    spectrum_lowest_frequency: float = 0.0
 
     def __post_init__(self):
         """Reject settings that cannot cut windows."""
+        if self.band is not None and not isinstance(self.band, AnalysisBand):
+            raise InputError(f'window setting band={self.band!r} is not an analysis band')
         checks = {
             'window_length': self.window_length > 0,
             'min_speed': self.min_speed > 0,
@@ -58,6 +66,7 @@ class WindowSettings:
             'stale_timeout': self.stale_timeout > 0,
             'reset_after_backstep': self.reset_after_backstep > 0,
             'spectrum_segment': self.spectrum_segment >= 0,
+            'spectrum_lowest_frequency': self.spectrum_lowest_frequency >= 0,
         }
         for name, ok in checks.items():
             value = getattr(self, name)
@@ -131,6 +140,7 @@ class Window:
     reason: str = ''
     spectrum: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan  # Hz per spectrum bin
+    sample_rate: float = math.nan          # Hz, vibration sample rate in the window (highest if several)
 
     @property
     def steady(self) -> bool:
@@ -226,6 +236,9 @@ class WindowBuilder:
         self._closed: list[Window] = []
         self._block_stamps = np.zeros(0, np.int64)   # vibration block stamps (us) of open windows
         self._square_buffer = np.empty(0)
+        self.band = self.settings.band     # the band of the RMS; its upper edge is chosen at the first block
+        self.band_refusal = ''             # why blocks were refused for the band (a sample rate too low), if any
+        self._band_filter: BandFilter | None = None
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
@@ -312,6 +325,8 @@ class WindowBuilder:
         self._closed_before = -math.inf
         self._moving = False
         self._last_angle = math.nan
+        if self._band_filter is not None:
+            self._band_filter.reset()
 
     def _advance(self, stream: str, stamp: float):
         if stamp > self._progress.get(stream, -math.inf):
@@ -333,12 +348,14 @@ class WindowBuilder:
             n = int((empty & good).sum())
             self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
         good &= ~bad_rate & ~empty
+        if self.band is not None and good.any():
+            good &= self._band_covered(rates, good)
         if not good.any():
             return
         samples = np.asarray(batch.samples).reshape(-1)
         finite = np.isfinite(samples)
         all_finite = bool(finite.all())
-        keep_spectra = self.settings.spectrum_segment > 0
+        keep_spectra = self.settings.spectrum_segment > 0 or self.settings.spectrum_lowest_frequency > 0
         if all_finite:
             values = samples.astype(np.float64) if keep_spectra else samples
         else:
@@ -352,6 +369,8 @@ class WindowBuilder:
         idx = np.flatnonzero(good)
         b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
         b_off = offsets[idx]
+        if self._band_filter is not None:
+            values = self._band_filter.apply(values, b_stamp, b_rate, b_off, b_count)
         b_end = b_stamp + (b_count - 1) / b_rate
         k_first = np.floor(b_stamp / length).astype(np.int64)
         k_last = np.floor(b_end / length).astype(np.int64)
@@ -384,6 +403,20 @@ class WindowBuilder:
             for k, first, last in zip(seg_k.tolist(), lo.tolist(), hi.tolist()):
                 self._chunks.setdefault(k, []).append(values[first:last])
         self._advance('vibration', float(b_end.max()))
+
+    def _band_covered(self, rates: np.ndarray, good: np.ndarray) -> np.ndarray:
+        """Mask of blocks whose sample rate covers the band (choosing its upper edge at the first block)."""
+        if not self.band.chosen:
+            self.band = self.band.resolved(float(rates[np.flatnonzero(good)[0]]))
+        if self._band_filter is None:
+            self._band_filter = BandFilter(self.band)
+        covered = rates >= self.band.min_sample_rate * (1 - 1e-9)
+        refused = good & ~covered
+        if refused.any():
+            line = f'vibration: {rate_refusal(self.band, float(rates[refused][0]))}'
+            self.band_refusal = self.band_refusal or line
+            self._report('vibration-band', line + f'; {int(refused.sum())} block(s) left out', int(refused.sum()))
+        return covered
 
     def _squares(self, values: np.ndarray) -> np.ndarray:
         """``values ** 2`` in float64, written into a buffer kept between batches (no new pages per batch)."""
@@ -542,22 +575,25 @@ class WindowBuilder:
                         & (table[:, _LOAD_N] > 0))
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra = [(None, math.nan)] * keys.size
-        if s.spectrum_segment > 0:
+        if s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0:
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
                 chunks = self._chunks.pop(k, None)
                 if chunks and rate_k > 0:
-                    spectra[row] = _power_spectrum(np.concatenate(chunks), rate_k, s.spectrum_segment)
+                    segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
+                               if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
+                    spectra[row] = _power_spectrum(np.concatenate(chunks), rate_k, segment)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
                       count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
                       load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
-                      run_index.tolist(), maybe_steady.tolist(), table, spectra)
+                      run_index.tolist(), maybe_steady.tolist(), table, spectra, rate.tolist())
         windows = []
         for (start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
-             revolutions_k, run_k, steady_k, row, (spectrum, resolution)) in columns:
+             revolutions_k, run_k, steady_k, row, (spectrum, resolution), rate_k) in columns:
             kind, reason = ('', '') if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
-            # Positional, in field order (start ... spectrum_resolution): a third cheaper than keywords.
+            # Positional, in field order (start ... sample_rate): a third cheaper than keywords.
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
-                                  position_k, revolutions_k, run_k, kind, reason, spectrum, resolution))
+                                  position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
+                                  rate_k if rate_k > 0 else math.nan))
         return windows
 
 

@@ -1,0 +1,241 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Signal conditioning before the window RMS: DC and gravity out, the analysis band, spectrum segments.
+
+The RMS of Eq. 22 is the thread-contact vibration; what an accelerometer also
+records is not:
+
+* **DC**: gravity on a DC-coupled axis (9.81 m/s^2 on a vertical one, and
+  every ``sensor_msgs/Imu`` includes it), offsets of the sensor and its
+  amplifier.  A high-pass at :data:`HIGHPASS_CORNER` (Butterworth, order
+  :data:`HIGHPASS_ORDER`) removes it.  The corner lies below the lowest shaft
+  order of interest: order 1 of the screw at the slowest speed of the paper's
+  plan, 100 r/min = 1.67 Hz, passes with a power loss below 0.1 %;
+* **content outside the band**: what the recording carries above the band
+  depends on its sample rate, so the same vibration recorded at 4 kHz and at
+  51.2 kHz gives different raw RMS.  A low-pass at the band's upper edge
+  (Butterworth, order :data:`LOWPASS_ORDER`) makes the RMS that of one band
+  whatever the rate.  The edge is at most :data:`BAND_HIGH_MAX` (the paper's
+  4 kHz acquisition with the anti-alias margin) and at most
+  :data:`ANTI_ALIAS_MARGIN` of the Nyquist frequency of the recording, so the
+  acquisition's anti-alias filter never shapes the band.
+
+The band is stored in the calibration (``band:``) and assessment uses the
+calibration's band; a recording whose sample rate cannot cover it (below
+:meth:`AnalysisBand.min_sample_rate`) is refused.  A calibration file without
+``band:`` was fitted on the raw RMS (DC included, 0 Hz to half the sample rate
+of its recordings), and is assessed that way (:data:`RAW_BAND_TEXT`).
+
+Filtering streams: :class:`BandFilter` carries its state from one block to
+the next when the next block starts one sample period after the previous one
+ends, and starts afresh (state set to the steady state of the block's mean,
+so a DC offset gives no transient) after a gap, a rate change or a clock
+reset.
+
+:func:`spectrum_segment` chooses the Welch segment length for the spectra of
+diagnose and its report from the sample rate and the lowest rotation order of
+interest at the lowest speed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+
+import numpy as np
+
+from ..errors import InputError
+
+#: High-pass corner, Hz: a quarter of shaft order 1 at 120 r/min, 0.3 of it at the paper's slowest 100 r/min.
+HIGHPASS_CORNER = 0.5
+#: Butterworth order of the high-pass (12 dB per octave: DC is gone in the steady state whatever the order).
+HIGHPASS_ORDER = 2
+#: Highest upper band edge, Hz: 0.8 x the Nyquist frequency of the paper's 4 kHz acquisition.
+BAND_HIGH_MAX = 1600.0
+#: Butterworth order of the low-pass at the upper edge (48 dB per octave).
+LOWPASS_ORDER = 8
+#: The upper edge is at most this fraction of the Nyquist frequency (room for the acquisition's anti-alias filter).
+ANTI_ALIAS_MARGIN = 0.8
+#: Lowest rotation order of interest at the lowest speed, Hz: shaft order 1 at the paper's slowest 100 r/min.
+LOWEST_ORDER_FREQUENCY = 100.0 / 60.0
+#: How the RMS of a calibration without ``band:`` (written before bands existed) was computed.
+RAW_BAND_TEXT = 'raw RMS: DC included, 0 Hz to half the sample rate of the recording (calibration without band)'
+#: A block continues the previous one when its stamp is within this many sample periods of the expected one ...
+CONTINUITY_PERIODS = 2.0
+#: ... or within this fraction of the previous block's duration (stamp jitter of block publishers).
+CONTINUITY_BLOCK_SHARE = 0.25
+
+
+@dataclass(frozen=True)
+class AnalysisBand:
+    """The band the window RMS is computed in, Hz, and the filters that make it.
+
+    ``high`` NaN means "not chosen yet": :meth:`resolved` takes
+    ``min(BAND_HIGH_MAX, ANTI_ALIAS_MARGIN x rate / 2)`` for the first sample
+    rate met; ``high`` inf means no low-pass (DC removal only, as the IMU
+    source does).
+    """
+
+    low: float = HIGHPASS_CORNER
+    high: float = math.nan
+    highpass_order: int = HIGHPASS_ORDER
+    lowpass_order: int = LOWPASS_ORDER
+    margin: float = ANTI_ALIAS_MARGIN
+
+    def __post_init__(self):
+        """Reject bands no filter can make."""
+        if not (math.isfinite(self.low) and self.low > 0):
+            raise InputError(f'analysis band: high-pass corner {self.low!r} Hz must be a number > 0')
+        if not (math.isnan(self.high) or self.high > self.low):
+            raise InputError(f'analysis band: upper edge {self.high!r} Hz must lie above the corner {self.low:g} Hz')
+        if not (0 < self.margin <= 1) or self.highpass_order < 1 or self.lowpass_order < 1:
+            raise InputError(f'analysis band: orders must be >= 1 and margin in (0, 1], got {self}')
+
+    @property
+    def chosen(self) -> bool:
+        """Whether the upper edge is fixed (not waiting for the first sample rate)."""
+        return not math.isnan(self.high)
+
+    def resolved(self, rate: float) -> AnalysisBand:
+        """This band with its upper edge chosen for sample rate ``rate`` (Hz) if it is not chosen yet."""
+        if self.chosen:
+            return self
+        return replace(self, high=min(BAND_HIGH_MAX, self.margin * rate / 2.0))
+
+    @property
+    def min_sample_rate(self) -> float:
+        """Lowest sample rate, Hz, that covers the band with the anti-alias margin (0 without a low-pass)."""
+        if not (self.chosen and math.isfinite(self.high)):
+            return 0.0
+        return 2.0 * self.high / self.margin
+
+    def covers(self, rate: float) -> bool:
+        """Whether a recording at ``rate`` Hz can give the RMS in this band."""
+        return rate >= self.min_sample_rate * (1 - 1e-9)
+
+    @property
+    def text(self) -> str:
+        """The band in words: ``0.5-1600 Hz (Butterworth high-pass order 2, low-pass order 8)``."""
+        high = f'{self.high:g}' if self.chosen else 'auto'
+        if self.chosen and math.isinf(self.high):
+            return f'above {self.low:g} Hz (Butterworth high-pass order {self.highpass_order}: DC removed)'
+        return (f'{self.low:g}-{high} Hz (Butterworth high-pass order {self.highpass_order}, low-pass order '
+                f'{self.lowpass_order}; sample rate at least {self.min_sample_rate:g} Hz)')
+
+    def as_dict(self) -> dict:
+        """Mapping for the calibration file's ``band:``."""
+        return {'low_hz': float(self.low), 'high_hz': float(self.high), 'highpass_order': int(self.highpass_order),
+                'lowpass_order': int(self.lowpass_order), 'anti_alias_margin': float(self.margin),
+                'min_sample_rate_hz': float(self.min_sample_rate), 'filter': 'butterworth'}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> AnalysisBand:
+        """Inverse of :meth:`as_dict`."""
+        return cls(low=float(data['low_hz']), high=float(data['high_hz']),
+                   highpass_order=int(data.get('highpass_order', HIGHPASS_ORDER)),
+                   lowpass_order=int(data.get('lowpass_order', LOWPASS_ORDER)),
+                   margin=float(data.get('anti_alias_margin', ANTI_ALIAS_MARGIN)))
+
+
+#: The band of new calibrations: DC out at 0.5 Hz, upper edge chosen from the first sample rate (at most 1600 Hz).
+DEFAULT_BAND = AnalysisBand()
+
+
+def band_text(band: AnalysisBand | None) -> str:
+    """The band in words; :data:`RAW_BAND_TEXT` for None (raw RMS)."""
+    return band.text if band is not None else RAW_BAND_TEXT
+
+
+def rate_refusal(band: AnalysisBand, rate: float) -> str:
+    """One line: a recording at ``rate`` Hz cannot give the RMS in ``band``."""
+    return (f'sample rate {rate:g} Hz cannot cover the analysis band {band.low:g}-{band.high:g} Hz '
+            f'(needs at least {band.min_sample_rate:g} Hz: upper edge at most {band.margin:g} x the Nyquist '
+            'frequency); record faster or calibrate at this rate')
+
+
+def band_sections(band: AnalysisBand, rate: float) -> np.ndarray:
+    """Second-order sections of the band's filters at sample rate ``rate`` Hz (high-pass, then low-pass)."""
+    from scipy.signal import butter
+    sections = [butter(band.highpass_order, band.low, 'highpass', fs=rate, output='sos')]
+    if math.isfinite(band.high):
+        sections.append(butter(band.lowpass_order, band.high, 'lowpass', fs=rate, output='sos'))
+    return np.vstack(sections)
+
+
+class BandFilter:
+    """Streaming band filter over consecutive blocks (see module doc): state carried, reset on gaps."""
+
+    def __init__(self, band: AnalysisBand):
+        """``band`` must be chosen (:meth:`AnalysisBand.resolved`)."""
+        self.band = band
+        self._design: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        self._state: np.ndarray | None = None
+        self._next_stamp = math.nan        # s, where a block continuing the last one starts
+        self._rate = math.nan
+        self._tolerance = 0.0
+
+    def reset(self) -> None:
+        """Start afresh at the next block (clock reset, source restarted)."""
+        self._state = None
+        self._next_stamp = math.nan
+
+    def _sections(self, rate: float) -> tuple[np.ndarray, np.ndarray]:
+        design = self._design.get(rate)
+        if design is None:
+            from scipy.signal import sosfilt_zi
+            sos = band_sections(self.band, rate)
+            design = self._design[rate] = (sos, sosfilt_zi(sos))
+        return design
+
+    def apply(self, samples: np.ndarray, stamps: np.ndarray, rates: np.ndarray,
+              starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """Filtered copy (float64) of ``samples``; blocks ``[starts[i], starts[i] + counts[i])`` in time order.
+
+        ``stamps`` (s) and ``rates`` (Hz) are those of each block; samples outside the blocks are copied as
+        they are.  Consecutive blocks are filtered as one signal when they join (see module doc).
+        """
+        out = np.array(samples, dtype=np.float64)
+        if starts.size == 0:
+            return out
+        from scipy.signal import sosfilt
+        ends = stamps + counts / rates
+        expected = np.concatenate(([self._next_stamp], ends[:-1]))
+        previous_rate = np.concatenate(([self._rate], rates[:-1]))
+        tolerance = np.maximum(CONTINUITY_PERIODS / rates,
+                               CONTINUITY_BLOCK_SHARE * np.concatenate(([self._tolerance], counts[:-1] / rates[:-1])))
+        joined = (np.abs(stamps - expected) <= tolerance) & (rates == previous_rate)
+        joined[1:] &= starts[1:] == starts[:-1] + counts[:-1]
+        breaks = np.flatnonzero(~joined).tolist()
+        segments = breaks if breaks and breaks[0] == 0 else [0] + breaks
+        state = self._state if joined[0] else None
+        for first, stop in zip(segments, segments[1:] + [starts.size]):
+            rate = float(rates[first])
+            sos, zi = self._sections(rate)
+            lo, hi = int(starts[first]), int(starts[stop - 1] + counts[stop - 1])
+            if state is None or first > 0:
+                state = zi * float(np.mean(out[lo:int(starts[first] + counts[first])]))
+            out[lo:hi], state = sosfilt(sos, out[lo:hi], zi=state)
+        self._state = state
+        self._next_stamp = float(ends[-1])
+        self._rate = float(rates[-1])
+        self._tolerance = float(counts[-1] / rates[-1])
+        return out
+
+
+def spectrum_segment(sample_rate: float, lowest_frequency: float, max_samples: int | None = None,
+                     bins_per_interval: float = 2.0) -> int:
+    """Welch segment length (samples, a power of 2) that resolves ``lowest_frequency``.
+
+    ``lowest_frequency`` (Hz) is the lowest rotation order of interest at the
+    lowest speed (also the spacing of neighbouring orders there): the bin width
+    ``sample_rate / nperseg`` is at most ``lowest_frequency / bins_per_interval``,
+    so two neighbouring orders fall ``bins_per_interval`` bins apart.  At most
+    ``max_samples`` (the samples of one window) and at least 64.
+    """
+    if not (sample_rate > 0 and lowest_frequency > 0):
+        raise InputError(f'spectrum: sample rate {sample_rate!r} Hz and lowest frequency '
+                         f'{lowest_frequency!r} Hz must be > 0')
+    needed = sample_rate * bins_per_interval / lowest_frequency
+    segment = 1 << max(6, math.ceil(math.log2(needed)))
+    if max_samples is not None:
+        segment = min(segment, 1 << max(3, int(math.floor(math.log2(max(max_samples, 8))))))
+    return int(segment)
