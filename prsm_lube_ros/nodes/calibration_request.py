@@ -8,7 +8,7 @@ swaps the result in; everything wrong with a request comes out as one
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import os
 from pathlib import Path
 import re
@@ -112,6 +112,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
             raise InputError(f'calibrate: {path}: no steady window under {namespace}: '
                              f'{_main_reason(recording.windows)}')
         recordings.append(recording)
+        settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
     calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)
     return CalibrationOutcome(calibration, tuple(str(p) for p in paths), tuple(problems))
 
