@@ -203,15 +203,16 @@ class BandFilter:
         tolerance = np.maximum(CONTINUITY_PERIODS / rates,
                                CONTINUITY_BLOCK_SHARE * np.concatenate(([self._tolerance], counts[:-1] / rates[:-1])))
         joined = (np.abs(stamps - expected) <= tolerance) & (rates == previous_rate)
-        joined[1:] &= starts[1:] == starts[:-1] + counts[:-1]
-        breaks = np.flatnonzero(~joined).tolist()
+        # One sosfilt call per stretch of blocks adjacent in ``samples``; the state restarts where blocks do not join.
+        adjacent = np.ones(starts.size, bool)
+        adjacent[1:] = starts[1:] == starts[:-1] + counts[:-1]
+        breaks = np.flatnonzero(~(joined & adjacent)).tolist()
         segments = breaks if breaks and breaks[0] == 0 else [0] + breaks
-        state = self._state if joined[0] else None
+        state = self._state
         for first, stop in zip(segments, segments[1:] + [starts.size]):
-            rate = float(rates[first])
-            sos, zi = self._sections(rate)
+            sos, zi = self._sections(float(rates[first]))
             lo, hi = int(starts[first]), int(starts[stop - 1] + counts[stop - 1])
-            if state is None or first > 0:
+            if state is None or not joined[first]:
                 state = zi * float(np.mean(out[lo:int(starts[first] + counts[first])]))
             out[lo:hi], state = sosfilt(sos, out[lo:hi], zi=state)
         self._state = state
@@ -222,14 +223,15 @@ class BandFilter:
 
 
 def spectrum_segment(sample_rate: float, lowest_frequency: float, max_samples: int | None = None,
-                     bins_per_interval: float = 2.0) -> int:
+                     bins_per_interval: float = 4.0) -> int:
     """Welch segment length (samples, a power of 2) that resolves ``lowest_frequency``.
 
     ``lowest_frequency`` (Hz) is the lowest rotation order of interest at the
     lowest speed (also the spacing of neighbouring orders there): the bin width
     ``sample_rate / nperseg`` is at most ``lowest_frequency / bins_per_interval``,
-    so two neighbouring orders fall ``bins_per_interval`` bins apart.  At most
-    ``max_samples`` (the samples of one window) and at least 64.
+    so two neighbouring orders fall ``bins_per_interval`` bins apart: 4 puts the
+    first null of Welch's Hann window (2 bins from a line) midway between them.
+    At most ``max_samples`` (the samples of one window) and at least 64.
     """
     if not (sample_rate > 0 and lowest_frequency > 0):
         raise InputError(f'spectrum: sample rate {sample_rate!r} Hz and lowest frequency '

@@ -369,8 +369,9 @@ class WindowBuilder:
         idx = np.flatnonzero(good)
         b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
         b_off = offsets[idx]
-        if self._band_filter is not None:
-            values = self._band_filter.apply(values, b_stamp, b_rate, b_off, b_count)
+        if self._band_filter is not None:   # in time order, so blocks out of order in a batch still join
+            order = slice(None) if (b_stamp[1:] >= b_stamp[:-1]).all() else np.argsort(b_stamp, kind='stable')
+            values = self._band_filter.apply(values, b_stamp[order], b_rate[order], b_off[order], b_count[order])
         b_end = b_stamp + (b_count - 1) / b_rate
         k_first = np.floor(b_stamp / length).astype(np.int64)
         k_last = np.floor(b_end / length).astype(np.int64)
