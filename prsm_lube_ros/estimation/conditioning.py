@@ -165,7 +165,12 @@ class BandFilter:
     """Streaming band filter over consecutive blocks (see module doc): state carried, reset on gaps."""
 
     def __init__(self, band: AnalysisBand):
-        """``band`` must be chosen (:meth:`AnalysisBand.resolved`)."""
+        """``band`` must be chosen (:meth:`AnalysisBand.resolved`).
+
+        Imports :mod:`scipy.signal` here (half a second on a busy machine), not
+        in the first block's callback of a live node.
+        """
+        import scipy.signal  # noqa: F401
         self.band = band
         self._design: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._state: np.ndarray | None = None

@@ -238,7 +238,7 @@ class WindowBuilder:
         self._square_buffer = np.empty(0)
         self.band = self.settings.band     # the band of the RMS; its upper edge is chosen at the first block
         self.band_refusal = ''             # why blocks were refused for the band (a sample rate too low), if any
-        self._band_filter: BandFilter | None = None
+        self._band_filter = BandFilter(self.band) if self.band is not None and self.band.chosen else None
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
