@@ -27,7 +27,6 @@ Usage: ``python benchmarks/band_invariance.py [--data DIR] [--tolerance 0.01]``
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 import json
 from math import gcd
 from pathlib import Path

@@ -53,8 +53,7 @@ def test_runs_inside_the_domain_carry_no_mark(calibration, paper_experiment, tmp
     assert not any(line.endswith(' ~') for line in capsys.readouterr().out.splitlines())
 
 
-def test_an_old_calibration_is_assessed_on_the_raw_rms_it_was_fitted_on_and_says_so(paper_experiment, tmp_path,
-                                                                                  capsys):
+def test_an_old_calibration_is_assessed_on_the_raw_rms_it_was_fitted_on(paper_experiment, tmp_path, capsys):
     out = tmp_path / 'a.json'
     bag = paper_experiment / 'stage_1'
     assert main(['assess', str(bag), '--calibration', str(OLD_FILE), '--json', str(out)]) == 0

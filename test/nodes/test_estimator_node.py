@@ -375,8 +375,7 @@ def test_parameters_are_validated_and_applied(graph, tmp_path):
     assert node.channels[0].assessor is not None       # the calibration survived every refusal
 
 
-def test_windows_outside_the_calibrated_domain_warn_with_how_far_and_in_the_band_of_the_calibration(graph,
-                                                                                                   tmp_path):
+def test_windows_outside_the_calibrated_domain_warn_and_say_how_far(graph, tmp_path):
     """theta 0.9 (OK by level) at 10 rad/s on constants fitted at 20-40 rad/s: WARN, extrapolated, said how far."""
     fitted = replace(calibration(START), band=DEFAULT_BAND.resolved(2000.0),
                      domain=CalibrationDomain(speed=(20.0, 40.0), load=(100.0, 200.0)))
