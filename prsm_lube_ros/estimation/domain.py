@@ -82,7 +82,8 @@ class CalibrationDomain:
                                  ('temperature', self.temperature, 'degC'),
                                  ('sample rate', self.sample_rate, 'Hz')):
             if span:
-                parts.append(f'{name} {span[0]:.4g}-{span[1]:.4g} {unit}')
+                digits = 6 if name == 'sample rate' else 4
+                parts.append(f'{name} {span[0]:.{digits}g}-{span[1]:.{digits}g} {unit}')
         return ', '.join(parts) or 'unknown'
 
 
