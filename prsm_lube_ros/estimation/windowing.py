@@ -13,6 +13,14 @@ above ``min_speed`` after standstill; a window is steady when its speed is
 above ``min_speed`` and varies by less than ``max_speed_spread`` inside it,
 which leaves out acceleration and deceleration.
 
+The RMS is that of the analysis band (``WindowSettings.band``, see
+:mod:`.conditioning`): each vibration block goes through the streaming band
+filter (DC and gravity out, low-pass at the band's upper edge) before its
+squares are summed, the filter state carried from block to block and started
+afresh after a gap or a clock reset.  Blocks whose sample rate cannot cover
+the band are left out and said once (:attr:`WindowBuilder.band_refusal`);
+``band=None`` gives the raw RMS (calibrations written before bands).
+
 Memory stays flat: only windows that can still receive data are open; a window
 is closed once every input stream has passed its end by ``completion_delay``
 (a stream silent for ``stale_timeout`` while others advance stops holding
