@@ -82,26 +82,25 @@ def test_assessed_windows_and_runs_outside_the_domain_are_flagged(reference):
     assert run.domain_flag == item.domain_flag and run.as_json()['domain_flag'] == item.domain_flag
 
 
-def test_merged_loads_are_named_not_called_missing():
-    speeds = [10.0] * 4 + [20.0] * 4
-    loads = [4000.0, 4000.0, 4200.0, 4200.0] * 2
-    with pytest.raises(InputError) as refused:
-        check_identifiable(speeds, loads)
-    assert str(refused.value) == (
-        'calibration cannot identify C_sys, C_F and C_lambda: record a second axial load more than 5 % from the '
-        'others (loads 4000 and 4200 N were recorded, but lie within 5 % of each other and count as one level); '
-        'C_sys and C_F cannot be told apart at one load')
+REFUSALS = {
+    'merged loads are named, not called missing': (
+        [10.0] * 4 + [20.0] * 4, [4000.0, 4000.0, 4200.0, 4200.0] * 2,
+        'record a second axial load more than 5 % from the others (loads 4000 and 4200 N were recorded, but lie '
+        'within 5 % of each other and count as one level); C_sys and C_F cannot be told apart at one load'),
+    'two speeds and two loads in two pairs are told the missing pairs': (
+        [10.0] * 4 + [20.0] * 4, [100.0] * 4 + [200.0] * 4,
+        'record a third operating condition: the windows hold 2 distinct (speed, load) pairs (10 rad/s at 100 N, '
+        '20 rad/s at 200 N) for 3 constants, each speed at one load only; a speed at a second load would do '
+        '(3 speeds x 2 loads as in the paper)'),
+}
 
 
-def test_two_speeds_and_two_loads_in_two_pairs_are_told_the_missing_pairs():
-    speeds = [10.0] * 4 + [20.0] * 4
-    loads = [100.0] * 4 + [200.0] * 4
+@pytest.mark.parametrize('case', REFUSALS)
+def test_refusals_name_the_real_lack(case):
+    speeds, loads, lack = REFUSALS[case]
     with pytest.raises(InputError) as refused:
         check_identifiable(speeds, loads)
-    assert str(refused.value) == (
-        'calibration cannot identify C_sys, C_F and C_lambda: record a third operating condition: the windows '
-        'hold 2 distinct (speed, load) pairs (10 rad/s at 100 N, 20 rad/s at 200 N) for 3 constants, each speed '
-        'at one load only; a speed at a second load would do (3 speeds x 2 loads as in the paper)')
+    assert str(refused.value) == 'calibration cannot identify C_sys, C_F and C_lambda: ' + lack
 
 
 def test_conditions_that_leave_the_fit_degenerate_are_counted_in_the_refusal():
