@@ -7,18 +7,25 @@ records is not:
 
 * **DC**: gravity on a DC-coupled axis (9.81 m/s^2 on a vertical one, and
   every ``sensor_msgs/Imu`` includes it), offsets of the sensor and its
-  amplifier.  A high-pass at :data:`HIGHPASS_CORNER` (Butterworth, order
-  :data:`HIGHPASS_ORDER`) removes it.  The corner lies below the lowest shaft
-  order of interest: order 1 of the screw at the slowest speed of the paper's
-  plan, 100 r/min = 1.67 Hz, passes with a power loss below 0.1 %;
-* **content outside the band**: what the recording carries above the band
+  amplifier;
+* **content outside the band**: what a recording carries above some frequency
   depends on its sample rate, so the same vibration recorded at 4 kHz and at
-  51.2 kHz gives different raw RMS.  A low-pass at the band's upper edge
-  (Butterworth, order :data:`LOWPASS_ORDER`) makes the RMS that of one band
-  whatever the rate.  The edge is at most :data:`BAND_HIGH_MAX` (the paper's
-  4 kHz acquisition with the anti-alias margin) and at most
-  :data:`ANTI_ALIAS_MARGIN` of the Nyquist frequency of the recording, so the
-  acquisition's anti-alias filter never shapes the band.
+  51.2 kHz gives different raw RMS.
+
+So the window RMS is that of one band, ``AnalysisBand.low`` to
+``AnalysisBand.high`` Hz, whatever the rate: each window's samples are
+transformed (``numpy.fft.rfft``, rectangular window) and the mean square is
+summed over the bins inside the band (Parseval).  The bins lie at multiples of
+1 / window length (1 Hz for 1 s windows) whatever the sample rate, so a
+recording at 4 kHz and one at 51.2 kHz give the RMS of the same bins; bin 0,
+the window mean (DC, gravity), is always out.  ``low`` is
+:data:`HIGHPASS_CORNER`, below the lowest shaft order of interest (order 1 of
+the screw at the paper's slowest 100 r/min is 1.67 Hz, bin 1 or 2 of a 1 s
+window: kept).  ``high`` is at most :data:`BAND_HIGH_MAX` (the paper's 4 kHz
+acquisition with the anti-alias margin) and at most :data:`ANTI_ALIAS_MARGIN`
+of the Nyquist frequency of the recording, so the acquisition's anti-alias
+filter never shapes the band.  Nothing is carried from one window to the next,
+so gaps and clock resets need no care.
 
 The band is stored in the calibration (``band:``) and assessment uses the
 calibration's band; a recording whose sample rate cannot cover it (below
@@ -26,11 +33,13 @@ calibration's band; a recording whose sample rate cannot cover it (below
 ``band:`` was fitted on the raw RMS (DC included, 0 Hz to half the sample rate
 of its recordings), and is assessed that way (:data:`RAW_BAND_TEXT`).
 
-Filtering streams: :class:`BandFilter` carries its state from one block to
-the next when the next block starts one sample period after the previous one
-ends, and starts afresh (state set to the steady state of the block's mean,
-so a DC offset gives no transient) after a gap, a rate change or a clock
-reset.
+Streams that publish samples rather than windows (the IMU source of the
+sensor bridge) take gravity out with :class:`HighPassFilter`: a Butterworth
+high-pass at :data:`HIGHPASS_CORNER` (order :data:`HIGHPASS_ORDER`) whose state
+carries from one block to the next when the next block starts one sample
+period after the previous one ends, and starts afresh (at the steady state of
+the block's mean, so the gravity step gives no transient) after a gap, a rate
+change or a reset.
 
 :func:`spectrum_segment` chooses the Welch segment length for the spectra of
 diagnose and its report from the sample rate and the lowest rotation order of
@@ -45,14 +54,12 @@ import numpy as np
 
 from ..errors import InputError
 
-#: High-pass corner, Hz: a quarter of shaft order 1 at 120 r/min, 0.3 of it at the paper's slowest 100 r/min.
+#: Lower band edge and high-pass corner, Hz: 0.3 x shaft order 1 at the paper's slowest 100 r/min.
 HIGHPASS_CORNER = 0.5
-#: Butterworth order of the high-pass (12 dB per octave: DC is gone in the steady state whatever the order).
+#: Butterworth order of the streaming high-pass (the IMU source's gravity removal).
 HIGHPASS_ORDER = 2
 #: Highest upper band edge, Hz: 0.8 x the Nyquist frequency of the paper's 4 kHz acquisition.
 BAND_HIGH_MAX = 1600.0
-#: Butterworth order of the low-pass at the upper edge (48 dB per octave).
-LOWPASS_ORDER = 8
 #: The upper edge is at most this fraction of the Nyquist frequency (room for the acquisition's anti-alias filter).
 ANTI_ALIAS_MARGIN = 0.8
 #: Lowest rotation order of interest at the lowest speed, Hz: shaft order 1 at the paper's slowest 100 r/min.
@@ -67,28 +74,24 @@ CONTINUITY_BLOCK_SHARE = 0.25
 
 @dataclass(frozen=True)
 class AnalysisBand:
-    """The band the window RMS is computed in, Hz, and the filters that make it.
+    """The band the window RMS is computed in, Hz (see module doc).
 
     ``high`` NaN means "not chosen yet": :meth:`resolved` takes
-    ``min(BAND_HIGH_MAX, ANTI_ALIAS_MARGIN x rate / 2)`` for the first sample
-    rate met; ``high`` inf means no low-pass (DC removal only, as the IMU
-    source does).
+    ``min(BAND_HIGH_MAX, margin x rate / 2)`` for the first sample rate met.
     """
 
     low: float = HIGHPASS_CORNER
     high: float = math.nan
-    highpass_order: int = HIGHPASS_ORDER
-    lowpass_order: int = LOWPASS_ORDER
     margin: float = ANTI_ALIAS_MARGIN
 
     def __post_init__(self):
-        """Reject bands no filter can make."""
+        """Reject bands that hold nothing."""
         if not (math.isfinite(self.low) and self.low > 0):
-            raise InputError(f'analysis band: high-pass corner {self.low!r} Hz must be a number > 0')
-        if not (math.isnan(self.high) or self.high > self.low):
-            raise InputError(f'analysis band: upper edge {self.high!r} Hz must lie above the corner {self.low:g} Hz')
-        if not (0 < self.margin <= 1) or self.highpass_order < 1 or self.lowpass_order < 1:
-            raise InputError(f'analysis band: orders must be >= 1 and margin in (0, 1], got {self}')
+            raise InputError(f'analysis band: lower edge {self.low!r} Hz must be a number > 0')
+        if not (math.isnan(self.high) or (math.isfinite(self.high) and self.high > self.low)):
+            raise InputError(f'analysis band: upper edge {self.high!r} Hz must lie above the lower {self.low:g} Hz')
+        if not 0 < self.margin <= 1:
+            raise InputError(f'analysis band: anti-alias margin {self.margin!r} must lie in (0, 1]')
 
     @property
     def chosen(self) -> bool:
@@ -103,40 +106,30 @@ class AnalysisBand:
 
     @property
     def min_sample_rate(self) -> float:
-        """Lowest sample rate, Hz, that covers the band with the anti-alias margin (0 without a low-pass)."""
-        if not (self.chosen and math.isfinite(self.high)):
-            return 0.0
-        return 2.0 * self.high / self.margin
-
-    def covers(self, rate: float) -> bool:
-        """Whether a recording at ``rate`` Hz can give the RMS in this band."""
-        return rate >= self.min_sample_rate * (1 - 1e-9)
+        """Lowest sample rate, Hz, that covers the band with the anti-alias margin (0 while not chosen)."""
+        return 2.0 * self.high / self.margin if self.chosen else 0.0
 
     @property
     def text(self) -> str:
-        """The band in words: ``0.5-1600 Hz (Butterworth high-pass order 2, low-pass order 8)``."""
+        """The band in words: ``0.5-1600 Hz (per window ...; sample rate at least 4000 Hz)``."""
         high = f'{self.high:g}' if self.chosen else 'auto'
-        if self.chosen and math.isinf(self.high):
-            return f'above {self.low:g} Hz (Butterworth high-pass order {self.highpass_order}: DC removed)'
-        return (f'{self.low:g}-{high} Hz (Butterworth high-pass order {self.highpass_order}, low-pass order '
-                f'{self.lowpass_order}; sample rate at least {self.min_sample_rate:g} Hz)')
+        return (f'{self.low:g}-{high} Hz (per window: FFT bins in the band, the window mean out; '
+                f'sample rate at least {self.min_sample_rate:g} Hz)')
 
     def as_dict(self) -> dict:
         """Mapping for the calibration file's ``band:``."""
-        return {'low_hz': float(self.low), 'high_hz': float(self.high), 'highpass_order': int(self.highpass_order),
-                'lowpass_order': int(self.lowpass_order), 'anti_alias_margin': float(self.margin),
-                'min_sample_rate_hz': float(self.min_sample_rate), 'filter': 'butterworth'}
+        return {'low_hz': float(self.low), 'high_hz': float(self.high), 'anti_alias_margin': float(self.margin),
+                'min_sample_rate_hz': float(self.min_sample_rate),
+                'method': 'rfft of each window, mean square of the bins from low_hz to high_hz (Parseval)'}
 
     @classmethod
     def from_dict(cls, data: dict) -> AnalysisBand:
         """Inverse of :meth:`as_dict`."""
         return cls(low=float(data['low_hz']), high=float(data['high_hz']),
-                   highpass_order=int(data.get('highpass_order', HIGHPASS_ORDER)),
-                   lowpass_order=int(data.get('lowpass_order', LOWPASS_ORDER)),
                    margin=float(data.get('anti_alias_margin', ANTI_ALIAS_MARGIN)))
 
 
-#: The band of new calibrations: DC out at 0.5 Hz, upper edge chosen from the first sample rate (at most 1600 Hz).
+#: The band of new calibrations: DC out, upper edge chosen from the first sample rate (at most 1600 Hz).
 DEFAULT_BAND = AnalysisBand()
 
 
@@ -152,26 +145,33 @@ def rate_refusal(band: AnalysisBand, rate: float) -> str:
             'frequency); record faster or calibrate at this rate')
 
 
-def band_sections(band: AnalysisBand, rate: float) -> np.ndarray:
-    """Second-order sections of the band's filters at sample rate ``rate`` Hz (high-pass, then low-pass)."""
-    from scipy.signal import butter
-    sections = [butter(band.highpass_order, band.low, 'highpass', fs=rate, output='sos')]
-    if math.isfinite(band.high):
-        sections.append(butter(band.lowpass_order, band.high, 'lowpass', fs=rate, output='sos'))
-    return np.vstack(sections)
+def band_mean_square(samples: np.ndarray, rate: float, band: AnalysisBand) -> float:
+    """Mean square, (m/s^2)^2, of ``samples`` (one window at ``rate`` Hz) in ``band`` (Parseval over rfft bins).
+
+    ``sum x^2 / N = (|X_0|^2 + 2 sum_{0<k<N/2} |X_k|^2 + |X_{N/2}|^2) / N^2``; only the
+    bins with ``low <= k rate / N <= high`` are summed (bin 0, the mean, never).
+    """
+    n = samples.size
+    if n < 2:
+        return math.nan
+    power = np.abs(np.fft.rfft(samples)) ** 2
+    frequencies = np.arange(power.size) * (rate / n)
+    weights = np.where((frequencies >= band.low) & (frequencies <= band.high), 2.0, 0.0)
+    weights[0] = 0.0
+    if n % 2 == 0:
+        weights[-1] /= 2.0
+    return float(weights @ power) / (n * n)
 
 
-class BandFilter:
-    """Streaming band filter over consecutive blocks (see module doc): state carried, reset on gaps."""
+class HighPassFilter:
+    """Streaming Butterworth high-pass over consecutive blocks (see module doc): state carried, reset on gaps."""
 
-    def __init__(self, band: AnalysisBand):
-        """``band`` must be chosen (:meth:`AnalysisBand.resolved`).
-
-        Imports :mod:`scipy.signal` here (half a second on a busy machine), not
-        in the first block's callback of a live node.
-        """
+    def __init__(self, corner: float = HIGHPASS_CORNER, order: int = HIGHPASS_ORDER):
+        """``corner`` in Hz; imports :mod:`scipy.signal` here, not in the first block's callback of a node."""
         import scipy.signal  # noqa: F401
-        self.band = band
+        if not (math.isfinite(corner) and corner > 0 and order >= 1):
+            raise InputError(f'high-pass: corner {corner!r} Hz must be > 0 and order {order!r} >= 1')
+        self.corner, self.order = float(corner), int(order)
         self._design: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._state: np.ndarray | None = None
         self._next_stamp = math.nan        # s, where a block continuing the last one starts
@@ -186,8 +186,8 @@ class BandFilter:
     def _sections(self, rate: float) -> tuple[np.ndarray, np.ndarray]:
         design = self._design.get(rate)
         if design is None:
-            from scipy.signal import sosfilt_zi
-            sos = band_sections(self.band, rate)
+            from scipy.signal import butter, sosfilt_zi
+            sos = butter(self.order, self.corner, 'highpass', fs=rate, output='sos')
             design = self._design[rate] = (sos, sosfilt_zi(sos))
         return design
 

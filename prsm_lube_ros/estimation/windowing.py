@@ -14,10 +14,9 @@ above ``min_speed`` and varies by less than ``max_speed_spread`` inside it,
 which leaves out acceleration and deceleration.
 
 The RMS is that of the analysis band (``WindowSettings.band``, see
-:mod:`.conditioning`): each vibration block goes through the streaming band
-filter (DC and gravity out, low-pass at the band's upper edge) before its
-squares are summed, the filter state carried from block to block and started
-afresh after a gap or a clock reset.  Blocks whose sample rate cannot cover
+:mod:`.conditioning`): the samples of each open window are kept, and when it
+closes the mean square of its FFT bins inside the band is its RMS squared (DC
+and gravity, the window mean, out).  Blocks whose sample rate cannot cover
 the band are left out and said once (:attr:`WindowBuilder.band_refusal`);
 ``band=None`` gives the raw RMS (calibrations written before bands).
 
@@ -37,7 +36,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
-from .conditioning import AnalysisBand, BandFilter, DEFAULT_BAND, rate_refusal, spectrum_segment
+from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
 
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
@@ -231,7 +230,7 @@ class WindowBuilder:
         self.settings = settings or WindowSettings()
         self.lead = float(lead)
         self._open = _OpenWindows()
-        self._chunks: dict[int, list[np.ndarray]] = {}   # spectrum samples per open window key
+        self._chunks: dict[int, list] = {}   # (time s, samples) per open window key, for the band and spectra
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -246,7 +245,6 @@ class WindowBuilder:
         self._square_buffer = np.empty(0)
         self.band = self.settings.band     # the band of the RMS; its upper edge is chosen at the first block
         self.band_refusal = ''             # why blocks were refused for the band (a sample rate too low), if any
-        self._band_filter = BandFilter(self.band) if self.band is not None and self.band.chosen else None
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
@@ -333,8 +331,6 @@ class WindowBuilder:
         self._closed_before = -math.inf
         self._moving = False
         self._last_angle = math.nan
-        if self._band_filter is not None:
-            self._band_filter.reset()
 
     def _advance(self, stream: str, stamp: float):
         if stamp > self._progress.get(stream, -math.inf):
@@ -363,9 +359,9 @@ class WindowBuilder:
         samples = np.asarray(batch.samples).reshape(-1)
         finite = np.isfinite(samples)
         all_finite = bool(finite.all())
-        keep_spectra = self.settings.spectrum_segment > 0 or self.settings.spectrum_lowest_frequency > 0
+        keep_samples = self._keeps_samples()
         if all_finite:
-            values = samples.astype(np.float64) if keep_spectra else samples
+            values = samples.astype(np.float64) if keep_samples else samples
         else:
             n = int(samples.size - np.count_nonzero(finite))
             self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
@@ -377,9 +373,6 @@ class WindowBuilder:
         idx = np.flatnonzero(good)
         b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
         b_off = offsets[idx]
-        if self._band_filter is not None:   # in time order, so blocks out of order in a batch still join
-            order = slice(None) if (b_stamp[1:] >= b_stamp[:-1]).all() else np.argsort(b_stamp, kind='stable')
-            values = self._band_filter.apply(values, b_stamp[order], b_rate[order], b_off[order], b_count[order])
         b_end = b_stamp + (b_count - 1) / b_rate
         k_first = np.floor(b_stamp / length).astype(np.int64)
         k_last = np.floor(b_end / length).astype(np.int64)
@@ -408,17 +401,21 @@ class WindowBuilder:
         table[rows, _SUMSQ] += sumsq
         table[rows, _COUNT] += count
         table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
-        if keep_spectra:
-            for k, first, last in zip(seg_k.tolist(), lo.tolist(), hi.tolist()):
-                self._chunks.setdefault(k, []).append(values[first:last])
+        if keep_samples:   # copies (a view would hold the whole batch), with the time of their first sample
+            seg_time = b_stamp[seg_block] + (lo - b_off[seg_block]) / b_rate[seg_block]
+            for k, first, last, time in zip(seg_k.tolist(), lo.tolist(), hi.tolist(), seg_time.tolist()):
+                self._chunks.setdefault(k, []).append((time, values[first:last].copy()))
         self._advance('vibration', float(b_end.max()))
+
+    def _keeps_samples(self) -> bool:
+        """Whether open windows keep their samples (for the band's RMS or for spectra)."""
+        s = self.settings
+        return self.band is not None or s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
 
     def _band_covered(self, rates: np.ndarray, good: np.ndarray) -> np.ndarray:
         """Mask of blocks whose sample rate covers the band (choosing its upper edge at the first block)."""
         if not self.band.chosen:
             self.band = self.band.resolved(float(rates[np.flatnonzero(good)[0]]))
-        if self._band_filter is None:
-            self._band_filter = BandFilter(self.band)
         covered = rates >= self.band.min_sample_rate * (1 - 1e-9)
         refused = good & ~covered
         if refused.any():
@@ -584,13 +581,20 @@ class WindowBuilder:
                         & (table[:, _LOAD_N] > 0))
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra = [(None, math.nan)] * keys.size
-        if s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0:
+        spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+        if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
                 chunks = self._chunks.pop(k, None)
-                if chunks and rate_k > 0:
+                if not (chunks and rate_k > 0):
+                    continue
+                chunks.sort(key=lambda chunk: chunk[0])   # blocks may arrive out of order
+                samples = np.concatenate([c for _, c in chunks]) if len(chunks) > 1 else chunks[0][1]
+                if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
+                    rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
+                if spectral:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
-                    spectra[row] = _power_spectrum(np.concatenate(chunks), rate_k, segment)
+                    spectra[row] = _power_spectrum(samples, rate_k, segment)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
                       count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
                       load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),

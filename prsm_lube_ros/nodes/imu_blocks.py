@@ -28,11 +28,12 @@ ones only counted (:attr:`ImuBlockAssembler.problems`).  A full block has
 
 Gravity: every ``sensor_msgs/Imu`` includes it (9.81 m/s^2 on the vertical
 axis), and the window RMS must not.  With ``highpass`` (Hz, > 0) each block
-leaves through the same streaming high-pass the windows use
-(:class:`prsm_lube_ros.estimation.conditioning.BandFilter`, Butterworth order
-2, no low-pass): its state carries from one block to the next and starts
-afresh, at the steady state of the block's mean (no transient from the
-gravity step), after a gap, stamps going back, a rate change or a pause.
+leaves through a streaming high-pass at the lower edge of the windows' band
+(:class:`prsm_lube_ros.estimation.conditioning.HighPassFilter`, Butterworth
+order 2): its state carries from one block to
+the next and starts afresh, at the steady state of the block's mean (no
+transient from the gravity step), after a gap, stamps going back, a rate
+change or a pause.
 """
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ from typing import Callable, List, Optional
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.conditioning import AnalysisBand, BandFilter
+from ..estimation.conditioning import HighPassFilter
 
 #: Intervals whose median is the measured sample period.
 RATE_WINDOW = 16
@@ -107,7 +108,7 @@ class ImuBlockAssembler:
         self._intervals: deque = deque(maxlen=RATE_WINDOW)
         self._first_stamp = 0             # ns, stamp of the current block's first sample
         self._values: List[float] = []
-        self._gravity_filter = BandFilter(AnalysisBand(low=highpass, high=math.inf)) if highpass > 0 else None
+        self._gravity_filter = HighPassFilter(highpass) if highpass > 0 else None
 
     @property
     def sample_rate(self) -> float:

@@ -31,7 +31,8 @@ Parameter ``source`` (read-only) chooses where the data come from:
   more than ``rate_tolerance`` close the block early; each kind is logged
   once in one line and counted on ``/diagnostics``.  Gravity (in every
   ``sensor_msgs/Imu``) is taken out by a high-pass at ``imu_highpass`` Hz,
-  the windows' own (:mod:`prsm_lube_ros.estimation.conditioning`).  header.frame_id is the
+  the lower edge of the windows' band
+  (:mod:`prsm_lube_ros.estimation.conditioning`).  header.frame_id is the
   IMU's (``frame_id`` when the IMU leaves it empty).  Only vibration is
   published: speed and load come from the control stack's own topics (or
   the relays below).
@@ -162,7 +163,8 @@ PARAMETERS = {
     'jitter_tolerance': (0.25, _DOUBLE, 'imu: largest deviation of one stamp interval from the sample period, '
                          'as a fraction of it, before the block is closed early', (0.01, 0.49), True),
     'imu_highpass': (HIGHPASS_CORNER, _DOUBLE, 'imu: corner in Hz of the high-pass that takes gravity (DC) out of '
-                     'the samples, as the windows do (0: samples passed on unchanged)', (0.0, 100.0), True),
+                     'the samples, the lower edge of the windows\' band (0: samples passed on unchanged)', (0.0, 100.0),
+                     True),
     # hardware and imu
     'relay_joint_states': ('', _STRING, 'hardware, imu: JointState topic of the EMA stack to republish on '
                            '<namespace>/joint_states (empty: the stack publishes there itself)', None, True),

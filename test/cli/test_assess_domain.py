@@ -74,3 +74,26 @@ def test_no_table_header_after_an_error(calibration, tmp_path, capsys):
     captured = capsys.readouterr()
     assert status == 2 and 'theta_oil' not in captured.out and captured.out.strip() == ''
     assert captured.err.strip().splitlines()[-1].startswith(f'prsm-lube assess: error: {missing}')
+
+
+@pytest.fixture(scope='module')
+def two_rates(tmp_path_factory):
+    """Reference recordings (theta 1) of the paper's plan at 2 kHz and at 8 kHz."""
+    from prsm_lube_ros.simulation.rig_config import RigConfig
+    folder = tmp_path_factory.mktemp('rates')
+    plan = ExperimentPlan(stage_thetas=(1.0,))
+    return {rate: simulate_experiment(folder / f'{rate:g}', seed=7, plan=plan, rig=RigConfig(
+        vibration_rate=rate, contact_mode_frequency=600.0))[0] for rate in (2000.0, 8000.0)}
+
+
+def test_recordings_at_two_rates_calibrate_in_the_band_of_the_first_and_a_slower_second_is_refused(
+        two_rates, tmp_path, capsys):
+    slow, fast = two_rates[2000.0], two_rates[8000.0]
+    assert main(['calibrate', str(slow), str(fast), '--out', str(tmp_path / 'c.yaml')]) == 0
+    assert 'band: 0.5-800 Hz' in capsys.readouterr().out          # the 8 kHz recording filtered to the common band
+    status = main(['calibrate', str(fast), str(slow), '--out', str(tmp_path / 'd.yaml')])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and not (tmp_path / 'd.yaml').exists()
+    assert err[-1] == (f'prsm-lube calibrate: error: {slow}: vibration: sample rate 2000 Hz cannot cover the '
+                       'analysis band 0.5-1600 Hz (needs at least 4000 Hz: upper edge at most 0.8 x the Nyquist '
+                       'frequency); record faster or calibrate at this rate')

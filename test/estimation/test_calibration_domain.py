@@ -32,8 +32,8 @@ def test_the_band_and_domain_go_to_the_file_and_come_back(reference, tmp_path):
     _, calibration = reference
     path = save_calibration(calibration, tmp_path / 'c.yaml')
     data = yaml.safe_load(path.read_text())
-    assert data['band'] == {'low_hz': 0.5, 'high_hz': 1600.0, 'highpass_order': 2, 'lowpass_order': 8,
-                            'anti_alias_margin': 0.8, 'min_sample_rate_hz': 4000.0, 'filter': 'butterworth'}
+    assert data['band'] == {'low_hz': 0.5, 'high_hz': 1600.0, 'anti_alias_margin': 0.8, 'min_sample_rate_hz': 4000.0,
+                            'method': 'rfft of each window, mean square of the bins from low_hz to high_hz (Parseval)'}
     assert data['domain']['sample_rate_hz'] == [4000.0, 4000.0]
     low, high = data['domain']['speed_rad_s']
     assert low == pytest.approx(100 * math.pi / 30, rel=0.01) and high == pytest.approx(200 * math.pi / 30, rel=0.01)
@@ -42,7 +42,7 @@ def test_the_band_and_domain_go_to_the_file_and_come_back(reference, tmp_path):
     assert data['fit']['windows_used'] == calibration.windows_used        # the keys before stay as they were
     again = load_calibration(path)
     assert again.band == calibration.band and again.domain == calibration.domain
-    assert band_note(again) == ('band 0.5-1600 Hz (Butterworth high-pass order 2, low-pass order 8; '
+    assert band_note(again) == ('band 0.5-1600 Hz (per window: FFT bins in the band, the window mean out; '
                                 'sample rate at least 4000 Hz)')
 
 

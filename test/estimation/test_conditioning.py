@@ -1,19 +1,19 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The analysis band: DC out before the RMS, one band whatever the rate, streaming state, refusals, spectra."""
+"""The analysis band: DC out before the RMS, one band whatever the rate, the IMU's high-pass, refusals, spectra."""
 import numpy as np
 import pytest
-from scipy.signal import sosfilt, sosfilt_zi
+from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from prsm_lube_ros.errors import InputError
-from prsm_lube_ros.estimation.conditioning import (AnalysisBand, band_sections, BandFilter, DEFAULT_BAND,
+from prsm_lube_ros.estimation.conditioning import (AnalysisBand, band_mean_square, DEFAULT_BAND, HighPassFilter,
                                                    spectrum_segment)
 from prsm_lube_ros.estimation.pipeline import recording_windows
 from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings
 from prsm_lube_ros.recording.batches import AxialLoadBatch, ScrewStateBatch, VibrationBatch
 
 T0 = 1.767e9
-BAND_4K = DEFAULT_BAND.resolved(4000.0)
+BAND_4K = DEFAULT_BAND.resolved(4000.0)   # 0.5-1600 Hz
 
 
 def blocks_of(signal, rate, sizes, t0=T0):
@@ -31,7 +31,7 @@ def filter_blocks(band_filter, blocks, rate):
                                              np.array([samples.size])) for stamp, samples in blocks])
 
 
-def test_blocks_filtered_live_or_in_one_batch_equal_one_pass_over_the_signal():
+def test_the_imu_high_pass_over_blocks_live_or_in_one_batch_equals_one_pass_over_the_signal():
     rate = 4000.0
     rng = np.random.default_rng(1)
     signal = 9.81 + rng.standard_normal(20000)
@@ -39,28 +39,39 @@ def test_blocks_filtered_live_or_in_one_batch_equal_one_pass_over_the_signal():
     sizes = sizes[np.cumsum(sizes) <= signal.size]
     blocks = blocks_of(signal, rate, sizes)
     used = signal[:int(sizes.sum())]
-    sos = band_sections(BAND_4K, rate)
+    sos = butter(2, 0.5, 'highpass', fs=rate, output='sos')
     expected, _ = sosfilt(sos, used, zi=sosfilt_zi(sos) * used[:sizes[0]].mean())
-    live = filter_blocks(BandFilter(BAND_4K), blocks, rate)
+    live = filter_blocks(HighPassFilter(), blocks, rate)
     starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    batch = BandFilter(BAND_4K).apply(used, np.array([s for s, _ in blocks]), np.full(sizes.size, rate),
-                                      starts, sizes)
+    batch = HighPassFilter().apply(used, np.array([s for s, _ in blocks]), np.full(sizes.size, rate), starts, sizes)
     np.testing.assert_allclose(live, expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(batch, expected, rtol=0, atol=1e-12)
     assert abs(expected[4000:].mean()) < 0.01          # gravity gone after the start, with no transient needed
 
 
-def test_a_gap_restarts_the_filter_at_the_new_level_without_a_transient():
+def test_a_gap_restarts_the_imu_high_pass_at_the_new_level_without_a_transient():
     rate = 4000.0
     tone = np.sqrt(2) * np.sin(2 * np.pi * 100.0 * np.arange(8000) / rate)
     before, after = tone[:4000], tone[4000:] + 9.81          # gravity appears while nothing was recorded
-    band_filter = BandFilter(BAND_4K)
+    band_filter = HighPassFilter()
     first = filter_blocks(band_filter, blocks_of(before, rate, [400] * 10), rate)
     second = filter_blocks(band_filter, blocks_of(after, rate, [400] * 10, t0=T0 + 5.0), rate)   # 4 s gap
     assert np.sqrt(np.mean(first[400:] ** 2)) == pytest.approx(1.0, rel=1e-3)
     assert np.sqrt(np.mean(second ** 2)) == pytest.approx(1.0, rel=1e-3)    # from the first block on
-    joined = filter_blocks(BandFilter(BAND_4K), blocks_of(np.concatenate((before, after)), rate, [400] * 20), rate)
+    joined = filter_blocks(HighPassFilter(), blocks_of(np.concatenate((before, after)), rate, [400] * 20), rate)
     assert np.sqrt(np.mean(joined[4000:4400] ** 2)) > 3.0    # the same step without a gap: a real transient
+
+
+def test_the_band_keeps_the_bins_inside_it_and_the_same_bins_at_any_rate():
+    for rate in (4000.0, 10000.0, 51200.0):
+        t = np.arange(int(rate)) / rate                       # one 1 s window: 1 Hz bins
+        signal = 9.81 + np.sqrt(2) * np.sin(2 * np.pi * 3.0 * t) + np.sqrt(2) * 0.5 * np.sin(2 * np.pi * 1200.0 * t)
+        band = DEFAULT_BAND.resolved(rate)
+        assert band.high == 1600.0
+        assert band_mean_square(signal, rate, band) == pytest.approx(1.25, rel=1e-9)   # 1 + 0.25, gravity out
+        if rate > 4000:
+            above = signal + np.sqrt(2) * np.sin(2 * np.pi * 1700.0 * t)            # outside the band
+            assert band_mean_square(above, rate, band) == pytest.approx(1.25, rel=1e-9)
 
 
 def steady_windows(offset, rate, band=DEFAULT_BAND, seconds=8.0, blocks_per_batch=7):
@@ -107,6 +118,8 @@ def test_the_band_edge_follows_the_first_rate_and_a_slower_one_is_refused_in_one
     assert builder.take_problems() == [line + '; 7 block(s) left out']
     with pytest.raises(InputError, match='analysis band'):
         AnalysisBand(low=0.0)
+    with pytest.raises(InputError, match='high-pass'):
+        HighPassFilter(0.0)
 
 
 def test_a_recording_below_the_band_is_refused_by_the_pipeline(paper_experiment):
