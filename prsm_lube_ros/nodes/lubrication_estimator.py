@@ -12,8 +12,8 @@ message to that actuator's :class:`~prsm_lube_ros.estimation.windowing.WindowBui
 one status per actuator, judged by :mod:`prsm_lube_ros.estimation.health`.
 
 Windows are made in the band of the actuator's calibration
-(:mod:`prsm_lube_ros.estimation.conditioning`: DC and gravity out, the band's
-low-pass); a window outside the calibration's domain (speeds, loads,
+(:mod:`prsm_lube_ros.estimation.conditioning`: DC and gravity out, nothing
+above the band's upper edge); a window outside the calibration's domain (speeds, loads,
 temperatures fitted) makes the status at least WARN with how far outside
 (KeyValue ``domain_flag``), beside ``calibration_band`` and
 ``calibration_domain``.
