@@ -34,11 +34,15 @@ def run(args) -> int:
     """theta_Oil for every steady window and run; table on stdout, JSON and history if asked.
 
     A recording that cannot be assessed is one line on stderr; the others are
-    assessed, and the status is non-zero at the end.
+    assessed, and the status is non-zero at the end.  Windows are made in the
+    calibration's band (:mod:`..estimation.conditioning`); a recording whose
+    sample rate cannot cover it is such a line.  The table is printed only when
+    some recording was assessed; ``!`` marks a theta_oil outside its physical
+    range, ``~`` a run outside the calibration's domain (extrapolated).
     """
     import math
     from pathlib import Path
-    from ..estimation.calibration_file import load_calibration
+    from ..estimation.calibration_file import band_note, load_calibration
     from ..estimation.pipeline import assessment_json
     from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import assess_bags, BagJob
@@ -46,7 +50,7 @@ def run(args) -> int:
     from ..validation import require_positive
     from .common import progress_bar, warn, write_json
     calibration = load_calibration(args.calibration)
-    settings = WindowSettings(window_length=require_positive('--window', args.window))
+    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band)
     job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
                  hash_content=bool(args.history))
     to_history = None
@@ -72,9 +76,13 @@ def run(args) -> int:
             warn(line)
         if outcome.error:
             print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
-    flagged = []
+    flagged, extrapolated = [], []
     for flag in calibration.flags:
         print(f'warning: calibration {args.calibration}: {flag}')
+    if not results:
+        return EXIT_USER_ERROR
+    print(f'calibration {args.calibration}: {band_note(calibration)}'
+          + (f'; domain {calibration.domain.text}' if calibration.domain is not None else ''))
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '
           f'{"theta_oil":>9} {"+/-":>6}')
     for rec in results:
@@ -84,11 +92,16 @@ def run(args) -> int:
             if run_result.flag:
                 flagged.append((Path(rec.path).name, run_result.run_index, run_result.flag))
                 theta += ' !'
+            if run_result.domain_flag:
+                extrapolated.append((Path(rec.path).name, run_result.run_index, run_result.domain_flag))
+                theta += ' ~'
             print(f'{Path(rec.path).name[:28]:<28} {run_result.run_index:>4} '
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
                   f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
     for name, run_index, flag in flagged:
         print(f'! {name} run {run_index}: {flag}')
+    for name, run_index, flag in extrapolated:
+        print(f'~ {name} run {run_index}: {flag}')
     if args.history and results:
         print(f'history {args.history}: {len(results)} recordings added or replaced')
     if args.json and results:

@@ -37,6 +37,7 @@ def run(args) -> int:
     print(f'fit: relative RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows '
           f'({calibration.plan_summary}, {calibration.runs} runs); wrote {args.out}')
     print(f'standard errors: {calibration.standard_errors}')
+    print(f'band: {calibration.band.text}; domain: {calibration.domain.text}')
     for flag in calibration.flags:
         print(f'warning: {flag}')
     return 0

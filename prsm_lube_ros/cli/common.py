@@ -53,13 +53,15 @@ def warn(line: str) -> None:
 
 def read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
+    from dataclasses import replace
+    from ..estimation.conditioning import LOWEST_ORDER_FREQUENCY
     from ..estimation.pipeline import recording_windows, require_usable
     from ..estimation.windowing import WindowSettings
     from ..physics.actuator import load_actuator
     from ..validation import require_positive
     actuator = load_actuator(args.actuator)
     settings = WindowSettings(window_length=require_positive('--window', args.window),
-                              spectrum_segment=256 if spectra else 0)
+                              spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if spectra else 0.0)
     recordings = []
     for path in paths:
         bar = progress_bar(100, Path(path).name)
@@ -69,6 +71,8 @@ def read_recordings(paths, args, *, spectra: bool = False):
         finally:
             bar.close()
         recordings.append(require_usable(recording, settings))
+        # The first recording's band (its upper edge chosen for its sample rate) is every later one's.
+        settings = replace(settings, band=recording.band)
     return recordings, actuator
 
 

@@ -59,7 +59,10 @@ def run(args) -> int:
         print(f'record: {result.what_to_record}')
     if args.calibration_out:
         from ..estimation.calibration_file import save_calibration
-        save_calibration(result.calibration(), args.calibration_out)
+        from ..estimation.pipeline import with_band_and_domain
+        from ..estimation.windowing import usable_windows
+        used = [w for rec in recordings for w in usable_windows(rec.windows)]
+        save_calibration(with_band_and_domain(result.calibration(), recordings[0].band, used), args.calibration_out)
         print(f'wrote {args.calibration_out}')
     if args.report:
         from ..diagnosis import write_report

@@ -38,6 +38,11 @@ outside what the calibrated model can produce, and :func:`theta_range_flag`
 says so with the likely reason (``theta_oil_flag`` in the JSON, a mark in the
 table).  The value is still reported.
 
+Windows and runs outside the calibration's domain (the speeds, loads and
+temperatures it was fitted on, :mod:`.domain`) carry ``domain_flag``: how far
+outside, in words (``extrapolated: speed 40 % below the calibrated 63-188
+rad/s``); the value is still reported.
+
 A calibration with a model extension (``Calibration.extension``, written by
 ``prsm-lube diagnose``) is honoured: each window's RMS is first mapped back to
 the amplitude Eq. 22 describes and theta_Oil divided by the extension's film
@@ -54,6 +59,7 @@ import numpy as np
 from ..physics.vibration_model import film_speed_load_term, lubrication_index
 from ..validation import finite_or_none
 from .calibration import Calibration
+from .domain import domain_flag
 from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
 
 #: Highest theta_Oil taken as a lubrication state (1 = reference; the paper's stages span 0.72-1).
@@ -84,6 +90,7 @@ class WindowAssessment:
     theta_oil: float
     theta_oil_std: float
     reason: str = ''
+    domain_flag: str = ''   # :func:`.domain.domain_flag` of an assessed window outside the calibration's domain
 
     @property
     def flag(self) -> str:
@@ -107,6 +114,7 @@ class RunAssessment:
     windows: int
     temperature: float = math.nan
     reason: str = ''
+    domain_flag: str = ''   # :func:`.domain.domain_flag` of an assessed run outside the calibration's domain
 
     @property
     def flag(self) -> str:
@@ -120,7 +128,7 @@ class RunAssessment:
                 'vibration_rms': self.vibration_rms, 'theta_oil': self.theta_oil,
                 'theta_oil_std': self.theta_oil_std, 'theta_oil_flag': self.flag, 'run_index': self.run_index,
                 'windows': self.windows, 'temperature': finite_or_none(self.temperature),
-                'reason': self.reason}
+                'reason': self.reason, 'domain_flag': self.domain_flag}
 
 
 class Assessor:
@@ -200,7 +208,10 @@ class Assessor:
                 std[rows] = np.where(finite, errors, math.nan)
                 for j in np.flatnonzero(~finite).tolist():
                     reasons[rows[j]] = 'Eq. 23 has no finite value for this window'
-        return [WindowAssessment(w, t, s, r) for w, t, s, r in zip(windows, theta.tolist(), std.tolist(), reasons)]
+        domain = self.calibration.domain
+        return [WindowAssessment(w, t, s, r, domain_flag(domain, w.screw_speed, w.axial_load, w.temperature)
+                                 if domain is not None and t == t else '')
+                for w, t, s, r in zip(windows, theta.tolist(), std.tolist(), reasons)]
 
     def assess_runs(self, assessed: Sequence[WindowAssessment], bag: str = '') -> list[RunAssessment]:
         """One :class:`RunAssessment` per run that has steady windows, in run order."""
@@ -270,5 +281,7 @@ class Assessor:
             results.append(RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
                                          end=windows[-1].end, screw_speed=speed[i], axial_load=load[i],
                                          vibration_rms=rms[i], theta_oil=theta_i, theta_oil_std=std_i,
-                                         windows=len(windows), temperature=temperature[i], reason=reason))
+                                         windows=len(windows), temperature=temperature[i], reason=reason,
+                                         domain_flag='' if reason else domain_flag(
+                                             self.calibration.domain, speed[i], load[i], temperature[i])))
         return results

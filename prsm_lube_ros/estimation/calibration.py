@@ -39,6 +39,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
+from .conditioning import AnalysisBand
+from .domain import CalibrationDomain
 from .run_scatter import estimate_run_scatter, ols_covariance, RunScatter
 from .windowing import MIN_AXIAL_LOAD, usable_windows
 
@@ -74,6 +76,8 @@ class Calibration:
     merged: tuple = ()              # set-points merged into one level, in words ("loads 4000 and 4200 N")
     flags: tuple = ()               # what the fit cannot vouch for, in words ("form untested: ...")
     scatter: RunScatter | None = None   # run-to-run and window scatter (None: a file from before they were kept)
+    band: AnalysisBand | None = None      # band of the window RMS fitted (conditioning); None: raw RMS (old files)
+    domain: CalibrationDomain | None = None  # speed, load, temperature and sample-rate ranges fitted in
 
     @property
     def run_scatter(self) -> RunScatter:
@@ -153,21 +157,37 @@ def check_identifiable(speeds, loads) -> tuple[list[float], list[float]]:
                          'recordings; record runs at constant speed under load (3 speeds x 2 loads as in the paper)')
     missing = []
     if len(load_levels) < 2:
-        missing.append(f'a second axial load (all windows at {_levels(load_levels, "N")}); '
-                       'C_sys and C_F cannot be told apart at one load')
+        missing.append(_second_level('axial load', 'loads', loads, load_levels, 'N')
+                       + '; C_sys and C_F cannot be told apart at one load')
     if len(speed_levels) < 2:
-        missing.append(f'a second screw speed (all windows at {_levels(speed_levels, "rad/s")}); '
-                       'C_lambda cannot be told from C_F with one speed')
-    conditions = operating_conditions(speeds, loads) if n else 0
-    if len(load_levels) >= 2 and len(speed_levels) >= 2 and conditions < CONSTANTS:
-        missing.append(f'{CONSTANTS - conditions} more distinct (speed, load) condition(s): '
-                       f'{len(speed_levels)} speeds x {len(load_levels)} loads were recorded as only {conditions} '
-                       f'conditions, and {CONSTANTS} constants need {CONSTANTS}')
+        missing.append(_second_level('screw speed', 'speeds', speeds, speed_levels, 'rad/s')
+                       + '; C_lambda cannot be told from C_F with one speed')
+    if not missing and operating_conditions(speeds, loads) < CONSTANTS:
+        missing.append(_more_conditions(speeds, loads, speed_levels, load_levels))
     if n < MIN_WINDOWS:
         missing.append(f'more windows ({n} steady, need at least {MIN_WINDOWS}): longer runs or shorter windows')
     if missing:
         raise InputError('calibration cannot identify C_sys, C_F and C_lambda: record ' + '; and '.join(missing))
     return speed_levels, load_levels
+
+
+def _second_level(what: str, plural: str, values, levels, unit: str) -> str:
+    """What to record when all windows sit at one level: a second one, naming set-points that merged."""
+    merged = merged_setpoints(values, unit=unit, name=plural)
+    if merged:
+        return (f'a second {what} more than {100 * LEVEL_TOLERANCE:g} % from the others ({merged[0]} were '
+                f'recorded, but lie within {100 * LEVEL_TOLERANCE:g} % of each other and count as one level)')
+    return f'a second {what} (all windows at {_levels(levels, unit)})'
+
+
+def _more_conditions(speeds, loads, speed_levels, load_levels) -> str:
+    """What to record when there are two speeds and two loads but fewer (speed, load) pairs than constants."""
+    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
+    pairs = sorted(set(zip(_nearest_level(speeds, speed_levels).tolist(), _nearest_level(loads, load_levels).tolist())))
+    named = ', '.join(f'{speed_levels[i]:.4g} rad/s at {load_levels[j]:.4g} N' for i, j in pairs)
+    return (f'a third operating condition: the windows hold {len(pairs)} distinct (speed, load) pairs ({named}) '
+            f'for {CONSTANTS} constants, each speed at one load only; a speed at a second load would do '
+            '(3 speeds x 2 loads as in the paper)')
 
 
 def _levels(levels, unit):
@@ -331,8 +351,9 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     xs = x / scale
     singular = np.linalg.svd(xs, compute_uv=False)
     if singular[-1] < 1e-9 * singular[0]:
-        raise InputError('calibration cannot identify C_sys, C_F and C_lambda: the speeds and loads recorded '
-                         'leave the fit degenerate; record at least 2 loads and 2 speeds (3 x 2 as in the paper)')
+        raise InputError('calibration cannot identify C_sys, C_F and C_lambda: the '
+                         f'{operating_conditions(speeds, loads)} (speed, load) conditions recorded leave the fit '
+                         'degenerate; record each speed at a second load (3 speeds x 2 loads as in the paper)')
     solution, *_ = np.linalg.lstsq(xs, y, rcond=None)
     params = solution / scale
     residual = y - x @ params

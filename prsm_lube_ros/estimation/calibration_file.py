@@ -21,6 +21,8 @@ from ..config_file import read_yaml
 from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
+from .conditioning import AnalysisBand, RAW_BAND_TEXT
+from .domain import CalibrationDomain
 from .run_scatter import RunScatter
 
 FORMAT = 'prsm_lube_ros/calibration'
@@ -50,6 +52,9 @@ def calibration_to_dict(calibration: Calibration) -> dict:
                 'flags': list(calibration.flags),
                 'sources': list(calibration.sources), **_scatter_to_dict(calibration.scatter)},
         'extension': dict(calibration.extension),
+        # Band of the window RMS the constants fit (absent: raw RMS, as files before bands; see band_note).
+        **({'band': calibration.band.as_dict()} if calibration.band is not None else {}),
+        'domain': calibration.domain.as_dict() if calibration.domain is not None else None,
     }
 
 
@@ -76,7 +81,11 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             standard_errors=str(fit.get('standard_errors', '')),
             merged=tuple(str(v) for v in fit.get('merged_levels', ()) or ()),
             flags=tuple(str(v) for v in fit.get('flags', ()) or ()),
-            scatter=_scatter_from_dict(fit))
+            scatter=_scatter_from_dict(fit),
+            band=AnalysisBand.from_dict(data['band']) if data.get('band') else None,
+            domain=(CalibrationDomain.from_dict(data['domain']) if data.get('domain')
+                    else CalibrationDomain.of_levels(fit.get('speed_levels_rad_s', ()),
+                                                     fit.get('load_levels_n', ()))))
     except InputError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -107,6 +116,11 @@ def _scatter_from_dict(fit: dict) -> RunScatter | None:
         if not (math.isfinite(value) and 0 <= value < 1):
             raise ValueError(f'fit: {name} must be a number in [0, 1), got {value!r}')
     return scatter
+
+
+def band_note(calibration: Calibration) -> str:
+    """The band a calibration's RMS is in, in words (a file without ``band:`` implies the raw RMS)."""
+    return f'band {calibration.band.text}' if calibration.band is not None else RAW_BAND_TEXT
 
 
 def save_calibration(calibration: Calibration, path: str | Path) -> Path:

@@ -244,6 +244,17 @@ def out_of_range(status: HealthStatus, flag: str) -> HealthStatus:
     return replace(status, level=WARN, message=f'theta_oil outside its physical range: {flag}')
 
 
+def outside_domain(status: HealthStatus, flag: str) -> HealthStatus:
+    """``status`` when the last window lies outside the calibration's domain (``flag``, :mod:`.domain`): at least WARN.
+
+    theta_Oil there is an extrapolation of the fitted form; the value is still
+    published, and the status says how far outside.
+    """
+    if not flag or status.level != OK:
+        return status
+    return replace(status, level=WARN, message=f'theta_oil {flag}')
+
+
 def format_value(value) -> str:
     """A diagnostic KeyValue string: numbers with 6 significant digits, NaN as 'nan'."""
     if isinstance(value, float):

@@ -8,18 +8,20 @@ memory stays flat whatever their length.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from ..errors import NotIdentifiable
+from ..errors import InputError, NotIdentifiable
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
 from .assessment import Assessor, RunAssessment, WindowAssessment
 from .calibration import Calibration, fit_windows
-from .windowing import MIN_AXIAL_LOAD, Window, WindowBuilder, WindowSettings
+from .conditioning import AnalysisBand, band_text
+from .domain import CalibrationDomain
+from .windowing import MIN_AXIAL_LOAD, usable_windows, Window, WindowBuilder, WindowSettings
 
 ProblemSink = Callable[[str], None]
 
@@ -39,6 +41,8 @@ class RecordingWindows:
     #: messages read per batch kind (``VibrationBatch``, ``ScrewStateBatch``, ...), and the fastest screw speed
     messages_read: dict[str, int] = field(default_factory=dict)
     max_speed: float = 0.0
+    #: band of the window RMS (upper edge chosen at the first block); None: raw RMS
+    band: AnalysisBand | None = None
 
     def why_no_window(self, settings: WindowSettings | None = None) -> str:
         """Why the recording gave no window, in a few words (for a recording with messages on its topics)."""
@@ -71,7 +75,8 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     ``on_problem`` as one line each, prefixed with the recording's path.
     ``progress`` receives the fraction of the recording read so far.
     ``slice_seconds`` is how much recording is decoded and windowed at a time.
-    Raises :class:`InputError` for a recording that cannot be read at all.
+    Raises :class:`InputError` for a recording that cannot be read at all, or
+    whose sample rate cannot cover the analysis band (``settings.band``).
     """
     problems: list[str] = []
 
@@ -100,7 +105,9 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     windows.extend(builder.finish())
     for line in builder.take_problems():
         report(line)
-    return RecordingWindows(str(path), windows, problems, messages_read, max_speed)
+    if builder.band_refusal:
+        raise InputError(f'{path}: {builder.band_refusal}')
+    return RecordingWindows(str(path), windows, problems, messages_read, max_speed, builder.band)
 
 
 def require_usable(recording: RecordingWindows, settings: WindowSettings | None = None) -> RecordingWindows:
@@ -112,11 +119,28 @@ def require_usable(recording: RecordingWindows, settings: WindowSettings | None 
 
 def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 1.0,
                          min_axial_load: float = MIN_AXIAL_LOAD) -> Calibration:
-    """Fit C_sys, C_F, C_lambda on the steady windows of recordings at lubrication state ``theta``."""
+    """Fit C_sys, C_F, C_lambda on the steady windows of recordings at lubrication state ``theta``.
+
+    The calibration keeps the band of the recordings' RMS and the domain of the
+    windows used.  Recordings whose RMS is in different bands (sample rates too
+    low for one common band) are refused in one line.
+    """
+    bands = {rec.band for rec in recordings if rec.windows}
+    if len(bands) > 1:
+        raise InputError('calibration: the recordings give the RMS in different bands ('
+                         + '; '.join(f'{rec.path}: {band_text(rec.band)}' for rec in recordings)
+                         + '); give the slowest recording first, so that the others are filtered to its band')
     windows = [w for rec in recordings for w in rec.windows]
     labels = [index for index, rec in enumerate(recordings) for _ in rec.windows]
-    return fit_windows(windows, theta, min_axial_load=min_axial_load,
-                       sources=[rec.path for rec in recordings], recordings=labels)
+    calibration = fit_windows(windows, theta, min_axial_load=min_axial_load,
+                              sources=[rec.path for rec in recordings], recordings=labels)
+    return with_band_and_domain(calibration, bands.pop() if bands else None,
+                                usable_windows(windows, min_axial_load))
+
+
+def with_band_and_domain(calibration: Calibration, band: AnalysisBand | None, windows) -> Calibration:
+    """``calibration`` with the band its RMS was computed in and the domain of the ``windows`` it was fitted on."""
+    return replace(calibration, band=band, domain=CalibrationDomain.of_windows(windows))
 
 
 @dataclass
@@ -159,7 +183,8 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
                             'nut_position': finite_or_none(w.nut_position),
                             'theta_oil': finite_or_none(item.theta_oil),
                             'theta_oil_std': finite_or_none(item.theta_oil_std), 'theta_oil_flag': item.flag,
-                            'reason': item.reason})
+                            'reason': item.reason, 'domain_flag': item.domain_flag,
+                            'sample_rate': finite_or_none(w.sample_rate)})
     for run in unassessed:
         run['theta_oil'] = None
         run['theta_oil_std'] = None
@@ -167,6 +192,8 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
     return {'runs': runs, 'unassessed_runs': unassessed, 'windows': windows,
             'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
                             'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used,
-                            'flags': list(calibration.flags)},
+                            'flags': list(calibration.flags), 'band': band_text(calibration.band),
+                            'domain': calibration.domain.text if calibration.domain is not None else None},
             'runs_flagged': sum(bool(run['theta_oil_flag']) for run in runs),
+            'runs_extrapolated': sum(bool(run['domain_flag']) for run in runs),
             'problems': problems}

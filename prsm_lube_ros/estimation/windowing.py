@@ -13,6 +13,13 @@ above ``min_speed`` after standstill; a window is steady when its speed is
 above ``min_speed`` and varies by less than ``max_speed_spread`` inside it,
 which leaves out acceleration and deceleration.
 
+The RMS is that of the analysis band (``WindowSettings.band``, see
+:mod:`.conditioning`): the samples of each open window are kept, and when it
+closes the mean square of its FFT bins inside the band is its RMS squared (DC
+and gravity, the window mean, out).  Blocks whose sample rate cannot cover
+the band are left out and said once (:attr:`WindowBuilder.band_refusal`);
+``band=None`` gives the raw RMS (calibrations written before bands).
+
 Memory stays flat: only windows that can still receive data are open; a window
 is closed once every input stream has passed its end by ``completion_delay``
 (a stream silent for ``stale_timeout`` while others advance stops holding
@@ -29,6 +36,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
 
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
@@ -46,9 +54,16 @@ class WindowSettings:
     stale_timeout: float = 3.0
     reset_after_backstep: float = 5.0
     spectrum_segment: int = 0
+    #: Band of the window RMS (see :mod:`.conditioning`); None: raw RMS (calibrations without a band).
+    band: AnalysisBand | None = DEFAULT_BAND
+    #: Hz; > 0: spectra resolve this frequency (lowest order at the lowest speed), segment from
+    #: :func:`.conditioning.spectrum_segment` (overrides ``spectrum_segment``'s length).
+    spectrum_lowest_frequency: float = 0.0
 
     def __post_init__(self):
         """Reject settings that cannot cut windows."""
+        if self.band is not None and not isinstance(self.band, AnalysisBand):
+            raise InputError(f'window setting band={self.band!r} is not an analysis band')
         checks = {
             'window_length': self.window_length > 0,
             'min_speed': self.min_speed > 0,
@@ -58,6 +73,7 @@ class WindowSettings:
             'stale_timeout': self.stale_timeout > 0,
             'reset_after_backstep': self.reset_after_backstep > 0,
             'spectrum_segment': self.spectrum_segment >= 0,
+            'spectrum_lowest_frequency': self.spectrum_lowest_frequency >= 0,
         }
         for name, ok in checks.items():
             value = getattr(self, name)
@@ -131,6 +147,7 @@ class Window:
     reason: str = ''
     spectrum: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan  # Hz per spectrum bin
+    sample_rate: float = math.nan          # Hz, vibration sample rate in the window (highest if several)
 
     @property
     def steady(self) -> bool:
@@ -213,7 +230,7 @@ class WindowBuilder:
         self.settings = settings or WindowSettings()
         self.lead = float(lead)
         self._open = _OpenWindows()
-        self._chunks: dict[int, list[np.ndarray]] = {}   # spectrum samples per open window key
+        self._chunks: dict[int, list] = {}   # (time s, samples) per open window key, for the band and spectra
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -226,6 +243,8 @@ class WindowBuilder:
         self._closed: list[Window] = []
         self._block_stamps = np.zeros(0, np.int64)   # vibration block stamps (us) of open windows
         self._square_buffer = np.empty(0)
+        self.band = self.settings.band     # the band of the RMS; its upper edge is chosen at the first block
+        self.band_refusal = ''             # why blocks were refused for the band (a sample rate too low), if any
 
     # -- problem reports -------------------------------------------------
     def _report(self, kind: str, line: str, count: int = 1):
@@ -333,14 +352,16 @@ class WindowBuilder:
             n = int((empty & good).sum())
             self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
         good &= ~bad_rate & ~empty
+        if self.band is not None and good.any():
+            good &= self._band_covered(rates, good)
         if not good.any():
             return
         samples = np.asarray(batch.samples).reshape(-1)
         finite = np.isfinite(samples)
         all_finite = bool(finite.all())
-        keep_spectra = self.settings.spectrum_segment > 0
+        keep_samples = self._keeps_samples()
         if all_finite:
-            values = samples.astype(np.float64) if keep_spectra else samples
+            values = samples.astype(np.float64) if keep_samples else samples
         else:
             n = int(samples.size - np.count_nonzero(finite))
             self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
@@ -380,10 +401,28 @@ class WindowBuilder:
         table[rows, _SUMSQ] += sumsq
         table[rows, _COUNT] += count
         table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
-        if keep_spectra:
-            for k, first, last in zip(seg_k.tolist(), lo.tolist(), hi.tolist()):
-                self._chunks.setdefault(k, []).append(values[first:last])
+        if keep_samples:   # copies (a view would hold the whole batch), with the time of their first sample
+            seg_time = b_stamp[seg_block] + (lo - b_off[seg_block]) / b_rate[seg_block]
+            for k, first, last, time in zip(seg_k.tolist(), lo.tolist(), hi.tolist(), seg_time.tolist()):
+                self._chunks.setdefault(k, []).append((time, values[first:last].copy()))
         self._advance('vibration', float(b_end.max()))
+
+    def _keeps_samples(self) -> bool:
+        """Whether open windows keep their samples (for the band's RMS or for spectra)."""
+        s = self.settings
+        return self.band is not None or s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+
+    def _band_covered(self, rates: np.ndarray, good: np.ndarray) -> np.ndarray:
+        """Mask of blocks whose sample rate covers the band (choosing its upper edge at the first block)."""
+        if not self.band.chosen:
+            self.band = self.band.resolved(float(rates[np.flatnonzero(good)[0]]))
+        covered = rates >= self.band.min_sample_rate * (1 - 1e-9)
+        refused = good & ~covered
+        if refused.any():
+            line = f'vibration: {rate_refusal(self.band, float(rates[refused][0]))}'
+            self.band_refusal = self.band_refusal or line
+            self._report('vibration-band', line + f'; {int(refused.sum())} block(s) left out', int(refused.sum()))
+        return covered
 
     def _squares(self, values: np.ndarray) -> np.ndarray:
         """``values ** 2`` in float64, written into a buffer kept between batches (no new pages per batch)."""
@@ -542,22 +581,32 @@ class WindowBuilder:
                         & (table[:, _LOAD_N] > 0))
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra = [(None, math.nan)] * keys.size
-        if s.spectrum_segment > 0:
+        spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+        if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
                 chunks = self._chunks.pop(k, None)
-                if chunks and rate_k > 0:
-                    spectra[row] = _power_spectrum(np.concatenate(chunks), rate_k, s.spectrum_segment)
+                if not (chunks and rate_k > 0):
+                    continue
+                chunks.sort(key=lambda chunk: chunk[0])   # blocks may arrive out of order
+                samples = np.concatenate([c for _, c in chunks]) if len(chunks) > 1 else chunks[0][1]
+                if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
+                    rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
+                if spectral:
+                    segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
+                               if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
+                    spectra[row] = _power_spectrum(samples, rate_k, segment)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
                       count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
                       load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
-                      run_index.tolist(), maybe_steady.tolist(), table, spectra)
+                      run_index.tolist(), maybe_steady.tolist(), table, spectra, rate.tolist())
         windows = []
         for (start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
-             revolutions_k, run_k, steady_k, row, (spectrum, resolution)) in columns:
+             revolutions_k, run_k, steady_k, row, (spectrum, resolution), rate_k) in columns:
             kind, reason = ('', '') if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
-            # Positional, in field order (start ... spectrum_resolution): a third cheaper than keywords.
+            # Positional, in field order (start ... sample_rate): a third cheaper than keywords.
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
-                                  position_k, revolutions_k, run_k, kind, reason, spectrum, resolution))
+                                  position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
+                                  rate_k if rate_k > 0 else math.nan))
         return windows
 
 

@@ -8,7 +8,7 @@ swaps the result in; everything wrong with a request comes out as one
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import os
 from pathlib import Path
 import re
@@ -120,6 +120,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
                              f'{_main_reason(recording.windows)}')
         recordings.append(recording)
         steady += sum(1 for w in recording.windows if w.steady)
+        settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
     if on_progress:
         on_progress('fitting', len(paths), len(paths), steady)
     calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)

@@ -25,6 +25,15 @@ at the end of the warm-up keeps the block: its samples came at that rate); the f
 occurrence of each kind is reported through ``on_problem(kind, line)``, later
 ones only counted (:attr:`ImuBlockAssembler.problems`).  A full block has
 ``round(block_length * sample_rate)`` samples (at least 1).
+
+Gravity: every ``sensor_msgs/Imu`` includes it (9.81 m/s^2 on the vertical
+axis), and the window RMS must not.  With ``highpass`` (Hz, > 0) each block
+leaves through a streaming high-pass at the lower edge of the windows' band
+(:class:`prsm_lube_ros.estimation.conditioning.HighPassFilter`, Butterworth
+order 2): its state carries from one block to
+the next and starts afresh, at the steady state of the block's mean (no
+transient from the gravity step), after a gap, stamps going back, a rate
+change or a pause.
 """
 from __future__ import annotations
 
@@ -36,6 +45,7 @@ from typing import Callable, List, Optional
 import numpy as np
 
 from ..errors import InputError
+from ..estimation.conditioning import HighPassFilter
 
 #: Intervals whose median is the measured sample period.
 RATE_WINDOW = 16
@@ -69,15 +79,18 @@ class ImuBlockAssembler:
 
     ``block_length``: s per full block; ``sample_rate``: expected Hz (0: take
     the measured one); ``rate_tolerance`` and ``jitter_tolerance``: fractions
-    of the sample period; ``on_problem(kind, line)``: called once per kind.
+    of the sample period; ``on_problem(kind, line)``: called once per kind;
+    ``highpass``: corner in Hz of the gravity (DC) high-pass, 0 for none.
     """
 
     def __init__(self, block_length: float, sample_rate: float = 0.0, rate_tolerance: float = 0.05,
-                 jitter_tolerance: float = 0.25, on_problem: Optional[Callable[[str, str], None]] = None):
+                 jitter_tolerance: float = 0.25, on_problem: Optional[Callable[[str, str], None]] = None,
+                 highpass: float = 0.0):
         checks = {'block_length': block_length > 0 and math.isfinite(block_length),
                   'sample_rate': sample_rate >= 0 and math.isfinite(sample_rate),
                   'rate_tolerance': 0 < rate_tolerance < 1,
-                  'jitter_tolerance': 0 < jitter_tolerance < GAP_PERIODS - 1}
+                  'jitter_tolerance': 0 < jitter_tolerance < GAP_PERIODS - 1,
+                  'highpass': highpass >= 0 and math.isfinite(highpass)}
         for name, ok in checks.items():
             if not ok:
                 raise InputError(f'parameter {name}: {locals()[name]!r} is out of range')
@@ -95,6 +108,7 @@ class ImuBlockAssembler:
         self._intervals: deque = deque(maxlen=RATE_WINDOW)
         self._first_stamp = 0             # ns, stamp of the current block's first sample
         self._values: List[float] = []
+        self._gravity_filter = HighPassFilter(highpass) if highpass > 0 else None
 
     @property
     def sample_rate(self) -> float:
@@ -140,6 +154,8 @@ class ImuBlockAssembler:
         """
         blocks = self._close()
         self._last_stamp = None
+        if self._gravity_filter is not None:
+            self._gravity_filter.reset()
         return blocks
 
     # -- checks -------------------------------------------------------------------------------------
@@ -209,4 +225,8 @@ class ImuBlockAssembler:
         if self.period_ns is None:
             self.dropped_samples += len(values)
             return []
-        return [AssembledBlock(first_stamp, self.sample_rate, np.asarray(values, dtype=np.float32))]
+        samples = np.asarray(values, dtype=np.float64)
+        if self._gravity_filter is not None:
+            samples = self._gravity_filter.apply(samples, np.array([first_stamp * 1e-9]), np.array([self.sample_rate]),
+                                                 np.zeros(1, np.int64), np.array([samples.size]))
+        return [AssembledBlock(first_stamp, self.sample_rate, samples.astype(np.float32))]

@@ -11,6 +11,13 @@ message to that actuator's :class:`~prsm_lube_ros.estimation.windowing.WindowBui
 ``LubricationState`` on ``<ns>/lubrication_state``.  ``/diagnostics`` carries
 one status per actuator, judged by :mod:`prsm_lube_ros.estimation.health`.
 
+Windows are made in the band of the actuator's calibration
+(:mod:`prsm_lube_ros.estimation.conditioning`: DC and gravity out, nothing
+above the band's upper edge); a window outside the calibration's domain (speeds, loads,
+temperatures fitted) makes the status at least WARN with how far outside
+(KeyValue ``domain_flag``), beside ``calibration_band`` and
+``calibration_domain``.
+
 Only the vibration subscriptions (with the timers and services) wake the
 executor, which rebuilds its wait set from every entity on every wake.  The
 joint state, load and temperature subscriptions, which bring 151 of the 161
@@ -52,7 +59,7 @@ left out and reported once per kind.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 import math
 import os
 from pathlib import Path
@@ -81,8 +88,9 @@ from ..contract import DEFAULT_NAMESPACE, LUBRICATION_TASK, status_name, topic_n
 from ..errors import InputError
 from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
-from ..estimation.calibration_file import load_calibration, save_calibration
-from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, \
+from ..estimation.calibration_file import band_note, load_calibration, save_calibration
+from ..estimation.conditioning import band_text
+from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, outside_domain, \
     uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
 from ..fleet.forecast import forecast_summaries
@@ -230,6 +238,7 @@ class ActuatorChannel:
     last_theta: float = math.nan
     last_theta_std: float = math.nan
     last_flag: str = ''                              # theta_range_flag of the last assessed theta
+    last_domain_flag: str = ''                       # domain_flag of the last assessed window ('' inside)
     last_level: int | None = None
     windows: int = 0
     input_errors: dict = field(default_factory=dict)
@@ -415,11 +424,23 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             self.get_logger().info(f'{channel.name}: calibration {path} loaded')
 
     def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
+        band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load)
         channel.calibration_note = ''
+        channel.last_domain_flag = ''
+        if band_changed and channel.builder.band != self._channel_settings(channel).band:
+            # Windows in the calibration's band (conditioning): open windows in another band are dropped.
+            channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
+            self.get_logger().info(f'{channel.name}: windows now in the calibration\'s {band_note(calibration)}')
         channel.monitor.restart_smoothing()      # thetas of the old constants must not be averaged with the new
 
     # -- inputs ------------------------------------------------------------------------------------
+    def _channel_settings(self, channel: ActuatorChannel) -> WindowSettings:
+        """The window settings with the band of the actuator's calibration (the default band without one)."""
+        if channel.assessor is None:
+            return self._settings
+        return replace(self._settings, band=channel.assessor.calibration.band)
+
     def now(self) -> float:
         """Node-clock time in s (sim time when use_sim_time is set)."""
         return self.get_clock().now().nanoseconds * 1e-9
@@ -553,6 +574,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         else:
             assessed = assessor.assess_window(window)
             theta, std, reason, flag = assessed.theta_oil, assessed.theta_oil_std, assessed.reason, assessed.flag
+            if math.isfinite(theta):
+                channel.last_domain_flag = assessed.domain_flag
         speed = window.screw_speed
         moving = not (math.isfinite(speed) and speed < self._settings.min_speed)
         kind = window.reason_kind or ('low_load' if assessor is not None and not math.isfinite(theta)
@@ -576,7 +599,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         status = channel.monitor.status(now)
         if channel.assessor is None:
             return uncalibrated(status, channel.calibration_note)
-        return out_of_range(status, channel.last_flag)
+        return outside_domain(out_of_range(status, channel.last_flag), channel.last_domain_flag)
 
     def _status(self, channel: ActuatorChannel, now: float):
         status = self._health(channel, now)
@@ -585,6 +608,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             ('theta_oil', channel.last_theta),
             ('theta_oil_std', channel.last_theta_std),
             ('theta_oil_flag', channel.last_flag),
+            ('domain_flag', channel.last_domain_flag),
             ('vibration_rms', w.vibration_rms if w else math.nan),
             ('screw_speed', w.screw_speed if w else math.nan),
             ('axial_load', w.axial_load if w else math.nan),
@@ -596,6 +620,10 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             ('unassessed_reason', status.reason or 'none'),
             ('calibration_file', channel.calibration_file or 'none'),
             ('calibration', 'loaded' if channel.assessor else channel.calibration_note),
+            ('calibration_band', band_note(channel.assessor.calibration) if channel.assessor
+             else band_text(self._settings.band)),
+            ('calibration_domain', channel.assessor.calibration.domain.text
+             if channel.assessor and channel.assessor.calibration.domain else 'none'),
             ('problems', channel.problem_count()),
             ('last_vibration_age', channel.monitor.stale_for(now)),
         ] + channel.forecast
@@ -831,7 +859,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             if settings is not None:
                 self._settings = settings
                 for channel in self.channels:
-                    channel.builder = WindowBuilder(settings, lead=self._lead)
+                    channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
                 self.get_logger().info(f'window settings changed ({", ".join(sorted(names))}); open windows '
                                        'dropped, starting over')
             if thresholds is not None:

@@ -29,7 +29,10 @@ Parameter ``source`` (read-only) chooses where the data come from:
   measured from the stamps).  A gap, jitter beyond ``jitter_tolerance``,
   stamps going back, or stamps whose rate differs from ``sample_rate`` by
   more than ``rate_tolerance`` close the block early; each kind is logged
-  once in one line and counted on ``/diagnostics``.  header.frame_id is the
+  once in one line and counted on ``/diagnostics``.  Gravity (in every
+  ``sensor_msgs/Imu``) is taken out by a high-pass at ``imu_highpass`` Hz,
+  the lower edge of the windows' band
+  (:mod:`prsm_lube_ros.estimation.conditioning`).  header.frame_id is the
   IMU's (``frame_id`` when the IMU leaves it empty).  Only vibration is
   published: speed and load come from the control stack's own topics (or
   the relays below).
@@ -78,6 +81,7 @@ from sensor_msgs.msg import Imu, JointState, Temperature
 
 from ..contract import DEFAULT_NAMESPACE, DIAGNOSTICS_TOPIC, SOURCE_TASK, status_name, topic_name
 from ..errors import InputError
+from ..estimation.conditioning import HIGHPASS_CORNER
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
 from ..simulation.rig_config import load_rig_config
@@ -164,6 +168,9 @@ PARAMETERS = {
                        'sample_rate before the measured rate is used (reported once)', (0.001, 0.5), True),
     'jitter_tolerance': (0.25, _DOUBLE, 'imu: largest deviation of one stamp interval from the sample period, '
                          'as a fraction of it, before the block is closed early', (0.01, 0.49), True),
+    'imu_highpass': (HIGHPASS_CORNER, _DOUBLE, 'imu: corner in Hz of the high-pass that takes gravity (DC) out of '
+                     'the samples, the lower edge of the windows\' band (0: samples passed on unchanged)', (0.0, 100.0),
+                     True),
     # hardware and imu
     'relay_joint_states': ('', _STRING, 'hardware, imu: JointState topic of the EMA stack to republish on '
                            '<namespace>/joint_states (empty: the stack publishes there itself)', None, True),
@@ -369,7 +376,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
                                    durability=qos_profile_sensor_data.durability)
         self._assembler = ImuBlockAssembler(float(values['block_length']), float(values['sample_rate']),
                                             float(values['rate_tolerance']), float(values['jitter_tolerance']),
-                                            on_problem=self._imu_problem)
+                                            on_problem=self._imu_problem, highpass=float(values['imu_highpass']))
         self._imu_unusable = 0
         # Each IMU callback also takes the messages queued behind it (fast_drain.py): one executor wake-up per
         # burst instead of per sample.  Without that rclpy API: one callback per message.

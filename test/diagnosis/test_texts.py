@@ -91,7 +91,7 @@ def test_diagnose_refuses_what_calibrate_refuses_with_the_same_line(two_conditio
     for result in (calibrate, diagnose):
         assert result.returncode != 0 and 'Traceback' not in result.stderr
         assert len(result.stderr.strip().splitlines()) == 1
-    assert 'distinct (speed, load) condition' in calibrate.stderr
+    assert 'distinct (speed, load) pairs' in calibrate.stderr
     assert diagnose.stderr.split(': error: ')[1] == calibrate.stderr.split(': error: ')[1]
     assert not (folder / 'd.yaml').exists()
 

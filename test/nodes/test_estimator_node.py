@@ -6,6 +6,7 @@ Inputs are synthetic runs with a known RMS (a whole number of sine periods per
 window), so theta_Oil follows from Eq. 23 by hand; the node's answers are also
 checked against the offline WindowBuilder + Assessor on the same messages.
 """
+from dataclasses import replace
 import math
 import os
 import signal
@@ -30,6 +31,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState, Temperature  # noqa: E402
 
 from prsm_lube_ros.estimation.assessment import Assessor  # noqa: E402
+from prsm_lube_ros.estimation.conditioning import DEFAULT_BAND  # noqa: E402
+from prsm_lube_ros.estimation.domain import CalibrationDomain  # noqa: E402
 from prsm_lube_ros.estimation.calibration import Calibration  # noqa: E402
 from prsm_lube_ros.estimation.calibration_file import load_calibration, save_calibration  # noqa: E402
 from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN  # noqa: E402
@@ -375,6 +378,30 @@ def test_parameters_are_validated_and_applied(graph, tmp_path):
     assert node.set_parameters([Parameter('window_length', value=0.25)])[0].successful
     assert node.channels[0].builder.settings.window_length == 0.25
     assert node.channels[0].assessor is not None       # the calibration survived every refusal
+
+
+def test_windows_outside_the_calibrated_domain_warn_and_say_how_far(graph, tmp_path):
+    """theta 0.9 (OK by level) at 10 rad/s on constants fitted at 20-40 rad/s: WARN, extrapolated, said how far."""
+    fitted = replace(calibration(START), band=DEFAULT_BAND.resolved(2000.0),
+                     domain=CalibrationDomain(speed=(20.0, 40.0), load=(100.0, 200.0)))
+    save_calibration(fitted, tmp_path / 'calibration_prsm.yaml')
+    node = graph.estimator(tmp_path, calibration_file=str(tmp_path / 'calibration_{actuator}.yaml'),
+                           level_smoothing=1)
+    assert node.channels[0].builder.band == fitted.band            # windows in the calibration's band
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    wait_for(lambda: node.channels[0].publisher.get_subscription_count() > 0, 10, 'probe subscribed')
+    graph.publish(graph.publishers(), segments_stream([(3.0, rms_for(0.9), SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 3, 15, 'states')
+    flag = 'extrapolated: speed 50 % below the calibrated 20-40 rad/s'
+    assert states[1].theta_oil == pytest.approx(0.9, abs=0.01)
+    assert states[1].level == WARN and states[1].message == f'theta_oil {flag}', states[1].message
+    wait_for(lambda: status_of(diagnostics[-1], '/prsm').level == bytes([WARN]), 5, 'WARN on /diagnostics')
+    status = status_of(diagnostics[-1], '/prsm')
+    values = values_of(status)
+    assert status.message == f'theta_oil {flag}' and values['domain_flag'] == flag
+    assert values['calibration_band'].startswith('band 0.5-800 Hz')
+    assert values['calibration_domain'] == 'speed 20-40 rad/s, load 100-200 N'
 
 
 def test_several_actuators_each_have_topics_status_and_service(graph, tmp_path):

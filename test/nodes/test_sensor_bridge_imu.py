@@ -4,10 +4,12 @@
 
 A probe node publishes ``sensor_msgs/Imu`` at 1 kHz with stamps of its own
 (two gaps in them); the bridge's VibrationBlocks must carry exactly those
-samples and stamps, and each gap must close a block while only the first is
-logged (read back from /rosout).
+samples and stamps (gravity high-pass off), and each gap must close a block
+while only the first is logged (read back from /rosout).  With the default
+high-pass, gravity on the axis must leave the blocks and the vibration stay.
 """
 import os
+import time
 
 import numpy as np
 import pytest
@@ -50,7 +52,7 @@ def test_imu_samples_become_vibration_blocks_and_a_gap_closes_a_block_logged_onc
     blocks = graph.collect(VibrationBlock, '/imu_rig/vibration')
     logs = graph.log_lines('bridge_imu_a')
     bridge = graph.bridge('bridge_imu_a', source='imu', namespace='/imu_rig', imu_topic='/imu_test_a/data',
-                          imu_axis='y', sample_rate=1000.0, block_length=0.1, qos_depth=5000)
+                          imu_axis='y', sample_rate=1000.0, block_length=0.1, qos_depth=5000, imu_highpass=0.0)
     assert bridge.topics == {'vibration': '/imu_rig/vibration'}
     publisher = graph.probe.create_publisher(Imu, '/imu_test_a/data', 5000)
     wait_for(lambda: publisher.get_subscription_count() >= 1, 20, 'the bridge subscribed to the IMU')
@@ -149,3 +151,37 @@ def test_messages_without_linear_acceleration_are_dropped_counted_and_logged_onc
     wait_for(lambda: bridge.health.lost_samples == 30, 20, 'thirty samples counted lost')
     wait_for(lambda: any('not measured' in m.msg for m in logs), 10, 'the log line')
     assert len([m for m in logs if 'not measured' in m.msg]) == 1 and blocks == []
+
+
+def test_gravity_leaves_the_imu_blocks_and_the_vibration_stays(graph):
+    """z = 9.81 m/s^2 + 0.5 m/s^2 at 50 Hz, with a gap: the blocks carry the 50 Hz tone without the gravity."""
+    blocks = graph.collect(VibrationBlock, '/gravity_rig/vibration')
+    bridge = graph.bridge('bridge_imu_g', source='imu', namespace='/gravity_rig', imu_topic='/imu_test_g/data',
+                          imu_axis='z', sample_rate=1000.0, block_length=0.1, qos_depth=5000)
+    publisher = graph.probe.create_publisher(Imu, '/imu_test_g/data', 5000)
+    wait_for(lambda: publisher.get_subscription_count() >= 1, 20, 'the bridge subscribed to the IMU')
+    wait_for(lambda: graph.probe.count_publishers('/gravity_rig/vibration') >= 1 and bridge._outputs[
+        'vibration'].get_subscription_count() >= 1, 20, 'the probe subscribed to the blocks')
+    tone = 0.5 * np.sqrt(2.0)            # amplitude of a 0.5 m/s^2 RMS sine
+
+    def message(k):
+        msg = imu_message(k)
+        msg.linear_acceleration.z = 9.81 + tone * np.sin(2 * np.pi * 50.0 * k / 1000.0)
+        return msg
+
+    indices = [k for k in range(2000) if not 1200 <= k < 1250]     # a gap: the filter starts afresh after it
+    start = time.monotonic()
+    for n, k in enumerate(indices):
+        publisher.publish(message(k))
+        if n % 10 == 9:
+            delay = start + (n + 1) * 1e-3 - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+    wait_for(lambda: sum(len(b.samples) for b in blocks) >= 1900, 30, 'the samples as blocks')
+    received = np.concatenate([np.asarray(b.samples, float) for b in blocks])
+    assert abs(float(np.mean(received))) < 0.02                      # gravity gone (raw mean: 9.81)
+    assert np.sqrt(np.mean(received ** 2)) == pytest.approx(0.5, rel=0.02)   # the 50 Hz vibration kept
+    after_gap = np.concatenate([np.asarray(b.samples, float) for b in blocks
+                                if block_stamp(b) >= T0 + 1250 * MS])
+    assert abs(float(np.mean(after_gap[:100]))) < 0.05               # no gravity step after the gap
+    assert not graph.errors
