@@ -108,6 +108,7 @@ def main() -> int:
     args = parser.parse_args()
     sys.path.insert(0, str(ROOT))
     from prsm_lube_ros.estimation.calibration_file import band_note
+    from prsm_lube_ros.estimation.conditioning import AnalysisBand, COMMON_BAND_HIGH
     from prsm_lube_ros.estimation.pipeline import assess_recording, calibrate_recordings, recording_windows
     from prsm_lube_ros.estimation.windowing import WindowSettings
     from prsm_lube_ros.simulation.recordings import simulate_experiment
@@ -125,7 +126,8 @@ def main() -> int:
     stages = [read_stage(path) for path in stage_paths]
     work = args.data / 'variants'
     lead = 0.005
-    modes = {'band': WindowSettings(), 'raw': WindowSettings(band=None)}
+    # One calibration for every rate: the band every rate from 4 kHz up covers (calibrate --band-high 1600).
+    modes = {'band': WindowSettings(band=AnalysisBand(high=COMMON_BAND_HIGH)), 'raw': WindowSettings(band=None)}
     thetas: dict = {mode: {} for mode in modes}
     calibrations = {}
 

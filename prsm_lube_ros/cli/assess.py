@@ -77,10 +77,10 @@ def run(args) -> int:
         if outcome.error:
             print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
     flagged, extrapolated = [], []
-    for flag in calibration.flags:
-        print(f'warning: calibration {args.calibration}: {flag}')
     if not results:
         return EXIT_USER_ERROR
+    for flag in calibration.flags:
+        print(f'warning: calibration {args.calibration}: {flag}')
     print(f'calibration {args.calibration}: {band_note(calibration)}'
           + (f'; domain {calibration.domain.text}' if calibration.domain is not None else ''))
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '

@@ -3,7 +3,7 @@
 """``prsm-lube calibrate``: fit C_sys, C_F and C_lambda on reference recordings and write them."""
 from __future__ import annotations
 
-from .common import add_recording_options
+from .common import add_band_option, add_recording_options
 
 
 def add_command(subparsers) -> None:
@@ -17,6 +17,7 @@ def add_command(subparsers) -> None:
                         help='theta_oil of the recordings (default 1.0; 0 means 1.0)')
     parser.add_argument('--out', required=True, metavar='CALIB.yaml', help='calibration file to write')
     add_recording_options(parser)
+    add_band_option(parser)
     parser.set_defaults(func=run)
 
 

@@ -51,6 +51,13 @@ def warn(line: str) -> None:
     print(f'warning: {line}', file=sys.stderr)
 
 
+def add_band_option(parser) -> None:
+    """``--band-high``: the analysis band's upper edge for a new calibration (default: from the first recording)."""
+    parser.add_argument('--band-high', type=float, metavar='HZ', default=None,
+                        help='upper edge of the analysis band, Hz (default 0.8 x the Nyquist frequency of the first '
+                        'recording; 1600 lets one calibration serve every rate from 4 kHz up)')
+
+
 def read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
     from dataclasses import replace
@@ -62,6 +69,9 @@ def read_recordings(paths, args, *, spectra: bool = False):
     actuator = load_actuator(args.actuator)
     settings = WindowSettings(window_length=require_positive('--window', args.window),
                               spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if spectra else 0.0)
+    if getattr(args, 'band_high', None) is not None:
+        from ..estimation.conditioning import AnalysisBand
+        settings = replace(settings, band=AnalysisBand(high=require_positive('--band-high', args.band_high)))
     recordings = []
     for path in paths:
         bar = progress_bar(100, Path(path).name)

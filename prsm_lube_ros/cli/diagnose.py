@@ -8,7 +8,7 @@ import math
 
 def add_command(subparsers) -> None:
     """Add ``diagnose`` to the ``prsm-lube`` subcommands."""
-    from .common import add_recording_options
+    from .common import add_band_option, add_recording_options
     parser = subparsers.add_parser(
         'diagnose', help='find the physics the model leaves out, model it, refit and show the gain',
         description='Recordings at one known lubrication state: fit the paper\'s model, locate where recording '
@@ -21,6 +21,7 @@ def add_command(subparsers) -> None:
     parser.add_argument('--calibration-out', metavar='CALIB.yaml',
                         help='write the calibration of the chosen model (effect in its extension)')
     add_recording_options(parser)
+    add_band_option(parser)
     parser.set_defaults(func=run)
 
 

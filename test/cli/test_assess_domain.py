@@ -95,5 +95,8 @@ def test_recordings_at_two_rates_calibrate_in_the_band_of_the_first_and_a_slower
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and not (tmp_path / 'd.yaml').exists()
     assert err[-1] == (f'prsm-lube calibrate: error: {slow}: vibration: sample rate 2000 Hz cannot cover the '
-                       'analysis band 0.5-1600 Hz (needs at least 4000 Hz: upper edge at most 0.8 x the Nyquist '
+                       'analysis band 0.5-3200 Hz (needs at least 8000 Hz: upper edge at most 0.8 x the Nyquist '
                        'frequency); record faster or calibrate at this rate')
+    # One calibration for both rates: the band both cover, asked for.
+    assert main(['calibrate', str(fast), str(slow), '--band-high', '800', '--out', str(tmp_path / 'e.yaml')]) == 0
+    assert 'band: 0.5-800 Hz' in capsys.readouterr().out

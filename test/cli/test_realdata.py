@@ -50,9 +50,7 @@ def test_sigma_covers_healthy_units_of_the_other_subset(calibrations, reference,
     assert len(runs) == (11 if assessed == 'test_early' else 6)
     assert all(run['theta_oil_std'] > 0 for run in runs)           # a condition recorded once included
     rms = math.sqrt(np.mean(z ** 2))
-    # Measured 0.74 (learn -> test) and 0.69 (test -> learn): the learn units scatter less than the test units
-    # (REML run scatter 15 % against 24 %), so the wider subset's sigma over-covers the tighter one.
-    assert 0.6 < rms < 1.4
+    assert 0.7 < rms < 1.4
     assert np.max(np.abs(z)) < 3
 
 
