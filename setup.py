@@ -9,10 +9,18 @@ on recordings (``prsm-lube simulate | calibrate | assess | diagnose``) on a
 machine without ROS; the nodes additionally need the generated interfaces.
 """
 from glob import glob
+from pathlib import Path
 
 from setuptools import find_packages, setup
 
 package_name = 'prsm_lube_ros'
+
+
+def requirements(name):
+    """The requirement lines of ``requirements/<name>.txt``: the one dependency list pip, CI and setup.py share."""
+    text = (Path(__file__).resolve().parent / 'requirements' / f'{name}.txt').read_text()
+    return [line.split('#')[0].strip() for line in text.splitlines() if line.split('#')[0].strip()]
+
 
 setup(
     name=package_name,
@@ -25,11 +33,12 @@ setup(
         ('share/' + package_name + '/launch', glob('launch/*.py')),
         ('share/' + package_name + '/msg', glob('msg/*.msg')),
         ('share/' + package_name + '/srv', glob('srv/*.srv')),
+        ('share/' + package_name + '/action', glob('action/*.action')),
     ],
+    package_data={package_name: ['py.typed']},
     python_requires='>=3.10',
-    install_requires=['numpy', 'scipy', 'rosbags>=0.10.4', 'mcap', 'zstandard', 'lz4', 'PyYAML',
-                      'matplotlib', 'tqdm'],
-    extras_require={'hardware': ['nidaqmx'], 'test': ['pytest', 'flake8', 'pydocstyle']},
+    install_requires=requirements('core'),
+    extras_require={'hardware': ['nidaqmx'], 'test': requirements('test')},
     zip_safe=True,
     maintainer='prsm_lube_ros developers',
     maintainer_email='prsm-lube@example.org',

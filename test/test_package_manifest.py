@@ -17,7 +17,8 @@ CHECKED_KEYS = {'python3-numpy', 'python3-scipy', 'python3-yaml', 'python3-matpl
                 'python3-rosbags-pip', 'python3-pytest', 'python3-pytest-timeout', 'python3-flake8', 'pydocstyle'}
 #: Python packages the code or the tests use that have no key in that file (searched by name and by the
 #: pip package a key installs): pip installs them from requirements/core.txt and requirements/test.txt.
-NO_ROSDEP_KEY = {'mcap', 'lz4', 'zstandard', 'isal', 'pyarrow', 'dask', 'distributed', 'duckdb', 'polars'}
+NO_ROSDEP_KEY = {'mcap', 'lz4', 'zstandard', 'isal', 'pyarrow', 'dask', 'distributed', 'duckdb', 'polars',
+                 'statsmodels'}
 #: Key of each requirement that has one (requirements/*.txt name -> rosdep key).
 KEY_OF = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'pyyaml': 'python3-yaml',
           'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm', 'rosbags': 'python3-rosbags-pip',
@@ -95,3 +96,14 @@ def test_colcon_test_runs_the_pytest_suite():
     assert 'ament_add_pytest_test(' in block and ' test' in block
     assert 'ament_cmake_pytest' in manifest_dependencies().get('test_depend', set())
     assert os.path.isdir(ROOT / 'test')
+
+
+def test_setup_py_installs_the_requirement_files_and_ships_py_typed():
+    """One dependency list: setup.py reads requirements/core.txt and test.txt, nothing of its own."""
+    root = Path(__file__).resolve().parents[1]
+    source = (root / 'setup.py').read_text()
+    calls = {node.args[0].value for node in ast.walk(ast.parse(source))
+             if isinstance(node, ast.Call) and getattr(node.func, 'id', '') == 'requirements'}
+    assert calls == {'core', 'test'}
+    assert "install_requires=requirements('core')" in source
+    assert (root / 'prsm_lube_ros' / 'py.typed').is_file() and "'py.typed'" in source
