@@ -44,7 +44,6 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 #: Run scatter (relative, ln units) assumed when the runs cannot estimate it: the middle of the 1-4 % seen on rigs.
 ASSUMED_RUN_STD = 0.03
@@ -144,6 +143,8 @@ def estimate_run_scatter(x, residual, runs) -> RunScatter:
         _, sigma2 = _restricted_fit(0.0, xtx, xty, yty, sizes, column_sums, y_sums, n, p)
         window_var = _within_run_variance(y, index, groups) if n > groups else sigma2
         return RunScatter(ASSUMED_RUN_STD, math.sqrt(max(window_var, 0.0)), groups, dof, estimated=False)
+
+    from scipy.optimize import minimize_scalar    # here: assess never fits, and must start without scipy.optimize
 
     def objective(log_ratio):
         return _restricted_fit(math.exp(log_ratio), xtx, xty, yty, sizes, column_sums, y_sums, n, p)[0]
