@@ -79,3 +79,32 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def live_theta(path: Path, windows: Sequence[tuple], event_time: float, truth: float, title: str) -> Path:
+    """theta_Oil per window over wall time as a live observer received it, an event line and the truth.
+
+    ``windows`` are ``(s since the observer started, theta_Oil, ...)``;
+    ``event_time`` (s, same clock) is drawn as a vertical line (the new
+    calibration's answer), ``truth`` as a dashed horizontal one.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8.0, 4.2), dpi=120)
+    t = np.array([w[0] for w in windows], float)
+    theta = np.array([w[1] for w in windows], float)
+    before = t < event_time if np.isfinite(event_time) else np.ones(t.size, bool)
+    ax.plot(t[before], theta[before], 'o', markersize=3, color='C1', label='before the calibration')
+    ax.plot(t[~before], theta[~before], 'o', markersize=3, color='C0', label='after')
+    if np.isfinite(event_time):
+        ax.axvline(event_time, color='0.3', linewidth=1, label='calibrate service answered')
+    ax.axhline(truth, color='C2', linestyle='--', linewidth=1, label=f'truth {truth:g}')
+    ax.set_xlabel('wall time, s')
+    ax.set_ylabel(r'$\theta_{Oil}$')
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
