@@ -90,7 +90,6 @@ def live_step(out: Path, bags_dir: Path, stages, *, playback_rate: float, window
     from ..estimation.calibration_file import save_calibration
     from ..estimation.pipeline import calibrate_recordings, recording_windows
     from ..figures import live_theta
-    from ..nodes.live_demo import run_live_graph, write_parameters
     from ..physics.actuator import Actuator
     from ..recording.writer import bag_path
     step = StepResult(2, 'Live graph: bridge, estimator, calibrate service',
@@ -98,6 +97,12 @@ def live_step(out: Path, bags_dir: Path, stages, *, playback_rate: float, window
                       '/diagnostics; the estimator starts from a calibration made on stage 2 taken for '
                       'theta_Oil = 1, then /prsm/calibrate is called on stage 3 (the true reference)')
     started = time.perf_counter()
+    try:
+        from ..nodes.live_demo import run_live_graph, write_parameters
+    except ImportError as exc:           # prsm-lube installed with pip, without ROS 2
+        _check(step, say, f'ROS 2 and the package\'s interfaces importable ({exc}; source the workspace, e.g. '
+               '.env-jazzy.sh, or run tools/demo)', False)
+        return step
     folder = out / 'live'
     if folder.exists():
         shutil.rmtree(folder)
