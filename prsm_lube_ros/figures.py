@@ -16,6 +16,18 @@ def _pyplot():
     return plt
 
 
+def _save(fig, ax, path: Path, title: str, plt) -> Path:
+    """Title, legend and grid on ``ax``; ``fig`` written to ``path`` (folders made) and closed."""
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
                  values: Mapping[tuple[str, str], float], errors: Mapping[tuple[str, str], float] | None,
                  ylabel: str, title: str, reference_lines: Mapping[str, float] | None = None) -> Path:
@@ -71,14 +83,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
         ax.axvline(days(event), color='0.4', linestyle=':', linewidth=1, label='relubrication' if j == 0 else None)
     ax.set_xlabel('days since the first recording')
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, ax, path, title, plt)
 
 
 def live_theta(path: Path, windows: Sequence[tuple], event_time: float, truth: float, title: str) -> Path:
@@ -100,11 +105,4 @@ def live_theta(path: Path, windows: Sequence[tuple], event_time: float, truth: f
     ax.axhline(truth, color='C2', linestyle='--', linewidth=1, label=f'truth {truth:g}')
     ax.set_xlabel('wall time, s')
     ax.set_ylabel(r'$\theta_{Oil}$')
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, ax, path, title, plt)
