@@ -119,7 +119,9 @@ def run(args) -> int:
         header(4, f'a small fleet ({args.actuators} actuators x {args.days} days): history, trend, the most '
                'urgent actuators and their forecast crossing')
         steps.append(fleet_step(out, args.seed, say, actuators=args.actuators, days=args.days))
-    command = 'prsm-lube demo ' + ' '.join(sys.argv[2:]) if len(sys.argv) > 1 else 'prsm-lube demo'
+    sizes = (f' --actuators {args.actuators} --days {args.days} --playback-rate {args.playback_rate:g} '
+             f'--live-windows {args.live_windows}')
+    command = f'prsm-lube demo --out {args.out} --seed {args.seed}' + (' --quick' if args.quick else sizes)
     page = write_page(out, steps, command)
     say()
     for step in steps:

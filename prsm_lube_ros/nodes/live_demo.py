@@ -188,7 +188,12 @@ def run_live_graph(folder: Path, parameters: Path, *, reference_bags: list[str],
     say(f'    ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}, discovery {env["ROS_AUTOMATIC_DISCOVERY_RANGE"]}; '
         f'started: prsm-lube run --config {parameters}')
     child = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
-    observer = Observer(int(env['ROS_DOMAIN_ID']))
+    try:
+        observer = Observer(int(env['ROS_DOMAIN_ID']))
+    except BaseException:
+        stop_child(child)
+        log.close()
+        raise
     try:
         if not observer.wait_for(lambda: len(observer.windows_since(0.0)) >= windows_wanted, timeout, child):
             result.problem = (f'only {len(observer.windows_since(0.0))} windows of theta_Oil in {timeout:.0f} s '
