@@ -16,6 +16,18 @@ def _pyplot():
     return plt
 
 
+def _save(fig, ax, path: Path, title: str, plt) -> Path:
+    """Title, legend and grid on ``ax``; ``fig`` written to ``path`` (folders made) and closed."""
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
                  values: Mapping[tuple[str, str], float], errors: Mapping[tuple[str, str], float] | None,
                  ylabel: str, title: str, reference_lines: Mapping[str, float] | None = None) -> Path:
@@ -71,11 +83,26 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
         ax.axvline(days(event), color='0.4', linestyle=':', linewidth=1, label='relubrication' if j == 0 else None)
     ax.set_xlabel('days since the first recording')
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, ax, path, title, plt)
+
+
+def live_theta(path: Path, windows: Sequence[tuple], event_time: float, truth: float, title: str) -> Path:
+    """theta_Oil per window over wall time as a live observer received it, an event line and the truth.
+
+    ``windows`` are ``(s since the observer started, theta_Oil, ...)``;
+    ``event_time`` (s, same clock) is drawn as a vertical line (the new
+    calibration's answer), ``truth`` as a dashed horizontal one.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8.0, 4.2), dpi=120)
+    t = np.array([w[0] for w in windows], float)
+    theta = np.array([w[1] for w in windows], float)
+    before = t < event_time if np.isfinite(event_time) else np.ones(t.size, bool)
+    ax.plot(t[before], theta[before], 'o', markersize=3, color='C1', label='before the calibration')
+    ax.plot(t[~before], theta[~before], 'o', markersize=3, color='C0', label='after')
+    if np.isfinite(event_time):
+        ax.axvline(event_time, color='0.3', linewidth=1, label='calibrate service answered')
+    ax.axhline(truth, color='C2', linestyle='--', linewidth=1, label=f'truth {truth:g}')
+    ax.set_xlabel('wall time, s')
+    ax.set_ylabel(r'$\theta_{Oil}$')
+    return _save(fig, ax, path, title, plt)

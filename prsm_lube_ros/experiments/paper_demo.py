@@ -48,7 +48,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
 
     out = Path(out)
     bags_dir = out / 'bags'
-    say(f'1/4 simulating the paper\'s experiment (seed {seed}, true theta per stage {", ".join(map(str, stages))}) '
+    say(f'1a simulating the paper\'s experiment (seed {seed}, true theta per stage {", ".join(map(str, stages))}) '
         f'into {bags_dir}')
     bags = simulate_experiment(bags_dir, seed=seed, stage_thetas=tuple(stages), storage=storage)
     actuator = Actuator()
@@ -57,7 +57,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
     for bag in bags:
         recordings.append(recording_windows(bag, lead=actuator.lead, settings=settings,
                                             on_problem=lambda line: say(f'   warning: {line}')))
-    say(f'2/4 calibrating on {Path(bags[-1]).name} (theta_oil = 1)')
+    say(f'1b calibrating on {Path(bags[-1]).name} (theta_oil = 1)')
     calibration = calibrate_recordings([recordings[-1]], theta=1.0)
     save_calibration(calibration, out / 'calibration.yaml')
     c = calibration.constants
@@ -65,7 +65,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
         f'C_F = {c.c_f:.4g} +/- {calibration.c_f_std:.2g} 1/N, '
         f'C_lambda = {c.c_lambda:.4g} +/- {calibration.c_lambda_std:.2g}; '
         f'fit RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows')
-    say('3/4 assessing all three stages')
+    say('1c assessing all three stages')
     assessments = [assess_recording(rec, calibration) for rec in recordings]
     (out / 'assessment.json').write_text(json.dumps(assessment_json(assessments, calibration), indent=1,
                                                     allow_nan=False))
@@ -95,7 +95,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
         say(row)
 
     say()
-    say('4/4 checks against the simulator\'s truth')
+    say('1d checks against the simulator\'s truth')
     ok = True
     summary = {'seed': seed, 'true_theta': list(stages), 'stages': {},
                'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
