@@ -293,17 +293,22 @@ def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
         pos = end
 
 
-def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record,
+                  on_problem=None, offsets: Optional[List[int]] = None) -> Tuple[RawChunk, int]:
     """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
     Walks every record (no message index); each buffer is walked on its own,
     so one that ends in a cut record cannot shift the next.  Returns the chunk
     (over the buffers joined) and the bytes of the last buffer used.
-    ``on_record(opcode, content)`` receives every non-message record.
+    ``on_record(opcode, content)`` receives every non-message record.  A
+    record whose length runs past its buffer (a corrupt length inside a chunk)
+    ends that buffer's walk; ``on_problem`` (if given) hears it in one line
+    with the bytes lost, the buffer named by its file offset (``offsets``,
+    one per buffer; default ``file_offset``).
     """
     per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
     base = used = 0
-    for buf in buffers:
+    for number, buf in enumerate(buffers):
         used = 0
         for opcode, begin, end in walk_records(buf):
             used = end
@@ -315,6 +320,9 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
                     (base + begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
             else:
                 on_record(opcode, memoryview(buf)[begin:end])
+        if used != len(buf) and on_problem is not None:
+            at = offsets[number] if offsets else file_offset
+            on_problem(_overrun_problem(at, used, len(buf)))
         base += len(buf)
     groups = {}
     for channel_id, rows in per_channel.items():
@@ -324,21 +332,31 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
     return RawChunk(start_time, np.frombuffer(joined, np.uint8), groups, file_offset), used
 
 
-def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record,
+                     on_problem=None) -> Tuple[RawChunk, int]:
     """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
 
-    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    ``on_record(opcode, content)`` receives every non-message record (schemas,
+    channels); ``on_problem`` a record overrunning the buffer (:func:`split_records`).
     """
-    return split_records([buf], start_time, file_offset, on_record)
+    return split_records([buf], start_time, file_offset, on_record, on_problem)
+
+
+def _overrun_problem(file_offset: int, used: int, size: int) -> str:
+    """The line for a chunk (or record run) whose walk stopped ``size - used`` bytes before its end."""
+    return (f'chunk at byte {file_offset}: a record length at byte {used} of its {size} bytes of records runs past '
+            f'the chunk (corrupt); its last {size - used} bytes are not readable')
 
 
 def split_indexed(buf: bytes, start_time: int, file_offset: int,
-                  indexes: Dict[int, bytes], on_record) -> Optional[RawChunk]:
+                  indexes: Dict[int, bytes], on_record, on_problem=None) -> Optional[RawChunk]:
     """Split a chunk with its MessageIndex records, vectorised; None if the index does not fit.
 
     The index is trusted only after checking that every entry points at a
     Message record of its channel inside the chunk and that the bytes between
-    indexed messages hold no other Message record.
+    indexed messages hold no other Message record.  Log times are the
+    messages' own (as the reference readers give them); index times that
+    disagree are said to ``on_problem`` (if given) in one line.
     """
     data = np.frombuffer(buf, np.uint8)
     size = data.size
@@ -383,12 +401,17 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
             last = end
         if last != gap_end:
             return None
+    own_times = uint64_at[offsets + RECORD_PREFIX + 6].view(np.int64)   # after channel_id u16, sequence u32
+    wrong = int(np.count_nonzero(own_times != log_times))
+    if wrong and on_problem is not None:
+        on_problem(f'chunk at byte {file_offset}: {wrong} message index time(s) disagree with the messages\' own '
+                   'log times (corrupt index); the messages\' times are used')
     groups = {}
     start = 0
     for channel_id, count in zip(ids, counts):
         stop = start + count
         groups[channel_id] = MessageGroup(offsets[start:stop] + RECORD_PREFIX + MESSAGE_HEADER,
-                                          lengths[start:stop] - MESSAGE_HEADER, log_times[start:stop])
+                                          lengths[start:stop] - MESSAGE_HEADER, own_times[start:stop])
         start = stop
     return RawChunk(start_time, data, groups, file_offset)
 
@@ -396,7 +419,12 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
 # -- the file ---------------------------------------------------------------------------------------
 
 def _definitions_into(summary: Summary, on_problem):
-    """A sink for the Schema and Channel records met while reading, filling ``summary``."""
+    """A sink for the Schema and Channel records met while reading, filling ``summary``.
+
+    It hears the records among messages (inside chunks, or gathered top-level
+    ones): any other spec opcode there (a Footer, a Chunk, 0x00) is damage --
+    most often a Message whose opcode byte changed -- and said in one line.
+    """
     def on_record(opcode, content):
         try:
             if opcode == OP_SCHEMA:
@@ -405,6 +433,9 @@ def _definitions_into(summary: Summary, on_problem):
             elif opcode == OP_CHANNEL:
                 channel = parse_channel(content)
                 summary.channels.setdefault(channel.id, channel)
+            elif opcode < 0x80:
+                on_problem(f'a record of opcode {opcode:#04x} among the messages (corrupt; a message with a damaged '
+                           'opcode?) left out')
         except McapProblem as problem:
             on_problem(f'bad schema/channel record ({problem})')
     return on_record
@@ -454,10 +485,12 @@ class _Gathered:
     decode and a slice step per message; gathered, they cost one per batch.
     """
 
-    def __init__(self, on_record, size: int):
+    def __init__(self, on_record, size: int, on_problem=None):
         self.on_record = on_record
+        self.on_problem = on_problem
         self.size = size
         self.buffers: List[bytes] = []
+        self.offsets: List[int] = []
         self.bytes = 0
         self.file_offset = 0
         self.start_time: Optional[int] = None
@@ -467,6 +500,7 @@ class _Gathered:
         if not self.buffers:
             self.file_offset = file_offset
         self.buffers.append(buffer)
+        self.offsets.append(file_offset)
         self.bytes += len(buffer)
         if start_time is not None:
             self.start_time = start_time if self.start_time is None else min(self.start_time, start_time)
@@ -476,8 +510,9 @@ class _Gathered:
         """What is gathered as one pseudo-chunk (None if nothing)."""
         if not self.buffers:
             return None
-        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record)
-        self.buffers, self.bytes, self.start_time = [], 0, None
+        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record,
+                                 self.on_problem, self.offsets)
+        self.buffers, self.offsets, self.bytes, self.start_time = [], [], 0, None
         return chunk
 
 
@@ -599,7 +634,7 @@ class McapFile:
         """
         summary = summary if summary is not None else Summary()
         on_record = _definitions_into(summary, on_problem)
-        gathered = _Gathered(on_record, unchunked_batch)
+        gathered = _Gathered(on_record, unchunked_batch, on_problem)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
             pos = len(MAGIC)
@@ -632,8 +667,12 @@ class McapFile:
                 if opcode != OP_CHUNK and gathered.buffers:
                     yield gathered.take()
                 if opcode in (OP_DATA_END, OP_FOOTER):
-                    cut = None
-                    break
+                    if _ends_data(stream, pos, opcode, length, self.size):
+                        cut = None
+                        break
+                    on_problem(f'a {"DataEnd" if opcode == OP_DATA_END else "Footer"} record at byte {pos} in the '
+                               f'middle of the data section (corrupt; a damaged opcode?): its {length} bytes skipped')
+                    stream.seek(pos + RECORD_PREFIX)    # the skip below passes its content
                 if opcode == OP_CHUNK:
                     content = stream.read(length)
                     try:
@@ -669,7 +708,7 @@ class McapFile:
             return
         if gathered.buffers:
             yield gathered.take()
-        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record)
+        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record, gathered.on_problem)
 
     def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
         """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
@@ -680,7 +719,7 @@ class McapFile:
         cannot be read is left out with one line to ``on_problem``.
         """
         summary = summary if summary is not None else Summary()
-        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES)
+        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES, on_problem)
         with open(self.path, 'rb') as stream:
             for pos in offsets:
                 pos = int(pos)
@@ -721,12 +760,12 @@ class McapFile:
         return [records, signed(start_time), {}, pos]
 
     def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
-                      on_record) -> RawChunk:
+                      on_record, on_problem=None) -> RawChunk:
         if indexes and -1 not in indexes:
-            chunk = split_indexed(records, start_time, pos, indexes, on_record)
+            chunk = split_indexed(records, start_time, pos, indexes, on_record, on_problem)
             if chunk is not None:
                 return chunk
-        chunk, _ = split_sequential(records, start_time, pos, on_record)
+        chunk, _ = split_sequential(records, start_time, pos, on_record, on_problem)
         return chunk
 
     def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
@@ -754,6 +793,34 @@ class DataLayout:
     complete: bool          # every record fits and the section ends with DataEnd or the Footer
 
 
+#: Opcodes of the summary section (after DataEnd): Schema, Channel, ChunkIndex, AttachmentIndex, Statistics,
+#: MetadataIndex, SummaryOffset.
+SUMMARY_OPCODES = frozenset((OP_SCHEMA, OP_CHANNEL, OP_CHUNK_INDEX, 0x0A, OP_STATISTICS, 0x0D, 0x0E))
+
+
+def _ends_data(stream: BinaryIO, pos: int, opcode: int, length: int, size: int) -> bool:
+    """True when the DataEnd or Footer record at ``pos`` really ends the data section.
+
+    Only (part of) the closing magic may follow a Footer; after a DataEnd only
+    summary records, up to a Footer or to where a truncation cut them.  Any
+    other record after it (a Chunk, a Message, an index) makes it an end
+    opcode in the middle of the data (a damaged byte), which the reference
+    readers refuse.  Seeks ``stream`` over record headers only.
+    """
+    at = pos + RECORD_PREFIX + length
+    if opcode == OP_FOOTER:
+        return at >= size - len(MAGIC)
+    while at + RECORD_PREFIX <= size:
+        stream.seek(at)
+        kind, record_length = _RECORD.unpack_from(stream.read(RECORD_PREFIX), 0)
+        if kind == OP_FOOTER:
+            return True
+        if not (kind in SUMMARY_OPCODES or kind >= 0x80):
+            return False
+        at += RECORD_PREFIX + record_length
+    return True
+
+
 def data_layout(path, size: int) -> DataLayout:
     """The :class:`DataLayout` of a file's data section, from its record headers only.
 
@@ -771,10 +838,10 @@ def data_layout(path, size: int) -> DataLayout:
             if len(head) < RECORD_PREFIX:
                 break
             opcode, length = _RECORD.unpack_from(head, 0)
-            if opcode in (OP_DATA_END, OP_FOOTER):
-                complete = True
-                break
             if length > size - pos - RECORD_PREFIX:
+                break
+            if opcode in (OP_DATA_END, OP_FOOTER):
+                complete = _ends_data(stream, pos, opcode, length, size)   # else: McapFile.chunks reports it
                 break
             if opcode == OP_CHUNK and length >= 8 and len(head) >= RECORD_PREFIX + 8:
                 offsets.append(pos)
