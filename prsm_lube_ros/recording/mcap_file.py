@@ -529,6 +529,7 @@ class McapFile:
     def __init__(self, path):
         self.path = path
         self.summary_problem = ''     # why the summary section was not used (a problem line), '' when it was
+        self.chunk_index: List[int] = []    # chunk offsets an intact summary's ChunkIndex records give
         with open(path, 'rb') as stream:
             stream.seek(0, 2)
             self.size = stream.tell()
@@ -574,12 +575,15 @@ class McapFile:
             return None
         summary = Summary(complete=True)
         statistics = False
+        chunk_index = []
         try:
             last = 0
             for opcode, begin, end in walk_records(section):
                 last = end
                 content = memoryview(section)[begin:end]
-                if opcode == OP_SCHEMA:
+                if opcode == OP_CHUNK_INDEX and end - begin >= 24:
+                    chunk_index.append(_U64.unpack_from(content, 16)[0])     # chunk_start_offset
+                elif opcode == OP_SCHEMA:
                     schema = parse_schema(content)
                     summary.schemas[schema.id] = schema
                 elif opcode == OP_CHANNEL:
@@ -603,7 +607,21 @@ class McapFile:
                 return None
         except McapProblem:
             return None
+        self.chunk_index = chunk_index
         return summary if statistics else None
+
+    def index_problem(self, layout: 'DataLayout') -> str:
+        """A line when chunks the summary's chunk index lists are not where it says ('' when all are).
+
+        A chunk whose opcode became another (a user opcode, which readers
+        skip) leaves no other trace in a file without statistics; the
+        reference readers, which seek by this index, refuse such a file.
+        """
+        missing = sorted(set(self.chunk_index) - set(layout.offsets.tolist()))
+        if not missing:
+            return ''
+        return (f'{len(missing)} chunk(s) the chunk index lists (at byte {missing[0]}'
+                f'{" ..." if len(missing) > 1 else ""}) are not in the data section (damaged records): not read')
 
     def scan(self) -> Tuple[Summary, List[str]]:
         """Rebuild the listing by reading the data section (file without a usable summary)."""
@@ -639,6 +657,7 @@ class McapFile:
             stream.seek(len(MAGIC))
             pos = len(MAGIC)
             pending = None        # chunk waiting for its message index records
+            previous = None       # opcode of the last record not a MessageIndex of a pending chunk
             while True:
                 head = stream.read(RECORD_PREFIX)
                 if len(head) < RECORD_PREFIX:
@@ -652,6 +671,10 @@ class McapFile:
                     _add_index(pending[2], stream.read(length))
                     pos += RECORD_PREFIX + length
                     continue
+                if opcode == OP_MESSAGE_INDEX and previous not in (OP_CHUNK, OP_MESSAGE_INDEX):
+                    on_problem(f'a MessageIndex record at byte {pos} follows no chunk (corrupt; a chunk whose opcode '
+                               'was damaged?): skipped')
+                previous = opcode
                 if pending is not None:
                     yield from self._finish_or_gather(pending, gathered)
                     pending = None
@@ -683,6 +706,9 @@ class McapFile:
                 elif opcode in (OP_SCHEMA, OP_CHANNEL):
                     on_record(opcode, stream.read(length))
                 else:
+                    if opcode in SUMMARY_OPCODES or (opcode == OP_HEADER and pos != len(MAGIC)):
+                        on_problem(f'a record of opcode {opcode:#04x} at byte {pos} where it does not belong in the '
+                                   'data section (corrupt; a damaged opcode?): skipped')
                     stream.seek(length, 1)
                 pos += RECORD_PREFIX + length
             if pending is not None:
@@ -857,6 +883,57 @@ def data_layout(path, size: int) -> DataLayout:
                       only_chunks, complete)
 
 
+class ReadCheck:
+    """What reading a file found, held against its intact summary at the end.
+
+    Damage that leaves no trace where it happened -- a chunk whose opcode
+    became a user opcode (skipped, as the spec says), a message whose log time
+    or channel id changed in a chunk without CRC -- still disagrees with the
+    Statistics record: fewer messages than it counts, log times outside its
+    span, or a channel defined nowhere.
+    """
+
+    def __init__(self, summary: Optional[Summary], summary_problem: str = ''):
+        self.summary = summary if summary is not None and summary.complete else None
+        self.summary_problem = summary_problem
+        self.counts: Dict[int, int] = {}
+        self.outside = 0
+        self.undefined = 0
+
+    def add(self, chunk: RawChunk, channels: Dict[int, Channel]) -> None:
+        """Count one chunk's messages (``channels``: those defined so far)."""
+        summary = self.summary
+        for channel_id, group in chunk.groups.items():
+            self.counts[channel_id] = self.counts.get(channel_id, 0) + int(group.log_times.size)
+            if channel_id not in channels:
+                self.undefined += int(group.log_times.size)
+            if summary is not None and summary.start_time is not None and summary.message_counts:
+                times = group.log_times
+                self.outside += int(np.count_nonzero((times < signed(summary.start_time))
+                                                     | (times > signed(summary.end_time))))
+
+    def lines(self) -> List[str]:
+        """One line per kind of disagreement (none for an intact file)."""
+        lines = [self.summary_problem] if self.summary_problem else []
+        if self.undefined:
+            lines.append(f'{self.undefined} message(s) on a channel defined nowhere in the file (a damaged record?)')
+        summary = self.summary
+        if summary is None:
+            return lines
+        if self.outside:
+            lines.append(f'{self.outside} message(s) with a log time outside the span its summary states '
+                         f'({summary.start_time} to {summary.end_time} ns): damaged records')
+        short = [(key, self.counts.get(key, 0), listed) for key, listed in sorted(summary.message_counts.items())
+                 if self.counts.get(key, 0) < listed]
+        if short:
+            def name(key):
+                return summary.channels[key].topic if key in summary.channels else f'channel {key}'
+            lost = sum(listed - got for _, got, listed in short)
+            lines.append(f'{lost} message(s) listed in the summary were not read (damaged data): '
+                         + ', '.join(f'{name(key)} {got} of {listed}' for key, got, listed in short))
+        return lines
+
+
 def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:
     """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
 
@@ -867,7 +944,12 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
     summary = Summary()
     if mcap.summary is not None:
         summary.channels.update(mcap.summary.channels)
+    check = ReadCheck(mcap.summary, mcap.summary_problem)
+    index_problem = mcap.index_problem(data_layout(path, mcap.size)) if mcap.chunk_index else ''
+    if index_problem:
+        on_problem(index_problem)
     for chunk in mcap.chunks(on_problem, summary):
+        check.add(chunk, summary.channels)
         ids = np.concatenate([np.full(g.data_offsets.size, key, np.int64) for key, g in chunk.groups.items()]
                              + [np.zeros(0, np.int64)])
         starts = np.concatenate([g.data_offsets for g in chunk.groups.values()] + [np.zeros(0, np.int64)])
@@ -878,6 +960,8 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
             sequence, log_time = struct.unpack_from('<IQ', buffer, begin - MESSAGE_HEADER + 2)
             yield (summary.channels.get(int(ids[index])), sequence, log_time,
                    bytes(buffer[begin:begin + int(lengths[index])]))
+    for line in check.lines():
+        on_problem(line)
 
 
 def bare_read(path) -> Tuple[int, int]:

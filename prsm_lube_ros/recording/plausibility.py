@@ -26,6 +26,8 @@ reports one named problem and leaves the entries out.  No ROS import.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: Vibration sample rates accepted, Hz.
@@ -81,3 +83,78 @@ def plausible_temperatures(values) -> np.ndarray:
     low, high = TEMPERATURE_RANGE
     with np.errstate(invalid='ignore'):
         return (values >= low) & (values <= high)
+
+
+#: A header stamp that jumps away from both neighbours of its topic by more than this (s) while they agree
+#: with each other is damage, not jitter: no clock goes forward and back by a second for one message.
+STAMP_SPIKE_SECONDS = 1.0
+#: Likewise a block's sample rate that differs from both neighbours' by more than this fraction while
+#: they agree: an acquisition changes its rate for good (the IMU bridge's measured rate), not for one block.
+RATE_SPIKE_FRACTION = 0.05
+
+
+def _spikes(values: np.ndarray, jump: float) -> np.ndarray:
+    """Mask of values jumping more than ``jump`` from both neighbours (same side) whose neighbours agree.
+
+    The first and last values are not judged (False): see :func:`_edge`.
+    """
+    spikes = np.zeros(values.size, bool)
+    if values.size < 3:
+        return spikes
+    with np.errstate(invalid='ignore'):
+        before, after = values[1:-1] - values[:-2], values[1:-1] - values[2:]
+        spikes[1:-1] = ((np.abs(before) > jump) & (np.abs(after) > jump) & (np.sign(before) == np.sign(after))
+                        & (np.abs(values[2:] - values[:-2]) < jump))
+    return spikes
+
+
+class SpikeCount:
+    """Counts isolated jumps (damage, not jitter or resets) in one stream of values fed piece by piece.
+
+    ``jump``: the threshold, in the values' unit, or as a fraction when
+    ``relative`` (compared in log space).  A gap (lost messages) or a clock
+    reset jumps without coming back and is not a spike.  The last values of
+    a piece are kept, so pieces join without blind spots; the stream's first
+    value is judged against the two after it, its last one by :meth:`finish`.
+    """
+
+    def __init__(self, jump: float, relative: bool = False):
+        self.jump = math.log1p(jump) if relative else jump
+        self.relative = relative
+        self.count = 0
+        self._tail = np.zeros(0)      # the last (up to 3) values; the last one not judged yet
+        self._started = False
+
+    def add(self, values) -> None:
+        """Judge ``values``, the next piece of the stream."""
+        values = np.asarray(values, float).reshape(-1)
+        if self.relative:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                values = np.log(values)
+        joined = np.concatenate((self._tail, values))
+        if joined.size < 3:
+            self._tail = joined
+            return
+        spikes = _spikes(joined, self.jump)
+        if self._started:
+            start = self._tail.size - 1
+        else:
+            spikes[0], start, self._started = _edge(joined[0], joined[1], joined[2], self.jump), 0, True
+        self.count += int(np.count_nonzero(spikes[start:joined.size - 1]))
+        self._tail = joined[-3:]
+
+    def finish(self) -> int:
+        """Judge the stream's last value against the two before it; return the spikes counted."""
+        tail = self._tail
+        if self._started and tail.size == 3 and _edge(tail[2], tail[1], tail[0], self.jump):
+            self.count += 1
+        self._tail = np.zeros(0)
+        self._started = False
+        return self.count
+
+
+def _edge(value: float, first: float, second: float, jump: float) -> bool:
+    """An end value that jumps more than ``jump`` from its two neighbours, which agree."""
+    with np.errstate(invalid='ignore'):
+        return bool(abs(value - first) > jump and abs(value - second) > jump and abs(first - second) < jump
+                    and np.sign(value - first) == np.sign(value - second))
