@@ -390,29 +390,33 @@ def _mcap_files(path: Path) -> list:
 
 
 def valid_to_the_reference(path: Path) -> bool:
-    """True when the ``mcap`` library reads every MCAP file of ``path`` without error, CRCs checked,
-    and finds the messages this package reads (by topic, sequence, log time and bytes).
+    """True when the ``mcap`` library accepts every MCAP file of ``path`` and finds the messages read here.
+
+    Both of its readers (by the index, and from start to end) must read it
+    without error, CRCs checked, with the same topics, sequences, log times
+    and bytes as this package.
 
     Such a mutant is a valid, different file -- a sequence number, a topic
     name or a payload changed where nothing covers it -- and reading it in
     silence is right: there is no corruption to detect.
     """
-    from mcap.reader import make_reader
+    from mcap.reader import NonSeekingReader, SeekingReader
     files = _mcap_files(path)
     if not files:
         return False
     for file in files:
-        try:
-            with open(file, 'rb') as stream:
-                theirs = sorted((channel.topic, message.sequence, message.log_time, zlib.crc32(message.data))
-                                for _, channel, message in make_reader(stream, validate_crcs=True)
-                                .iter_messages(log_time_order=False))
-        except Exception:   # the reference refuses the file: it is corrupt
-            return False
         ours = sorted((topic, sequence, log_time, zlib.crc32(data)) for topic, sequence, log_time, data
                       in raw_messages(file))
-        if ours != theirs:
-            return False
+        for reader in (SeekingReader, NonSeekingReader):     # by the index, and from start to end
+            try:
+                with open(file, 'rb') as stream:
+                    theirs = sorted((channel.topic, message.sequence, message.log_time, zlib.crc32(message.data))
+                                    for _, channel, message in reader(stream, validate_crcs=True)
+                                    .iter_messages(log_time_order=False))
+            except Exception:   # the reference refuses the file: it is corrupt
+                return False
+            if ours != theirs:
+                return False
     return True
 
 
