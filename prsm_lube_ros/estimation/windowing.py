@@ -343,7 +343,8 @@ class WindowBuilder:
         else:
             self._report_bad_values(samples, finite, 'vibration', 'vibration', 'sample(s)',
                                     f'beyond {MAX_ACCELERATION:g} m/s^2')
-            values = np.where(finite, samples.astype(np.float64), 0.0)
+            with np.errstate(invalid='ignore'):       # a signalling NaN warns when cast
+                values = np.where(finite, samples.astype(np.float64), 0.0)
         length = self.settings.window_length
         good &= self._first_sight(stamps, good)
         if not good.any():

@@ -478,6 +478,39 @@ def _chunk_header(content, at: int) -> Tuple[int, int, int, str, int, int]:
     return start_time, size, crc, compression, name_end + 8, _U64.unpack_from(content, name_end)[0]
 
 
+class _CrcReader:
+    """Reads of a data section in file order, keeping the CRC-32 of every byte read or skipped (magic included)."""
+
+    def __init__(self, stream: BinaryIO):
+        self.stream = stream
+        self.crc = crc32(MAGIC)
+
+    def read(self, size: int) -> bytes:
+        """The next ``size`` bytes (fewer at the end of the file)."""
+        data = self.stream.read(size)
+        self.crc = crc32(data, self.crc)
+        return data
+
+    def skip(self, size: int) -> None:
+        """Pass over ``size`` bytes, a MiB at a time."""
+        while size > 0:
+            piece = self.read(min(size, 1 << 20))
+            if not piece:
+                return
+            size -= len(piece)
+
+
+def _check_data_crc(stream: BinaryIO, pos: int, opcode: int, length: int, crc: int, on_problem) -> None:
+    """Say when the DataEnd record at ``pos`` states a data-section CRC other than ``crc`` (0: none stated)."""
+    if opcode != OP_DATA_END or length < 4:
+        return
+    stream.seek(pos + RECORD_PREFIX)
+    stated = _U32.unpack(stream.read(4))[0]
+    if stated and stated != crc:
+        on_problem('its data section does not match the CRC its DataEnd record states (corrupt bytes where no '
+                   'chunk CRC covers them)')
+
+
 class _Gathered:
     """Top-level messages and the records of small chunks, gathered into pseudo-chunks of about ``size`` bytes.
 
@@ -563,7 +596,11 @@ class McapFile:
         if tail[-len(MAGIC):] != MAGIC or tail[0] != OP_FOOTER or _U64.unpack_from(tail, 1)[0] != 20:
             return None
         summary_start = _U64.unpack_from(tail, RECORD_PREFIX)[0]
-        if summary_start == 0 or not len(MAGIC) <= summary_start <= footer_at:
+        if summary_start == 0:
+            return None
+        damaged = 'its summary section is damaged; the listing was rebuilt from the data section'
+        if not len(MAGIC) <= summary_start <= footer_at:
+            self.summary_problem = damaged
             return None
         stream.seek(summary_start)
         section = stream.read(footer_at - summary_start)
@@ -604,8 +641,10 @@ class McapFile:
                         summary.message_counts[channel_id] = fields.u64()
                     statistics = True
             if last != len(section):
+                self.summary_problem = damaged
                 return None
         except McapProblem:
+            self.summary_problem = damaged
             return None
         self.chunk_index = chunk_index
         return summary if statistics else None
@@ -655,11 +694,14 @@ class McapFile:
         gathered = _Gathered(on_record, unchunked_batch, on_problem)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
+            data = _CrcReader(stream)
             pos = len(MAGIC)
+            ended = False
             pending = None        # chunk waiting for its message index records
             previous = None       # opcode of the last record not a MessageIndex of a pending chunk
             while True:
-                head = stream.read(RECORD_PREFIX)
+                crc_before = data.crc
+                head = data.read(RECORD_PREFIX)
                 if len(head) < RECORD_PREFIX:
                     cut = pos if head else None
                     break
@@ -668,7 +710,7 @@ class McapFile:
                     cut = pos
                     break
                 if opcode == OP_MESSAGE_INDEX and pending is not None:
-                    _add_index(pending[2], stream.read(length))
+                    _add_index(pending[2], data.read(length))
                     pos += RECORD_PREFIX + length
                     continue
                 if opcode == OP_MESSAGE_INDEX and previous not in (OP_CHUNK, OP_MESSAGE_INDEX):
@@ -679,7 +721,7 @@ class McapFile:
                     yield from self._finish_or_gather(pending, gathered)
                     pending = None
                 if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
-                    record = head + stream.read(length)
+                    record = head + data.read(length)
                     start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
                                   if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
                     chunk = gathered.add(record, start_time, pos)
@@ -691,30 +733,34 @@ class McapFile:
                     yield gathered.take()
                 if opcode in (OP_DATA_END, OP_FOOTER):
                     if _ends_data(stream, pos, opcode, length, self.size):
-                        cut = None
+                        cut, ended = None, True
+                        _check_data_crc(stream, pos, opcode, length, crc_before, on_problem)
                         break
                     on_problem(f'a {"DataEnd" if opcode == OP_DATA_END else "Footer"} record at byte {pos} in the '
                                f'middle of the data section (corrupt; a damaged opcode?): its {length} bytes skipped')
                     stream.seek(pos + RECORD_PREFIX)    # the skip below passes its content
                 if opcode == OP_CHUNK:
-                    content = stream.read(length)
+                    content = data.read(length)
                     try:
                         pending = self._open_chunk(content, pos, on_problem)
                     except McapProblem as problem:
                         on_problem(f'chunk at byte {pos} skipped: {problem}')
                         pending = None
                 elif opcode in (OP_SCHEMA, OP_CHANNEL):
-                    on_record(opcode, stream.read(length))
+                    on_record(opcode, data.read(length))
                 else:
                     if opcode in SUMMARY_OPCODES or (opcode == OP_HEADER and pos != len(MAGIC)):
                         on_problem(f'a record of opcode {opcode:#04x} at byte {pos} where it does not belong in the '
                                    'data section (corrupt; a damaged opcode?): skipped')
-                    stream.seek(length, 1)
+                    data.skip(length)
                 pos += RECORD_PREFIX + length
             if pending is not None:
                 yield from self._finish_or_gather(pending, gathered)
             if gathered.buffers:
                 yield gathered.take()
+            if cut is None and not ended:
+                on_problem(f'ends at byte {pos} without a DataEnd record or footer (truncated: what followed '
+                           'is lost)')
             if cut is not None:
                 salvage = self._salvage(stream, cut, on_record)
                 lost = f'{self.size - cut} bytes'
@@ -787,11 +833,16 @@ class McapFile:
 
     def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
                       on_record, on_problem=None) -> RawChunk:
-        if indexes and -1 not in indexes:
+        indexed = indexes and -1 not in indexes
+        if indexed:
             chunk = split_indexed(records, start_time, pos, indexes, on_record, on_problem)
             if chunk is not None:
                 return chunk
         chunk, _ = split_sequential(records, start_time, pos, on_record, on_problem)
+        listed = sum(len(entries) for entries in indexes.values()) // 16 if indexed else 0
+        if indexed and on_problem is not None and chunk.message_count() != listed:
+            on_problem(f'chunk at byte {pos}: its message index lists {listed} message(s), its records hold '
+                       f'{chunk.message_count()} (corrupt)')
         return chunk
 
     def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
