@@ -14,12 +14,13 @@ messages read here.
 from pathlib import Path
 import sqlite3
 import struct
+import zlib
 
 from mcap.reader import NonSeekingReader
 import pytest
 
 import bagfactory as bf
-from fuzzing import _data_records, _rate_positions, _uncompressed_chunks
+from fuzzing import _clear_crc, _data_records, _rate_positions, _uncompressed_chunks
 from prsm_lube_ros.estimation.pipeline import recording_windows
 from prsm_lube_ros.recording.reader import raw_messages, topic_messages
 
@@ -145,3 +146,41 @@ def test_every_conformance_file_still_reads_without_a_problem_line():
         if problems:
             noisy.append(f'{path.name}: {problems[0]}')
     assert not noisy, noisy[:10]
+
+
+def test_a_file_cut_at_a_record_boundary_says_it_is_truncated(tmp_path, entries):
+    path = bf.write_mcap_library(tmp_path / 'cut.mcap', entries, compression='lz4', chunk_size=4096)
+    data = path.read_bytes()
+    path.write_bytes(data[:[r for r in _data_records(data) if r[1] == 0x06][3][0]])   # just before a chunk
+    problems = []
+    got = list(raw_messages(path, problems.append))
+    assert got and any('without a DataEnd record or footer (truncated' in line for line in problems), problems
+
+
+def test_bytes_no_chunk_crc_covers_are_caught_by_the_data_end_crc(tmp_path, entries):
+    path = bf.write_mcap_library(tmp_path / 'crc.mcap', entries, compression='lz4', chunk_size=4096)
+    data = bytearray(path.read_bytes())
+    end = next(r for r in _data_records(data) if r[1] == 0x0F)[0]
+    struct.pack_into('<I', data, end + 9, zlib.crc32(data[:end]))   # the python writer states none; Go's does
+    path.write_bytes(bytes(data))
+    problems = []
+    list(raw_messages(path, problems.append))
+    assert not problems
+    profile_at = data.index(b'ros2', 8)                         # the Header record's profile: no chunk around it
+    data[profile_at + 3] = ord('3')
+    path.write_bytes(bytes(data))
+    list(raw_messages(path, problems.append))
+    assert any('does not match the CRC its DataEnd record states' in line for line in problems), problems
+    assert reference_count(path) is None
+
+
+def test_a_chunk_whose_records_do_not_hold_what_its_index_lists_is_said(tmp_path, entries):
+    path = bf.write_mcap_library(tmp_path / 'indexed.mcap', entries, compression='none', chunk_size=8192)
+    data = bytearray(path.read_bytes())
+    chunk_pos, _, _, records = _uncompressed_chunks(data)[0]
+    _clear_crc(data, chunk_pos)
+    data[records[5][0]] = 0x99                   # a message becomes a user record: its index entry points at it
+    path.write_bytes(bytes(data))
+    problems = []
+    list(raw_messages(path, problems.append))
+    assert any('its message index lists' in line for line in problems), problems
