@@ -840,7 +840,7 @@ class McapFile:
                 return chunk
         chunk, _ = split_sequential(records, start_time, pos, on_record, on_problem)
         listed = sum(len(entries) for entries in indexes.values()) // 16 if indexed else 0
-        if indexed and on_problem is not None and chunk.message_count() != listed:
+        if indexed and on_problem is not None and chunk.message_count() < listed:   # more: an index cut short
             on_problem(f'chunk at byte {pos}: its message index lists {listed} message(s), its records hold '
                        f'{chunk.message_count()} (corrupt)')
         return chunk
@@ -938,30 +938,25 @@ class ReadCheck:
     """What reading a file found, held against its intact summary at the end.
 
     Damage that leaves no trace where it happened -- a chunk whose opcode
-    became a user opcode (skipped, as the spec says), a message whose log time
-    or channel id changed in a chunk without CRC -- still disagrees with the
-    Statistics record: fewer messages than it counts, log times outside its
-    span, or a channel defined nowhere.
+    became a user opcode (skipped, as the spec says), a message whose channel
+    id changed in a chunk without CRC -- still disagrees with the Statistics
+    record (fewer messages than it counts) or the definitions (a channel
+    defined nowhere).  Log times are not held against the Statistics span:
+    rosbag2's writer leaves a log time of 0 out of it.
     """
 
     def __init__(self, summary: Optional[Summary], summary_problem: str = ''):
         self.summary = summary if summary is not None and summary.complete else None
         self.summary_problem = summary_problem
         self.counts: Dict[int, int] = {}
-        self.outside = 0
         self.undefined = 0
 
     def add(self, chunk: RawChunk, channels: Dict[int, Channel]) -> None:
         """Count one chunk's messages (``channels``: those defined so far)."""
-        summary = self.summary
         for channel_id, group in chunk.groups.items():
             self.counts[channel_id] = self.counts.get(channel_id, 0) + int(group.log_times.size)
             if channel_id not in channels:
                 self.undefined += int(group.log_times.size)
-            if summary is not None and summary.start_time is not None and summary.message_counts:
-                times = group.log_times
-                self.outside += int(np.count_nonzero((times < signed(summary.start_time))
-                                                     | (times > signed(summary.end_time))))
 
     def lines(self) -> List[str]:
         """One line per kind of disagreement (none for an intact file)."""
@@ -971,9 +966,6 @@ class ReadCheck:
         summary = self.summary
         if summary is None:
             return lines
-        if self.outside:
-            lines.append(f'{self.outside} message(s) with a log time outside the span its summary states '
-                         f'({summary.start_time} to {summary.end_time} ns): damaged records')
         short = [(key, self.counts.get(key, 0), listed) for key, listed in sorted(summary.message_counts.items())
                  if self.counts.get(key, 0) < listed]
         if short:
