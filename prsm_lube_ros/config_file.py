@@ -18,15 +18,29 @@ from .errors import ConfigError, InputError
 from .validation import as_number
 
 
+#: Largest YAML file read, bytes, and deepest nesting of mappings and lists it may have: configuration and
+#: calibration files are a few kB and a few levels deep; these bounds keep a hostile file from costing
+#: memory, time or the interpreter's recursion limit.
+MAX_YAML_BYTES = 8 << 20
+MAX_YAML_NESTING = 32
+
+
 def read_yaml(path: str | Path, what: str):
     """The parsed document of ``path``; :class:`ConfigError` naming the file (``what`` says which kind).
 
-    A missing file, an unreadable one, invalid YAML and text that is not UTF-8 each give one line.
+    A missing file, an unreadable one, invalid YAML, text that is not UTF-8, a
+    file over :data:`MAX_YAML_BYTES` and nesting deeper than
+    :data:`MAX_YAML_NESTING` each give one line.
     """
     import yaml
     path = Path(path)
     try:
-        return yaml.safe_load(path.read_text())
+        if path.is_file() and path.stat().st_size > MAX_YAML_BYTES:
+            raise ConfigError(f'{path}: {what} is {path.stat().st_size} bytes, more than {MAX_YAML_BYTES} '
+                              '(not a configuration file?)')
+        document = yaml.safe_load(path.read_text())
+    except RecursionError:
+        raise ConfigError(f'{path}: {what} is nested too deeply (more than {MAX_YAML_NESTING} levels)') from None
     except FileNotFoundError:
         raise ConfigError(f'{path}: {what} not found') from None
     except IsADirectoryError:
@@ -37,6 +51,31 @@ def read_yaml(path: str | Path, what: str):
         raise ConfigError(f'{path}: {what} is not text (not UTF-8)') from None
     except yaml.YAMLError as exc:
         raise ConfigError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
+    if nesting_depth(document) > MAX_YAML_NESTING:
+        raise ConfigError(f'{path}: {what} is nested too deeply (more than {MAX_YAML_NESTING} levels)')
+    return document
+
+
+def nesting_depth(document) -> int:
+    """Levels of mappings and lists in a parsed YAML document (a scalar: 0), without recursion.
+
+    Shared (aliased) nodes are measured once, so a small file of aliases that
+    would expand to billions of nodes costs no more than its own size.
+    """
+    heights: dict[int, int] = {}
+    stack = [(document, False)]
+    while stack:
+        node, done = stack.pop()
+        if not isinstance(node, (dict, list)) or (id(node) in heights and not done):
+            continue
+        children = [c for c in (node.values() if isinstance(node, dict) else node) if isinstance(c, (dict, list))]
+        if done:
+            heights[id(node)] = 1 + max((heights.get(id(c), 0) for c in children), default=0)
+            continue
+        heights[id(node)] = 0     # on the stack: a cycle (YAML allows one) stops here
+        stack.append((node, True))
+        stack.extend((c, False) for c in children if id(c) not in heights)
+    return heights.get(id(document), 0)
 
 
 def read_section(path: str | Path, keys: Iterable[str], what: str) -> dict:

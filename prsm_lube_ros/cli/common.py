@@ -11,6 +11,7 @@ from pathlib import Path
 import sys
 
 from ..errors import ConfigError
+from ..validation import finite_or_none
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -87,9 +88,28 @@ def read_recordings(paths, args, *, spectra: bool = False):
 
 
 def write_json(path, document) -> None:
-    """``document`` as indented JSON at ``path`` (folders made); NaN is refused, never written."""
+    """``document`` as indented JSON at ``path`` (folders made); NaN and infinities are never written.
+
+    JSON has no NaN: a non-finite number that reached the document (the
+    builders give ``None`` for them already) is written as ``null``, not a traceback.
+    """
+    try:
+        text = json.dumps(document, indent=1, allow_nan=False)
+    except ValueError:      # "Out of range float values are not JSON compliant"
+        text = json.dumps(_finite_or_null(document), indent=1, allow_nan=False)
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(json.dumps(document, indent=1, allow_nan=False))
+        Path(path).write_text(text)
     except OSError as exc:
         raise ConfigError(f'{path}: cannot write ({exc.strerror or exc})') from None
+
+
+def _finite_or_null(value):
+    """``value`` with every non-finite float (at any depth of dicts and lists) replaced by None."""
+    if isinstance(value, float):
+        return finite_or_none(value)
+    if isinstance(value, dict):
+        return {key: _finite_or_null(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_null(item) for item in value]
+    return value

@@ -21,6 +21,7 @@ from ..config_file import read_yaml
 from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
+from .calibration_checks import check_calibration, check_document
 from .conditioning import AnalysisBand, RAW_BAND_TEXT
 from .domain import CalibrationDomain
 from .run_scatter import RunScatter
@@ -86,14 +87,12 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             domain=(CalibrationDomain.from_dict(data['domain']) if data.get('domain')
                     else CalibrationDomain.of_levels(fit.get('speed_levels_rad_s', ()),
                                                      fit.get('load_levels_n', ()))))
-    except InputError:
-        raise
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+    except InputError as exc:
+        raise exc if origin in str(exc) else ConfigError(f'{origin}: {exc}') from None
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise ConfigError(f'{origin}: malformed calibration ({exc.__class__.__name__}: {exc})') from None
-    if not (constants.c_sys > 0 and math.isfinite(constants.c_f) and math.isfinite(constants.c_lambda)):
-        raise ConfigError(f'{origin}: constants must be finite with C_sys > 0, got {constants}')
-    if constants.c_lambda == 0:
-        raise ConfigError(f'{origin}: C_lambda is 0, theta_Oil (Eq. 23) cannot be computed')
+    check_document(data, origin)
+    check_calibration(calibration, origin)
     return calibration
 
 

@@ -37,6 +37,9 @@ import numpy as np
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
+from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED,
+                                      plausible_durations, plausible_magnitudes, plausible_rates,
+                                      plausible_temperatures, rate_problem, TEMPERATURE_RANGE)
 
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
@@ -342,30 +345,27 @@ class WindowBuilder:
         offsets = np.asarray(batch.offsets, np.int64)
         counts = np.diff(offsets)
         good = self._check_time(stamps, 'vibration')
-        bad_rate = ~(np.isfinite(rates) & (rates > 0))
-        if (bad_rate & good).any():
-            n = int((bad_rate & good).sum())
-            self._report('vibration-rate', f'vibration: {n} block(s) with sample_rate '
-                         f'{float(rates[bad_rate & good][0]):g} Hz (must be > 0) left out', n)
+        good &= self._plausible_blocks(rates, counts, good)
         empty = counts == 0
         if (empty & good).any():
             n = int((empty & good).sum())
             self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
-        good &= ~bad_rate & ~empty
+        good &= ~empty
         if self.band is not None and good.any():
             good &= self._band_covered(rates, good)
         if not good.any():
             return
         samples = np.asarray(batch.samples).reshape(-1)
-        finite = np.isfinite(samples)
+        finite = plausible_magnitudes(samples, MAX_ACCELERATION)   # finite, and what an accelerometer gives
         all_finite = bool(finite.all())
         keep_samples = self._keeps_samples()
         if all_finite:
             values = samples.astype(np.float64) if keep_samples else samples
         else:
-            n = int(samples.size - np.count_nonzero(finite))
-            self._report('vibration-nonfinite', f'vibration: {n} NaN or inf sample(s) left out', n)
-            values = np.where(finite, samples.astype(np.float64), 0.0)
+            self._report_bad_values(samples, finite, 'vibration', 'vibration', 'sample(s)',
+                                    f'beyond {MAX_ACCELERATION:g} m/s^2')
+            with np.errstate(invalid='ignore'):       # a signalling NaN warns when cast
+                values = np.where(finite, samples.astype(np.float64), 0.0)
         length = self.settings.window_length
         good &= self._first_sight(stamps, good)
         if not good.any():
@@ -424,6 +424,36 @@ class WindowBuilder:
             self._report('vibration-band', line + f'; {int(refused.sum())} block(s) left out', int(refused.sum()))
         return covered
 
+    def _plausible_blocks(self, rates: np.ndarray, counts: np.ndarray, good: np.ndarray) -> np.ndarray:
+        """Mask of blocks whose header can size windows: rate and duration within :mod:`..recording.plausibility`.
+
+        Checked before anything is sized from them, so a corrupt ``sample_rate``
+        (1e-6 Hz: one block spanning years of windows) is one named problem.
+        """
+        rate_ok = plausible_rates(rates)
+        bad = good & ~rate_ok
+        if bad.any():
+            n = int(bad.sum())
+            self._report('vibration-rate', f'vibration: {n} block(s) with {rate_problem(rates[bad][0])} left out', n)
+        long = good & rate_ok & ~plausible_durations(counts, rates)
+        if long.any():
+            n, first = int(long.sum()), int(np.flatnonzero(long)[0])
+            self._report('vibration-length', f'vibration: {n} block(s) of '
+                         f'{duration_problem(counts[first], rates[first])} left out', n)
+        return rate_ok & ~long
+
+    def _report_bad_values(self, values: np.ndarray, ok: np.ndarray, stream: str, topic: str, what: str,
+                           bound: str):
+        """Report the entries of ``values`` failing ``ok``: non-finite ones, and finite ones beyond ``bound``."""
+        finite = np.isfinite(values)
+        nonfinite = int(values.size - np.count_nonzero(finite))
+        if nonfinite:
+            self._report(f'{stream}-nonfinite', f'{topic}: {nonfinite} NaN or inf {what} left out', nonfinite)
+        implausible = int(np.count_nonzero(finite & ~ok))
+        if implausible:
+            self._report(f'{stream}-implausible', f'{topic}: {implausible} {what} {bound} (no sensor of the '
+                         'contract gives that: corrupt data?) left out', implausible)
+
     def _squares(self, values: np.ndarray) -> np.ndarray:
         """``values ** 2`` in float64, written into a buffer kept between batches (no new pages per batch)."""
         if self._square_buffer.size < values.size:
@@ -441,7 +471,11 @@ class WindowBuilder:
         if bad.any():
             self._report('screw-nonfinite', f'joint_states: {int(bad.sum())} screw state(s) without a finite '
                          'velocity left out', int(bad.sum()))
-        good &= np.isfinite(speeds)
+        wild = good & ~plausible_magnitudes(speeds, MAX_SCREW_SPEED)
+        if wild.any():
+            self._report_bad_values(speeds[wild], np.zeros(int(wild.sum()), bool), 'screw', 'joint_states',
+                                    'screw speed(s)', f'beyond {MAX_SCREW_SPEED:g} rad/s')
+        good &= ~wild
         if not good.any():
             return
         if not good.all():
@@ -502,11 +536,20 @@ class WindowBuilder:
         stamps = np.asarray(stamps, float)
         good = self._check_time(stamps, stream)
         bad = good & ~np.isfinite(values)
+        topic = 'axial_load' if stream == 'load' else stream
         if bad.any():
-            topic = 'axial_load' if stream == 'load' else stream
             self._report(f'{stream}-nonfinite', f'{topic}: {int(bad.sum())} non-finite value(s) left out',
                          int(bad.sum()))
         good &= np.isfinite(values)
+        plausible = (plausible_magnitudes(values, MAX_AXIAL_LOAD) if stream == 'load'
+                     else plausible_temperatures(values))
+        wild = good & ~plausible
+        if wild.any():
+            bound = (f'beyond {MAX_AXIAL_LOAD:g} N' if stream == 'load'
+                     else f'outside {TEMPERATURE_RANGE[0]:g} to {TEMPERATURE_RANGE[1]:g} degC')
+            self._report_bad_values(values[wild], np.zeros(int(wild.sum()), bool), stream, topic, 'value(s)',
+                                    bound)
+        good &= ~wild
         if not good.any():
             return
         keys = np.floor(stamps[good] / self.settings.window_length).astype(np.int64)

@@ -27,6 +27,7 @@ from typing import Iterator, List, Tuple
 import numpy as np
 
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from ..recording.plausibility import plausible_durations, plausible_rates
 
 Event = Tuple[float, str, int, tuple]
 KINDS = ('vibration', 'joint_states', 'axial_load', 'temperature')
@@ -77,7 +78,9 @@ def batch_events(batches) -> List[Event]:
             for k in np.flatnonzero(good):
                 samples = batch.samples[offsets[k]:offsets[k + 1]]
                 rate = float(rates[k])
-                span = samples.size / rate if rate > 0 and math.isfinite(rate) else 0.0
+                # A rate no sensor gives (a corrupt header) must not pace the replay for days: no span.
+                plausible = plausible_rates(rate) and plausible_durations(samples.size, rate)
+                span = samples.size / rate if plausible else 0.0
                 events.append((float(batch.stamps[k]) + span, 'vibration', int(ns[k]), (rate, samples)))
         elif isinstance(batch, ScrewStateBatch):
             events.extend((float(t), 'joint_states', int(n), (float(a), float(s)))

@@ -293,17 +293,22 @@ def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
         pos = end
 
 
-def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record,
+                  on_problem=None, offsets: Optional[List[int]] = None) -> Tuple[RawChunk, int]:
     """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
     Walks every record (no message index); each buffer is walked on its own,
     so one that ends in a cut record cannot shift the next.  Returns the chunk
     (over the buffers joined) and the bytes of the last buffer used.
-    ``on_record(opcode, content)`` receives every non-message record.
+    ``on_record(opcode, content)`` receives every non-message record.  A
+    record whose length runs past its buffer (a corrupt length inside a chunk)
+    ends that buffer's walk; ``on_problem`` (if given) hears it in one line
+    with the bytes lost, the buffer named by its file offset (``offsets``,
+    one per buffer; default ``file_offset``).
     """
     per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
     base = used = 0
-    for buf in buffers:
+    for number, buf in enumerate(buffers):
         used = 0
         for opcode, begin, end in walk_records(buf):
             used = end
@@ -315,6 +320,9 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
                     (base + begin + MESSAGE_HEADER, end - begin - MESSAGE_HEADER, signed(log_time)))
             else:
                 on_record(opcode, memoryview(buf)[begin:end])
+        if used != len(buf) and on_problem is not None:
+            at = offsets[number] if offsets else file_offset
+            on_problem(_overrun_problem(at, used, len(buf)))
         base += len(buf)
     groups = {}
     for channel_id, rows in per_channel.items():
@@ -324,21 +332,31 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
     return RawChunk(start_time, np.frombuffer(joined, np.uint8), groups, file_offset), used
 
 
-def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record) -> Tuple[RawChunk, int]:
+def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record,
+                     on_problem=None) -> Tuple[RawChunk, int]:
     """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
 
-    ``on_record(opcode, content)`` receives every non-message record (schemas, channels).
+    ``on_record(opcode, content)`` receives every non-message record (schemas,
+    channels); ``on_problem`` a record overrunning the buffer (:func:`split_records`).
     """
-    return split_records([buf], start_time, file_offset, on_record)
+    return split_records([buf], start_time, file_offset, on_record, on_problem)
+
+
+def _overrun_problem(file_offset: int, used: int, size: int) -> str:
+    """The line for a chunk (or record run) whose walk stopped ``size - used`` bytes before its end."""
+    return (f'chunk at byte {file_offset}: a record length at byte {used} of its {size} bytes of records runs past '
+            f'the chunk (corrupt); its last {size - used} bytes are not readable')
 
 
 def split_indexed(buf: bytes, start_time: int, file_offset: int,
-                  indexes: Dict[int, bytes], on_record) -> Optional[RawChunk]:
+                  indexes: Dict[int, bytes], on_record, on_problem=None) -> Optional[RawChunk]:
     """Split a chunk with its MessageIndex records, vectorised; None if the index does not fit.
 
     The index is trusted only after checking that every entry points at a
     Message record of its channel inside the chunk and that the bytes between
-    indexed messages hold no other Message record.
+    indexed messages hold no other Message record.  Log times are the
+    messages' own (as the reference readers give them); index times that
+    disagree are said to ``on_problem`` (if given) in one line.
     """
     data = np.frombuffer(buf, np.uint8)
     size = data.size
@@ -383,12 +401,17 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
             last = end
         if last != gap_end:
             return None
+    own_times = uint64_at[offsets + RECORD_PREFIX + 6].view(np.int64)   # after channel_id u16, sequence u32
+    wrong = int(np.count_nonzero(own_times != log_times))
+    if wrong and on_problem is not None:
+        on_problem(f'chunk at byte {file_offset}: {wrong} message index time(s) disagree with the messages\' own '
+                   'log times (corrupt index); the messages\' times are used')
     groups = {}
     start = 0
     for channel_id, count in zip(ids, counts):
         stop = start + count
         groups[channel_id] = MessageGroup(offsets[start:stop] + RECORD_PREFIX + MESSAGE_HEADER,
-                                          lengths[start:stop] - MESSAGE_HEADER, log_times[start:stop])
+                                          lengths[start:stop] - MESSAGE_HEADER, own_times[start:stop])
         start = stop
     return RawChunk(start_time, data, groups, file_offset)
 
@@ -396,7 +419,12 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
 # -- the file ---------------------------------------------------------------------------------------
 
 def _definitions_into(summary: Summary, on_problem):
-    """A sink for the Schema and Channel records met while reading, filling ``summary``."""
+    """A sink for the Schema and Channel records met while reading, filling ``summary``.
+
+    It hears the records among messages (inside chunks, or gathered top-level
+    ones): any other spec opcode there (a Footer, a Chunk, 0x00) is damage --
+    most often a Message whose opcode byte changed -- and said in one line.
+    """
     def on_record(opcode, content):
         try:
             if opcode == OP_SCHEMA:
@@ -405,6 +433,9 @@ def _definitions_into(summary: Summary, on_problem):
             elif opcode == OP_CHANNEL:
                 channel = parse_channel(content)
                 summary.channels.setdefault(channel.id, channel)
+            elif opcode < 0x80:
+                on_problem(f'a record of opcode {opcode:#04x} among the messages (corrupt; a message with a damaged '
+                           'opcode?) left out')
         except McapProblem as problem:
             on_problem(f'bad schema/channel record ({problem})')
     return on_record
@@ -447,6 +478,39 @@ def _chunk_header(content, at: int) -> Tuple[int, int, int, str, int, int]:
     return start_time, size, crc, compression, name_end + 8, _U64.unpack_from(content, name_end)[0]
 
 
+class _CrcReader:
+    """Reads of a data section in file order, keeping the CRC-32 of every byte read or skipped (magic included)."""
+
+    def __init__(self, stream: BinaryIO):
+        self.stream = stream
+        self.crc = crc32(MAGIC)
+
+    def read(self, size: int) -> bytes:
+        """The next ``size`` bytes (fewer at the end of the file)."""
+        data = self.stream.read(size)
+        self.crc = crc32(data, self.crc)
+        return data
+
+    def skip(self, size: int) -> None:
+        """Pass over ``size`` bytes, a MiB at a time."""
+        while size > 0:
+            piece = self.read(min(size, 1 << 20))
+            if not piece:
+                return
+            size -= len(piece)
+
+
+def _check_data_crc(stream: BinaryIO, pos: int, opcode: int, length: int, crc: int, on_problem) -> None:
+    """Say when the DataEnd record at ``pos`` states a data-section CRC other than ``crc`` (0: none stated)."""
+    if opcode != OP_DATA_END or length < 4:
+        return
+    stream.seek(pos + RECORD_PREFIX)
+    stated = _U32.unpack(stream.read(4))[0]
+    if stated and stated != crc:
+        on_problem('its data section does not match the CRC its DataEnd record states (corrupt bytes where no '
+                   'chunk CRC covers them)')
+
+
 class _Gathered:
     """Top-level messages and the records of small chunks, gathered into pseudo-chunks of about ``size`` bytes.
 
@@ -454,10 +518,12 @@ class _Gathered:
     decode and a slice step per message; gathered, they cost one per batch.
     """
 
-    def __init__(self, on_record, size: int):
+    def __init__(self, on_record, size: int, on_problem=None):
         self.on_record = on_record
+        self.on_problem = on_problem
         self.size = size
         self.buffers: List[bytes] = []
+        self.offsets: List[int] = []
         self.bytes = 0
         self.file_offset = 0
         self.start_time: Optional[int] = None
@@ -467,6 +533,7 @@ class _Gathered:
         if not self.buffers:
             self.file_offset = file_offset
         self.buffers.append(buffer)
+        self.offsets.append(file_offset)
         self.bytes += len(buffer)
         if start_time is not None:
             self.start_time = start_time if self.start_time is None else min(self.start_time, start_time)
@@ -476,8 +543,9 @@ class _Gathered:
         """What is gathered as one pseudo-chunk (None if nothing)."""
         if not self.buffers:
             return None
-        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record)
-        self.buffers, self.bytes, self.start_time = [], 0, None
+        chunk, _ = split_records(self.buffers, self.start_time or 0, self.file_offset, self.on_record,
+                                 self.on_problem, self.offsets)
+        self.buffers, self.offsets, self.bytes, self.start_time = [], [], 0, None
         return chunk
 
 
@@ -494,6 +562,7 @@ class McapFile:
     def __init__(self, path):
         self.path = path
         self.summary_problem = ''     # why the summary section was not used (a problem line), '' when it was
+        self.chunk_index: List[int] = []    # chunk offsets an intact summary's ChunkIndex records give
         with open(path, 'rb') as stream:
             stream.seek(0, 2)
             self.size = stream.tell()
@@ -527,7 +596,11 @@ class McapFile:
         if tail[-len(MAGIC):] != MAGIC or tail[0] != OP_FOOTER or _U64.unpack_from(tail, 1)[0] != 20:
             return None
         summary_start = _U64.unpack_from(tail, RECORD_PREFIX)[0]
-        if summary_start == 0 or not len(MAGIC) <= summary_start <= footer_at:
+        if summary_start == 0:
+            return None
+        damaged = 'its summary section is damaged; the listing was rebuilt from the data section'
+        if not len(MAGIC) <= summary_start <= footer_at:
+            self.summary_problem = damaged
             return None
         stream.seek(summary_start)
         section = stream.read(footer_at - summary_start)
@@ -539,12 +612,15 @@ class McapFile:
             return None
         summary = Summary(complete=True)
         statistics = False
+        chunk_index = []
         try:
             last = 0
             for opcode, begin, end in walk_records(section):
                 last = end
                 content = memoryview(section)[begin:end]
-                if opcode == OP_SCHEMA:
+                if opcode == OP_CHUNK_INDEX and end - begin >= 24:
+                    chunk_index.append(_U64.unpack_from(content, 16)[0])     # chunk_start_offset
+                elif opcode == OP_SCHEMA:
                     schema = parse_schema(content)
                     summary.schemas[schema.id] = schema
                 elif opcode == OP_CHANNEL:
@@ -565,10 +641,26 @@ class McapFile:
                         summary.message_counts[channel_id] = fields.u64()
                     statistics = True
             if last != len(section):
+                self.summary_problem = damaged
                 return None
         except McapProblem:
+            self.summary_problem = damaged
             return None
+        self.chunk_index = chunk_index
         return summary if statistics else None
+
+    def index_problem(self, layout: 'DataLayout') -> str:
+        """A line when chunks the summary's chunk index lists are not where it says ('' when all are).
+
+        A chunk whose opcode became another (a user opcode, which readers
+        skip) leaves no other trace in a file without statistics; the
+        reference readers, which seek by this index, refuse such a file.
+        """
+        missing = sorted(set(self.chunk_index) - set(layout.offsets.tolist()))
+        if not missing:
+            return ''
+        return (f'{len(missing)} chunk(s) the chunk index lists (at byte {missing[0]}'
+                f'{" ..." if len(missing) > 1 else ""}) are not in the data section (damaged records): not read')
 
     def scan(self) -> Tuple[Summary, List[str]]:
         """Rebuild the listing by reading the data section (file without a usable summary)."""
@@ -599,13 +691,17 @@ class McapFile:
         """
         summary = summary if summary is not None else Summary()
         on_record = _definitions_into(summary, on_problem)
-        gathered = _Gathered(on_record, unchunked_batch)
+        gathered = _Gathered(on_record, unchunked_batch, on_problem)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
+            data = _CrcReader(stream)
             pos = len(MAGIC)
+            ended = False
             pending = None        # chunk waiting for its message index records
+            previous = None       # opcode of the last record not a MessageIndex of a pending chunk
             while True:
-                head = stream.read(RECORD_PREFIX)
+                crc_before = data.crc
+                head = data.read(RECORD_PREFIX)
                 if len(head) < RECORD_PREFIX:
                     cut = pos if head else None
                     break
@@ -614,14 +710,18 @@ class McapFile:
                     cut = pos
                     break
                 if opcode == OP_MESSAGE_INDEX and pending is not None:
-                    _add_index(pending[2], stream.read(length))
+                    _add_index(pending[2], data.read(length))
                     pos += RECORD_PREFIX + length
                     continue
+                if opcode == OP_MESSAGE_INDEX and previous not in (OP_CHUNK, OP_MESSAGE_INDEX):
+                    on_problem(f'a MessageIndex record at byte {pos} follows no chunk (corrupt; a chunk whose opcode '
+                               'was damaged?): skipped')
+                previous = opcode
                 if pending is not None:
                     yield from self._finish_or_gather(pending, gathered)
                     pending = None
                 if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
-                    record = head + stream.read(length)
+                    record = head + data.read(length)
                     start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
                                   if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
                     chunk = gathered.add(record, start_time, pos)
@@ -632,24 +732,35 @@ class McapFile:
                 if opcode != OP_CHUNK and gathered.buffers:
                     yield gathered.take()
                 if opcode in (OP_DATA_END, OP_FOOTER):
-                    cut = None
-                    break
+                    if _ends_data(stream, pos, opcode, length, self.size):
+                        cut, ended = None, True
+                        _check_data_crc(stream, pos, opcode, length, crc_before, on_problem)
+                        break
+                    on_problem(f'a {"DataEnd" if opcode == OP_DATA_END else "Footer"} record at byte {pos} in the '
+                               f'middle of the data section (corrupt; a damaged opcode?): its {length} bytes skipped')
+                    stream.seek(pos + RECORD_PREFIX)    # the skip below passes its content
                 if opcode == OP_CHUNK:
-                    content = stream.read(length)
+                    content = data.read(length)
                     try:
                         pending = self._open_chunk(content, pos, on_problem)
                     except McapProblem as problem:
                         on_problem(f'chunk at byte {pos} skipped: {problem}')
                         pending = None
                 elif opcode in (OP_SCHEMA, OP_CHANNEL):
-                    on_record(opcode, stream.read(length))
+                    on_record(opcode, data.read(length))
                 else:
-                    stream.seek(length, 1)
+                    if opcode in SUMMARY_OPCODES or (opcode == OP_HEADER and pos != len(MAGIC)):
+                        on_problem(f'a record of opcode {opcode:#04x} at byte {pos} where it does not belong in the '
+                                   'data section (corrupt; a damaged opcode?): skipped')
+                    data.skip(length)
                 pos += RECORD_PREFIX + length
             if pending is not None:
                 yield from self._finish_or_gather(pending, gathered)
             if gathered.buffers:
                 yield gathered.take()
+            if cut is None and not ended:
+                on_problem(f'ends at byte {pos} without a DataEnd record or footer (truncated: what followed '
+                           'is lost)')
             if cut is not None:
                 salvage = self._salvage(stream, cut, on_record)
                 lost = f'{self.size - cut} bytes'
@@ -669,7 +780,7 @@ class McapFile:
             return
         if gathered.buffers:
             yield gathered.take()
-        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record)
+        yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record, gathered.on_problem)
 
     def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
         """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
@@ -680,7 +791,7 @@ class McapFile:
         cannot be read is left out with one line to ``on_problem``.
         """
         summary = summary if summary is not None else Summary()
-        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES)
+        gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES, on_problem)
         with open(self.path, 'rb') as stream:
             for pos in offsets:
                 pos = int(pos)
@@ -721,12 +832,17 @@ class McapFile:
         return [records, signed(start_time), {}, pos]
 
     def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
-                      on_record) -> RawChunk:
-        if indexes and -1 not in indexes:
-            chunk = split_indexed(records, start_time, pos, indexes, on_record)
+                      on_record, on_problem=None) -> RawChunk:
+        indexed = indexes and -1 not in indexes
+        if indexed:
+            chunk = split_indexed(records, start_time, pos, indexes, on_record, on_problem)
             if chunk is not None:
                 return chunk
-        chunk, _ = split_sequential(records, start_time, pos, on_record)
+        chunk, _ = split_sequential(records, start_time, pos, on_record, on_problem)
+        listed = sum(len(entries) for entries in indexes.values()) // 16 if indexed else 0
+        if indexed and on_problem is not None and chunk.message_count() < listed:   # more: an index cut short
+            on_problem(f'chunk at byte {pos}: its message index lists {listed} message(s), its records hold '
+                       f'{chunk.message_count()} (corrupt)')
         return chunk
 
     def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
@@ -754,6 +870,34 @@ class DataLayout:
     complete: bool          # every record fits and the section ends with DataEnd or the Footer
 
 
+#: Opcodes of the summary section (after DataEnd): Schema, Channel, ChunkIndex, AttachmentIndex, Statistics,
+#: MetadataIndex, SummaryOffset.
+SUMMARY_OPCODES = frozenset((OP_SCHEMA, OP_CHANNEL, OP_CHUNK_INDEX, 0x0A, OP_STATISTICS, 0x0D, 0x0E))
+
+
+def _ends_data(stream: BinaryIO, pos: int, opcode: int, length: int, size: int) -> bool:
+    """True when the DataEnd or Footer record at ``pos`` really ends the data section.
+
+    Only (part of) the closing magic may follow a Footer; after a DataEnd only
+    summary records, up to a Footer or to where a truncation cut them.  Any
+    other record after it (a Chunk, a Message, an index) makes it an end
+    opcode in the middle of the data (a damaged byte), which the reference
+    readers refuse.  Seeks ``stream`` over record headers only.
+    """
+    at = pos + RECORD_PREFIX + length
+    if opcode == OP_FOOTER:
+        return at >= size - len(MAGIC)
+    while at + RECORD_PREFIX <= size:
+        stream.seek(at)
+        kind, record_length = _RECORD.unpack_from(stream.read(RECORD_PREFIX), 0)
+        if kind == OP_FOOTER:
+            return True
+        if not (kind in SUMMARY_OPCODES or kind >= 0x80):
+            return False
+        at += RECORD_PREFIX + record_length
+    return True
+
+
 def data_layout(path, size: int) -> DataLayout:
     """The :class:`DataLayout` of a file's data section, from its record headers only.
 
@@ -771,10 +915,10 @@ def data_layout(path, size: int) -> DataLayout:
             if len(head) < RECORD_PREFIX:
                 break
             opcode, length = _RECORD.unpack_from(head, 0)
-            if opcode in (OP_DATA_END, OP_FOOTER):
-                complete = True
-                break
             if length > size - pos - RECORD_PREFIX:
+                break
+            if opcode in (OP_DATA_END, OP_FOOTER):
+                complete = _ends_data(stream, pos, opcode, length, size)   # else: McapFile.chunks reports it
                 break
             if opcode == OP_CHUNK and length >= 8 and len(head) >= RECORD_PREFIX + 8:
                 offsets.append(pos)
@@ -790,6 +934,49 @@ def data_layout(path, size: int) -> DataLayout:
                       only_chunks, complete)
 
 
+class ReadCheck:
+    """What reading a file found, held against its intact summary at the end.
+
+    Damage that leaves no trace where it happened -- a chunk whose opcode
+    became a user opcode (skipped, as the spec says), a message whose channel
+    id changed in a chunk without CRC -- still disagrees with the Statistics
+    record (fewer messages than it counts) or the definitions (a channel
+    defined nowhere).  Log times are not held against the Statistics span:
+    rosbag2's writer leaves a log time of 0 out of it.
+    """
+
+    def __init__(self, summary: Optional[Summary], summary_problem: str = ''):
+        self.summary = summary if summary is not None and summary.complete else None
+        self.summary_problem = summary_problem
+        self.counts: Dict[int, int] = {}
+        self.undefined = 0
+
+    def add(self, chunk: RawChunk, channels: Dict[int, Channel]) -> None:
+        """Count one chunk's messages (``channels``: those defined so far)."""
+        for channel_id, group in chunk.groups.items():
+            self.counts[channel_id] = self.counts.get(channel_id, 0) + int(group.log_times.size)
+            if channel_id not in channels:
+                self.undefined += int(group.log_times.size)
+
+    def lines(self) -> List[str]:
+        """One line per kind of disagreement (none for an intact file)."""
+        lines = [self.summary_problem] if self.summary_problem else []
+        if self.undefined:
+            lines.append(f'{self.undefined} message(s) on a channel defined nowhere in the file (a damaged record?)')
+        summary = self.summary
+        if summary is None:
+            return lines
+        short = [(key, self.counts.get(key, 0), listed) for key, listed in sorted(summary.message_counts.items())
+                 if self.counts.get(key, 0) < listed]
+        if short:
+            def name(key):
+                return summary.channels[key].topic if key in summary.channels else f'channel {key}'
+            lost = sum(listed - got for _, got, listed in short)
+            lines.append(f'{lost} message(s) listed in the summary were not read (damaged data): '
+                         + ', '.join(f'{name(key)} {got} of {listed}' for key, got, listed in short))
+        return lines
+
+
 def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:
     """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
 
@@ -800,7 +987,12 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
     summary = Summary()
     if mcap.summary is not None:
         summary.channels.update(mcap.summary.channels)
+    check = ReadCheck(mcap.summary, mcap.summary_problem)
+    index_problem = mcap.index_problem(data_layout(path, mcap.size)) if mcap.chunk_index else ''
+    if index_problem:
+        on_problem(index_problem)
     for chunk in mcap.chunks(on_problem, summary):
+        check.add(chunk, summary.channels)
         ids = np.concatenate([np.full(g.data_offsets.size, key, np.int64) for key, g in chunk.groups.items()]
                              + [np.zeros(0, np.int64)])
         starts = np.concatenate([g.data_offsets for g in chunk.groups.values()] + [np.zeros(0, np.int64)])
@@ -811,6 +1003,8 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
             sequence, log_time = struct.unpack_from('<IQ', buffer, begin - MESSAGE_HEADER + 2)
             yield (summary.channels.get(int(ids[index])), sequence, log_time,
                    bytes(buffer[begin:begin + int(lengths[index])]))
+    for line in check.lines():
+        on_problem(line)
 
 
 def bare_read(path) -> Tuple[int, int]:

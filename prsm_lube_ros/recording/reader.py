@@ -63,6 +63,7 @@ from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
 from ..errors import ConfigError, exception_text, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
+from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
 #: default length of one time slice, s of log time
 SLICE_SECONDS = 10.0
@@ -205,13 +206,27 @@ class _McapSource:
         """The files' chunks in log time order of their start: in file order, or by seeking when they go back."""
         layouts = [mcap_file.data_layout(mcap.path, mcap.size) for mcap in self.files]
         times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
+        read = [mcap_file.ReadCheck(listing, mcap.summary_problem) for listing, mcap in zip(self.listings, self.files)]
+        for mcap, layout in zip(self.files, layouts):
+            if mcap.chunk_index and (problem := mcap.index_problem(layout)):
+                on_problem(self._about(mcap, problem))
         if times.size and np.any(times[1:] < times[:-1]) and all(
                 layout.complete and layout.only_chunks for layout in layouts):
-            return self._chunks_by_start_time(layouts, times, topics, on_problem)
-        return self._chunks_in_file_order(layouts, times, topics, on_problem)
+            chunks = self._chunks_by_start_time(layouts, times, topics, on_problem, read)
+        else:
+            chunks = self._chunks_in_file_order(layouts, times, topics, on_problem, read)
+        return self._checked_counts(chunks, read, on_problem)
+
+    def _checked_counts(self, chunks: Iterator[_RawChunk], checks: List[mcap_file.ReadCheck],
+                        on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """``chunks``, then what each file's :class:`~.mcap_file.ReadCheck` found wrong, one line each."""
+        yield from chunks
+        for mcap, check in zip(self.files, checks):
+            for line in check.lines():
+                on_problem(self._about(mcap, line))
 
     def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
-                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
+                              on_problem: ProblemSink, read: List[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
         """Chunks that go back in time (reversed, shuffled, topic after topic), read by seeking.
 
         Sorted by their start times across all files, as the reference readers
@@ -230,11 +245,12 @@ class _McapSource:
             index = int(files[run[0]])
             mcap, summary = self.files[index], summaries[index]
             for chunk in mcap.chunks_at(offsets[run], self._sink(mcap, on_problem), summary):
+                read[index].add(chunk, summary.channels)
                 yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
                                 (chunk.start_time - first) / span)
 
     def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
-                              on_problem: ProblemSink) -> Iterator[_RawChunk]:
+                              on_problem: ProblemSink, read: List[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
         back = float(np.max(np.maximum.accumulate(times) - times)) * 1e-9 if times.size else 0.0
         if back > HELD_BACK_SECONDS:
             on_problem(f'chunks go back in log time by up to {back:.0f} s and cannot be read by seeking (damaged, '
@@ -244,6 +260,7 @@ class _McapSource:
         for index, (mcap, (offsets, suffix)) in enumerate(zip(self.files, self._horizons(layouts))):
             summary = self._summary_of(index)
             for chunk in mcap.chunks(self._sink(mcap, on_problem), summary):
+                read[index].add(chunk, summary.channels)
                 # nothing from this chunk on is earlier than the horizon
                 horizon = int(suffix[np.searchsorted(offsets, chunk.file_offset, 'left')])
                 yield _RawChunk(min(chunk.start_time, horizon), chunk.buffer,
@@ -448,12 +465,24 @@ def _open_source(path: Path):
         if storage == 'mcap':
             return _McapSource(str(path), files)
         if storage == 'sqlite3':
-            return _SqliteSource(str(path), files)
+            return _with_metadata_counts(_SqliteSource(str(path), files), info)
     if storage == 'sqlite3' and compression in ('message', 'file') and compression_format == 'zstd':
-        return _SqliteSource(str(path), files, compression)
+        return _with_metadata_counts(_SqliteSource(str(path), files, compression), info)
     if storage not in ('mcap', 'sqlite3'):
         raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
+
+
+def _with_metadata_counts(source, info: dict):
+    """``source`` with ``metadata_counts``: messages per topic as metadata.yaml lists them (unreadable: none)."""
+    counts = {}
+    try:
+        for entry in info.get('topics_with_message_count') or ():
+            counts[str(entry['topic_metadata']['name'])] = int(entry['message_count'])
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError):
+        counts = {}
+    source.metadata_counts = counts
+    return source
 
 
 # -- slicing -----------------------------------------------------------------------------------------
@@ -666,6 +695,9 @@ class Recording:
         by_topic = {topic: kind for kind, topic in self.selected.items()}
         slicer = _Slicer(kinds, int(round(slice_seconds * 1e9)))
         undecodable = dict.fromkeys(kinds, 0)
+        stamp_spikes = {kind: SpikeCount(STAMP_SPIKE_SECONDS) for kind in kinds}
+        rate_spikes = SpikeCount(RATE_SPIKE_FRACTION, relative=True)
+        streamed = dict.fromkeys(kinds, 0)
         without_screw = 0
         vectorised = engine == 'fast'
         for chunk in self._raw_chunks(list(by_topic), problems.append, engine):
@@ -676,6 +708,10 @@ class Recording:
                                           group.log_times, vectorised)
                 undecodable[kind] += decoded.undecodable
                 without_screw += decoded.without_screw
+                streamed[kind] += int(group.data_offsets.size)
+                stamp_spikes[kind].add(decoded.columns['stamps'])
+                if kind == VIBRATION:
+                    rate_spikes.add(decoded.columns['sample_rates'])
                 slicer.add(kind, decoded)
             if progress is not None:
                 progress(min(max(chunk.progress, 0.0), 1.0))
@@ -693,8 +729,30 @@ class Recording:
         if without_screw:
             problems.append(f'{self.selected[JOINT_STATES]}: {without_screw} JointState message(s) without '
                             f'a "screw" entry skipped')
+        problems.extend(self._damage_lines({kind: count.finish() for kind, count in stamp_spikes.items()},
+                                           rate_spikes.finish(), streamed))
         for line in problems:
             sink(line)
+
+    def _damage_lines(self, spikes: Dict[str, int], rate_spikes: int, streamed: Dict[str, int]) -> List[str]:
+        """Lines for damage the container does not show: stamp and rate spikes, messages metadata.yaml lists unread.
+
+        A sqlite3 row whose topic id changed leaves its topic without a trace
+        but for the metadata's count (MCAP files check their own summary).
+        """
+        lines = [f'{self.selected[kind]}: {count} message(s) with a header stamp that jumps more than '
+                 f'{STAMP_SPIKE_SECONDS:g} s away from both neighbours and back (corrupt stamp?)'
+                 for kind, count in spikes.items() if count]
+        if rate_spikes:
+            lines.append(f'{self.selected[VIBRATION]}: {rate_spikes} block(s) whose sample_rate differs by more than '
+                         f'{100 * RATE_SPIKE_FRACTION:g}% from both neighbours\' (corrupt header?)')
+        listed = getattr(self._source, 'metadata_counts', None) or {}
+        for kind, count in streamed.items():
+            topic = self.selected[kind]
+            if count < listed.get(topic, 0):
+                lines.append(f'{topic}: metadata.yaml lists {listed[topic]} message(s), {count} read '
+                             '(damaged storage: the rest are lost)')
+        return lines
 
     def _raw_chunks(self, topics: List[str], on_problem: ProblemSink, engine: str) -> Iterator[_RawChunk]:
         source = self._source

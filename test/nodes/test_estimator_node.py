@@ -335,6 +335,38 @@ def test_bad_inputs_are_left_out_and_the_node_keeps_publishing(graph, tmp_path):
     wait_for(lambda: int(values_of(status_of(diagnostics[-1], '/prsm'))['problems']) > 5, 5, 'problem count')
 
 
+@pytest.mark.parametrize('rate', [1e-3, 1e-6, 5e-324, 1e9])
+def test_a_block_with_an_extreme_rate_is_one_counted_reason_and_the_node_keeps_its_period(graph, tmp_path, rate):
+    """The trial's case: one block at 1e-3 Hz made 30,710 NaN states and /diagnostics silent for 20 s.
+
+    The block is left out before it sizes anything: no flood of states, no
+    memory, /diagnostics keeps its 0.2 s period, the reason is counted.
+    """
+    import resource
+    node = graph.estimator(tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
+    arrivals = []
+    graph.probe.create_subscription(DiagnosticArray, '/diagnostics', lambda msg: arrivals.append(time.monotonic()),
+                                    100)
+    good = segments_stream([(4.0, rms_for(0.9), SPEED, LOAD)])
+    bad = [(T0 + 1.0, 'vibration', ros_convert.vibration_block_msg(T0 + 1.01, rate, np.ones(4000, np.float32)))]
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    graph.publish(graph.publishers(), sorted(good + bad, key=lambda e: e[0]))
+    wait_for(lambda: 3.0 in by_window(states), 15, 'the states after the bad block')
+    time.sleep(1.0)                                       # and a second more of /diagnostics
+    done = time.monotonic()
+    live = by_window(states)
+    assert len(states) <= 8, sorted(live)                 # the run's 0.5 s windows, not years of NaN windows
+    for start in (0.0, 0.5, 1.0, 1.5, 2.0, 2.5):
+        assert live[start].theta_oil == pytest.approx(0.9, abs=0.01), (start, live[start].message)
+    assert node.channels[0].builder.problem_summary().get('vibration-rate') == 1
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000      # kB
+    gaps = np.diff([t for t in arrivals if t <= done])
+    assert gaps.size >= 4 and gaps.max() < 2.0, gaps     # period 0.2 s; the old code fell silent for 20 s
+    wait_for(lambda: int(values_of(status_of(diagnostics[-1], '/prsm'))['problems']) >= 1, 5, 'problem count')
+
+
 def test_joint_states_and_load_are_taken_while_vibration_is_silent(graph, tmp_path):
     """Only vibration wakes the executor; when it stops, the other inputs are still taken (drain timer).
 

@@ -52,6 +52,16 @@ def test_batch_events_merge_topics_in_delivery_order():
     assert events[0][3] == (1.0, 10.0) and events[2][3] == (-150.0,)    # the NaN-stamped load is left out
 
 
+@pytest.mark.parametrize('rate', [1e-3, 1e-6, 5e-324, 0.0, math.nan])
+def test_a_played_block_with_a_rate_no_sensor_gives_does_not_pace_the_replay_for_days(rate):
+    """4000 samples at 1e-3 Hz would make the playback wait 46 days for the block (issue 18); it goes out now."""
+    vib = VibrationBatch(np.array([T0, T0 + 0.1]), np.array([rate, 4000.0]), np.array([0, 4000, 4400]),
+                         np.ones(4400, dtype=np.float32))
+    events = batch_events([vib])
+    assert [e[0] - T0 for e in events] == pytest.approx([0.0, 0.2])
+    assert events[0][3][0] == rate or math.isnan(rate)      # passed on as recorded: the estimator says why not
+
+
 def test_rig_block_events_carry_the_simulator_stamps_exactly():
     generator = RigSignalGenerator(RigConfig(), seed=2, start_stamp_ns=1767225600_000000000)
     generator.set_speed(10.0)

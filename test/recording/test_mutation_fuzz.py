@@ -12,7 +12,8 @@ import zlib
 import pytest
 
 import bagfactory as bf
-from fuzzing import exercise, mutate, seed_calibration, seed_recordings
+from fuzzing import (command_result, decoded_inputs, exercise, mutate, mutate_as, only_values_differ,
+                     RECORDING_KINDS, same_result, seed_calibration, seed_recordings, valid_to_the_reference)
 from prsm_lube_ros.errors import ConfigError, InputError
 from prsm_lube_ros.estimation.calibration_file import load_calibration
 from prsm_lube_ros.recording import mcap_file
@@ -108,3 +109,77 @@ def test_a_calibration_file_of_random_bytes_is_one_config_error(tmp_path):
         path.write_bytes(data)
         with pytest.raises(ConfigError, match=str(path)):
             load_calibration(path)
+
+
+@pytest.mark.parametrize('kind', [k for k in RECORDING_KINDS if k != 'random'])
+def test_targeted_damage_is_refused_or_said_never_a_silently_different_result(tmp_path, kind):
+    """Lengths inside chunks, opcodes, sample_rate, sample counts and values, index times (issue 18).
+
+    Each mutant is read as assess and calibrate read it; a result that differs
+    from the clean file's must come with a problem line (or a one-line
+    refusal naming the file), unless nothing a reader could check changed.
+    """
+    from prsm_lube_ros.estimation.calibration import Calibration
+    from prsm_lube_ros.physics.vibration_model import ModelConstants
+    import numpy as np
+    calibration = Calibration(ModelConstants(0.08, 1e-3, 0.3), np.diag([1e-4, 1e-10, 1e-4]), 0.01, 0.01, 10, 1.0)
+    seeds = [(p, k) for p, k in seed_recordings(tmp_path / 'seeds') if p.suffix in ('.mcap', '.db3')]
+    rng = random.Random(kind)
+    done = 0
+    for index in range(24):
+        source, seed_kind = seeds[index % len(seeds)]
+        mutant, how = mutate_as(source.read_bytes(), rng, kind)
+        if how != kind:
+            continue
+        clean_dir, work = tmp_path / f'clean_{index}', tmp_path / f'mutant_{index}'
+        if seed_kind.startswith('bag:'):
+            shutil.copytree(source.parent, clean_dir)
+            shutil.copytree(source.parent, work)
+            (work / source.name).write_bytes(mutant)
+            clean_path, path = clean_dir, work
+        else:
+            clean_dir.mkdir()
+            work.mkdir()
+            clean_path = Path(shutil.copy(source, clean_dir))
+            path = work / source.name
+            path.write_bytes(mutant)
+        try:
+            problems, result = command_result(path, True, calibration)
+        except InputError as err:
+            assert '\n' not in str(err) and str(work) in str(err), str(err)
+            continue
+        if not problems and not same_result(result, command_result(clean_path, True, calibration)[1]):
+            assert only_values_differ(decoded_inputs(clean_path), decoded_inputs(path)) or \
+                valid_to_the_reference(path), f'{kind} #{index} of {source.name}: a different result in silence'
+        done += 1
+    assert done >= 8
+
+
+@pytest.mark.parametrize('kind', ['calibration_structure', 'calibration_value'])
+def test_damaged_calibration_structure_and_values_are_one_line_naming_the_file_and_no_warning(tmp_path, kind):
+    """Nesting 5,000 deep, alias bombs, wrong types; NaN, inf, signs, C_sys x 1e-6 (issue 18)."""
+    import warnings
+    source = seed_calibration(tmp_path / 'calibration.yaml')
+    rng = random.Random(kind)
+    target = tmp_path / 'mutant.yaml'
+    refused = 0
+    for index in range(60):
+        mutant, how = mutate_as(source.read_bytes(), rng, kind)
+        assert how == kind
+        target.write_bytes(mutant)
+        with warnings.catch_warnings():
+            warnings.simplefilter('error')          # a numpy RuntimeWarning would reach the user
+            try:
+                calibration = load_calibration(target)
+            except ConfigError as err:
+                assert '\n' not in str(err) and str(target) in str(err), str(err)
+                refused += 1
+                continue
+        assert calibration.constants.c_sys > 0 and calibration.constants.c_lambda > 0
+        assert np_finite(calibration.covariance), index
+    assert refused >= 30
+
+
+def np_finite(array) -> bool:
+    import numpy as np
+    return bool(np.all(np.isfinite(array)))
