@@ -21,7 +21,8 @@ def add_command(subparsers) -> None:
                         help='add runs and windows to this Parquet history (re-assessed recordings replace theirs)')
     parser.add_argument('--actuator-id', default=None, metavar='ID',
                         help='actuator the recordings belong to in the history: an id, "folder" for the name of '
-                        'the folder holding each recording, or (default) the namespace')
+                        'the folder holding each recording, or (default) the namespace, refused when the '
+                        'recordings lie in more than one folder')
     parser.add_argument('--jobs', type=int, default=1, metavar='N',
                         help='assess N recordings at a time in local processes (default 1)')
     parser.add_argument('--scheduler', default=None, metavar='ADDRESS',
@@ -53,7 +54,7 @@ def run(args) -> int:
     if args.history:
         from ..fleet.history import history_writer
         to_history = history_writer(args.history, args.calibration, calibration,
-                                    actuator_id=args.actuator_id or args.namespace, namespace=args.namespace)
+                                    actuator_id=_actuator_id(args), namespace=args.namespace)
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
 
     def done(outcome) -> None:
@@ -96,3 +97,23 @@ def run(args) -> int:
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
     return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
+
+
+def _actuator_id(args) -> str:
+    """The history's actuator id: ``--actuator-id``, else the namespace when all recordings share one folder.
+
+    Recordings from several folders under the default id would merge distinct
+    actuators into one (invented relubrications, a confident wrong forecast):
+    refused in one line.
+    """
+    from pathlib import Path
+    from ..errors import InputError
+    if args.actuator_id:
+        return args.actuator_id
+    folders = sorted({str(Path(bag).resolve().parent) for bag in args.bags})
+    if len(folders) > 1:
+        names = ', '.join(Path(folder).name for folder in folders[:3]) + (', ...' if len(folders) > 3 else '')
+        raise InputError(f'--history: the recordings lie in {len(folders)} folders ({names}) and would all be '
+                         f'actuator {args.namespace.strip("/") or args.namespace!r}; say which actuator each is: '
+                         '--actuator-id folder (the folder\'s name) or --actuator-id ID')
+    return args.namespace
