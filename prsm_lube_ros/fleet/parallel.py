@@ -107,6 +107,22 @@ def _outcome(path, future) -> BagOutcome:
         return BagOutcome(path, error=f'{path}: worker failed ({exc.__class__.__name__}: {exc})')
 
 
+#: Dask tasks per worker: recordings go in batches so that the per-task cost (scheduling, one round trip per
+#: result) is paid a few times per worker instead of once per recording
+TASKS_PER_WORKER = 4
+
+
+def assess_batch(paths: Sequence[str], job: BagJob) -> list[BagOutcome]:
+    """:func:`assess_bag` of each path, in order (one Dask task)."""
+    return [assess_bag(path, job) for path in paths]
+
+
+def batches(paths: Sequence[str], workers: int) -> list[list[str]]:
+    """``paths`` in consecutive batches, :data:`TASKS_PER_WORKER` per worker (at least one path each)."""
+    size = max(1, -(-len(paths) // max(1, workers * TASKS_PER_WORKER)))
+    return [list(paths[start:start + size]) for start in range(0, len(paths), size)]
+
+
 def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
     """Each recording on Dask, sent as its absolute path (remote workers do not share our working folder).
 
@@ -117,15 +133,25 @@ def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
     given = {str(Path(path).resolve()): path for path in dict.fromkeys(paths)}
     with dask_client(scheduler, jobs) as client:
         job_future = client.scatter(job, broadcast=True)
-        futures = client.map(assess_bag, list(given), job=job_future, pure=False)
-        by_key = dict(zip((f.key for f in futures), given.values()))
+        work = batches(list(given), len(client.scheduler_info().get('workers', {})) or jobs)
+        futures = client.map(assess_batch, work, job=job_future, pure=False)
+        by_key = dict(zip((f.key for f in futures), work))
         outcomes = {}
         for future in dask_completed(futures):
-            path = by_key[future.key]
-            outcomes[path] = _as_given(_outcome(path, future), path)
-            if on_done is not None:
-                on_done(outcomes[path])
+            for sent, outcome in zip(by_key[future.key], _batch_outcomes(by_key[future.key], future)):
+                path = given[sent]
+                outcomes[path] = _as_given(outcome, path)
+                if on_done is not None:
+                    on_done(outcomes[path])
         return outcomes
+
+
+def _batch_outcomes(paths: Sequence[str], future) -> list[BagOutcome]:
+    """The batch's outcomes, or an error line for each of its recordings when its worker was lost."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 -- a lost worker fails its recordings, not the fleet
+        return [BagOutcome(path, error=f'{path}: worker failed ({exc.__class__.__name__}: {exc})') for path in paths]
 
 
 def _as_given(outcome: BagOutcome, path: str) -> BagOutcome:
