@@ -56,11 +56,12 @@ def run(args) -> int:
         to_history = history_writer(args.history, args.calibration, calibration,
                                     actuator_id=_actuator_id(args), namespace=args.namespace)
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
+    refused = []
 
     def done(outcome) -> None:
         """Write each finished recording into the history at once (this process), so a killed run keeps it."""
         if to_history is not None:
-            to_history(outcome)
+            refused.append(to_history(outcome))
         bar.update(1)
 
     try:
@@ -73,6 +74,9 @@ def run(args) -> int:
             warn(line)
         if outcome.error:
             print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
+    refused = [line for line in refused if line]
+    for line in refused:
+        print(f'prsm-lube assess: error: {line}', file=sys.stderr)
     flagged = []
     for flag in calibration.flags:
         print(f'warning: calibration {args.calibration}: {flag}')
@@ -91,12 +95,12 @@ def run(args) -> int:
     for name, run_index, flag in flagged:
         print(f'! {name} run {run_index}: {flag}')
     if args.history and results:
-        print(f'history {args.history}: {len(results)} recordings added or replaced')
+        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
     if args.json and results:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
-    return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
+    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
 
 
 def _actuator_id(args) -> str:

@@ -223,19 +223,38 @@ def history_writer(history: str | Path, calibration_path: str | Path, fit, *, ac
 
     ``actuator_id`` ``folder`` names each recording's actuator by the folder it
     lies in; any other value names them all.  Recordings that failed are left
-    out.  The calibration is registered and what killed writers left is
-    removed first.
+    out, and so is a recording whose span overlaps another one of its
+    actuator (:mod:`.identity`: the id would merge two actuators): ``write``
+    returns the line saying so.  The calibration is registered and what
+    killed writers left is removed first.
     """
+    from .identity import assessment_span, clash_line, table_spans, Timeline
     identifier = register_calibration(history, calibration_path)
     remove_stale(Path(history) / STAGING)
+    timeline = Timeline(lambda key: _existing_spans(history, key, table_spans))
 
-    def write(outcome) -> None:
+    def write(outcome) -> str:
+        """Add the outcome's recording; '' when added or failed, else the line saying why it was refused."""
         if outcome.assessment is None:
-            return
+            return ''
         actuator = Path(outcome.path).resolve().parent.name if actuator_id == 'folder' else actuator_id
+        span, key = assessment_span(outcome.assessment, outcome.content), actuator_key(actuator)
+        clash = timeline.clash(key, span) if span is not None else None
+        if clash is not None:
+            return clash_line(span, clash, actuator)
         add_assessment(history, outcome.assessment, actuator_id=actuator, content=outcome.content,
                        calibration=identifier, namespace=namespace, fit=fit)
+        if span is not None:
+            timeline.add(key, span)
+        return ''
     return write
+
+
+def _existing_spans(history: str | Path, key: str, spans) -> list:
+    """Spans of one actuator's recordings already in the history (none for a new history)."""
+    if not (Path(history) / RECORDINGS).is_dir():
+        return []
+    return spans(read_table(history, 'runs', actuator=key, on_problem=lambda line: None))
 
 
 def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,

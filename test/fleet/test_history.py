@@ -229,3 +229,26 @@ def test_a_folder_that_is_not_a_history_is_one_line(tmp_path, layout):
     with pytest.raises(ConfigError, match=str(folder)) as caught:
         read_table(folder)
     assert '\n' not in str(caught.value)
+
+
+def test_recordings_overlapping_in_time_under_one_id_are_refused_not_merged(tmp_path):
+    """Two actuators filed under one id: the second recording overlapping the first is refused in one line."""
+    import dataclasses
+    from prsm_lube_ros.fleet.history import history_writer
+    from prsm_lube_ros.fleet.parallel import BagOutcome
+    history = tmp_path / 'history'
+    calibration = recording(tmp_path, 'calibration.yaml', b'constants: {}')
+    first, second, copy = (recording(tmp_path, name, name.encode()) for name in ('a.mcap', 'b.mcap', 'a.db3'))
+    write = history_writer(history, calibration, None, actuator_id='line')
+    assert write(BagOutcome(str(first), assessment(first, 0.9), content_hash(first))) == ''
+    shifted = assessment(second, 0.8)
+    shifted = dataclasses.replace(shifted, runs=[dataclasses.replace(r, start=r.start + 5, end=r.end + 5)
+                                                 for r in shifted.runs])
+    line = write(BagOutcome(str(second), shifted, content_hash(second)))
+    assert str(second) in line and str(first) in line and '--actuator-id' in line and '\n' not in line
+    # the same recording stored in another format (same span, other bytes) is no clash, nor is a re-assessment
+    assert write(BagOutcome(str(copy), assessment(copy, 0.9), content_hash(copy))) == ''
+    again = history_writer(history, calibration, None, actuator_id='line')      # a later run reads the history
+    assert again(BagOutcome(str(first), assessment(first, 0.85), content_hash(first))) == ''
+    assert again(BagOutcome(str(second), shifted, content_hash(second))) != ''
+    assert sorted(set(read_table(history).column('recording_path').to_pylist())) == [str(copy), str(first)]
