@@ -27,7 +27,7 @@ def add_command(subparsers) -> None:
                         help='assess N recordings at a time in local processes (default 1)')
     parser.add_argument('--scheduler', default=None, metavar='ADDRESS',
                         help='assess on a Dask distributed cluster at ADDRESS, or "local" for a local cluster '
-                        'of --jobs workers')
+                        'of --jobs workers; a tcp:// address that sends no Dask handshake within 10 s is refused')
     parser.set_defaults(func=run)
 
 

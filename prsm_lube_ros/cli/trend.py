@@ -141,9 +141,12 @@ def _forecast(args, options: TrendOptions, points, relubrications, odometers, od
     from ..fleet.forecast import forecast_points
     from ..fleet.planner import plan
     from .common import write_json
+    from ..errors import InputError
     forecasts = forecast_points(points, relubrications=relubrications, levels=options.levels,
                                 only=args.actuator, odometers=odometers, confidence=options.confidence,
                                 as_of=options.as_of)
+    if not forecasts:
+        raise InputError(f'{args.history}: no assessed recording made by --as-of {_utc(options.as_of)}')
     for forecast in forecasts:
         forecast.revolutions_reason = odometer_reasons.get(forecast.actuator, '')
     plans = {forecast.actuator: plan(forecast, options.as_of, options.by) for forecast in forecasts}

@@ -130,3 +130,9 @@ def test_the_backtest_scores_the_forecast_on_later_recordings(small_fleet, tmp_p
     assert document['days'] == 2 and document['recordings_scored'] >= 4
     assert 0.0 <= document['band_coverage'] <= 1.0 and 'band coverage' in result.stdout
     assert sum(a['later'] for a in document['actuators']) == document['recordings_scored']
+
+
+def test_an_as_of_date_before_every_recording_is_one_line(small_fleet, tmp_path):
+    result = trend(small_fleet['history'], '--report', tmp_path / 'r', '--as-of', '2020-01-01')
+    lines = error_lines(result)
+    assert result.returncode == 2 and len(lines) == 1 and '--as-of 2020-01-01' in lines[0], result.stderr
