@@ -18,6 +18,7 @@ import socket
 import struct
 import time
 from typing import Iterator
+import warnings
 
 from ..errors import InputError
 
@@ -101,7 +102,10 @@ def dask_client(scheduler: str, workers: int, timeout: float = CONNECT_TIMEOUT) 
     cluster = None
     try:
         if scheduler == LOCAL_SCHEDULER:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            with warnings.catch_warnings():     # its HTTP port taken by another cluster: it picks another, say nothing
+                warnings.filterwarnings('ignore', message='Port .* is already in use', category=UserWarning)
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
             client = Client(cluster, timeout=f'{timeout}s')
         else:
             probe_scheduler(scheduler, timeout)
