@@ -60,30 +60,62 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
                           band_times: Sequence[float], band: tuple[Sequence[float], Sequence[float],
                                                                    Sequence[float]],
                           levels: Mapping[str, float], events: Sequence[float], title: str,
-                          ylabel: str = 'theta_Oil') -> Path:
-    """Values with one-sigma bars over days since the first, a forecast (centre and band) and level lines.
+                          ylabel: str = 'theta_Oil', *, crossings: Sequence[tuple] = (),
+                          as_of: float | None = None, confidence: float = 0.95) -> Path:
+    """Values with one-sigma bars over UTC dates, a forecast (centre and band), levels, crossings and the as-of date.
 
-    ``times``, ``band_times`` and ``events`` (vertical dotted lines, e.g.
-    relubrications) in s since the epoch; ``levels`` maps a label to a value.
+    ``times``, ``band_times``, ``events`` (vertical dotted lines, e.g.
+    relubrications) and ``as_of`` in s since the epoch; ``levels`` maps a
+    label to a value; ``crossings`` are ``(label, level, estimate, low,
+    high)`` (s since the epoch, None where unknown), drawn as a marker at the
+    estimate and a bar over the interval on the level's line.
     """
+    import datetime
     plt = _pyplot()
-    origin = float(times[0]) if len(times) else 0.0
 
-    def days(seconds):
-        return (np.asarray(seconds, float) - origin) / 86400.0
-    fig, ax = plt.subplots(figsize=(8.0, 4.2), dpi=120)
-    ax.errorbar(days(times), values, yerr=errors, fmt='o', markersize=3, capsize=2, label='recordings')
+    def dates(seconds):
+        return [datetime.datetime.fromtimestamp(float(t), datetime.timezone.utc) for t in np.atleast_1d(seconds)]
+    fig, ax = plt.subplots(figsize=(8.0, 4.4), dpi=120)
+    if len(times):
+        ax.errorbar(dates(times), values, yerr=errors, fmt='o', markersize=3, capsize=2,
+                    label='recordings (one-sigma)')
     centre, low, high = (np.asarray(v, float) for v in band)
     if len(band_times) and np.isfinite(centre).any():
-        ax.plot(days(band_times), centre, color='C1', label='forecast')
-        ax.fill_between(days(band_times), low, high, color='C1', alpha=0.25, label='forecast band')
+        ax.plot(dates(band_times), centre, color='C1', label='forecast')
+        ax.fill_between(dates(band_times), low, high, color='C1', alpha=0.25,
+                        label=f'{confidence:.0%} band: theta_Oil itself (fit state, calibration, usage scatter)')
     for i, (label, value) in enumerate(levels.items()):
         ax.axhline(value, color=('C3' if i else 'C8'), linestyle='--', linewidth=1, label=label)
+    _crossing_marks(ax, crossings, dates, confidence)
     for j, event in enumerate(events):
-        ax.axvline(days(event), color='0.4', linestyle=':', linewidth=1, label='relubrication' if j == 0 else None)
-    ax.set_xlabel('days since the first recording')
+        ax.axvline(dates(event)[0], color='0.4', linestyle=':', linewidth=1,
+                   label='relubrication' if j == 0 else None)
+    if as_of is not None:
+        ax.axvline(dates(as_of)[0], color='k', linewidth=1, label='as of')
+    ax.set_xlabel('date (UTC)')
     ax.set_ylabel(ylabel)
-    return _save(fig, ax, path, title, plt)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, loc='best')
+    ax.grid(alpha=0.3)
+    fig.autofmt_xdate()
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _crossing_marks(ax, crossings: Sequence[tuple], dates, confidence: float) -> None:
+    """A diamond at each crossing estimate and a bar over its interval (open ends drawn to the plot's edge)."""
+    for i, (label, level, estimate, low, high) in enumerate(crossings):
+        color = 'C3' if i else 'C8'
+        if low is not None:
+            right = high if high is not None else ax.get_xlim()[1]
+            right = dates(right)[0] if high is not None else right
+            ax.plot([dates(low)[0], right], [level, level], color=color, linewidth=4, alpha=0.5,
+                    label=f'{label}: {confidence:.0%} interval')
+        if estimate is not None:
+            ax.plot(dates(estimate), [level], 'D', color=color, markersize=6, label=f'{label}: estimate')
 
 
 def live_theta(path: Path, windows: Sequence[tuple], event_time: float, truth: float, title: str) -> Path:

@@ -21,12 +21,13 @@ def add_command(subparsers) -> None:
                         help='add runs and windows to this Parquet history (re-assessed recordings replace theirs)')
     parser.add_argument('--actuator-id', default=None, metavar='ID',
                         help='actuator the recordings belong to in the history: an id, "folder" for the name of '
-                        'the folder holding each recording, or (default) the namespace')
+                        'the folder holding each recording, or (default) the namespace, refused when the '
+                        'recordings lie in more than one folder')
     parser.add_argument('--jobs', type=int, default=1, metavar='N',
                         help='assess N recordings at a time in local processes (default 1)')
     parser.add_argument('--scheduler', default=None, metavar='ADDRESS',
                         help='assess on a Dask distributed cluster at ADDRESS, or "local" for a local cluster '
-                        'of --jobs workers')
+                        'of --jobs workers; a tcp:// address that sends no Dask handshake within 10 s is refused')
     parser.set_defaults(func=run)
 
 
@@ -57,13 +58,14 @@ def run(args) -> int:
     if args.history:
         from ..fleet.history import history_writer
         to_history = history_writer(args.history, args.calibration, calibration,
-                                    actuator_id=args.actuator_id or args.namespace, namespace=args.namespace)
+                                    actuator_id=_actuator_id(args), namespace=args.namespace)
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
+    refused = []
 
     def done(outcome) -> None:
         """Write each finished recording into the history at once (this process), so a killed run keeps it."""
         if to_history is not None:
-            to_history(outcome)
+            refused.append(to_history(outcome))
         bar.update(1)
 
     try:
@@ -76,6 +78,9 @@ def run(args) -> int:
             warn(line)
         if outcome.error:
             print(f'prsm-lube assess: error: {outcome.error}', file=sys.stderr)
+    refused = [line for line in refused if line]
+    for line in refused:
+        print(f'prsm-lube assess: error: {line}', file=sys.stderr)
     flagged, extrapolated = [], []
     if not results:
         return EXIT_USER_ERROR
@@ -103,9 +108,29 @@ def run(args) -> int:
     for name, run_index, flag in extrapolated:
         print(f'~ {name} run {run_index}: {flag}')
     if args.history and results:
-        print(f'history {args.history}: {len(results)} recordings added or replaced')
+        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
     if args.json and results:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
-    return EXIT_USER_ERROR if len(results) < len(outcomes) else 0
+    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _actuator_id(args) -> str:
+    """The history's actuator id: ``--actuator-id``, else the namespace when all recordings share one folder.
+
+    Recordings from several folders under the default id would merge distinct
+    actuators into one (invented relubrications, a confident wrong forecast):
+    refused in one line.
+    """
+    from pathlib import Path
+    from ..errors import InputError
+    if args.actuator_id:
+        return args.actuator_id
+    folders = sorted({str(Path(bag).resolve().parent) for bag in args.bags})
+    if len(folders) > 1:
+        names = ', '.join(Path(folder).name for folder in folders[:3]) + (', ...' if len(folders) > 3 else '')
+        raise InputError(f'--history: the recordings lie in {len(folders)} folders ({names}) and would all be '
+                         f'actuator {args.namespace.strip("/") or args.namespace!r}; say which actuator each is: '
+                         '--actuator-id folder (the folder\'s name) or --actuator-id ID')
+    return args.namespace

@@ -1,7 +1,26 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""``prsm-lube trend``: theta_Oil history per actuator, depletion fit and when it crosses warn and error."""
+"""``prsm-lube trend``: theta_Oil history per actuator, depletion fit and when it crosses warn and error.
+
+For the people who plan maintenance: every figure is stated as of a date
+(``--as-of``, default now): days to go with their interval (``--level``),
+overdue, "may have crossed" with its probability, and the probability of
+crossing by a chosen date (``--by``).  ``--backtest DAYS`` forecasts from the
+history cut DAYS earlier and scores it against what was measured since.
+
+Bad input never stops the report for the others: an unreadable file of the
+history, a stray file in it, an odometer that goes backwards or names an
+actuator the history does not have are each one line on stderr (``file`` or
+``file:line``), the rest is reported, and the status is non-zero.
+"""
 from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .common import EXIT_USER_ERROR
+
+#: days after the as-of date of the default ``--by`` date
+BY_DAYS = 30.0
 
 
 def add_command(subparsers) -> None:
@@ -10,12 +29,25 @@ def add_command(subparsers) -> None:
         'trend', help='theta_oil history per actuator and the forecast of the warn and error crossings',
         description='Fit theta_oil = a exp(-t/tau) per lubrication cycle to each actuator\'s history (written '
         'by assess --history), relubrications found as jumps up or given, and forecast when theta_oil crosses '
-        'the warn and error levels, with a 95 % interval. Table most urgent first, JSON and plots.')
+        'the warn and error levels, with an interval. Table most urgent first, JSON and dated plots, as of a '
+        'date; --backtest scores the forecast against later recordings.')
     parser.add_argument('history', metavar='HISTORY', help='history folder written by prsm-lube assess --history')
     parser.add_argument('--actuator', default=None, metavar='ID', help='only this actuator')
     parser.add_argument('--report', required=True, metavar='DIR', help='folder for trend.json, trend.md, plots')
     parser.add_argument('--warn-below', type=float, default=0.85, help='warn level (estimator default 0.85)')
     parser.add_argument('--error-below', type=float, default=0.70, help='error level (estimator default 0.70)')
+    parser.add_argument('--as-of', default=None, metavar='DATE',
+                        help='forecast as of this UTC date or time (ISO 8601; a date means its end), from the '
+                        'recordings made by then; days to go count from it (default: now)')
+    parser.add_argument('--by', default=None, metavar='DATE',
+                        help=f'also give the probability of crossing each level by this date (default: as-of + '
+                        f'{BY_DAYS:g} days)')
+    parser.add_argument('--level', type=float, default=0.95, metavar='P',
+                        help='probability inside the stated intervals and the plotted band (default 0.95: 95 %% '
+                        'intervals)')
+    parser.add_argument('--backtest', type=float, default=None, metavar='DAYS',
+                        help='forecast from the history cut DAYS before its newest recording and score it '
+                        'against the recordings after the cut (coverage of band and crossing intervals)')
     parser.add_argument('--relubrications', default=None, metavar='CSV',
                         help='known relubrications, lines "actuator,time" (ISO 8601 or s since the epoch); '
                         'actuators not listed have theirs found as jumps up in theta_oil')
@@ -25,67 +57,224 @@ def add_command(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+@dataclass(frozen=True)
+class TrendOptions:
+    """The checked options of one ``trend`` run (times in s since the epoch)."""
+
+    levels: tuple[float, float]
+    confidence: float
+    as_of: float
+    by: float
+
+
+def _options(args) -> TrendOptions:
+    """Check the levels, ``--level`` and the dates; one-line errors."""
+    import datetime
+    from ..errors import InputError
+    from ..estimation.health import HealthThresholds
+    HealthThresholds(warn_below=args.warn_below, error_below=args.error_below)   # checks the order
+    if not 0.0 < args.level < 1.0:
+        raise InputError(f'--level must lie between 0 and 1 (a probability such as 0.95), got {args.level:g}')
+    now = datetime.datetime.now(datetime.timezone.utc).timestamp()
+    as_of = _date('--as-of', args.as_of) if args.as_of else now
+    by = _date('--by', args.by) if args.by else as_of + BY_DAYS * 86400.0
+    return TrendOptions((args.warn_below, args.error_below), args.level, as_of, by)
+
+
+def _date(option: str, text: str) -> float:
+    """s since the epoch of an ISO 8601 date (its end) or time (UTC unless it names a zone)."""
+    import datetime
+    from ..errors import InputError
+    try:
+        if len(text.strip()) == 10:
+            day = datetime.date.fromisoformat(text.strip())
+            stamp = datetime.datetime.combine(day, datetime.time.max, datetime.timezone.utc)
+        else:
+            stamp = datetime.datetime.fromisoformat(text.strip().replace('Z', '+00:00'))
+    except ValueError:
+        raise InputError(f'{option} {text!r} is not an ISO 8601 date or time (e.g. 2026-03-01)') from None
+    if stamp.tzinfo is None:
+        stamp = stamp.replace(tzinfo=datetime.timezone.utc)
+    return stamp.timestamp()
+
+
 def run(args) -> int:
     """Forecast every actuator of the history; table on stdout, JSON, Markdown and one plot each."""
     from pathlib import Path
-    import numpy as np
-    from ..estimation.health import HealthThresholds
-    from ..figures import history_with_forecast
     from ..errors import ConfigError
-    from ..fleet.forecast import DAY, forecast_history
-    from .common import write_json
-    HealthThresholds(warn_below=args.warn_below, error_below=args.error_below)   # checks the order
+    from ..fleet.forecast import history_points
+    from .common import warn
+    options = _options(args)
     report = Path(args.report)
     if report.exists() and not report.is_dir():
         raise ConfigError(f'--report {report}: exists and is not a folder')
-    levels = (args.warn_below, args.error_below)
-    from ..fleet.service_log import read_odometer, read_relubrications
+    problems: list[str] = []
+    points = history_points(args.history, on_problem=problems.append, actuator=args.actuator)
+    relubrications, odometers, odometer_reasons = _service_logs(args, points, problems)
+    if args.backtest is not None:
+        _backtest(args, options, points, relubrications, report)
+    else:
+        _forecast(args, options, points, relubrications, odometers, odometer_reasons, report)
+    for line in problems:
+        warn(line)
+    return EXIT_USER_ERROR if problems else 0
+
+
+def _service_logs(args, points, problems: list[str]):
+    """Relubrications, odometers without the problem ones, and each problem actuator's reason."""
+    from ..fleet.history import actuator_key
+    from ..fleet.service_log import odometer_problems, odometer_readings, read_relubrications
     relubrications = read_relubrications(args.relubrications) if args.relubrications else None
-    odometers = read_odometer(args.odometer) if args.odometer else None
-    forecasts = forecast_history(args.history, actuator=args.actuator, relubrications=relubrications,
-                                 levels=levels, odometers=odometers)
-    rows = [_row(forecast) for forecast in forecasts]
-    header = ('| actuator | recordings | relubrications | tau d | theta now | warn crossing (95 % interval) '
-              '| error crossing (95 % interval) |')
-    if odometers:
-        header += ' N_d rev | warn at odometer rev (95 % interval) |'
-    table = '\n'.join([header, '|---' * header.count(' |') + '|'] + rows)
+    if not args.odometer:
+        return relubrications, None, {}
+    readings = odometer_readings(args.odometer)
+    found = odometer_problems(args.odometer, readings, set(points), key=actuator_key)
+    problems.extend(found.values())
+    odometers = {name: ([r.time for r in items], [r.revolutions for r in items])
+                 for name, items in readings.items() if name not in found}
+    return relubrications, odometers, {actuator_key(name): line for name, line in found.items()
+                                       if actuator_key(name) in points}
+
+
+def _forecast(args, options: TrendOptions, points, relubrications, odometers, odometer_reasons, report) -> None:
+    """Forecast, plan, print the table and write trend.json, trend.md and the plots."""
+    from ..fleet.forecast import forecast_points
+    from ..fleet.planner import plan
+    from .common import write_json
+    from ..errors import InputError
+    forecasts = forecast_points(points, relubrications=relubrications, levels=options.levels,
+                                only=args.actuator, odometers=odometers, confidence=options.confidence,
+                                as_of=options.as_of)
+    if not forecasts:
+        raise InputError(f'{args.history}: no assessed recording made by --as-of {_utc(options.as_of)}')
+    for forecast in forecasts:
+        forecast.revolutions_reason = odometer_reasons.get(forecast.actuator, '')
+    plans = {forecast.actuator: plan(forecast, options.as_of, options.by) for forecast in forecasts}
+    table = _table(forecasts, plans, options, bool(args.odometer))
     print(table)
     for forecast in forecasts:
-        points = forecast.points
-        future = np.linspace(forecast.last_recording, forecast.last_recording + 30 * DAY, 200) \
-            if not forecast.reason else np.array([])
-        history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
-                              [p.theta_oil for p in points], [p.theta_oil_std for p in points], future,
-                              forecast.band(future) if len(future) else ([], [], []),
-                              {f'warn {args.warn_below:g}': args.warn_below,
-                               f'error {args.error_below:g}': args.error_below},
-                              forecast.relubrications, f'{forecast.actuator}: theta_Oil and forecast')
-    write_json(report / 'trend.json', {'history': str(args.history),
-                                       'levels': {'warn': args.warn_below, 'error': args.error_below},
-                                       'actuators': [forecast.as_json() for forecast in forecasts]})
-    (report / 'trend.md').write_text(f'# theta_Oil trend, most urgent first\n\n{table}\n')
+        _plot(report, forecast, options)
+    write_json(report / 'trend.json', _document(args, options, forecasts, plans))
+    (report / 'trend.md').write_text(f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent first\n\n'
+                                     f'{table}\n')
     print(f'wrote {report}: trend.json, trend.md and {len(forecasts)} plots')
-    return 0
 
 
-def _row(forecast) -> str:
-    """One Markdown table row of a forecast."""
-    import math
+def _utc(seconds: float | None) -> str:
+    """ISO 8601 UTC to the minute, ``never`` for None."""
+    from ..validation import utc_or_none
+    stamp = utc_or_none(seconds)
+    return 'never' if stamp is None else stamp.isoformat(timespec='minutes')
+
+
+def _document(args, options: TrendOptions, forecasts, plans) -> dict:
+    """trend.json: options, and per actuator the forecast with its planner view."""
+    actuators = []
+    for forecast in forecasts:
+        entry = forecast.as_json()
+        entry['planner'] = [item.as_json() for item in plans[forecast.actuator]]
+        entry['revolutions']['reason'] = forecast.revolutions_reason
+        actuators.append(entry)
+    return {'history': str(args.history), 'levels': {'warn': options.levels[0], 'error': options.levels[1]},
+            'confidence': options.confidence, 'as_of': options.as_of, 'as_of_utc': _utc(options.as_of),
+            'by': options.by, 'by_utc': _utc(options.by), 'actuators': actuators}
+
+
+def _table(forecasts, plans, options: TrendOptions, with_odometer: bool) -> str:
+    """The Markdown table, one row per actuator, every row with as many cells as the header."""
+    percent = f'{options.confidence:.0%}'
+    by_day = _utc(options.by)[:10]
+    header = ['actuator', 'recordings', 'relubrications', 'tau d', 'theta now']
+    for name in ('warn', 'error'):
+        header += [f'{name} crossing ({percent} interval)', f'{name}: days to go as of {_utc(options.as_of)[:10]}',
+                   f'P({name} by {by_day})']
+    if with_odometer:
+        header += ['N_d rev', f'warn at odometer rev ({percent} interval)']
+    rows = [_row(forecast, plans[forecast.actuator], with_odometer) for forecast in forecasts]
+    lines = ['| ' + ' | '.join(header) + ' |', '|---' * len(header) + '|']
+    lines += ['| ' + ' | '.join(cells + [''] * (len(header) - len(cells))) + ' |' for cells in rows]
+    return '\n'.join(lines)
+
+
+def _row(forecast, planned, with_odometer: bool) -> list[str]:
+    """The cells of one actuator's row."""
     from ..fleet.forecast import crossing_interval_text
+    from ..fleet.planner import planner_text
     if forecast.reason:
-        return f'| {forecast.actuator} | {len(forecast.points)} | – | – | – | {forecast.reason} | |'
-    cells = []
-    for crossing in forecast.crossings:
-        data = crossing.as_json()
-        cells.append(f'{data["time_utc"]} ({crossing_interval_text(crossing)})' if data['time_utc'] else 'never')
-    row = (f'| {forecast.actuator} | {len(forecast.points)} | {len(forecast.relubrications)} | '
-           f'{forecast.tau_days:.3g} | {forecast.theta_now:.3f} | ' + ' | '.join(cells) + ' |')
-    if math.isfinite(forecast.depletion_revolutions):
-        crossing = forecast.revolution_crossings[0] if forecast.revolution_crossings else None
-        where = 'passed'
-        if crossing and crossing.time is not None:
-            high = 'never' if crossing.high is None else f'{crossing.high:.0f}'
-            where = f'{crossing.time:.0f} ({crossing.low:.0f} .. {high})'
-        row += f' {forecast.depletion_revolutions:.3g} | {where} |'
-    return row
+        return [forecast.actuator, str(len(forecast.points)), '–', '–', '–', forecast.reason]
+    cells = [forecast.actuator, str(len(forecast.points)), str(len(forecast.relubrications)),
+             f'{forecast.tau_days:.3g}', f'{forecast.theta_now:.3f}']
+    for crossing, item in zip(forecast.crossings, planned):
+        when = f'{_utc(crossing.time)} ({crossing_interval_text(crossing)})' if crossing.time is not None else 'never'
+        probability = '–' if item.probability_by is None else f'{item.probability_by:.2f}'
+        cells += [when, planner_text(item), probability]
+    if with_odometer:
+        cells += _odometer_cells(forecast)
+    return cells
+
+
+def _odometer_cells(forecast) -> list[str]:
+    """N_d and the odometer reading of the warn crossing, or why there are none."""
+    import math
+    if forecast.revolutions_reason:
+        return ['–', forecast.revolutions_reason]
+    if not math.isfinite(forecast.depletion_revolutions):
+        return ['–', 'odometer does not cover the recordings']
+    crossing = forecast.revolution_crossings[0] if forecast.revolution_crossings else None
+    where = 'passed'
+    if crossing and crossing.time is not None:
+        high = 'never' if crossing.high is None else f'{crossing.high:.0f}'
+        where = f'{crossing.time:.0f} ({crossing.low:.0f} .. {high})'
+    return [f'{forecast.depletion_revolutions:.3g}', where]
+
+
+def _plot(report, forecast, options: TrendOptions) -> None:
+    """One dated plot: recordings, band to the by-date, levels, crossings with intervals, as-of line."""
+    import numpy as np
+    from ..figures import history_with_forecast
+    points = forecast.points
+    end = max(options.by, forecast.last_recording + 7 * 86400.0) if not forecast.reason else 0.0
+    future = np.linspace(forecast.last_recording, end, 200) if not forecast.reason else np.array([])
+    names = ('warn', 'error')
+    history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
+                          [p.theta_oil for p in points], [p.theta_oil_std for p in points], future,
+                          forecast.band(future) if len(future) else ([], [], []),
+                          {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
+                          forecast.relubrications, f'{forecast.actuator}: theta_Oil and forecast',
+                          crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
+                                     for name, c in zip(names, forecast.crossings)],
+                          as_of=options.as_of, confidence=options.confidence)
+
+
+def _backtest(args, options: TrendOptions, points, relubrications, report) -> None:
+    """Forecast from the history cut ``--backtest`` days earlier; print and write its scores."""
+    from ..errors import InputError
+    from ..fleet.backtest import backtest
+    from .common import write_json
+    if not args.backtest > 0:
+        raise InputError(f'--backtest DAYS must be > 0, got {args.backtest:g}')
+    result = backtest(points, args.backtest, relubrications=relubrications, levels=options.levels,
+                      confidence=options.confidence)
+    document = result.as_json()
+    lines = [f'# Backtest: forecast as of {_utc(result.cut)} ({args.backtest:g} d before the newest recording)', '',
+             '| actuator | later recordings | inside band | crossings seen | inside interval |',
+             '|---|---|---|---|---|']
+    for item in result.actuators:
+        lines.append(f'| {item.actuator} | {item.later} | {item.inside_band} | {len(item.crossings)} | '
+                     f'{sum(c.inside for c in item.crossings)} |' + (f' {item.reason}' if item.reason else ''))
+    lines += ['', f'At {options.confidence:.0%}: band coverage {_share(document["band_coverage"])} of '
+              f'{document["recordings_scored"]} later recordings; crossing coverage '
+              f'{_share(document["crossing_coverage"])} of {document["crossings_scored"]} crossings seen; median '
+              f'|error| of the crossing estimate {_days(document["median_abs_crossing_error_days"])}.']
+    text = '\n'.join(lines)
+    print(text)
+    write_json(report / 'backtest.json', document)
+    (report / 'backtest.md').write_text(text + '\n')
+
+
+def _share(value: float | None) -> str:
+    return '–' if value is None else f'{value:.1%}'
+
+
+def _days(value: float | None) -> str:
+    return '–' if value is None else f'{value:.2f} d'

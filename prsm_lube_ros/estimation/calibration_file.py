@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import datetime
 import math
-import os
 from pathlib import Path
-import tempfile
 
 import numpy as np
 import yaml
 
+from ..atomic_file import write_atomically
 from ..config_file import read_yaml
 from ..errors import ConfigError, InputError
 from ..physics.vibration_model import ModelConstants
@@ -123,22 +122,15 @@ def band_note(calibration: Calibration) -> str:
 
 
 def save_calibration(calibration: Calibration, path: str | Path) -> Path:
-    """Write atomically (temporary file, fsync, rename); returns the path written."""
+    """Write atomically (temporary file, fsync, rename); returns the path written.
+
+    Temporaries a killed earlier write left beside ``path`` are removed
+    (:func:`~prsm_lube_ros.atomic_file.remove_stale`).
+    """
     path = Path(path)
     text = yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.tmp', dir=path.parent)
-        try:
-            with os.fdopen(fd, 'w') as stream:
-                stream.write(text)
-                stream.flush()
-                os.fsync(stream.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        write_atomically(path, lambda stream: stream.write(text), binary=False)
     except OSError as exc:
         raise ConfigError(f'{path}: cannot write calibration ({exc.strerror or exc})') from None
     return path

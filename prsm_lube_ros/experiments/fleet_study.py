@@ -9,7 +9,11 @@ assessed into a Parquet history (serially, ``--jobs`` processes or
 ``--scheduler``) and forecast per actuator with relubrications detected from
 the recordings.  Each actuator's true warn crossing (its last lubrication
 cycle, usage continued past the last day) is compared with the forecast
-interval.  Writes ``results.json`` and ``coverage.md`` to ``--results``
+interval.  ``--backtest DAYS`` (default 3) also forecasts each fleet from
+its history cut DAYS before the newest recording and scores the forecast
+band and crossing intervals on the later recordings
+(:mod:`prsm_lube_ros.fleet.backtest`, as ``prsm-lube trend --backtest``
+does).  Writes ``results.json`` and ``coverage.md`` to ``--results``
 (default ``--out``); one fleet per seed of ``--seeds``.
 
     python -m prsm_lube_ros.experiments.fleet_study --out out/fleet_study [--actuators 20] [--days 10]
@@ -99,12 +103,13 @@ def main(argv=None) -> int:
     parser.add_argument('--seeds', type=int, nargs='+', default=[0], help='one fleet per seed (default 0)')
     parser.add_argument('--jobs', type=int, default=1)
     parser.add_argument('--scheduler', default=None)
+    parser.add_argument('--backtest', type=float, default=3.0, metavar='DAYS')
     args = parser.parse_args(argv)
     out = Path(args.out)
     results = Path(args.results) if args.results else out
     arguments = sys.argv[1:] if argv is None else argv
     command = 'python -m prsm_lube_ros.experiments.fleet_study ' + ' '.join(arguments)
-    sections, runs, all_rows = [], [], []
+    sections, runs, all_rows, backtests = [], [], [], []
     for seed in args.seeds:
         folder = out / f'seed_{seed}'
         run = simulate_and_assess(folder, actuators=args.actuators, days=args.days, seed=seed, jobs=args.jobs,
@@ -113,6 +118,7 @@ def main(argv=None) -> int:
         rows = compare_with_truth(folder / 'history', folder / 'fleet' / 'truth.json')
         for row in rows:
             row['seed'] = seed
+        backtests.append(dict(backtest_history(folder / 'history', args.backtest), seed=seed))
         inside, ahead = sum(row['inside'] for row in rows), [row for row in rows if row['ahead']]
         runs.append(dict(run, seed=seed))
         all_rows += rows
@@ -138,15 +144,36 @@ def main(argv=None) -> int:
         median = 100.0 * sorted(errors)[len(errors) // 2]
         summary += (f' Against the odometer, N_d of the depletion law came out within {median:.1f} % of the truth '
                     f'(median), within two stated one-sigmas for {within}/{len(fitted)} actuators.')
+    summary += ' ' + backtest_summary(backtests, args.backtest)
     text = (f'# Fleet forecast against the simulator\'s truth\n\n`{command}`\n\n{summary}\n\n'
             + '\n\n'.join(sections) + '\n')
     results.mkdir(parents=True, exist_ok=True)
     (results / 'coverage.md').write_text(text)
     (results / 'results.json').write_text(json.dumps({'command': command, 'summary': summary, 'runs': runs,
                                                       'rows': all_rows, 'inside': inside,
+                                                      'backtests': backtests,
                                                       'actuators': len(all_rows)}, indent=1))
     print(summary)
     return 0
+
+
+def backtest_history(history: Path, days: float, confidence: float = 0.95) -> dict:
+    """:func:`~prsm_lube_ros.fleet.backtest.backtest` of a history at the estimator's warn and error levels."""
+    from ..fleet.backtest import backtest
+    from ..fleet.forecast import history_points
+    return backtest(history_points(history), days, levels=(0.85, 0.70), confidence=confidence).as_json()
+
+
+def backtest_summary(backtests: list[dict], days: float) -> str:
+    """One sentence: band and crossing coverage over all fleets' backtests."""
+    recordings = sum(b['recordings_scored'] for b in backtests)
+    inside = sum(a['inside_band'] for b in backtests for a in b['actuators'])
+    crossings = [c for b in backtests for a in b['actuators'] for c in a['crossings']]
+    hits = sum(c['inside'] for c in crossings)
+    return (f'Backtest (forecast from the history cut {days:g} d before its newest recording, scored on the '
+            f'later ones): {inside}/{recordings} later recordings inside the 95 % band '
+            f'({100.0 * inside / max(recordings, 1):.1f} %), {hits}/{len(crossings)} crossings seen after the cut '
+            f'inside their 95 % interval.')
 
 
 def synthetic_points(truth: dict, *, noise: float = 0.0045, seed: int = 0) -> dict:

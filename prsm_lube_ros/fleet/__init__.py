@@ -2,11 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """Many actuators over time: the Parquet history, parallel and Dask assessment, trend and forecast.
 
-Owns: the history store (``history``: a Parquet dataset of runs and windows
-partitioned by actuator and date, one file per recording, written atomically),
-assessing many recordings serially, in processes or on a Dask cluster with the
-same results (``parallel``), and the depletion fit and threshold-crossing
-forecast per actuator (``forecast``).
+Owns: the history store (``history``: one folder per recording holding its
+runs and windows as Parquet, committed in one rename, consistent for plain
+readers after any kill), assessing many recordings serially, in processes or
+on a Dask cluster with the same results (``parallel``; connecting to Dask in
+``scheduler``), the depletion fit and threshold-crossing forecast per actuator
+(``forecast``), what a maintenance planner reads off it as of a date
+(``planner``), scoring a forecast made from an earlier cut of the history
+(``backtest``) and the service logs (``service_log``).
 
 :func:`prsm_lube_ros.fleet.forecast.forecast_summaries` (history folder,
 actuator ids, warn and error levels) returns each actuator's forecast as short

@@ -47,8 +47,8 @@ usage scatter fitted once; :func:`forecast_summary` does it for one.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 import math
+from statistics import NormalDist
 from typing import Sequence
 
 import numpy as np
@@ -56,14 +56,18 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.health import HealthThresholds
 from ..validation import finite_or_none as _finite, utc_or_none
+from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
 
 DAY = 86400.0            # s
-#: probability inside the stated forecast interval
+#: probability inside the stated forecast interval (the default of ``trend --level``)
 INTERVAL = 0.95
 #: parameter draws for the interval (seeded: a forecast is reproducible)
 DRAWS = 4000
-#: two-sided normal quantile of INTERVAL
-_NORMAL_QUANTILE = 1.959964
+
+
+def two_sided_quantile(confidence: float) -> float:
+    """Normal quantile z with P(|Z| < z) = ``confidence`` (1.96 for 0.95)."""
+    return NormalDist().inv_cdf(0.5 + confidence / 2.0)
 
 
 @dataclass(frozen=True)
@@ -133,6 +137,12 @@ class ActuatorForecast:
     depletion_revolutions_std: float = math.nan
     odometer_last: float = math.nan
     revolution_crossings: list[Crossing] = field(default_factory=list)
+    #: probability inside the stated intervals and the band
+    confidence: float = INTERVAL
+    #: per level, draws of the days from the last recording to the first passage (0: already below; inf: never)
+    passage_days: dict = field(default_factory=dict)
+    #: why there is no fit against revolutions although an odometer was given
+    revolutions_reason: str = ''
 
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
@@ -143,7 +153,7 @@ class ActuatorForecast:
 
         ln theta = x - k dt, variance var(x) - 2 cov(x, k) dt + var(k) dt^2 + q dt
         (dt in days from the last recording); the interval covers
-        :data:`INTERVAL` (normal).
+        ``confidence`` (normal).
         """
         if self.state is None:
             nan = np.full(np.shape(times), math.nan)
@@ -152,7 +162,7 @@ class ActuatorForecast:
         dt = np.maximum((np.asarray(times, float) - self.last_recording) / DAY, 0.0)
         centre = x - k * dt
         variance = cov[0, 0] - 2.0 * cov[0, 1] * dt + cov[1, 1] * dt ** 2 + self.diffusion * dt
-        spread = _NORMAL_QUANTILE * np.sqrt(np.maximum(variance, 0.0))
+        spread = two_sided_quantile(self.confidence) * np.sqrt(np.maximum(variance, 0.0))
         return np.exp(centre), np.exp(centre - spread), np.exp(centre + spread)
 
     def as_json(self) -> dict:
@@ -225,21 +235,22 @@ def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float =
 def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
                   levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
                   usage_scatter: float | None = None, odometer: Sequence[float] | None = None,
-                  seed: int = 0) -> ActuatorForecast:
+                  seed: int = 0, confidence: float = INTERVAL) -> ActuatorForecast:
     """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
 
     ``relubrications`` (s since the epoch) are detected from jumps when None.
     ``usage_scatter`` is the fleet's (:func:`fleet_usage_scatter`); None fits
     this actuator's alone.  ``odometer`` (cumulative screw revolutions at each
     point, in time order) adds the fit against revolutions:
-    :func:`fit_revolutions`.
-    A forecast that cannot be made has ``reason`` set and no crossings.
+    :func:`fit_revolutions`.  ``confidence`` is the probability inside the
+    stated intervals.  A forecast that cannot be made has ``reason`` set and
+    no crossings.
     """
     order = sorted(range(len(points)), key=lambda j: points[j].time)
     points = [points[j] for j in order]
     odometer = None if odometer is None else np.array([odometer[j] for j in order], float)
     relubrications = sorted(detect_relubrications(points) if relubrications is None else relubrications)
-    result = ActuatorForecast(actuator, list(points), list(relubrications))
+    result = ActuatorForecast(actuator, list(points), list(relubrications), confidence=confidence)
     if not points:
         result.reason = 'no assessed recording'
         return result
@@ -287,17 +298,19 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
         result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
                                                                                   walk[2])
         result.state_covariance[0, 0] += shared ** 2
-    tail = (1.0 - INTERVAL) / 2.0
+    tail = (1.0 - confidence) / 2.0
     for level in levels:
         if y[-1] > math.log(level) and result.state is not None:
-            estimate, low, high = _first_passage(result, math.log(level), rng, tail)
+            estimate, low, high, result.passage_days[level] = _first_passage(result, math.log(level), rng, tail)
             result.crossings.append(Crossing(float(level), *(float(times[-1] + v * DAY) if math.isfinite(v)
                                                              else None for v in (estimate, low, high))))
             continue
+        if result.state is not None:     # its own generator: the crossings above draw what they always drew
+            result.passage_days[level] = _passage_draws(result, math.log(level), np.random.default_rng(seed + 1))
         with np.errstate(divide='ignore', invalid='ignore'):
             days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
-        low, high = (float(origin + v * DAY) if math.isfinite(v) else None
-                     for v in np.quantile(days, [tail, 1.0 - tail]))
+            quantiles = np.quantile(days, [tail, 1.0 - tail])
+        low, high = (float(origin + v * DAY) if math.isfinite(v) else None for v in quantiles)
         estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
         bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
         if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
@@ -333,7 +346,7 @@ def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarra
     result.depletion_revolutions = KILO / k if k > 0 else math.inf
     result.depletion_revolutions_std = KILO * math.sqrt(cov[1, 1]) / k ** 2 if k > 0 else math.inf
     draws = _posterior_draws(state, cov, dof, rng)
-    tail = (1.0 - INTERVAL) / 2.0
+    tail = (1.0 - result.confidence) / 2.0
     for level in levels:
         if not state[0] > math.log(level):
             result.revolution_crossings.append(Crossing(float(level), None, None, None))   # already below
@@ -341,7 +354,7 @@ def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarra
         with np.errstate(divide='ignore', invalid='ignore'):
             remaining = np.where(draws[:, 1] > 0, np.maximum(draws[:, 0] - math.log(level), 0.0) / draws[:, 1],
                                  math.inf)
-        low, high = np.quantile(remaining, [tail, 1.0 - tail])
+            low, high = np.quantile(remaining, [tail, 1.0 - tail])
         estimate = (state[0] - math.log(level)) / k if k > 0 else math.inf
         result.revolution_crossings.append(Crossing(float(level), *(
             float(odometer[-1] + v * KILO) if math.isfinite(v) else None for v in (estimate, low, high))))
@@ -373,148 +386,6 @@ def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0)
     return float(estimate), float(min(low, estimate)), float(max(high, estimate))
 
 
-@dataclass(frozen=True)
-class Increments:
-    """Changes of ln theta between consecutive recordings of one lubrication cycle, and their covariance."""
-
-    steps: np.ndarray          # days
-    changes: np.ndarray        # of ln theta
-    measurement: np.ndarray    # covariance from the recordings' own uncertainty
-
-    @cached_property
-    def without_diffusion(self) -> tuple[float, float, float] | None:
-        """:func:`_walk_likelihood` at q = 0, worked out once (the usage-scatter search asks for it per grid point)."""
-        return _walk_likelihood(self, 0.0)
-
-
-def increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray) -> Increments | None:
-    """The increments of ln theta ``y`` within cycles; neighbours sharing a recording correlate by -sigma^2.
-
-    Steps of zero days (recordings starting at the same time: one recording
-    assessed as MCAP and as sqlite3, or copies) are left out: they carry no
-    drift.  None with fewer than two increments.
-    """
-    pairs = np.array([j for j in range(len(y) - 1) if cycles[j] == cycles[j + 1] and days[j + 1] > days[j]],
-                     dtype=int)
-    if pairs.size < 2:
-        return None
-    measurement = np.diag(sigma[pairs] ** 2 + sigma[pairs + 1] ** 2)
-    for a in range(pairs.size - 1):
-        if pairs[a + 1] == pairs[a] + 1:
-            measurement[a, a + 1] = measurement[a + 1, a] = -sigma[pairs[a + 1]] ** 2
-    return Increments(days[pairs + 1] - days[pairs], y[pairs + 1] - y[pairs], measurement)
-
-
-def _walk_likelihood(data: Increments, q: float) -> tuple[float, float, float] | None:
-    """Gaussian log-likelihood, GLS drift k (1/day) and its variance for diffusion ``q`` (1/day).
-
-    None when the increments carry no information on the drift.
-    """
-    covariance = data.measurement + np.diag(q * data.steps)
-    try:
-        inverse = np.linalg.inv(covariance)
-    except np.linalg.LinAlgError:
-        return None
-    information = float(data.steps @ inverse @ data.steps)
-    if not information > 0 or not math.isfinite(information):
-        return None
-    k = -float(data.steps @ inverse @ data.changes) / information
-    residual = data.changes + k * data.steps
-    _, logdet = np.linalg.slogdet(covariance)
-    return -0.5 * (logdet + float(residual @ inverse @ residual)), k, 1.0 / information
-
-
-#: fall of the log-likelihood at the 95 % bound of one parameter (chi-square 3.84 / 2)
-PROFILE_DROP = 1.92
-#: grid of the relative day-to-day usage variance searched by :func:`fleet_usage_scatter`
-USAGE_SCATTER_GRID = np.concatenate(([0.0], np.logspace(-4, 0, 81)))
-
-
-def _diffusion(data: Increments, usage_scatter: float) -> float:
-    """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
-    k = data.without_diffusion[1]
-    for _ in range(2):
-        k = (_walk_likelihood(data, usage_scatter * k ** 2) or (0.0, k))[1]
-    return usage_scatter * k ** 2
-
-
-def _informative(data: Increments | None) -> bool:
-    """True when ``data`` determines a drift (increments with information on it)."""
-    return data is not None and data.without_diffusion is not None
-
-
-def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
-    """Relative variance of a day's revolutions: upper 95 % profile-likelihood bound over all actuators.
-
-    Each actuator's diffusion is ``q = s k^2`` with its own drift k: the
-    usage scatter ``s`` is a property of how the fleet is operated, which one
-    actuator's few recordings cannot pin down alone.  Daily recordings with
-    a few per mille of noise hardly see it, so the largest value the
-    likelihood does not reject (a drop of at most ``PROFILE_DROP``) is taken
-    rather than its maximum, which sits at zero.
-    """
-    sets = [data for data in sets if _informative(data)]
-    if not sets:
-        return 0.0
-    totals = np.array([sum(_walk_likelihood(data, _diffusion(data, scatter))[0] for data in sets)
-                       for scatter in USAGE_SCATTER_GRID])
-    return float(USAGE_SCATTER_GRID[np.flatnonzero(totals >= totals.max() - PROFILE_DROP)[-1]])
-
-
-def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = None
-                        ) -> tuple[float, float, float, int] | None:
-    """Depletion as a random walk: ln theta falls by ``k dt`` plus noise of variance ``q dt`` (usage scatter).
-
-    ``k`` by generalised least squares on the increments; ``q`` from the
-    fleet's relative ``usage_scatter`` (q = s k^2) or, without it, by maximum
-    likelihood on this actuator alone.  Returns (k 1/day, variance of k,
-    q 1/day, degrees of freedom) or None without increments.
-    """
-    if not _informative(data):
-        return None
-    if usage_scatter is None:
-        q = max((walk[0], q) for q in np.concatenate(([0.0], np.logspace(-9, -2, 57)))
-                if (walk := _walk_likelihood(data, q)) is not None)[1]
-    else:
-        q = _diffusion(data, usage_scatter)
-    _, k, k_variance = _walk_likelihood(data, q)
-    return k, k_variance, q, max(data.steps.size - 1, 1)
-
-
-def depletion_state(days, y, sigma, cycles, q):
-    """Kalman filter of (ln theta, k): level falls by k dt with diffusion q dt, reset at relubrications.
-
-    Returns the state at the last recording, its covariance (scaled by the
-    innovations' chi-square per degree of freedom when above 1) and the
-    degrees of freedom of that scale (0 when not scaled).
-    """
-    diffuse = 1e4
-    state = np.array([y[0], 0.0])
-    cov = np.diag([diffuse, diffuse])
-    chi2, count = 0.0, 0
-    for j in range(len(y)):
-        if j > 0:
-            dt = days[j] - days[j - 1]
-            transition = np.array([[1.0, -dt], [0.0, 1.0]])
-            state = transition @ state
-            cov = transition @ cov @ transition.T + np.diag([q * dt, 0.0])
-            if cycles[j] != cycles[j - 1]:
-                state[0], cov[0, :], cov[:, 0] = y[j], 0.0, 0.0
-                cov[0, 0] = diffuse
-        innovation_var = cov[0, 0] + sigma[j] ** 2
-        innovation = y[j] - state[0]
-        if cov[0, 0] < diffuse / 10 and cov[1, 1] < diffuse / 10:
-            chi2 += innovation ** 2 / innovation_var
-            count += 1
-        gain = cov[:, 0] / innovation_var
-        state = state + gain * innovation
-        cov = cov - np.outer(gain, cov[0, :])
-    dof = count
-    if dof and chi2 / dof > 1.0:
-        return state, cov * (chi2 / dof), dof
-    return state, cov, 0
-
-
 def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng) -> np.ndarray:
     """:data:`DRAWS` draws of a 2-vector: normal around ``mean``, Student-t with ``dof`` degrees of freedom if > 0."""
     normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(covariance + 1e-18 * np.eye(2)).T
@@ -523,13 +394,14 @@ def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng) ->
     return mean + normal
 
 
-def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
-    """Days from the last recording until ln theta first falls to ``level``: estimate and interval.
+def _passage_draws(forecast: ActuatorForecast, level: float, rng) -> np.ndarray:
+    """:data:`DRAWS` draws of the days from the last recording until ln theta first falls to ``level``.
 
     From a state (x, k) the first passage of the walk to ``level`` is inverse
     Gaussian (mean D/k with D = x - level, shape D^2/q); (x, k) are drawn from
     the filter's posterior (Student-t when its covariance was scaled).  A
-    draw with k <= 0 never crosses (the interval is open: ``inf``).
+    draw with k <= 0 never crosses (``inf``); a draw already below ``level``
+    crossed before the last recording (about 0 days).
     """
     draws = _posterior_draws(forecast.state, forecast.state_covariance, forecast.state_dof, rng)
     distance = np.maximum(draws[:, 0] - level, 1e-12)
@@ -538,9 +410,17 @@ def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     mean = distance[falling] / draws[falling, 1]
     q = forecast.diffusion
     days[falling] = rng.wald(mean, distance[falling] ** 2 / q) if q > 0 else mean
-    low, high = np.quantile(days, [tail, 1.0 - tail])
+    days[draws[:, 0] <= level] = 0.0
+    return days
+
+
+def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
+    """Days from the last recording until ln theta first falls to ``level``: estimate, interval and the draws."""
+    days = _passage_draws(forecast, level, rng)
+    with np.errstate(invalid='ignore'):               # inf - inf between never-crossing draws: still inf
+        low, high = np.quantile(days, [tail, 1.0 - tail])
     x, k = forecast.state
-    return ((x - level) / k if k > 0 else math.inf), low, high
+    return ((x - level) / k if k > 0 else math.inf), low, high, days
 
 
 def urgency_key(forecast: ActuatorForecast):
@@ -551,38 +431,56 @@ def urgency_key(forecast: ActuatorForecast):
 
 def forecast_history(history, *, actuator: str | None = None, relubrications: dict | None = None,
                      levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                     odometers: dict | None = None) -> list[ActuatorForecast]:
+                     odometers: dict | None = None, confidence: float = INTERVAL, as_of: float | None = None,
+                     on_problem=None) -> list[ActuatorForecast]:
     """Forecasts of every actuator (or one) in a history folder, most urgent first.
 
     ``relubrications`` maps an actuator id to its relubrication times (s since
     the epoch); actuators not in it have theirs detected.  ``odometers`` maps
     an actuator id to ``(times, cumulative revolutions)`` for the fit against
-    revolutions.
+    revolutions.  ``as_of`` (s since the epoch) forecasts from the recordings
+    made by then only.  ``on_problem(line)`` hears of history files skipped
+    (without it they raise).
     """
+    return forecast_points(history_points(history, on_problem=on_problem, actuator=actuator),
+                           relubrications=relubrications, levels=levels, confidence=confidence, as_of=as_of,
+                           only=actuator, odometers=odometers)
+
+
+def history_points(history, *, on_problem=None, actuator: str | None = None) -> dict[str, list[RecordingPoint]]:
+    """Each actuator's recording points from a history folder; :class:`InputError` when it has none."""
     actuator_key, read_table = _history_readers()
-    points = recording_points(read_table(history, 'runs'))
+    points = recording_points(read_table(history, 'runs', on_problem=on_problem))
+    if not points:
+        raise InputError(f'{history}: no assessed run in the history')
     if actuator is not None and actuator_key(actuator) not in points:
         raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
-    given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
-    return forecast_points(points, relubrications=given, levels=levels,
-                           only=actuator_key(actuator) if actuator is not None else None,
-                           odometers={actuator_key(k): v for k, v in (odometers or {}).items()})
+    return points
 
 
 def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                    only: str | None = None, odometers: dict | None = None) -> list[ActuatorForecast]:
+                    only: str | None = None, odometers: dict | None = None, confidence: float = INTERVAL,
+                    as_of: float | None = None) -> list[ActuatorForecast]:
     """Forecasts from each actuator's recording points (the fleet's usage scatter pooled), most urgent first.
 
     ``only`` forecasts that actuator alone (the others still inform the
-    usage scatter).  ``odometers`` maps an actuator to ``(times, readings)``
-    (s since the epoch, cumulative revolutions), interpolated at its
-    recordings for the fit against revolutions.
+    usage scatter).  ``relubrications`` and ``odometers`` (``(times,
+    readings)``: s since the epoch, cumulative revolutions, interpolated at
+    the recordings for the fit against revolutions) are keyed by actuator id
+    or partition key.  ``as_of`` keeps the points and relubrications up to
+    that time (s since the epoch) only.
     """
-    found, scatter = _fleet_walk(points, relubrications or {})
-    names = [only] if only is not None else list(points)
-    forecasts = [_fit_one(name, points[name], found[name], levels, scatter, (odometers or {}).get(name))
-                 for name in names]
+    actuator_key, _ = _history_readers()
+    given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
+    odometers = {actuator_key(k): v for k, v in (odometers or {}).items()}
+    if as_of is not None:
+        points = {name: kept for name, items in points.items() if (kept := [p for p in items if p.time <= as_of])}
+        given = {name: [t for t in times if t <= as_of] for name, times in given.items()}
+    found, scatter = _fleet_walk(points, given)
+    names = [actuator_key(only)] if only is not None else list(points)
+    forecasts = [_fit_one(name, points.get(name, []), found.get(name, []), levels, scatter, odometers.get(name),
+                          confidence) for name in names]
     return sorted(forecasts, key=urgency_key)
 
 
@@ -593,11 +491,11 @@ def _fleet_walk(points: dict[str, Sequence[RecordingPoint]], given: dict) -> tup
     return found, fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
 
 
-def _fit_one(name, points, relubrications, levels, scatter, odometer) -> ActuatorForecast:
+def _fit_one(name, points, relubrications, levels, scatter, odometer, confidence=INTERVAL) -> ActuatorForecast:
     """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's."""
     try:
         return fit_depletion(name, points, relubrications=relubrications, levels=levels, usage_scatter=scatter,
-                             odometer=_odometer_at(points, odometer))
+                             odometer=_odometer_at(points, odometer), confidence=confidence)
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:   # one bad actuator, not a broken trend
         result = ActuatorForecast(name, list(points), list(relubrications))
         result.reason = f'no fit ({exc.__class__.__name__}: {exc})'.replace('\n', ' ')

@@ -1,66 +1,102 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The assessment history: a Parquet dataset of runs and windows, partitioned by actuator and date.
+"""The assessment history: one folder per recording holding its runs and windows, committed in one rename.
 
-Layout (Hive partitioning, read as it is by pyarrow, pandas, polars, DuckDB
-and Spark)::
+Layout (Hive partitioning, read as it is by DuckDB, polars, pandas and
+pyarrow)::
 
-    HISTORY/runs/actuator=<id>/date=<YYYY-MM-DD>/<path key>-<content key>.parquet
-    HISTORY/windows/actuator=<id>/date=<YYYY-MM-DD>/<path key>-<content key>.parquet
+    HISTORY/recordings/actuator=<id>/recording=<content key>/runs.parquet
+    HISTORY/recordings/actuator=<id>/recording=<content key>/windows.parquet
+    HISTORY/calibrations/<calibration id>.yaml
+    HISTORY/.staging/                      (work in progress; never read)
 
-One file per recording and table: ``date`` is the UTC day the recording
-starts, ``<path key>`` the first 16 hex digits of the SHA-256 of its resolved
-path and ``<content key>`` those of its content hash (SHA-256 of its files).
-A recording is its content: re-assessing the same content (at the same path
-or another one) writes its new file and removes the old ones, so its rows are
-replaced, never duplicated; new content at a path already seen (a logger
-overwriting ``latest.mcap`` every day) is a new recording, added beside the
-earlier ones.  Every file is written to a hidden temporary file in the same
-folder (readers skip names starting with ``.``), flushed to disk and renamed
-over the final name in one ``os.replace``: a writer killed at any moment leaves
-the dataset readable.  A writer killed between renaming the new file and
-removing an old one leaves two versions of a recording; :func:`read_table`
-keeps only the newest assessment of each content hash, so readers of this
-module never see duplicates.
+``<content key>`` is the first 16 hex digits of the recording's content hash
+(SHA-256 of its files): a recording is its content.  Re-assessing the same
+bytes (at the same path or another one, under the same actuator or another)
+replaces its folder; new bytes at a path already seen (a logger overwriting
+``latest.mcap`` daily) are a new recording beside the earlier ones.
+
+Kill-safe for plain readers.  Both tables of a recording are written into a
+folder under ``.staging`` (fsynced), then that folder is renamed into place in
+one step: a new recording by ``rename``, a re-assessed one by an atomic
+exchange with its old folder (``renameat2(RENAME_EXCHANGE)``; where the
+kernel lacks it the old folder is moved aside first, so the recording is
+briefly absent, never doubled).  A recording re-assessed under another
+actuator is first moved (one rename) to its new place.  So a plain
+``read_parquet('HISTORY/recordings/*/*/runs.parquet')`` in DuckDB sees, at any
+moment and after a kill at any point, each recording once and with both of
+its tables, or not at all (``benchmarks/history_kill.py`` kills writers
+100 times).  What a killed writer left under ``.staging`` (and the hidden
+``.tmp`` files of :mod:`prsm_lube_ros.atomic_file`) is removed by the next
+writer once its process is gone.
+
+Self-description.  Each file's schema metadata holds the actuator id
+(``prsm_lube_ros.actuator``), the table, the layout version and the unit of
+every column (``prsm_lube_ros.units``, JSON; also each field's ``unit``).
+``calibration_id`` is the first 16 hex digits of the SHA-256 of the
+calibration file, whose bytes are kept as ``calibrations/<id>.yaml``
+(:func:`history_calibration`).  ``recording_path`` is the path as it was given
+on the command line (with ``content_hash`` beside it to find it again),
+``date`` the UTC day the recording starts, typed as a date.
 
 Columns of both tables: ``recording_path``, ``content_hash``,
 ``calibration_id``, ``assessed_at`` (UTC), ``namespace``, ``run_index``,
 ``start``/``end`` (UTC), ``screw_speed`` (rad/s), ``axial_load`` (N),
 ``vibration_rms`` (m/s^2), ``theta_oil`` and ``theta_oil_std`` (null where not
-assessable), ``reason``; runs add ``windows``, ``temperature`` (degC) and
-``theta_oil_std_calibration`` (the calibration's share of the one-sigma, common
-to all recordings assessed with it), windows add ``steady`` and
-``nut_position`` (m).  The partition columns
-``actuator`` and ``date`` come from the folder names.
+assessable), ``reason``, ``date``; runs add ``windows``, ``temperature``
+(degC) and ``theta_oil_std_calibration`` (the calibration's share of the
+one-sigma, common to all recordings assessed with it), windows add ``steady``
+and ``nut_position`` (m).  The partition columns ``actuator`` and
+``recording`` come from the folder names.
 """
 from __future__ import annotations
 
+import ctypes
 import datetime
 import hashlib
+import json
 import os
 from pathlib import Path
 import re
+import shutil
 import tempfile
+from typing import Callable
 
 import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 
+from ..atomic_file import remove_stale, temporary_prefix, write_atomically
 from ..errors import ConfigError, InputError, RecordingError
 from ..validation import finite_or_none as _finite, utc_or_none as _utc
 
 TABLES = ('runs', 'windows')
+RECORDINGS, CALIBRATIONS, STAGING = 'recordings', 'calibrations', '.staging'
+LAYOUT_VERSION = '2'
 UTC_TIME = pa.timestamp('us', tz='UTC')
+#: unit of each column that has one
+UNITS = {'start': 'UTC', 'end': 'UTC', 'assessed_at': 'UTC', 'screw_speed': 'rad/s', 'axial_load': 'N',
+         'vibration_rms': 'm/s^2', 'temperature': 'degC', 'nut_position': 'm', 'theta_oil': '1',
+         'theta_oil_std': '1', 'theta_oil_std_calibration': '1', 'date': 'UTC day'}
 _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('calibration_id', pa.string()),
            ('assessed_at', UTC_TIME), ('namespace', pa.string()), ('run_index', pa.int64()),
            ('start', UTC_TIME), ('end', UTC_TIME), ('screw_speed', pa.float64()), ('axial_load', pa.float64()),
            ('vibration_rms', pa.float64()), ('theta_oil', pa.float64()), ('theta_oil_std', pa.float64()),
            ('reason', pa.string())]
 _RUN_ONLY = [('windows', pa.int64()), ('temperature', pa.float64()), ('theta_oil_std_calibration', pa.float64())]
-SCHEMAS = {'runs': pa.schema(_COMMON + _RUN_ONLY),
-           'windows': pa.schema(_COMMON + [('steady', pa.bool_()), ('nut_position', pa.float64())])}
-PARTITIONING = ds.partitioning(pa.schema([('actuator', pa.string()), ('date', pa.string())]), flavor='hive')
+_WINDOW_ONLY = [('steady', pa.bool_()), ('nut_position', pa.float64())]
+_DATE = [('date', pa.date32())]
+
+
+def _schema(columns) -> pa.Schema:
+    return pa.schema([pa.field(name, kind, metadata={'unit': UNITS[name]} if name in UNITS else None)
+                      for name, kind in columns])
+
+
+SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DATE), 'windows': _schema(_COMMON + _WINDOW_ONLY + _DATE)}
+PARTITIONING = ds.partitioning(pa.schema([('actuator', pa.string()), ('recording', pa.string())]), flavor='hive')
 _HASH_BLOCK = 1 << 20
+_KEY = re.compile(r'^[0-9a-f]{16}$')
 
 
 def content_hash(path: str | Path) -> str:
@@ -90,6 +126,31 @@ def calibration_id(path: str | Path) -> str:
         raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
 
 
+def register_calibration(history: str | Path, path: str | Path) -> str:
+    """Keep the calibration file's bytes as ``HISTORY/calibrations/<id>.yaml``; returns its id."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
+    identifier = hashlib.sha256(data).hexdigest()[:16]
+    target = Path(history) / CALIBRATIONS / f'{identifier}.yaml'
+    if not target.is_file():
+        try:
+            write_atomically(target, lambda stream: stream.write(data))
+        except OSError as exc:
+            raise ConfigError(f'{history}: cannot write the history ({exc.strerror or exc})') from None
+    return identifier
+
+
+def history_calibration(history: str | Path, identifier: str):
+    """The :class:`~prsm_lube_ros.estimation.calibration.Calibration` a ``calibration_id`` of the history names."""
+    from ..estimation.calibration_file import load_calibration
+    path = Path(history) / CALIBRATIONS / f'{identifier}.yaml'
+    if not path.is_file():
+        raise ConfigError(f'{history}: no calibration {identifier!r} in {CALIBRATIONS}/')
+    return load_calibration(path)
+
+
 def actuator_key(actuator_id: str) -> str:
     """The partition folder value of an actuator id (namespace slashes become dots): ``/ema/prsm`` -> ``ema.prsm``."""
     key = re.sub(r'[^A-Za-z0-9_.-]', '_', str(actuator_id).strip('/').replace('/', '.'))
@@ -98,22 +159,19 @@ def actuator_key(actuator_id: str) -> str:
     return key
 
 
-def _path_key(recording_path: str) -> str:
-    return hashlib.sha256(str(Path(recording_path).resolve()).encode()).hexdigest()[:16]
-
-
 def assessment_tables(assessment, *, content: str, calibration: str, namespace: str = '/prsm',
-                      assessed_at: datetime.datetime | None = None, fit=None) -> dict[str, pa.Table]:
+                      assessed_at: datetime.datetime | None = None, fit=None,
+                      actuator_id: str = '') -> dict[str, pa.Table]:
     """The ``runs`` and ``windows`` rows of one ``RecordingAssessment`` as pyarrow tables.
 
     ``fit`` (the :class:`~prsm_lube_ros.estimation.calibration.Calibration`
     used) fills ``theta_oil_std_calibration``: the part of each run's
     one-sigma that comes from the constants' covariance, shared by every
     recording assessed with that calibration (null without ``fit``).
+    ``actuator_id`` goes into the schema metadata.
     """
     assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
-    path = str(Path(assessment.path).resolve())
-    common = {'recording_path': path, 'content_hash': content, 'calibration_id': calibration,
+    common = {'recording_path': str(assessment.path), 'content_hash': content, 'calibration_id': calibration,
               'assessed_at': assessed_at, 'namespace': namespace}
     shared = _calibration_std(fit, assessment.runs)
     runs = [dict(common, run_index=run.run_index, start=_utc(run.start), end=_utc(run.end),
@@ -130,8 +188,18 @@ def assessment_tables(assessment, *, content: str, calibration: str, namespace: 
                     theta_oil=_finite(item.theta_oil), theta_oil_std=_finite(item.theta_oil_std),
                     reason=item.reason, steady=bool(item.window.steady),
                     nut_position=_finite(item.window.nut_position)) for item in assessment.windows]
-    return {'runs': pa.Table.from_pylist(runs, schema=SCHEMAS['runs']),
-            'windows': pa.Table.from_pylist(windows, schema=SCHEMAS['windows'])}
+    day = _first_start([*runs, *windows], assessed_at).date()
+    for row in (*runs, *windows):
+        row['date'] = day
+    return {name: pa.Table.from_pylist(rows, schema=_described(name, actuator_id))
+            for name, rows in (('runs', runs), ('windows', windows))}
+
+
+def _described(table: str, actuator_id: str) -> pa.Schema:
+    """The table's schema with the actuator id, table name, layout version and units as metadata."""
+    return SCHEMAS[table].with_metadata({'prsm_lube_ros.actuator': str(actuator_id), 'prsm_lube_ros.table': table,
+                                         'prsm_lube_ros.history_layout': LAYOUT_VERSION,
+                                         'prsm_lube_ros.units': json.dumps(UNITS)})
 
 
 def _calibration_std(fit, runs) -> list[float | None]:
@@ -144,115 +212,224 @@ def _calibration_std(fit, runs) -> list[float | None]:
             for run in runs]
 
 
-def write_table_atomically(table: pa.Table, path: Path, *, before_replace=None) -> None:
-    """Write ``table`` to ``path``: a hidden temporary file in the same folder, fsync, then one rename.
-
-    ``before_replace(temporary_path)``, if given, runs between the write and
-    the rename (tests inject a crash there).
-    """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.tmp', dir=path.parent)
-    try:
-        with os.fdopen(handle, 'wb') as stream:
-            pq.write_table(table, stream)
-            stream.flush()
-            os.fsync(stream.fileno())
-        if before_replace is not None:
-            before_replace(Path(temporary))
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-
-
-def _first_start(tables: dict[str, pa.Table], fallback: datetime.datetime) -> datetime.datetime:
-    starts = [value for name in TABLES for value in tables[name].column('start').to_pylist() if value is not None]
+def _first_start(rows: list[dict], fallback: datetime.datetime) -> datetime.datetime:
+    starts = [row['start'] for row in rows if row['start'] is not None]
     return min(starts) if starts else fallback
 
 
 def history_writer(history: str | Path, calibration_path: str | Path, fit, *, actuator_id: str,
-                   namespace: str = '/prsm'):
+                   namespace: str = '/prsm') -> Callable:
     """``on_done`` for :func:`~.parallel.assess_bags`: each assessed recording into the history as it finishes.
 
     ``actuator_id`` ``folder`` names each recording's actuator by the folder it
-    lies in; any other value names them all.  Recordings that failed are left out.
+    lies in; any other value names them all.  Recordings that failed are left
+    out, and so is a recording whose span overlaps another one of its
+    actuator (:mod:`.identity`: the id would merge two actuators): ``write``
+    returns the line saying so.  The calibration is registered and what
+    killed writers left is removed first.
     """
-    identifier = calibration_id(calibration_path)
+    from .identity import assessment_span, clash_line, table_spans, Timeline
+    identifier = register_calibration(history, calibration_path)
+    remove_stale(Path(history) / STAGING)
+    timeline = Timeline(lambda key: _existing_spans(history, key, table_spans))
 
-    def write(outcome) -> None:
+    def write(outcome) -> str:
+        """Add the outcome's recording; '' when added or failed, else the line saying why it was refused."""
         if outcome.assessment is None:
-            return
+            return ''
         actuator = Path(outcome.path).resolve().parent.name if actuator_id == 'folder' else actuator_id
+        span, key = assessment_span(outcome.assessment, outcome.content), actuator_key(actuator)
+        clash = timeline.clash(key, span) if span is not None else None
+        if clash is not None:
+            return clash_line(span, clash, actuator)
         add_assessment(history, outcome.assessment, actuator_id=actuator, content=outcome.content,
                        calibration=identifier, namespace=namespace, fit=fit)
+        if span is not None:
+            timeline.add(key, span)
+        return ''
     return write
+
+
+def _existing_spans(history: str | Path, key: str, spans) -> list:
+    """Spans of one actuator's recordings already in the history (none for a new history)."""
+    if not (Path(history) / RECORDINGS).is_dir():
+        return []
+    return spans(read_table(history, 'runs', actuator=key, on_problem=lambda line: None))
 
 
 def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,
                    namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
-                   before_replace=None, after_replace=None, fit=None) -> list[Path]:
-    """Write one recording's runs and windows into the history, replacing its earlier rows; returns the files.
+                   before_commit: Callable[[Path], None] | None = None, fit=None) -> Path:
+    """Write one recording's runs and windows into the history, replacing its earlier ones; returns its folder.
 
-    ``content`` is the recording's :func:`content_hash` (the rows of earlier
-    assessments of that content are replaced, wherever it lay),
-    ``calibration`` the :func:`calibration_id` of the calibration used and
-    ``fit`` the calibration itself (for ``theta_oil_std_calibration``).
-    ``before_replace`` is passed to :func:`write_table_atomically`;
-    ``after_replace(path)``, if given, runs after each new file is in place
-    and before the old ones are removed (tests inject a crash there).
+    ``content`` is the recording's :func:`content_hash`, ``calibration`` the
+    :func:`calibration_id` of the calibration used and ``fit`` the calibration
+    itself (for ``theta_oil_std_calibration``).  ``before_commit(staged)``, if
+    given, runs after both files are written and before the folder is
+    renamed into place (tests inject a crash there).
     """
     history = Path(history)
-    assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
     tables = assessment_tables(assessment, content=content, calibration=calibration, namespace=namespace,
-                               assessed_at=assessed_at, fit=fit)
-    date = _first_start(tables, assessed_at).strftime('%Y-%m-%d')
-    path_key, content_key = _path_key(assessment.path), content[:16]
-    name = f'{path_key}-{content_key}.parquet'
-    written = []
+                               assessed_at=assessed_at, fit=fit, actuator_id=actuator_id)
+    key = content[:16]
+    target = history / RECORDINGS / f'actuator={actuator_key(actuator_id)}' / f'recording={key}'
     try:
-        for table_name in TABLES:
-            root = history / table_name
-            target = root / f'actuator={actuator_key(actuator_id)}' / f'date={date}' / name
-            write_table_atomically(tables[table_name], target, before_replace=before_replace)
-            written.append(target)
-            if after_replace is not None:
-                after_replace(target)
-            for stale in set(root.glob(f'*/*/*-{content_key}.parquet')) - {target}:
-                stale.unlink(missing_ok=True)
+        staged = _stage(history / STAGING, key, tables)
+        try:
+            if before_commit is not None:
+                before_commit(staged)
+            _commit(staged, target)
+        finally:
+            shutil.rmtree(staged, ignore_errors=True)     # gone after a commit; the half-done work otherwise
     except OSError as exc:
         raise ConfigError(f'{history}: cannot write the history ({exc.strerror or exc})') from None
-    return written
+    return target
 
 
-def read_table(history: str | Path, table: str = 'runs', actuator: str | None = None) -> pa.Table:
-    """One table of the history (with ``actuator`` and ``date``), the newest assessment of each recording.
+def _stage(staging: Path, key: str, tables: dict[str, pa.Table]) -> Path:
+    """Both tables written and fsynced into a new folder under ``staging``."""
+    staging.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix=temporary_prefix(key), suffix='.tmp', dir=staging))
+    try:
+        for name in TABLES:
+            with open(folder / f'{name}.parquet', 'wb') as stream:
+                pq.write_table(tables[name], stream)
+                stream.flush()
+                os.fsync(stream.fileno())
+        _fsync_folder(folder)
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return folder
 
-    ``actuator`` keeps one actuator (its id or partition key).  An empty table
-    (with the schema) when the history has none.
+
+def _commit(staged: Path, target: Path) -> None:
+    """Put the staged folder at ``target`` in one rename (or exchange); the recording's old folder goes."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    elsewhere = [p for p in target.parent.parent.glob(f'actuator=*/{target.name}') if p != target]
+    if elsewhere and not target.exists():
+        os.rename(elsewhere.pop(), target)               # moves to its new actuator: never in two places
+    if target.exists():
+        _exchange(staged, target)                         # staged now holds the old folder (removed by the caller)
+    else:
+        os.rename(staged, target)
+    for stale in elsewhere:                               # only after a crash of an earlier layout's writer
+        shutil.rmtree(stale, ignore_errors=True)
+    _fsync_folder(target.parent)
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(first: Path, second: Path) -> None:
+    """Swap two folders atomically (Linux ``renameat2``); else move ``second`` aside to ``first``'s place first."""
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (AttributeError, OSError):
+        renameat2 = None
+    if renameat2 is not None:
+        if renameat2(_AT_FDCWD, os.fsencode(first), _AT_FDCWD, os.fsencode(second), _RENAME_EXCHANGE) == 0:
+            return
+        error = ctypes.get_errno()
+        if error not in (22, 38, 95):                     # EINVAL, ENOSYS, EOPNOTSUPP: no exchange here
+            raise OSError(error, os.strerror(error), str(second))
+    aside = first.with_name(first.name + '.old.tmp')
+    os.rename(second, aside)
+    os.rename(first, second)
+    os.rename(aside, first)
+
+
+def _fsync_folder(folder: Path) -> None:
+    handle = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
+
+
+def read_table(history: str | Path, table: str = 'runs', actuator: str | None = None,
+               on_problem: Callable[[str], None] | None = None) -> pa.Table:
+    """One table of the history with ``actuator`` and ``recording`` (from the folders).
+
+    ``actuator`` keeps one actuator (its id or partition key).  A file that
+    cannot be read, or one that is not part of the layout, is a line passed
+    to ``on_problem`` and skipped (without ``on_problem``: a
+    :class:`ConfigError`).  An empty table (with the schema) when the history
+    has no recording; :class:`ConfigError` when ``history`` is not a history.
     """
     if table not in TABLES:
         raise InputError(f'history table must be one of {", ".join(TABLES)}, got {table!r}')
-    root = Path(history) / table
-    schema = SCHEMAS[table].append(pa.field('actuator', pa.string())).append(pa.field('date', pa.string()))
-    if not root.is_dir():
-        if not Path(history).is_dir():
-            raise ConfigError(f'{history}: no such history folder')
+    root = _recordings_root(history)
+    report = on_problem or _raise
+    pattern = f'actuator={actuator_key(actuator)}/*/{table}.parquet' if actuator else f'*/*/{table}.parquet'
+    files = sorted(str(p) for p in root.glob(pattern) if _in_layout(p, root))
+    for stray in _strays(root):
+        report(f'{stray}: not part of the history layout (recordings/actuator=ID/recording=KEY/), skipped')
+    schema = SCHEMAS[table].append(pa.field('actuator', pa.string())).append(pa.field('recording', pa.string()))
+    if not files:
         return schema.empty_table()
     try:
-        dataset = ds.dataset(root, format='parquet', partitioning=PARTITIONING, schema=schema)
-        data = dataset.to_table(filter=(ds.field('actuator') == actuator_key(actuator)) if actuator else None)
-    except (pa.ArrowException, OSError) as exc:
-        raise ConfigError(f'{root}: unreadable history ({exc})') from None
-    return _newest_assessments(data)
+        return _dataset(files, schema, root).to_table()
+    except (pa.ArrowException, OSError):
+        return _read_each(files, schema, root, report)
 
 
-def _newest_assessments(data: pa.Table) -> pa.Table:
-    """Rows of the newest assessment of each recording (content hash)."""
-    if data.num_rows == 0:
-        return data
-    contents, assessed = data.column('content_hash').to_pylist(), data.column('assessed_at').to_pylist()
-    newest: dict[str, datetime.datetime] = {}
-    for content, when in zip(contents, assessed):
-        if content not in newest or when > newest[content]:
-            newest[content] = when
-    return data.filter(pa.array([when == newest[content] for content, when in zip(contents, assessed)]))
+def _dataset(files: list[str], schema: pa.Schema, root: Path):
+    return ds.dataset(files, format='parquet', schema=schema, partitioning=PARTITIONING, partition_base_dir=str(root))
+
+
+def _read_each(files: list[str], schema: pa.Schema, root: Path, report: Callable[[str], None]) -> pa.Table:
+    """The files one by one: each unreadable one reported and skipped."""
+    parts = []
+    for file in files:
+        try:
+            parts.append(_dataset([file], schema, root).to_table())
+        except (pa.ArrowException, OSError) as exc:
+            report(f'{file}: unreadable Parquet ({str(exc).splitlines()[0]}), skipped')
+    return pa.concat_tables(parts) if parts else schema.empty_table()
+
+
+def _raise(line: str) -> None:
+    raise ConfigError(line)
+
+
+def _recordings_root(history: str | Path) -> Path:
+    """``HISTORY/recordings``; :class:`ConfigError` when ``history`` is not a history folder."""
+    history = Path(history)
+    if not history.is_dir():
+        raise ConfigError(f'{history}: no such history folder')
+    root = history / RECORDINGS
+    if root.is_dir():
+        return root
+    if (history / 'runs').is_dir():
+        raise ConfigError(f'{history}: a history of the earlier layout (runs/, windows/); assess the recordings '
+                          'again into a new --history folder')
+    raise ConfigError(f'{history}: not a history folder (no {RECORDINGS}/ in it; prsm-lube assess --history '
+                      'writes one)')
+
+
+def _in_layout(path: Path, root: Path) -> bool:
+    actuator, recording = path.relative_to(root).parts[:2]
+    return actuator.startswith('actuator=') and recording.startswith('recording=') and \
+        _KEY.match(recording[len('recording='):]) is not None
+
+
+def _strays(root: Path) -> list[Path]:
+    """Entries under ``root`` that the layout does not have (hidden ones are left alone)."""
+    found = []
+    for actuator in root.iterdir():
+        if actuator.name.startswith('.'):
+            continue
+        if not (actuator.is_dir() and actuator.name.startswith('actuator=')):
+            found.append(actuator)
+            continue
+        for recording in actuator.iterdir():
+            if recording.name.startswith('.'):
+                continue
+            if not (recording.is_dir() and _in_layout(recording / 'x', root)):
+                found.append(recording)
+                continue
+            found += [f for f in recording.iterdir()
+                      if not f.name.startswith('.') and f.name not in {f'{name}.parquet' for name in TABLES}]
+    return sorted(found)

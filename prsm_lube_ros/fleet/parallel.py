@@ -17,15 +17,14 @@ lost) is an outcome with ``error``, one line naming it; the others go on.
 from __future__ import annotations
 
 from concurrent.futures import as_completed, ProcessPoolExecutor
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
 from typing import Callable, Sequence
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration
 from ..estimation.pipeline import assess_recording, recording_windows, RecordingAssessment, require_usable
 from ..estimation.windowing import WindowSettings
-
-LOCAL_SCHEDULER = 'local'
 
 
 @dataclass(frozen=True)
@@ -108,38 +107,59 @@ def _outcome(path, future) -> BagOutcome:
         return BagOutcome(path, error=f'{path}: worker failed ({exc.__class__.__name__}: {exc})')
 
 
+#: Dask tasks per worker: recordings go in batches so that the per-task cost (scheduling, one round trip per
+#: result) is paid a few times per worker instead of once per recording
+TASKS_PER_WORKER = 4
+
+
+def assess_batch(paths: Sequence[str], job: BagJob) -> list[BagOutcome]:
+    """:func:`assess_bag` of each path, in order (one Dask task)."""
+    return [assess_bag(path, job) for path in paths]
+
+
+def batches(paths: Sequence[str], workers: int) -> list[list[str]]:
+    """``paths`` in consecutive batches, :data:`TASKS_PER_WORKER` per worker (at least one path each)."""
+    size = max(1, -(-len(paths) // max(1, workers * TASKS_PER_WORKER)))
+    return [list(paths[start:start + size]) for start in range(0, len(paths), size)]
+
+
 def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
-    try:
-        from distributed import as_completed as dask_completed, Client, LocalCluster
-    except ImportError:
-        raise InputError('--scheduler needs dask.distributed: pip install "distributed>=2024.1"') from None
-    cluster = None
-    try:
-        if scheduler == LOCAL_SCHEDULER:
-            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
-            client = Client(cluster)
-        else:
-            client = Client(scheduler, timeout='10s')
-    except (OSError, TimeoutError, ValueError, TypeError) as exc:   # ValueError: no port, unknown protocol
-        if cluster is not None:
-            cluster.close()
-        raise InputError(f'--scheduler {scheduler}: cannot connect ({exc})'.replace('\n', ' ')) from None
-    try:
-        unique = list(dict.fromkeys(paths))
+    """Each recording on Dask, sent as its absolute path (remote workers do not share our working folder).
+
+    The outcomes carry the paths as given, so they equal the serial ones.
+    """
+    from distributed import as_completed as dask_completed
+    from .scheduler import dask_client
+    given = {str(Path(path).resolve()): path for path in dict.fromkeys(paths)}
+    with dask_client(scheduler, jobs) as client:
         job_future = client.scatter(job, broadcast=True)
-        futures = client.map(assess_bag, unique, job=job_future, pure=False)
-        by_key = dict(zip((f.key for f in futures), unique))
+        work = batches(list(given), len(client.scheduler_info().get('workers', {})) or jobs)
+        futures = client.map(assess_batch, work, job=job_future, pure=False)
+        by_key = dict(zip((f.key for f in futures), work))
         outcomes = {}
         for future in dask_completed(futures):
-            path = by_key[future.key]
-            outcomes[path] = _outcome(path, future)
-            if on_done is not None:
-                on_done(outcomes[path])
+            for sent, outcome in zip(by_key[future.key], _batch_outcomes(by_key[future.key], future)):
+                path = given[sent]
+                outcomes[path] = _as_given(outcome, path)
+                if on_done is not None:
+                    on_done(outcomes[path])
         return outcomes
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+
+
+def _batch_outcomes(paths: Sequence[str], future) -> list[BagOutcome]:
+    """The batch's outcomes, or an error line for each of its recordings when its worker was lost."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 -- a lost worker fails its recordings, not the fleet
+        return [BagOutcome(path, error=f'{path}: worker failed ({exc.__class__.__name__}: {exc})') for path in paths]
+
+
+def _as_given(outcome: BagOutcome, path: str) -> BagOutcome:
+    """``outcome`` named by the path as the user gave it (the worker saw the absolute one)."""
+    assessment = outcome.assessment
+    if assessment is not None:
+        assessment = replace(assessment, path=path)
+    return replace(outcome, path=path, assessment=assessment)
 
 
 def _compared(item) -> tuple:

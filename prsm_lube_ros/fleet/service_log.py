@@ -5,11 +5,15 @@
 ``actuator,time`` lines for relubrications and ``actuator,time,revolutions``
 for an odometer (cumulative screw revolutions), time in ISO 8601 (UTC when no
 zone is given) or s since the epoch; an optional header line and ``#``
-comments.  A bad line is one :class:`ConfigError` naming the file and line.
+comments (the header may follow them).  A bad line is one :class:`ConfigError`
+naming the file and line; an odometer that goes backwards or names an
+actuator the history does not have is a ``file:line`` problem
+(:func:`odometer_problems`).
 """
 from __future__ import annotations
 
 import csv
+from dataclasses import dataclass
 import datetime
 import math
 
@@ -19,19 +23,53 @@ from ..errors import ConfigError
 def read_relubrications(path) -> dict[str, list[float]]:
     """``{actuator: [s since the epoch]}`` from a CSV of ``actuator,time`` lines (a header line is allowed)."""
     result: dict[str, list[float]] = {}
-    for actuator, seconds in _csv_rows(path, ('actuator', 'time')):
+    for _, (actuator, seconds) in _csv_rows(path, ('actuator', 'time')):
         result.setdefault(actuator, []).append(seconds)
     return result
 
 
+@dataclass(frozen=True)
+class OdometerReading:
+    """One odometer line: where it is, when (s since the epoch) and the cumulative screw revolutions."""
+
+    line: int
+    time: float
+    revolutions: float
+
+
+def odometer_readings(path) -> dict[str, list[OdometerReading]]:
+    """``{actuator: [readings in time order]}`` from a CSV of ``actuator,time,revolutions`` lines."""
+    result: dict[str, list[OdometerReading]] = {}
+    for number, (actuator, seconds, revolutions) in _csv_rows(path, ('actuator', 'time', 'revolutions')):
+        result.setdefault(actuator, []).append(OdometerReading(number, seconds, revolutions))
+    return {actuator: sorted(items, key=lambda r: r.time) for actuator, items in result.items()}
+
+
 def read_odometer(path) -> dict[str, tuple[list[float], list[float]]]:
     """``{actuator: (times, revolutions)}`` from a CSV of ``actuator,time,revolutions`` lines."""
-    result: dict[str, tuple[list[float], list[float]]] = {}
-    for actuator, seconds, revolutions in _csv_rows(path, ('actuator', 'time', 'revolutions')):
-        times, readings = result.setdefault(actuator, ([], []))
-        times.append(seconds)
-        readings.append(revolutions)
-    return result
+    return {actuator: ([r.time for r in items], [r.revolutions for r in items])
+            for actuator, items in odometer_readings(path).items()}
+
+
+def odometer_problems(path, readings: dict[str, list[OdometerReading]], known: set[str],
+                      key=lambda actuator: actuator) -> dict[str, str]:
+    """``{actuator: "file:line: what is wrong"}``: readings that go backwards in time, ids not in ``known``.
+
+    ``key`` maps an id of the file to the form ``known`` holds (the history's
+    partition key).
+    """
+    problems = {}
+    for actuator, items in readings.items():
+        if key(actuator) not in known:
+            problems[actuator] = f'{path}:{items[0].line}: actuator {actuator!r} is not in the history'
+            continue
+        for before, after in zip(items, items[1:]):
+            if after.revolutions < before.revolutions:
+                problems[actuator] = (f'{path}:{after.line}: odometer of {actuator} goes backwards '
+                                      f'({after.revolutions:g} rev after {before.revolutions:g} rev at line '
+                                      f'{before.line})')
+                break
+    return problems
 
 
 def _csv_rows(path, columns):
@@ -45,9 +83,14 @@ def _csv_rows(path, columns):
         raise ConfigError(f'{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})') from None
     except csv.Error as exc:
         raise ConfigError(f'{path}: not a CSV file ({exc})') from None
+    header_possible = True
     for number, row in enumerate(lines, start=1):
-        if not row or row[0].strip().startswith('#') or (number == 1 and row[0].strip() == columns[0]):
+        if not row or not ''.join(row).strip() or row[0].strip().startswith('#'):
             continue
+        if header_possible and row[0].strip() == columns[0]:
+            header_possible = False
+            continue
+        header_possible = False
         if len(row) < len(columns):
             raise ConfigError(f'{path}:{number}: expected "{",".join(columns)}", got {",".join(row)!r}')
         values = [row[0].strip()]
@@ -68,4 +111,4 @@ def _csv_rows(path, columns):
             if not math.isfinite(value):
                 raise ConfigError(f'{path}:{number}: {name} {text!r} is not finite')
             values.append(value)
-        yield tuple(values)
+        yield number, tuple(values)

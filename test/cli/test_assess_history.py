@@ -64,3 +64,23 @@ def test_each_recording_is_in_the_history_as_soon_as_it_is_assessed(small_fleet,
     assert len(calls) == 2
     assert set(read_table(history).column('recording_path').to_pylist()) == {
         str(__import__('pathlib').Path(small_fleet['bags'][0]).resolve())}
+
+
+def test_recordings_of_several_folders_under_the_default_id_are_refused_in_one_line(small_fleet, tmp_path):
+    import subprocess
+    import sys
+
+    def run_cli(*args):
+        return subprocess.run([sys.executable, '-m', 'prsm_lube_ros.cli', *map(str, args)], capture_output=True,
+                              text=True, timeout=300)
+
+    a01, a02 = small_fleet['bags'][0], small_fleet['bags'][-1]
+    history = tmp_path / 'history'
+    result = run_cli('assess', a01, a02, '--calibration', small_fleet['calibration'], '--history', history)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1, result.stderr
+    assert all(word in lines[0] for word in ('2 folders', 'A01', 'A04', '--actuator-id'))
+    assert not (history / 'recordings').exists()
+    assert run_cli('assess', a01, a02, '--calibration', small_fleet['calibration'], '--history', history,
+                   '--actuator-id', 'folder').returncode == 0
+    assert sorted(set(read_table(history).column('actuator').to_pylist())) == ['A01', 'A04']

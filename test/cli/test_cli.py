@@ -131,3 +131,20 @@ def test_nan_is_never_written_as_a_bare_token(experiment, tmp_path):
     assert 'NaN' not in text and 'Infinity' not in text
     for run in json.loads(text)['runs']:
         assert math.isfinite(run['theta_oil'])
+
+
+def test_calibrate_out_removes_the_temporaries_killed_writes_left(experiment, tmp_path):
+    """A ``calibrate --out`` killed mid-write leaves a hidden .tmp; the next run removes it, not a live writer's."""
+    import os
+    out = tmp_path / 'calib.yaml'
+    dead = subprocess.run([sys.executable, '-c', 'import os; print(os.getpid())'], capture_output=True, text=True)
+    killed = tmp_path / f'.calib.yaml.{dead.stdout.strip()}.abc123.tmp'
+    killed.write_text('half a calibr')
+    legacy = tmp_path / '.calib.yaml.x7yq2k.tmp'             # an earlier version's name, without a pid
+    legacy.write_text('half')
+    os.utime(legacy, (0, 0))
+    alive = tmp_path / f'.calib.yaml.{os.getpid()}.def456.tmp'   # a writer still at work
+    alive.write_text('in progress')
+    result = run_cli('calibrate', experiment / 'stage_3', '--out', out)
+    assert result.returncode == 0, result.stderr
+    assert out.exists() and not killed.exists() and not legacy.exists() and alive.exists()

@@ -1,13 +1,12 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The Parquet history: one file per recording, re-assessment replaces rows, a killed writer leaves it readable."""
+"""The Parquet history: one folder per recording, re-assessment replaces it, a killed writer leaves it consistent."""
 import datetime
 import math
 import os
 from pathlib import Path
 import subprocess
 import sys
-import textwrap
 
 import pyarrow.parquet as pq
 import pytest
@@ -15,7 +14,7 @@ import pytest
 from prsm_lube_ros.estimation.assessment import RunAssessment, WindowAssessment
 from prsm_lube_ros.estimation.pipeline import RecordingAssessment
 from prsm_lube_ros.estimation.windowing import Window
-from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table
+from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, STAGING
 
 START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.timezone.utc).timestamp()
 
@@ -44,18 +43,26 @@ def add(history, path, theta, actuator='/ema_left/prsm', **options):
                           calibration='c0ffee', **options)
 
 
-def test_rows_land_in_actuator_and_date_partitions_and_read_back(tmp_path):
+def test_rows_land_in_one_folder_per_recording_and_read_back(tmp_path):
     history = tmp_path / 'history'
-    files = add(history, recording(tmp_path, 'a.mcap'), 0.9)
-    assert [f.relative_to(history).parts[:3] for f in files] == [
-        ('runs', 'actuator=ema_left.prsm', 'date=2026-03-04'), ('windows', 'actuator=ema_left.prsm', 'date=2026-03-04')]
+    bag = recording(tmp_path, 'a.mcap')
+    folder = add(history, bag, 0.9)
+    assert folder.relative_to(history).parts == ('recordings', 'actuator=ema_left.prsm',
+                                                 f'recording={content_hash(bag)[:16]}')
     runs = read_table(history, 'runs')
     assert runs.num_rows == 2 and set(runs.column('actuator').to_pylist()) == {'ema_left.prsm'}
     assert runs.column('theta_oil').to_pylist() == [0.9, 0.9]
+    assert runs.column('date').to_pylist() == [datetime.date(2026, 3, 4)] * 2
     assert read_table(history, 'windows', actuator='/ema_left/prsm').num_rows == 6
     assert read_table(history, 'runs', actuator='other').num_rows == 0
-    # each file is plain Parquet, readable without this package's reader
-    assert pq.read_table(files[0]).num_rows == 2
+    # each file is plain Parquet, readable without this package's reader, and says what it holds
+    alone = pq.read_table(folder / 'runs.parquet')
+    assert alone.num_rows == 2 and str(alone.schema.field('date').type) == 'date32[day]'
+    metadata = alone.schema.metadata
+    assert metadata[b'prsm_lube_ros.actuator'] == b'/ema_left/prsm' and metadata[b'prsm_lube_ros.table'] == b'runs'
+    assert __import__('json').loads(metadata[b'prsm_lube_ros.units'])['screw_speed'] == 'rad/s'
+    assert alone.schema.field('axial_load').metadata == {b'unit': b'N'}
+    assert alone.column('recording_path').to_pylist() == [str(bag)] * 2      # as given, not resolved
 
 
 def test_reassessing_a_recording_replaces_its_rows(tmp_path):
@@ -70,7 +77,7 @@ def test_reassessing_a_recording_replaces_its_rows(tmp_path):
     for path, theta in zip(runs.column('recording_path').to_pylist(), runs.column('theta_oil').to_pylist()):
         by_path.setdefault(Path(path).name, []).append(theta)
     assert by_path == {'a.mcap': [0.7, 0.7], 'b.mcap': [0.8, 0.8]}
-    assert len(list((history / 'runs').rglob('*.parquet'))) == 2
+    assert len(list(history.rglob('runs.parquet'))) == 2 and len(list(history.rglob('windows.parquet'))) == 2
     # the same content moved to another path is the same recording
     moved = tmp_path / 'moved'
     moved.mkdir()
@@ -84,43 +91,60 @@ def test_reassessing_a_recording_replaces_its_rows(tmp_path):
                                                                                   'ema_left.prsm']
 
 
-def test_an_exception_between_temporary_write_and_rename_leaves_the_old_rows(tmp_path):
+def test_an_exception_between_staging_and_commit_leaves_the_old_rows(tmp_path):
     history = tmp_path / 'history'
     bag = recording(tmp_path, 'a.mcap')
     add(history, bag, 0.9)
 
-    def crash(temporary):
-        assert temporary.exists() and temporary.name.startswith('.')
+    def crash(staged):
+        assert (staged / 'runs.parquet').exists() and (staged / 'windows.parquet').exists()
         raise RuntimeError('power cut')
 
     with pytest.raises(RuntimeError):
-        add(history, bag, 0.5, before_replace=crash)
+        add(history, bag, 0.5, before_commit=crash)
     assert read_table(history, 'runs').column('theta_oil').to_pylist() == [0.9, 0.9]
-    assert not [p for p in history.rglob('*') if p.name.endswith('.tmp')]
+    assert not list((history / STAGING).iterdir())
 
 
-def test_a_writer_killed_mid_write_leaves_a_readable_dataset(tmp_path):
+KILLED = '''
+import os, signal, sys
+sys.path.insert(0, {here!r})
+from test_history import add
+from pathlib import Path
+def die(staged):
+    os.kill(os.getpid(), signal.SIGKILL)
+add(Path({history!r}), Path({bag!r}), 0.1, before_commit=die, actuator={actuator!r})
+'''
+
+
+def killed_writer(history, bag, actuator='/ema_left/prsm'):
+    """A writer killed (SIGKILL) with both tables staged, before its commit."""
+    script = KILLED.format(here=str(Path(__file__).parent), history=str(history), bag=str(bag), actuator=actuator)
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
+    assert done.returncode == -9, done.stderr.decode()
+
+
+def plain_duckdb(history, table='runs'):
+    """(recording_path, theta_oil) rows as plain DuckDB reads them, without this package."""
+    duckdb = pytest.importorskip('duckdb')
+    return sorted(duckdb.sql(f"select recording_path, theta_oil from read_parquet("
+                             f"'{history}/recordings/*/*/{table}.parquet', hive_partitioning = true)").fetchall())
+
+
+def test_a_writer_killed_before_its_commit_leaves_the_old_rows_and_the_next_one_cleans_up(tmp_path):
     history = tmp_path / 'history'
     bag = recording(tmp_path, 'a.mcap')
     add(history, bag, 0.9)
     add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8)
-    script = textwrap.dedent(f'''
-        import os, signal, sys
-        sys.path.insert(0, {str(Path(__file__).parent)!r})
-        from test_history import add
-        from pathlib import Path
-        def die(temporary):
-            os.kill(os.getpid(), signal.SIGKILL)
-        add(Path({str(history)!r}), Path({str(bag)!r}), 0.1, before_replace=die)
-    ''')
-    done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
-    assert done.returncode == -9, done.stderr.decode()
-    leftovers = [p for p in history.rglob('*') if p.name.endswith('.tmp')]
-    assert leftovers, 'the killed writer should have left its temporary file'
-    runs = read_table(history, 'runs')
-    assert sorted(runs.column('theta_oil').to_pylist()) == [0.8, 0.8, 0.9, 0.9]
-    import pyarrow.dataset as ds
-    assert ds.dataset(history / 'windows', format='parquet', partitioning='hive').to_table().num_rows == 12
+    killed_writer(history, bag)
+    assert list((history / STAGING).iterdir()), 'the killed writer should have left its staged folder'
+    assert [theta for _, theta in plain_duckdb(history)] == [0.9, 0.9, 0.8, 0.8]
+    assert len(plain_duckdb(history, 'windows')) == 12
+    from prsm_lube_ros.fleet.history import history_writer
+    calibration = recording(tmp_path, 'calibration.yaml', b'constants: {}')
+    history_writer(history, calibration, None, actuator_id='A')    # the next run removes what the killed one left
+    assert not list((history / STAGING).iterdir())
+    assert (history / 'calibrations' / f'{content_hash(calibration)[:16]}.yaml').read_bytes() == b'constants: {}'
 
 
 def test_a_folder_recording_hashes_names_and_bytes(tmp_path):
@@ -165,26 +189,66 @@ def test_new_content_at_a_reused_path_is_a_new_recording(tmp_path):
     assert sorted(read_table(history, 'runs').column('theta_oil').to_pylist()) == [0.7, 0.7, 0.9, 0.9]
 
 
-def test_a_writer_killed_between_the_rename_and_the_removal_leaves_no_duplicate(tmp_path):
+def test_a_recording_moved_to_another_actuator_is_never_in_two_places(tmp_path):
     history = tmp_path / 'history'
     bag = recording(tmp_path, 'a.mcap')
     add(history, bag, 0.9)
     add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8)
-    moved = tmp_path / 'moved'
-    moved.mkdir()
-    os.replace(bag, moved / 'a.mcap')             # same content at another path: another file name
-    script = textwrap.dedent(f'''
-        import os, signal, sys
-        sys.path.insert(0, {str(Path(__file__).parent)!r})
-        from test_history import add
-        from pathlib import Path
-        def die(target):
-            assert target.exists()
-            os.kill(os.getpid(), signal.SIGKILL)
-        add(Path({str(history)!r}), Path({str(moved / 'a.mcap')!r}), 0.1, after_replace=die)
-    ''')
-    done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
-    assert done.returncode == -9, done.stderr.decode()
-    assert len(list((history / 'runs').rglob('*.parquet'))) == 3, 'the old file of a.mcap should be left'
-    runs = read_table(history, 'runs')
-    assert sorted(runs.column('theta_oil').to_pylist()) == [0.1, 0.1, 0.8, 0.8]
+    killed_writer(history, bag, actuator='B')
+    assert [theta for _, theta in plain_duckdb(history)] == [0.9, 0.9, 0.8, 0.8]
+    add(history, bag, 0.1, actuator='B')
+    assert [theta for _, theta in plain_duckdb(history)] == [0.1, 0.1, 0.8, 0.8]
+    assert sorted(read_table(history).column('actuator').to_pylist()) == ['B', 'B', 'ema_left.prsm', 'ema_left.prsm']
+
+
+def test_a_file_that_is_not_parquet_or_not_in_the_layout_is_named_and_skipped(tmp_path):
+    history = tmp_path / 'history'
+    add(history, recording(tmp_path, 'a.mcap'), 0.9)
+    broken = add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8) / 'runs.parquet'
+    broken.write_bytes(b'PAR1 not really')
+    (history / 'recordings' / 'notes.txt').write_text('hello')
+    problems = []
+    runs = read_table(history, on_problem=problems.append)
+    assert runs.column('theta_oil').to_pylist() == [0.9, 0.9]
+    assert len(problems) == 2 and 'notes.txt' in problems[0] and str(broken) in problems[1]
+    from prsm_lube_ros.errors import ConfigError
+    with pytest.raises(ConfigError, match='notes.txt'):
+        read_table(history)
+
+
+@pytest.mark.parametrize('layout', ['missing', 'empty', 'recordings', 'earlier'])
+def test_a_folder_that_is_not_a_history_is_one_line(tmp_path, layout):
+    from prsm_lube_ros.errors import ConfigError
+    folder = tmp_path / 'h'
+    if layout != 'missing':
+        folder.mkdir()
+    if layout == 'recordings':
+        (folder / 'day1.mcap').write_bytes(b'x')
+    if layout == 'earlier':
+        (folder / 'runs').mkdir()
+    with pytest.raises(ConfigError, match=str(folder)) as caught:
+        read_table(folder)
+    assert '\n' not in str(caught.value)
+
+
+def test_recordings_overlapping_in_time_under_one_id_are_refused_not_merged(tmp_path):
+    """Two actuators filed under one id: the second recording overlapping the first is refused in one line."""
+    import dataclasses
+    from prsm_lube_ros.fleet.history import history_writer
+    from prsm_lube_ros.fleet.parallel import BagOutcome
+    history = tmp_path / 'history'
+    calibration = recording(tmp_path, 'calibration.yaml', b'constants: {}')
+    first, second, copy = (recording(tmp_path, name, name.encode()) for name in ('a.mcap', 'b.mcap', 'a.db3'))
+    write = history_writer(history, calibration, None, actuator_id='line')
+    assert write(BagOutcome(str(first), assessment(first, 0.9), content_hash(first))) == ''
+    shifted = assessment(second, 0.8)
+    shifted = dataclasses.replace(shifted, runs=[dataclasses.replace(r, start=r.start + 5, end=r.end + 5)
+                                                 for r in shifted.runs])
+    line = write(BagOutcome(str(second), shifted, content_hash(second)))
+    assert str(second) in line and str(first) in line and '--actuator-id' in line and '\n' not in line
+    # the same recording stored in another format (same span, other bytes) is no clash, nor is a re-assessment
+    assert write(BagOutcome(str(copy), assessment(copy, 0.9), content_hash(copy))) == ''
+    again = history_writer(history, calibration, None, actuator_id='line')      # a later run reads the history
+    assert again(BagOutcome(str(first), assessment(first, 0.85), content_hash(first))) == ''
+    assert again(BagOutcome(str(second), shifted, content_hash(second))) != ''
+    assert sorted(set(read_table(history).column('recording_path').to_pylist())) == [str(copy), str(first)]

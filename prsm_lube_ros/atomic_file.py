@@ -1,0 +1,90 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Temporary files and folders that name their writer, so the next run can remove what a killed one left.
+
+A write that must survive ``kill -9`` goes to a hidden temporary beside its
+target, named ``.<target name>.<writer pid>.<random>.tmp``, is flushed to
+disk and renamed over the target in one ``os.replace``.  A writer killed
+before the rename leaves its temporary; :func:`remove_stale` (called by the
+next writer of the same target) removes the temporaries whose writer process
+no longer runs, and leaves those of a writer still at work.  Temporaries of
+the earlier format (no pid) are removed once older than :data:`LEGACY_AGE`.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import re
+import shutil
+import tempfile
+import time
+from typing import Callable
+
+#: s after which a temporary without a writer pid is taken as stale
+LEGACY_AGE = 600.0
+_OWNED = re.compile(r'\.(\d+)\.[^.]+\.tmp$')
+
+
+def process_alive(pid: int) -> bool:
+    """True when a process with ``pid`` runs (or exists under another user)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def temporary_prefix(name: str) -> str:
+    """Prefix of this process's temporaries for a target called ``name``."""
+    return f'.{name}.{os.getpid()}.'
+
+
+def is_stale(path: Path, now: float | None = None) -> bool:
+    """True for a temporary whose writer is gone (or, without a pid, older than :data:`LEGACY_AGE`)."""
+    owned = _OWNED.search(path.name)
+    if owned is not None:
+        return not process_alive(int(owned.group(1)))
+    try:
+        return (now or time.time()) - path.lstat().st_mtime > LEGACY_AGE
+    except OSError:
+        return False
+
+
+def remove_stale(folder: Path, name: str = '') -> list[Path]:
+    """Remove the stale temporaries (files or folders) for ``name`` (every target when empty) in ``folder``."""
+    removed = []
+    for path in Path(folder).glob(f'.{name}*.tmp' if name else '.*.tmp'):
+        if is_stale(path):
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
+def write_atomically(path: Path, write: Callable[[object], None], *, binary: bool = True,
+                     before_replace: Callable[[Path], None] | None = None) -> None:
+    """``write(stream)`` into a temporary beside ``path``, fsync, rename over ``path``; stale temporaries removed.
+
+    ``before_replace(temporary)``, if given, runs between the write and the
+    rename (tests inject a crash there).  OSError propagates.
+    """
+    path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale(path.parent, path.name)
+    handle, temporary = tempfile.mkstemp(prefix=temporary_prefix(path.name), suffix='.tmp', dir=path.parent)
+    try:
+        with os.fdopen(handle, 'wb' if binary else 'w') as stream:
+            write(stream)
+            stream.flush()
+            os.fsync(stream.fileno())
+        if before_replace is not None:
+            before_replace(Path(temporary))
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
