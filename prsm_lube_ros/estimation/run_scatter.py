@@ -32,9 +32,10 @@ OLS under the fitted ``V``::
 
 ``tau^2`` rests on ``dof = runs - fixed parameters`` degrees of freedom.  A
 new run's ln amplitude then follows a Student t with ``dof`` degrees of
-freedom rather than a normal, so the one-sigma uncertainties stated are the
-standard deviation of that t: variances are multiplied by
-:attr:`RunScatter.predictive_factor` ``dof / (dof - 2)`` (at most
+freedom rather than a normal, so a one-sigma uncertainty stated is the
+half-width of that t's central 68.3 % interval, the interval one sigma spans
+of a normal: variances are multiplied by :attr:`RunScatter.predictive_factor`
+``t_dof(0.8413)^2`` (1.43 at 3 degrees of freedom, 1.12 at 9, at most
 :data:`MAX_PREDICTIVE_FACTOR`).  With no run beyond the fixed parameters
 ``tau`` cannot be estimated; :data:`ASSUMED_RUN_STD` is used and said.
 """
@@ -47,8 +48,10 @@ import numpy as np
 
 #: Run scatter (relative, ln units) assumed when the runs cannot estimate it: the middle of the 1-4 % seen on rigs.
 ASSUMED_RUN_STD = 0.03
-#: Largest variance factor for the t of few degrees of freedom (that of 3 degrees of freedom).
+#: Largest variance factor for the t of few degrees of freedom (that of one degree of freedom, rounded down).
 MAX_PREDICTIVE_FACTOR = 3.0
+#: Probability below one sigma above the mean of a normal: the one-sigma interval holds 68.27 % of it.
+ONE_SIGMA_QUANTILE = 0.8413447460685429
 #: Upper end of the search for lambda = tau^2 / sigma_w^2.
 MAX_VARIANCE_RATIO = 1e8
 
@@ -66,10 +69,11 @@ class RunScatter:
 
     @property
     def predictive_factor(self) -> float:
-        """Variance factor of a Student t with :attr:`dof` degrees of freedom, ``dof / (dof - 2)``."""
-        if self.dof > 2 + 2 / (MAX_PREDICTIVE_FACTOR - 1):
-            return self.dof / (self.dof - 2.0)
-        return MAX_PREDICTIVE_FACTOR
+        """Variance factor that makes one sigma span the central 68.3 % of a Student t with :attr:`dof` dof."""
+        from scipy.special import stdtrit     # scipy.special: no scipy.optimize at start-up
+        if self.dof < 1:
+            return MAX_PREDICTIVE_FACTOR
+        return min(float(stdtrit(self.dof, ONE_SIGMA_QUANTILE)) ** 2, MAX_PREDICTIVE_FACTOR)
 
     def new_run_variance(self, windows: float, window_variance: float | None = None) -> float:
         """Variance of ln(RMS) of a new run pooled over ``windows`` windows, predictive factor included.

@@ -88,7 +88,7 @@ def test_few_runs_without_repeats_are_flagged_and_widen_the_errors():
     cal = fit_windows(windows)
     ordinary = fit_constants([w.screw_speed for w in windows], [w.axial_load for w in windows],
                              [w.vibration_rms for w in windows])
-    assert cal.run_scatter.dof == 2 and cal.run_scatter.predictive_factor == 3.0
+    assert cal.run_scatter.dof == 2 and cal.run_scatter.predictive_factor == pytest.approx(1.746, abs=1e-3)
     assert any(flag.startswith('no condition repeated') for flag in cal.flags)
     assert cal.c_lambda_std > 2 * ordinary.c_lambda_std
 

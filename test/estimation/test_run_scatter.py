@@ -63,12 +63,15 @@ def test_ols_covariance_matches_the_spread_of_repeated_fits():
     assert np.median(stated) == pytest.approx(np.std(estimates), rel=0.25)
 
 
-def test_predictive_factor_is_that_of_a_student_t_and_bounded():
-    assert RunScatter(0.03, 0.01, 12, 9).predictive_factor == pytest.approx(9 / 7)
-    assert RunScatter(0.03, 0.01, 5, 2).predictive_factor == 3.0
+def test_predictive_factor_spans_68_percent_of_a_student_t_and_is_bounded():
+    stats = pytest.importorskip('scipy.stats')
+    for dof in (2, 3, 9, 30):
+        half_width = math.sqrt(RunScatter(0.03, 0.01, dof + 3, dof).predictive_factor)
+        assert stats.t.cdf(half_width, dof) - stats.t.cdf(-half_width, dof) == pytest.approx(0.6827, abs=1e-4)
     assert RunScatter(0.03, 0.01, 4, 1).predictive_factor == 3.0
+    assert RunScatter(0.03, 0.01, 3, 0).predictive_factor == 3.0
     one = RunScatter(0.03, 0.02, 12, 1000)
-    assert one.new_run_variance(1) == pytest.approx((0.03 ** 2 + 0.02 ** 2) * 1000 / 998)
+    assert one.new_run_variance(1) == pytest.approx((0.03 ** 2 + 0.02 ** 2) * one.predictive_factor)
     assert one.new_run_variance(100) > 0.03 ** 2
 
 
@@ -109,8 +112,8 @@ def test_a_run_sigma_carries_the_run_scatter_and_covers_new_runs():
             z.append((run.theta_oil - 0.8) / run.theta_oil_std)
             sigmas.append(run.theta_oil_std)
     z = np.array(z)
-    assert 0.85 < np.sqrt(np.mean(z ** 2)) < 1.2
-    assert 0.60 < np.mean(np.abs(z) < 1) < 0.80 and np.mean(np.abs(z) < 2) > 0.92
+    assert 0.85 < np.sqrt(np.mean(z ** 2)) < 1.25
+    assert 0.60 < np.mean(np.abs(z) < 1) < 0.76 and np.mean(np.abs(z) < 2) > 0.92
     # Thirty windows at 1 % scatter alone would give a sigma a fifth the size.
     window_only = fit_windows(runs_of(1.0, 0.0, 0))
     assert np.median(sigmas) > 3 * Assessor(window_only).assess_runs(
