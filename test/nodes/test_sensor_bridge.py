@@ -175,6 +175,9 @@ def test_bridge_and_estimator_as_separate_processes(graph, stage):
     try:
         wait_for(lambda: graph.probe.count_subscribers('/prsm/vibration') >= 1 or estimator.poll() is not None, 30,
                  'the estimator process subscribing')
+        # And this test's collector matched to the estimator's state publisher (a loaded machine discovers slowly).
+        wait_for(lambda: graph.probe.count_publishers('/prsm/lubrication_state') >= 1 or estimator.poll() is not None,
+                 30, 'the estimator publishing states')
         bridge = subprocess.Popen(bridge_command(stage['bag'], f'playback_rate:={RATE}', 'wait_for_subscribers:=10.0'),
                                   env=process_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         bridge_out, bridge_err = bridge.communicate(timeout=60)    # ends by itself after the last message
