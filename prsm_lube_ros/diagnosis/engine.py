@@ -146,6 +146,7 @@ class SecondEffect:
     first_effect: Effect        # the first effect in its form in the pair
     first_params: dict          # and its parameters in the joint fit
     first_form: str
+    combined: Effect | None = None   # the joint model (CombinedEffect) ``fit`` belongs to
 
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
@@ -258,9 +259,20 @@ class Diagnosis:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
         fit = self.chosen.fit if self.chosen is not None else self.baseline
         effect = self.chosen.effect if self.chosen is not None else None
+        if self.chosen is not None and self.second is not None and self.second.combined is not None:
+            fit, effect = self.second.fit, self.second.combined
         table = self.table
         covariance, scatter, residual_std, method = _constant_covariance(table, fit, effect)
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
+        if self.chosen is not None and self.second is not None and self.second.combined is not None:
+            # Every named effect, in the order the joint model applies them (assessment undoes them backwards);
+            # 'effect' and 'params' stay the first's, so readers of single-effect files still find one.
+            combined = self.second.combined
+            effects = [{'effect': part.id, 'form': part.form, 'params': _clean(combined.params_of(fit.params, part))}
+                       for part in (combined.first, combined.second)]
+            named = self.second.first_effect.id
+            first = next(item for item in effects if item['effect'] == named)
+            extension = {'effect': first['effect'], 'params': first['params'], 'effects': effects}
         conditions = operating_conditions(table.speed, table.load)
         flags = calibration_flags(conditions, scatter, replicated_conditions(table.speed, table.load, table.run),
                                   fit.constants, covariance)
@@ -476,7 +488,7 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
     return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
                                                                                  ties),
-                        kept, first_params, kept.form_name(first_params, table, location))
+                        kept, first_params, kept.form_name(first_params, table, location), combined=both)
 
 
 def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:

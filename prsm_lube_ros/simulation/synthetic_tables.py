@@ -160,8 +160,8 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
             clock += plan.cool_down_pause
             if heat:
                 temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.cool_down_pause / heat['tau'])
-        factor = (plan.return_factor if way < 0 else 1.0) * (plan.step_factor if run >= plan.step_at * len(legs)
-                                                              else 1.0)
+        factor = ((plan.return_factor if way < 0 else 1.0)
+                  * (plan.step_factor if run >= plan.step_at * len(legs) else 1.0))
         speed, load = conditions[index]
         nut_speed = plan.lead * speed / (2 * math.pi)
         n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
