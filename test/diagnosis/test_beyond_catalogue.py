@@ -115,3 +115,14 @@ def test_rig_set_up_factor_has_the_step_and_the_return_factor():
     half = np.arange(middle.size) >= 0.5 * middle.size
     expected = np.where(half, 1.2, 1.0) * np.where(speeds < 0, 0.7, 1.0)
     assert factor == pytest.approx(expected)
+
+
+def test_the_report_shows_the_empirical_term(tmp_path):
+    from prsm_lube_ros.diagnosis.report import write_report
+    plan = SyntheticPlan(out_and_back=True, return_factor=0.8, run_noise=0.02)
+    table, _ = synthetic_table(np.random.default_rng(3), None, plan)
+    page = write_report(diagnose_table(table), tmp_path)
+    markdown = (tmp_path / 'index.md').read_text()
+    assert (tmp_path / 'empirical.png').stat().st_size > 1000
+    assert 'Physics outside the catalogue' in markdown and 'empirical.png' in markdown
+    assert 'backlash' in page.read_text()
