@@ -168,7 +168,8 @@ def _run_random(args, effects: list[str], command: str) -> int:
             print(f'diagnose_study: unknown kind(s) {", ".join(unknown)}; known: {", ".join(kinds)}', file=sys.stderr)
             return 2
         kinds = list(args.kinds)
-    cases = [(kind, seed, tuple(effects), args.quick) for seed in range(args.seeds) for kind in kinds]
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    cases = [(kind, seed, tuple(effects), args.quick) for seed in seeds for kind in kinds]
     records, start = [], time.time()
     with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
         futures = [pool.submit(_safe_random_case, case) for case in cases]
@@ -203,6 +204,7 @@ def main(argv=None) -> int:
     parser.add_argument('--kinds', nargs='*', default=None,
                         help='random design: the kinds to run (default: every effect, none, two, step_in_time, '
                              'direction_factor, thermal_free)')
+    parser.add_argument('--first-seed', type=int, default=0, help='random design: seeds from this one on')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     args = parser.parse_args(argv)
