@@ -292,6 +292,23 @@ def confusion_markdown(records: list[dict], command: str, wall_seconds: float, j
               '| concealed | ' + ' | '.join(columns) + ' |', '|---|' + '---|' * len(columns)]
     for key, row in rows.items():
         lines.append(f'| {key} | ' + ' | '.join(str(row.get(c, '')) for c in columns) + ' |')
+    outside = [r for r in records if r['kind'] in OUTSIDE_KINDS or r['kind'] == THERMAL_FREE]
+    if outside:
+        lines += ['', '## Outside the catalogue and thermal with temperature not following revolutions', '',
+                  '| kind | seed | truth | verdict | located | empirical term (held-out gain) | r(temperature, '
+                  'revolutions) |', '|---|---|---|---|---|---|---|']
+        for r in outside:
+            s = r.get('setup', {})
+            truth = {'step_in_time': f'step x{1 + s.get("mount_step", 0.0):.3f}',
+                     'direction_factor': f'return x{s.get("return_factor", 1.0):.3f}'}.get(r['kind'], 'thermal')
+            empirical = r.get('empirical') or {}
+            where = ('factor by direction' if empirical.get('form') == 'direction'
+                     else f'{empirical.get("form")} in {empirical.get("covariate")}')
+            term = (f'{where}: {empirical["explanation"]} '
+                    f'({100 * empirical["gain"]:.0f} %)' if empirical.get('gain') is not None else '-')
+            rho = r.get('temperature_revolutions_correlation')
+            lines.append(f'| {r["kind"]} | {r["seed"]} | {truth} | {r["verdict"]} | {r.get("located", "-")} | '
+                         f'{term} | {"-" if rho is None else f"{rho:+.2f}"} |')
     misses = [r for r in records if not r['right']]
     lines += ['', f'## Misses ({len(misses)})', '']
     if misses:
