@@ -175,15 +175,20 @@ class EmpiricalFit:
         """It earns its parameters as a candidate would (BIC and held-out gain)."""
         return self.delta_bic <= -BIC_MARGIN and self.gain >= MIN_GAIN and not self.fit.unphysical()
 
-    def beats(self, named: ModelFit) -> bool:
+    def beats(self, named: ModelFit, covariates=()) -> bool:
         """True when it predicts held-out runs better than ``named`` (the catalogue model) does.
 
         A step, stretch or direction factor is a shape no catalogue law has: the
         catalogue model must predict held-out runs better to be named.  A
         smooth term follows any monotone or curved law, so it overrules the
-        catalogue model only when it is better by :data:`MIN_GAIN`.
+        catalogue model only when it is better by :data:`MIN_GAIN`, and never
+        in one of ``covariates``, those the named effects follow (their law is
+        a smooth law of it: a curve fitting better says the law's form is
+        approximate, not that the physics is missing).
         """
         if not self.earns or not named.cv_rmse > 0:
+            return False
+        if self.term.form == 'smooth' and self.term.covariate in covariates:
             return False
         margin = MIN_GAIN if self.term.form == 'smooth' else 0.0
         return self.fit.cv_rmse < (1.0 - margin) * named.cv_rmse
@@ -803,9 +808,12 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         advice += f'; {REPEAT_ADVICE}'
         notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
     empirical = _empirical(table, baseline, location, folds)
+    pair = second is not None and verdict == best.effect.id
+    followed = {best.effect.covariate} | ({second.effect.covariate} if pair else set()) if best else set()
+    followed |= {registered()[name].covariate for name in tied if name in registered()}
     if empirical is not None and best is not None and verdict in (best.effect.id, AMBIGUOUS) \
-            and empirical.beats(second.fit if second is not None and verdict == best.effect.id else best.fit):
-        named = second.fit if second is not None and verdict == best.effect.id else best.fit
+            and empirical.beats(second.fit if pair else best.fit, followed):
+        named = second.fit if pair else best.fit
         empirical.overrules = best.effect.id
         best.status = 'dropped'
         best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
