@@ -126,3 +126,21 @@ def test_the_report_shows_the_empirical_term(tmp_path):
     assert (tmp_path / 'empirical.png').stat().st_size > 1000
     assert 'Physics outside the catalogue' in markdown and 'empirical.png' in markdown
     assert 'backlash' in page.read_text()
+
+
+def test_an_empirical_term_overrules_a_named_effect_only_by_held_out_runs_and_not_in_its_own_covariate():
+    from prsm_lube_ros.diagnosis.empirical import EmpiricalTerm
+    from prsm_lube_ros.diagnosis.engine import EmpiricalFit
+
+    def fit(cv_rmse):
+        return SimpleNamespace(cv_rmse=cv_rmse, unphysical=lambda: [])
+
+    named = fit(0.040)
+    smooth = EmpiricalFit(EmpiricalTerm('temperature', 'smooth', scale=(30.0, 5.0)), fit(0.036), 0.4, -50.0)
+    assert smooth.beats(named, {'revolutions'})
+    assert not smooth.beats(named, {'temperature'})
+    assert not EmpiricalFit(smooth.term, fit(0.039), 0.4, -50.0).beats(named, {'revolutions'})   # < MIN_GAIN
+    step = EmpiricalFit(EmpiricalTerm('time', 'step', runs=[3, 4]), fit(0.039), 0.4, -50.0)
+    assert step.beats(named, {'revolutions', 'time'})
+    assert not step.beats(fit(0.038))
+    assert not EmpiricalFit(step.term, fit(0.01), 0.01, -50.0).beats(named)   # does not earn its parameter
