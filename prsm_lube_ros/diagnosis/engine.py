@@ -74,9 +74,10 @@ from ..estimation.calibration import (Calibration, calibration_flags, check_iden
 from .adequacy import lack_of_fit, LackOfFit, REPEAT_ADVICE
 from .combined import CombinedEffect
 from .effects import Effect, registered
+from .empirical import causes, empirical_terms, EmpiricalTerm
 from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log, \
     score_held_out
-from .locate import locate, Location
+from .locate import locate, Location, SIGNIFICANCE
 from .table import WindowTable
 
 #: BIC improvement (effective sample size) a candidate needs.
@@ -145,6 +146,7 @@ class SecondEffect:
     first_effect: Effect        # the first effect in its form in the pair
     first_params: dict          # and its parameters in the joint fit
     first_form: str
+    combined: Effect | None = None   # the joint model (CombinedEffect) ``fit`` belongs to
 
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
@@ -156,6 +158,62 @@ class SecondEffect:
         """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
         return {'effect': self.first_effect.id, 'form': self.first_form, 'params': _clean(self.first_params),
                 'explanation': self.first_effect.describe(self.first_params)}
+
+
+@dataclass
+class EmpiricalFit:
+    """An empirical term of the located shape fitted with Eq. 22 (physics outside the catalogue)."""
+
+    term: EmpiricalTerm
+    fit: ModelFit
+    gain: float                 # 1 - cv_rmse / cv_rmse of the paper's model
+    delta_bic: float            # against the paper's model
+    overrules: str = ''         # the catalogue effect it explains better than (held-out), if any
+
+    @property
+    def earns(self) -> bool:
+        """It earns its parameters as a candidate would (BIC and held-out gain)."""
+        return self.delta_bic <= -BIC_MARGIN and self.gain >= MIN_GAIN and not self.fit.unphysical()
+
+    def beats(self, named: ModelFit, covariates=()) -> bool:
+        """True when it predicts held-out runs better than ``named`` (the catalogue model) does.
+
+        A step, stretch or direction factor is a shape no catalogue law has: the
+        catalogue model must predict held-out runs better to be named.  A
+        smooth term follows any monotone or curved law, so it overrules the
+        catalogue model only when it is better by :data:`MIN_GAIN`, and never
+        in one of ``covariates``, those the named effects follow (their law is
+        a smooth law of it: a curve fitting better says the law's form is
+        approximate, not that the physics is missing).
+        """
+        if not self.earns or not named.cv_rmse > 0:
+            return False
+        if self.term.form == 'smooth' and self.term.covariate in covariates:
+            return False
+        margin = MIN_GAIN if self.term.form == 'smooth' else 0.0
+        return self.fit.cv_rmse < (1.0 - margin) * named.cv_rmse
+
+    @property
+    def note(self) -> str:
+        """What the empirical term shows, in words."""
+        term = self.term
+        return (f'physics outside the catalogue: the mismatch is modelled empirically as a {term.form} in '
+                f'{term.covariate} ({term.describe(self.fit.params)}), held-out error {100 * self.gain:.0f} % '
+                f'lower than the paper\'s model, BIC {self.delta_bic:+.0f}; no catalogue effect has this shape. '
+                f'Causes: {causes(term)}')
+
+    def as_json(self) -> dict:
+        """The ``empirical`` block."""
+        term = self.term
+        out = {'covariate': term.covariate, 'form': term.form, 'params': _clean(self.fit.params),
+               'explanation': term.describe(self.fit.params), 'gain': _num(self.gain),
+               'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'earns': self.earns,
+               'causes': causes(term), 'overrules': self.overrules or None,
+               'constants': {'c_sys': self.fit.constants.c_sys, 'c_f': self.fit.constants.c_f,
+                             'c_lambda': self.fit.constants.c_lambda}}
+        if term.form in ('step', 'stretch'):
+            out['runs'] = [int(r) for r in term.runs]
+        return out
 
 
 @dataclass
@@ -176,6 +234,8 @@ class Diagnosis:
     chosen_fit_test: LackOfFit | None = None
     second: 'SecondEffect | None' = None     # a second effect named with the first (forward selection)
     calibration_flags: list = field(default_factory=list)   # what calibrate says the recordings cannot vouch for
+    empirical: EmpiricalFit | None = None    # an empirical term of the located shape (physics outside the catalogue)
+    temperature_revolutions: float = math.nan   # Pearson correlation of run temperature and revolutions
 
     @property
     def confident(self) -> bool:
@@ -204,9 +264,20 @@ class Diagnosis:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
         fit = self.chosen.fit if self.chosen is not None else self.baseline
         effect = self.chosen.effect if self.chosen is not None else None
+        if self.chosen is not None and self.second is not None and self.second.combined is not None:
+            fit, effect = self.second.fit, self.second.combined
         table = self.table
         covariance, scatter, residual_std, method = _constant_covariance(table, fit, effect)
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
+        if self.chosen is not None and self.second is not None and self.second.combined is not None:
+            # Every named effect, in the order the joint model applies them (assessment undoes them backwards);
+            # 'effect' and 'params' stay the first's, so readers of single-effect files still find one.
+            combined = self.second.combined
+            effects = [{'effect': part.id, 'form': part.form, 'params': _clean(combined.params_of(fit.params, part))}
+                       for part in (combined.first, combined.second)]
+            named = self.second.first_effect.id
+            first = next(item for item in effects if item['effect'] == named)
+            extension = {'effect': first['effect'], 'params': first['params'], 'effects': effects}
         conditions = operating_conditions(table.speed, table.load)
         flags = calibration_flags(conditions, scatter, replicated_conditions(table.speed, table.load, table.run),
                                   fit.constants, covariance)
@@ -249,6 +320,8 @@ class Diagnosis:
                 'best': best, 'candidates': [cand.as_json() for cand in self.candidates],
                 'location': self.location.as_json(), 'notes': list(self.notes),
                 'confounding': [c.as_json() for c in self.confounding],
+                'empirical': self.empirical.as_json() if self.empirical is not None else None,
+                'temperature_revolutions_correlation': _num(self.temperature_revolutions),
                 'data': {'windows': len(table), 'runs': int(table.runs.size),
                          'recordings': int(np.unique(table.recording).size),
                          'speed_levels': operating_levels(table.speed), 'load_levels': operating_levels(table.load),
@@ -420,7 +493,7 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
     return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
                                                                                  ties),
-                        kept, first_params, kept.form_name(first_params, table, location))
+                        kept, first_params, kept.form_name(first_params, table, location), combined=both)
 
 
 def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:
@@ -543,6 +616,46 @@ def confounding(table: WindowTable) -> list[Confounding]:
     return found
 
 
+def _empirical(table, baseline: ModelFit, location: Location, folds) -> EmpiricalFit | None:
+    """The empirical term (of each significant located shape) that predicts held-out runs best, or None."""
+    best = None
+    for term in empirical_terms(table, baseline.log_residual, location, SIGNIFICANCE):
+        fit = fit_model(table, term, folds)
+        gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
+        candidate = EmpiricalFit(term, fit, gain, _delta_bic(fit, baseline))
+        if best is None or (candidate.earns, -fit.cv_rmse) > (best.earns, -best.fit.cv_rmse):
+            best = candidate
+    return best
+
+
+#: |Pearson| over runs from which temperature and revolutions count as collinear (their laws cannot be told apart).
+COLLINEAR = 0.9
+
+
+def drift_correlation(table: WindowTable, first: str = 'temperature', second: str = 'revolutions') -> float:
+    """Pearson correlation over runs of two drift covariates (NaN when one is missing or constant)."""
+    if first == 'temperature' and not table.has_temperature:
+        return math.nan
+    x, y = table.run_means(first), table.run_means(second)
+    ok = np.isfinite(x) & np.isfinite(y)
+    if ok.sum() < 3 or np.ptp(x[ok]) == 0 or np.ptp(y[ok]) == 0:
+        return math.nan
+    return float(np.corrcoef(x[ok], y[ok])[0, 1])
+
+
+def _held_out_tiebreak(table, first: Candidate, second: Candidate, correlation: float) -> Candidate | None:
+    """The candidate to drop from a tie between laws of two drift covariates that the recording does not tie.
+
+    When the two follow different recorded covariates (temperature and
+    revolutions) and these are not collinear over runs (|r| below
+    :data:`COLLINEAR`), held-out runs decide: the one predicting them worse is dropped.
+    """
+    covariates = {first.effect.covariate, second.effect.covariate}
+    if covariates != {'temperature', 'revolutions'} or not abs(correlation) < COLLINEAR:
+        return None
+    return first if first.fit.cv_rmse > second.fit.cv_rmse else second
+
+
 def _separation_advice(a: Effect, b: Effect) -> str:
     return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
 
@@ -595,6 +708,10 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     if len(folds) < table.runs.size:
         notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
                      'would not be identifiable')
+    correlation = drift_correlation(table)
+    if math.isfinite(correlation):
+        notes.append(f'temperature and revolutions over runs: r = {correlation:+.2f} '
+                     f'({"collinear" if abs(correlation) >= COLLINEAR else "not collinear"})')
     candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
     fitted = [c for c in candidates if c.fit is not None]
     ranked = sorted(fitted, key=lambda c: c.fit.cv_rmse)
@@ -619,6 +736,16 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 best, verdict = runner, runner.effect.id
             elif runner_adds and leader_adds:
                 notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
+            elif _held_out_tiebreak(table, best, runner, correlation):
+                loser = _held_out_tiebreak(table, best, runner, correlation)
+                winner = runner if loser is best else best
+                loser.status = 'dropped'
+                loser.reason += (f'; fits the amplitudes as well as {winner.effect.id} but predicts held-out runs '
+                                 f'worse (temperature and revolutions not collinear, r = {correlation:+.2f} over runs)')
+                notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; temperature '
+                             f'and revolutions are not collinear (r = {correlation:+.2f} over runs), so the held-out '
+                             f'runs decide: {winner.effect.id}')
+                best, verdict = winner, winner.effect.id
             elif _spectral_tiebreak(table, location, best, runner):
                 loser = _spectral_tiebreak(table, location, best, runner)
                 winner = runner if loser is best else best
@@ -632,8 +759,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 tied = [best.effect.id, runner.effect.id]
                 verdict = AMBIGUOUS
                 advice = _separation_advice(best.effect, runner.effect)
+                collinear = ''
+                if {best.effect.covariate, runner.effect.covariate} == {'temperature', 'revolutions'} \
+                        and math.isfinite(correlation):
+                    collinear = (f' (temperature and revolutions are collinear over runs, r = {correlation:+.2f}; '
+                                 'pauses that let the nut cool while the revolutions stand still separate them)')
                 notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
-                             'neither adds anything given the other: the recording cannot tell them apart')
+                             'neither adds anything given the other: the recording cannot tell them apart'
+                             + collinear)
                 break
     else:
         pattern = location.located not in ('none', 'spectrum')
@@ -674,6 +807,24 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     elif verdict == CANNOT_TELL and baseline_test.dof_pure <= 0:
         advice += f'; {REPEAT_ADVICE}'
         notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
+    empirical = _empirical(table, baseline, location, folds)
+    pair = second is not None and verdict == best.effect.id
+    followed = {best.effect.covariate} | ({second.effect.covariate} if pair else set()) if best else set()
+    followed |= {registered()[name].covariate for name in tied if name in registered()}
+    if empirical is not None and best is not None and verdict in (best.effect.id, AMBIGUOUS) \
+            and empirical.beats(second.fit if pair else best.fit, followed):
+        named = second.fit if pair else best.fit
+        empirical.overrules = best.effect.id
+        best.status = 'dropped'
+        best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
+                        f'{empirical.term.covariate} (held-out error {100 * named.cv_rmse:.2f} % against '
+                        f'{100 * empirical.fit.cv_rmse:.2f} %): the located shape is not its law')
+        verdict, second, tied = UNEXPLAINED, None, []
+        advice = 'a candidate for the located mismatch is missing from the catalogue'
+        notes.append(f'{best.effect.id} is not named: an empirical {empirical.term.form} in '
+                     f'{empirical.term.covariate} predicts held-out runs better')
+    if verdict == UNEXPLAINED and empirical is not None and empirical.earns:
+        notes.append(empirical.note)
     chosen_test = None
     if best is not None and verdict == best.effect.id:
         if second is None:
@@ -695,4 +846,5 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
                      tied=tied, notes=notes, what_to_record=advice, table=table,
                      confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
-                     second=second)
+                     second=second, empirical=empirical if verdict == UNEXPLAINED else None,
+                     temperature_revolutions=correlation)

@@ -11,7 +11,10 @@ strongly, with windows of one run treated as correlated:
 * ``revolutions``, ``time`` and ``temperature`` — linear trend over all
   windows;
 * ``speed`` and ``load`` — residual means per operating level (what the
-  model's speed and load laws leave over).
+  model's speed and load laws leave over);
+* ``direction`` — out and back at the same speed and load (return runs:
+  ``direction`` -1): run-level residuals of returns minus outs, paired by
+  condition, t test (:func:`_direction_test`).
 
 Trends use a cluster-robust (by run) standard error and a t test with
 ``runs - 1`` degrees of freedom; level means use an F test with the effective
@@ -66,7 +69,7 @@ LINE_CONSTANCY = 2.5
 POWER_SPREAD = 1.5
 
 COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
-                   'speed': 'rad/s', 'load': 'N'}
+                   'speed': 'rad/s', 'load': 'N', 'direction': 'sign of the screw speed'}
 
 
 @dataclass
@@ -88,7 +91,7 @@ class CovariateTest:
         out = {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
                'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
                'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
-        if self.kind in ('binned means', 'segment of runs'):
+        if self.kind in ('binned means', 'segment of runs', 'paired by direction'):
             out.update({'shape': self.shape, 'bin_centres': [_finite(v) for v in self.bin_centres],
                         'bin_amplitudes': [_finite(v) for v in self.bin_amplitudes]})
         return out
@@ -281,16 +284,14 @@ def _segment_statistics(cumulative: np.ndarray, starts: np.ndarray, stops: np.nd
     return sums ** 2 * total / (inside * (total - inside))
 
 
-def _segment_run_means(table, residual) -> CovariateTest | None:
-    """A step or a segment in time: run levels in recording order, one stretch of runs against the rest.
+def time_segment(table, residual) -> dict | None:
+    """The stretch of runs in recording order whose residual level differs most from the rest (see below).
 
-    Runs are ordered by recording (as given) and time inside it.  For every
-    stretch of consecutive runs (at least :data:`MIN_SEGMENT_RUNS` inside and
-    outside) the two-group F of the stretch against the rest is computed on
-    ``(1, runs - 2)`` degrees of freedom; the largest F is kept and its p-value
-    multiplied by the number of stretches tried (Bonferroni), so that looking
-    everywhere does not make chance stretches significant.  A stretch touching
-    either end is a step.
+    Returns None when there are too few runs, else a mapping: ``runs`` (run
+    numbers in recording order), ``levels`` (their centred residual means),
+    ``inside`` (bool per ordered run), ``first``/``stop`` (slice of the
+    stretch), ``times`` (run mean time, s), ``f``, ``p`` (Bonferroni) and
+    ``share`` (of the run-level variance).
     """
     levels = table.run_means(residual)
     times = table.run_means('time')
@@ -312,12 +313,31 @@ def _segment_run_means(table, residual) -> CovariateTest | None:
     best = int(np.argmax(between))
     within = max(total_ss - float(between[best]), 1e-300)
     f = float(between[best]) / (within / (n_runs - 2))
-    p = min(1.0, float(stats.f.sf(f, 1, n_runs - 2)) * starts.size)
     first, stop = int(starts[best]), int(stops[best])
     inside = np.zeros(n_runs, dtype=bool)
     inside[first:stop] = True
+    return {'runs': table.runs[ok][order], 'levels': y, 'inside': inside, 'first': first, 'stop': stop,
+            'times': times[ok][order], 'f': f, 'p': min(1.0, float(stats.f.sf(f, 1, n_runs - 2)) * starts.size),
+            'share': float(between[best] / total_ss)}
+
+
+def _segment_run_means(table, residual) -> CovariateTest | None:
+    """A step or a segment in time: run levels in recording order, one stretch of runs against the rest.
+
+    Runs are ordered by recording (as given) and time inside it.  For every
+    stretch of consecutive runs (at least :data:`MIN_SEGMENT_RUNS` inside and
+    outside) the two-group F of the stretch against the rest is computed on
+    ``(1, runs - 2)`` degrees of freedom; the largest F is kept and its p-value
+    multiplied by the number of stretches tried (Bonferroni), so that looking
+    everywhere does not make chance stretches significant.  A stretch touching
+    either end is a step.
+    """
+    segment = time_segment(table, residual)
+    if segment is None:
+        return None
+    y, inside, first, stop, run_times = (segment[k] for k in ('levels', 'inside', 'first', 'stop', 'times'))
+    n_runs, f, p, share = y.size, segment['f'], segment['p'], segment['share']
     change = -(float(y[inside].mean()) - float(y[~inside].mean()))     # residual is ln A_model - ln A
-    run_times = times[ok][order]
     if first == 0 or stop == n_runs:
         at = stop if first == 0 else first
         direction = 'rises' if (change > 0) == (first > 0) else 'falls'
@@ -327,9 +347,55 @@ def _segment_run_means(table, residual) -> CovariateTest | None:
         shape = (f'a stretch in time: amplitude {100 * abs(change):.1f} % {"higher" if change > 0 else "lower"} '
                  f'in runs {first + 1}-{stop} of {n_runs} (in recording order) than before and after')
     amplitude = np.where(inside, change, 0.0)
-    return CovariateTest('time', 'segment of runs', float(between[best] / total_ss), f, p,
+    return CovariateTest('time', 'segment of runs', share, f, p,
                          shape=shape, bin_centres=[float(v) for v in run_times],
                          bin_amplitudes=[float(v) for v in amplitude - amplitude.mean()])
+
+
+def direction_pairs(table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs by direction of travel, paired by condition: (run's condition key, run is a return, run used).
+
+    A return run has ``direction`` -1 (the nut comes back under load).  Runs
+    count only at (speed, load) conditions run both ways, so the comparison is
+    at the same speed and load.
+    """
+    speed, load = table.run_means('speed'), table.run_means('load')
+    back = table.run_means('direction') < 0
+    speeds, loads = np.array(operating_levels(np.abs(speed))), np.array(operating_levels(load))
+    key = (np.argmin(np.abs(np.abs(speed)[:, None] - speeds[None, :]), axis=1) * loads.size
+           + np.argmin(np.abs(load[:, None] - loads[None, :]), axis=1))
+    both = np.array([back[key == k].any() and (~back[key == k]).any() for k in key])
+    return key, back, both
+
+
+def _direction_test(table, residual) -> CovariateTest | None:
+    """Out and back at the same speed and load: the run-level residual of returns minus outs, paired by condition.
+
+    One difference per condition run both ways (mean over its return runs minus
+    mean over its out runs); a one-sample t test of the differences on
+    ``conditions - 1`` degrees of freedom, so run scatter is the noise.
+    """
+    levels = table.run_means(residual)
+    key, back, both = direction_pairs(table)
+    differences = np.array([levels[(key == k) & back].mean() - levels[(key == k) & ~back].mean()
+                            for k in np.unique(key[both])])
+    differences = differences[np.isfinite(differences)]
+    if differences.size < 3:
+        return None
+    spread = float(np.std(differences, ddof=1))
+    t = float(differences.mean()) / (spread / math.sqrt(differences.size)) if spread > 0 else math.inf
+    p = float(2 * stats.t.sf(abs(t), df=differences.size - 1))
+    log_ratio = -float(differences.mean())          # residual is ln A_model - ln A
+    window_back = np.isin(table.run, table.runs[back & both])
+    used = np.isin(table.run, table.runs[both])
+    y = residual[used] - residual[used].mean()
+    fitted = np.where(window_back[used], y[window_back[used]].mean(), y[~window_back[used]].mean())
+    r2 = float(fitted @ fitted) / float(y @ y) if y @ y > 0 else 0.0
+    shape = (f'a direction factor: amplitude {math.exp(log_ratio):.3f} times as high on the return traverses '
+             f'(nut coming back) as out, at the same speed and load ({differences.size} conditions run both '
+             'ways)')
+    return CovariateTest('direction', 'paired by direction', r2, t, p, slope=math.expm1(log_ratio), shape=shape,
+                         bin_centres=[1.0, -1.0], bin_amplitudes=[-0.5 * log_ratio, 0.5 * log_ratio])
 
 
 def _level_means(residual, values, groups, name) -> CovariateTest | None:
@@ -370,6 +436,7 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
     for name in ('revolutions', 'time', 'temperature'):
         flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
     flexible.append(_segment_run_means(table, residual))
+    flexible.append(_direction_test(table, residual))
     flexible = [t for t in flexible if t is not None]
     flexible.sort(key=lambda t: (t.p_value, -t.r_squared))
     return tests + flexible

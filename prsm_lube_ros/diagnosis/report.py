@@ -1,13 +1,15 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""A one-minute report of a diagnosis: four figures and a page (Markdown and HTML).
+"""A one-minute report of a diagnosis: up to five figures and a page (Markdown and HTML).
 
 * ``residual.png`` — model error against the covariate that carries the
   mismatch, the paper's model beside the chosen one;
 * ``runs.png`` — measured RMS against both models, run by run;
 * ``candidates.png`` — held-out error of every candidate against the paper's;
 * ``spectrum.png`` — median spectrum per screw speed with fixed lines marked
-  (when spectra were kept).
+  (when spectra were kept);
+* ``empirical.png`` — for physics outside the catalogue: run amplitudes against
+  the paper's model over the located covariate, with the empirical term.
 """
 from __future__ import annotations
 
@@ -18,13 +20,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .empirical import causes
 from .engine import Diagnosis
 from .fitting import predict_log
 from .locate import COVARIATE_UNITS
 
 LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revolutions since start of recording',
           'time': 'time since start of recording, s', 'temperature': 'temperature, degC',
-          'speed': 'screw speed, rad/s', 'load': 'axial load, N'}
+          'speed': 'screw speed, rad/s', 'load': 'axial load, N',
+          'direction': 'direction of travel (+1 out, -1 back)'}
 
 
 def _pyplot():
@@ -69,6 +73,41 @@ def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+def _empirical_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
+    """Run amplitudes over the paper's model against the located covariate, with the empirical term."""
+    empirical = diagnosis.empirical
+    if empirical is None:
+        return False
+    table, term = diagnosis.table, empirical.term
+    measured = 100 * np.expm1(-table.run_means(diagnosis.baseline.log_residual))
+    term_only = 100 * np.expm1(table.run_means(empirical.fit.log_residual - diagnosis.baseline.log_residual))
+    if term.form in ('step', 'stretch'):
+        order = np.lexsort((table.run_means('time'), table.run_means(table.recording.astype(float))))
+        x, label = np.arange(1, order.size + 1), 'run in recording order'
+        measured, term_only = measured[order], term_only[order]
+    elif term.form == 'direction':
+        x, label = table.run_means('direction'), LABELS['direction']
+    else:
+        x, label = _values(table, term.covariate), LABELS.get(term.covariate, term.covariate)
+        x = table.run_means(x)
+    fig, ax = plt.subplots(figsize=(6.5, 3.8), dpi=110)
+    ax.scatter(x, measured, s=14, label='measured / paper\'s model - 1 (run means)')
+    shown = np.argsort(x, kind='stable')
+    ax.plot(x[shown], term_only[shown], 'r.-' if term.form != 'direction' else 'r_', markersize=12,
+            label=f'empirical {term.form}: {term.describe(empirical.fit.params)}')
+    ax.axhline(0, color='k', linewidth=0.8)
+    ax.set_xlabel(label)
+    ax.set_ylabel('%')
+    ax.set_title(f'outside the catalogue: {term.form} in {term.covariate}, held-out error '
+                 f'{100 * empirical.gain:.0f} % lower', fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return True
 
 
 def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
@@ -161,6 +200,12 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     else:
         tied = f' — tied: {", ".join(diagnosis.tied)}' if diagnosis.tied else ''
         lines += [f'**Verdict: `{diagnosis.verdict}`**{tied}']
+    if diagnosis.empirical is not None:
+        empirical = diagnosis.empirical
+        lines += ['', f'**Physics outside the catalogue:** an empirical {empirical.term.form} in '
+                  f'{empirical.term.covariate}: {empirical.term.describe(empirical.fit.params)}; held-out error '
+                  f'{100 * base.cv_rmse:.1f} % → {100 * empirical.fit.cv_rmse:.1f} % ({100 * empirical.gain:.0f} % '
+                  f'lower). No catalogue effect has this shape; {causes(empirical.term)}.']
     if diagnosis.what_to_record:
         lines += ['', f'**What to record:** {diagnosis.what_to_record}']
     lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.']
@@ -245,6 +290,8 @@ def write_report(diagnosis: Diagnosis, folder) -> Path:
         figures.append('candidates.png')
     if _spectrum_figure(diagnosis, folder / 'spectrum.png', plt):
         figures.append('spectrum.png')
+    if _empirical_figure(diagnosis, folder / 'empirical.png', plt):
+        figures.append('empirical.png')
     markdown = _page(diagnosis, figures)
     (folder / 'index.md').write_text(markdown)
     page = folder / 'index.html'

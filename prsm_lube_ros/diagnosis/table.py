@@ -36,7 +36,8 @@ class WindowTable:
     speed rad/s, load N, rms m/s^2, position m along the stroke, revolutions
     since the start of the recording, time s since the start of the recording,
     temperature degC (NaN when not recorded), run (unique over recordings),
-    recording index.  ``spectra`` (n x bins, (m/s^2)^2/Hz) and
+    recording index.  ``direction`` is +1 on windows of runs out (nut travel > 0) and -1 on
+    runs back (default: the sign of ``speed``).  ``spectra`` (n x bins, (m/s^2)^2/Hz) and
     ``spectrum_resolution`` (Hz) are set when the windows carried spectra.
     """
 
@@ -53,6 +54,7 @@ class WindowTable:
     spectra: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan
     sources: tuple = ()
+    direction: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         """Coerce the columns to arrays of one length."""
@@ -65,6 +67,11 @@ class WindowTable:
                 n = value.size
             elif value.size != n:
                 raise InputError(f'window table: column {name} has {value.size} rows, expected {n}')
+        direction = np.where(self.speed < 0, -1.0, 1.0) if self.direction is None else self.direction
+        direction = np.atleast_1d(np.asarray(direction, dtype=float))
+        if direction.size != n:
+            raise InputError(f'window table: column direction has {direction.size} rows, expected {n}')
+        object.__setattr__(self, 'direction', direction)
 
     def __len__(self) -> int:
         """Number of windows."""
@@ -101,7 +108,7 @@ class WindowTable:
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None
         values = {name: getattr(self, name)[mask] for name in COLUMNS}
-        return replace(self, spectra=spectra, **values)
+        return replace(self, spectra=spectra, direction=self.direction[mask], **values)
 
     def run_means(self, column: str) -> np.ndarray:
         """Mean of ``column`` per run, in the order of :attr:`runs` (NaN-aware)."""
@@ -122,6 +129,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
     ``min_axial_load``; raises :class:`InputError` when none is left.
     """
     rows = {name: [] for name in COLUMNS}
+    directions = []
     spectra, resolution = [], math.nan
     run_offset = 0
     for rec_index, windows in enumerate(windows_per_recording):
@@ -142,6 +150,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         rows['temperature'].extend(w.temperature for w in chosen)
         rows['run'].extend((local_run + run_offset).tolist())
         rows['recording'].extend([rec_index] * len(chosen))
+        back = {r for r in np.unique(run_ids) if np.nanmedian(travel[run_ids == r]) < 0}
+        directions.extend(-1.0 if r in back else 1.0 for r in run_ids)
         run_offset += int(local_run.max()) + 1
         for w in chosen:
             spectra.append(w.spectrum)
@@ -154,7 +164,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
     if spectra and all(s is not None for s in spectra) and len({s.size for s in spectra}) == 1:
         spectrum_array = np.vstack(spectra)
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
-                       sources=tuple(str(s) for s in sources), **rows)
+                       sources=tuple(str(s) for s in sources), direction=directions, **rows)
 
 
 def _stroke_position(travel: np.ndarray, run_ids: np.ndarray) -> np.ndarray:

@@ -3,7 +3,8 @@
 """A calibration's model extension applied in assessment: back to Eq. 22's amplitude and theta_Oil.
 
 ``Calibration.extension`` holds ``{'effect': ID, 'params': {...}}`` as
-``prsm-lube diagnose --calibration-out`` writes it.  For assessment each effect
+``prsm-lube diagnose --calibration-out`` writes it, and with two named effects
+also ``effects``, a list of such entries (files with one effect still load).  For assessment each effect
 maps a measured window RMS back to the amplitude Eq. 22 describes
 (:meth:`~prsm_lube_ros.physics.effects.Extension.eq22_amplitude`) and gives the factor theta_Oil
 of Eq. 23 must be divided by (:meth:`~prsm_lube_ros.physics.effects.Extension.assessment_film_factor`),
@@ -38,18 +39,37 @@ def window_covariates(windows: Sequence, stroke: float | None = None) -> SimpleN
                            time=np.array([w.start for w in windows], dtype=float))
 
 
+def _parts(extension: dict) -> list[tuple]:
+    """``(Extension, params)`` of every effect of ``extension``, in the order the model applies them."""
+    items = extension.get('effects') or [extension]
+    if not isinstance(items, list):
+        raise ConfigError('calibration extension is malformed (effects must be a list)')
+    parts = []
+    try:
+        for item in items:
+            effect = effect_extension(str(item['effect']))
+            params = {k: float(v) if v is not None else np.nan for k, v in dict(item['params']).items()
+                      if not isinstance(v, str)}
+            parts.append((effect, params))
+    except (KeyError, TypeError, ValueError, ConfigError) as exc:
+        raise ConfigError(f'calibration extension is malformed ({exc.__class__.__name__}: {exc})') from None
+    return parts
+
+
 def eq22_inputs(extension: dict, windows: Sequence, rms) -> tuple[np.ndarray, np.ndarray]:
-    """``(amplitude for Eq. 23, film factor)`` per window under ``extension``; identity when it is empty."""
+    """``(amplitude for Eq. 23, film factor)`` per window under ``extension``; identity when it is empty.
+
+    ``extension`` holds one effect (``effect``, ``params``) or, as two named
+    effects are written, a list ``effects`` in the order the joint model
+    applies their gains: they are undone backwards, and their film factors multiply.
+    """
     rms = np.asarray(rms, dtype=float)
     if not extension:
         return rms, np.ones_like(rms)
-    try:
-        effect = effect_extension(str(extension['effect']))
-        params = {k: float(v) if v is not None else np.nan for k, v in dict(extension['params']).items()}
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ConfigError(f'calibration extension is malformed ({exc.__class__.__name__}: {exc})') from None
-    covariates = window_covariates(windows, params.get('stroke'))
-    amplitude = np.asarray(effect.eq22_amplitude(params, covariates, rms), dtype=float)
-    factor = np.broadcast_to(np.asarray(effect.assessment_film_factor(params, covariates), dtype=float),
-                             rms.shape)
+    amplitude, factor = rms, np.ones_like(rms)
+    for effect, params in reversed(_parts(extension)):
+        covariates = window_covariates(windows, params.get('stroke'))
+        amplitude = np.asarray(effect.eq22_amplitude(params, covariates, amplitude), dtype=float)
+        factor = factor * np.broadcast_to(np.asarray(effect.assessment_film_factor(params, covariates),
+                                                     dtype=float), rms.shape)
     return amplitude, np.array(factor)

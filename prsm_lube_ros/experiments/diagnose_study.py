@@ -161,9 +161,16 @@ def _safe_random_case(case: tuple) -> dict:
 def _run_random(args, effects: list[str], command: str) -> int:
     """Cases seed-major (a stopped run is a balanced subset), results rewritten every ``--save-every`` cases."""
     from concurrent.futures import as_completed
-    from .random_study import NONE, TWO, write_random_outputs
-    kinds = effects + [NONE] + ([TWO] if len(effects) >= 2 else [])
-    cases = [(kind, seed, tuple(effects), args.quick) for seed in range(args.seeds) for kind in kinds]
+    from .random_study import NONE, OUTSIDE_KINDS, THERMAL_FREE, TWO, write_random_outputs
+    kinds = effects + [NONE] + ([TWO] if len(effects) >= 2 else []) + list(OUTSIDE_KINDS) + [THERMAL_FREE]
+    if args.kinds:
+        unknown = sorted(set(args.kinds) - set(kinds))
+        if unknown:
+            print(f'diagnose_study: unknown kind(s) {", ".join(unknown)}; known: {", ".join(kinds)}', file=sys.stderr)
+            return 2
+        kinds = list(args.kinds)
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    cases = [(kind, seed, tuple(effects), args.quick) for seed in seeds for kind in kinds]
     records, start = [], time.time()
     with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
         futures = [pool.submit(_safe_random_case, case) for case in cases]
@@ -195,6 +202,10 @@ def main(argv=None) -> int:
     parser.add_argument('--order', choices=('random', 'fixed'), default='random', help='paper design only')
     parser.add_argument('--sessions', type=int, default=2, help='paper design: sessions (bags) at theta 1 per case')
     parser.add_argument('--effects', nargs='*', default=None, help='effect IDs (default: all and none)')
+    parser.add_argument('--kinds', nargs='*', default=None,
+                        help='random design: the kinds to run (default: every effect, none, two, step_in_time, '
+                             'direction_factor, thermal_free)')
+    parser.add_argument('--first-seed', type=int, default=0, help='random design: seeds from this one on')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     args = parser.parse_args(argv)

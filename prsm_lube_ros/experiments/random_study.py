@@ -32,6 +32,18 @@ import numpy as np
 from ..physics.effects.resonance import band_position
 
 NONE, TWO = 'none', 'two'
+#: Kinds with physics outside the diagnosis catalogue, and the covariate diagnose must locate for each: a step of
+#: the amplitude in time (the sensor re-seated) and a factor on the loaded return traverses (direction of travel).
+OUTSIDE_KINDS = {'step_in_time': 'time', 'direction_factor': 'direction'}
+#: Thermal viscosity with a temperature that does not follow the revolutions (warm start, cool-down pauses).
+THERMAL_FREE = 'thermal_free'
+#: Ranges of those kinds: |step| (fraction), where it happens (fraction of the traverses), |ln return factor|,
+#: initial offset of the nut temperature (times the running rise), cool-down pause (times the time constant).
+STEP_SIZE = (0.15, 0.40)
+STEP_AT = (0.3, 0.7)
+RETURN_LOG_FACTOR = (0.12, 0.35)
+WARM_START = (1.0, 2.0)
+COOL_DOWN = (0.7, 1.5)
 #: Verdict columns besides effect IDs.
 OTHER_VERDICTS = ('adequate', 'ambiguous', 'unexplained', 'cannot tell')
 #: Held-out gain an effect must bring when it is named (the issue's target).
@@ -95,17 +107,42 @@ def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool =
     from .study_draws import draw_setup
     rng = case_rng(kind, seed)
     setup = draw_setup(rng, quick=quick)
-    if kind == NONE:
+    if kind == NONE or kind in OUTSIDE_KINDS:
         names = []
     elif kind == TWO:
         names = sorted(rng.choice(effect_pool, size=2, replace=False).tolist())
+    elif kind == THERMAL_FREE:
+        names = ['thermal_viscosity']
     else:
         names = [kind]
     effects = draw_effects(names, seed=seed, rig=setup.rig, plan=setup.plan)
+    setup = _outside_catalogue(kind, rng, setup, effects)
     paths = simulate_experiment(folder / 'sim', plan=setup.plan, rig=setup.rig, seed=seed, effects=effects,
                                 nuisances=setup.nuisances)
     truth = effects.as_dict()
     return paths, setup, names, {name: truth.get(name) for name in names}
+
+
+def _outside_catalogue(kind: str, rng: np.random.Generator, setup, effects):
+    """The set-up of the kinds that are not one catalogue effect (drawn after everything else of the case)."""
+    from dataclasses import replace
+    from .study_draws import CaseSetup
+    sign = 1.0 if rng.integers(2) else -1.0
+    if kind == 'step_in_time':
+        rig = replace(setup.rig, mount_step=sign * float(rng.uniform(*STEP_SIZE)),
+                      mount_step_at=float(rng.uniform(*STEP_AT)))
+        return CaseSetup(setup.plan, rig, setup.nuisances)
+    if kind == 'direction_factor':
+        rig = replace(setup.rig, return_factor=float(math.exp(sign * rng.uniform(*RETURN_LOG_FACTOR))))
+        return CaseSetup(replace(setup.plan, return_under_load=True), rig, setup.nuisances)
+    if kind == THERMAL_FREE:
+        law = effects.thermal_viscosity
+        runs = len(setup.plan.conditions)
+        plan = replace(setup.plan, cool_down_pause=float(rng.uniform(*COOL_DOWN) * law.time_constant),
+                       cool_down_every=max(3, runs // 2))
+        rig = replace(setup.rig, initial_temperature_offset=float(rng.uniform(*WARM_START) * law.temperature_rise))
+        return CaseSetup(plan, rig, setup.nuisances)
+    return setup
 
 
 def run_random_case(case: tuple) -> dict:
@@ -150,6 +187,9 @@ def run_random_case(case: tuple) -> dict:
         'baseline_cv_rmse': result.baseline.cv_rmse,
         'chosen_cv_rmse': chosen.fit.cv_rmse if chosen is not None else None,
         'gain': chosen.gain if chosen is not None else None,
+        'located': result.location.located,
+        'empirical': document.get('empirical'),
+        'temperature_revolutions_correlation': document.get('temperature_revolutions_correlation'),
         'baseline_rms': test.residual_rms if test else None,
         'pure_error_rms': test.pure_error_rms if test else None,
         'seconds': round(time.time() - start, 2)})
@@ -159,6 +199,10 @@ def run_random_case(case: tuple) -> dict:
 
 def _right(record: dict) -> bool:
     effects, named = record['effects'], record.get('named', [])
+    if record['kind'] in OUTSIDE_KINDS:
+        empirical = record.get('empirical') or {}
+        return (record['verdict'] == 'unexplained'
+                and OUTSIDE_KINDS[record['kind']] in (record.get('located'), empirical.get('covariate')))
     if not effects:
         return record['verdict'] == 'adequate'
     if len(effects) == 1:
@@ -249,6 +293,23 @@ def confusion_markdown(records: list[dict], command: str, wall_seconds: float, j
               '| concealed | ' + ' | '.join(columns) + ' |', '|---|' + '---|' * len(columns)]
     for key, row in rows.items():
         lines.append(f'| {key} | ' + ' | '.join(str(row.get(c, '')) for c in columns) + ' |')
+    outside = [r for r in records if r['kind'] in OUTSIDE_KINDS or r['kind'] == THERMAL_FREE]
+    if outside:
+        lines += ['', '## Outside the catalogue and thermal with temperature not following revolutions', '',
+                  '| kind | seed | truth | verdict | located | empirical term (held-out gain) | r(temperature, '
+                  'revolutions) |', '|---|---|---|---|---|---|---|']
+        for r in outside:
+            s = r.get('setup', {})
+            truth = {'step_in_time': f'step x{1 + s.get("mount_step", 0.0):.3f}',
+                     'direction_factor': f'return x{s.get("return_factor", 1.0):.3f}'}.get(r['kind'], 'thermal')
+            empirical = r.get('empirical') or {}
+            where = ('factor by direction' if empirical.get('form') == 'direction'
+                     else f'{empirical.get("form")} in {empirical.get("covariate")}')
+            term = (f'{where}: {empirical["explanation"]} '
+                    f'({100 * empirical["gain"]:.0f} %)' if empirical.get('gain') is not None else '-')
+            rho = r.get('temperature_revolutions_correlation')
+            lines.append(f'| {r["kind"]} | {r["seed"]} | {truth} | {r["verdict"]} | {r.get("located", "-")} | '
+                         f'{term} | {"-" if rho is None else f"{rho:+.2f}"} |')
     misses = [r for r in records if not r['right']]
     lines += ['', f'## Misses ({len(misses)})', '']
     if misses:

@@ -79,7 +79,10 @@ class CaseSetup:
                 'joint_state_rate': self.rig.joint_state_rate, 'load_rate': self.rig.load_rate,
                 'temperature_rate': self.rig.temperature_rate, 'nuisances': self.nuisances.as_dict(),
                 'run_scatter': self.rig.run_scatter, 'run_wander': self.rig.run_wander,
-                'return_under_load': self.plan.return_under_load}
+                'return_under_load': self.plan.return_under_load, 'mount_step': self.rig.mount_step,
+                'mount_step_at': self.rig.mount_step_at, 'return_factor': self.rig.return_factor,
+                'initial_temperature_offset': self.rig.initial_temperature_offset,
+                'cool_down_pause': self.plan.cool_down_pause, 'cool_down_every': self.plan.cool_down_every}
 
 
 def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:

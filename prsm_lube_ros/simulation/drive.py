@@ -157,7 +157,8 @@ def schedule_session(program: DriveProgram, start: float, conditions: Sequence[t
     forward run and down after it; rewinds run unloaded at ``-rewind_speed``.
     With ``plan.return_under_load`` the nut comes back at the run's speed under
     its load instead (a ``'return'`` stroke: out and back both measured), and
-    the load ramps down after the return.
+    the load ramps down after the return.  After every ``plan.cool_down_every``
+    runs the rig stands still ``plan.cool_down_pause`` s more (the nut cools).
     Returns the strokes and the end time (after a final standstill).
     """
     require(rig.load_ramp_time <= plan.standstill,
@@ -165,7 +166,9 @@ def schedule_session(program: DriveProgram, start: float, conditions: Sequence[t
     lead = rig.actuator.lead
     strokes = []
     now = start + plan.standstill
-    for speed, load in conditions:
+    for number, (speed, load) in enumerate(conditions):
+        if number and plan.cool_down_every and number % plan.cool_down_every == 0:
+            now += plan.cool_down_pause
         if rig.load_ramp_time > 0:
             program.append_load(now - rig.load_ramp_time, load / rig.load_ramp_time, 0.0)
         program.append_load(now, 0.0, load)

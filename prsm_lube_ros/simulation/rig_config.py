@@ -69,6 +69,11 @@ class RigConfig:
     vibration_frame_id: str = 'nut_accelerometer'
     load_frame_id: str = 'load_cell'
     temperature_frame_id: str = 'nut'
+    # Physics outside the diagnosis catalogue and temperature histories (off by default):
+    mount_step: float = 0.0
+    mount_step_at: float = 0.5
+    return_factor: float = 1.0
+    initial_temperature_offset: float = 0.0
 
     def __post_init__(self):
         """Check every field; raise :class:`InputError` naming the first bad one."""
@@ -87,6 +92,11 @@ class RigConfig:
         require(self.contact_mode_damping < 1, 'rig contact_mode_damping must be below 1')
         for name in ('run_scatter', 'run_wander'):
             require(0 <= getattr(self, name) < 0.5, f'rig {name} must lie in [0, 0.5), got {getattr(self, name)!r}')
+        require(-0.5 < self.mount_step < 1.0, f'rig mount_step must lie in (-0.5, 1), got {self.mount_step!r}')
+        require(0.0 < self.mount_step_at < 1.0, f'rig mount_step_at must lie in (0, 1), got {self.mount_step_at!r}')
+        require(0.2 <= self.return_factor <= 5.0, f'rig return_factor must lie in [0.2, 5], got {self.return_factor!r}')
+        require(abs(self.initial_temperature_offset) <= 100.0,
+                f'rig initial_temperature_offset must lie within 100 K, got {self.initial_temperature_offset!r}')
         object.__setattr__(self, 'wander_period', tuple(as_number('rig wander_period', v)
                                                         for v in self.wander_period))
         require(len(self.wander_period) == 2 and 0 < self.wander_period[0] <= self.wander_period[1],
@@ -163,7 +173,9 @@ class ExperimentPlan:
     ramp) in m, rewind_speed in rad/s, standstill and stage_pause in s,
     run_order ``'fixed'`` (speed-major, as listed) or ``'random'`` (seeded);
     return_under_load: the return stroke runs back at the run's speed and load
-    (out and back, both measured) instead of an unloaded rewind.
+    (out and back, both measured) instead of an unloaded rewind;
+    cool_down_pause s of standstill after every cool_down_every runs (0: none),
+    so the nut cools while the revolutions stand still.
     """
 
     speeds: tuple[float, ...] = (100 * RPM, 150 * RPM, 200 * RPM)
@@ -176,6 +188,8 @@ class ExperimentPlan:
     stage_pause: float = 60.0
     run_order: str = 'fixed'
     return_under_load: bool = False
+    cool_down_pause: float = 0.0
+    cool_down_every: int = 0
 
     def __post_init__(self):
         """Check every field; raise :class:`InputError` naming the first bad one."""
@@ -187,6 +201,9 @@ class ExperimentPlan:
         for name in ('stroke', 'ramp_travel', 'rewind_speed', 'standstill'):
             require(getattr(self, name) > 0, f'plan {name} must be > 0, got {getattr(self, name)!r}')
         require(self.stage_pause >= 0, f'plan stage_pause must be >= 0, got {self.stage_pause!r}')
+        require(self.cool_down_pause >= 0, f'plan cool_down_pause must be >= 0 s, got {self.cool_down_pause!r}')
+        require(int(self.cool_down_every) == self.cool_down_every and self.cool_down_every >= 0,
+                f'plan cool_down_every must be a whole number of runs >= 0, got {self.cool_down_every!r}')
         require(2 * self.ramp_travel < self.stroke,
                 f'plan ramp_travel {self.ramp_travel} m leaves no steady travel in the {self.stroke} m stroke')
         require(self.run_order in ('fixed', 'random'),

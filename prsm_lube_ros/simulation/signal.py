@@ -139,7 +139,8 @@ class RigStream:
         self._wander_phases = wander_rng.uniform(0.0, 2.0 * math.pi, WANDER_TERMS)
         self._next_index: int | None = None
         self._last_angle = float(program.motion(0.0)[0])
-        self.temperature = rig.ambient_temperature
+        # A warm (or cooled) actuator at the start: the nut relaxes from there (thermal effect only).
+        self.temperature = rig.ambient_temperature + rig.initial_temperature_offset
         self.revolutions = 0.0
 
     def relubricate(self) -> None:
@@ -162,16 +163,27 @@ class RigStream:
         self.temperature = float(result[-1])
         return result
 
-    def _set_up_factor(self, times: np.ndarray) -> np.ndarray:
+    def _set_up_factor(self, times: np.ndarray, speeds: np.ndarray) -> np.ndarray:
         """Amplitude factor of the set-up: one log-normal draw per traverse times a slow wander of time.
 
         Each traverse (stroke of the drive program) has its own factor
         ``exp(run_scatter z_k)`` (sensor coupling, preload, temperature), drawn
         from the seed and the traverse number alone, so chunking changes
         nothing; the wander is ``run_wander sqrt(2 / J) sum_j sin(2 pi t / T_j + phi_j)``.
+        Physics the diagnosis catalogue does not have: from the traverse at the
+        fraction ``mount_step_at`` of all traverses on, the amplitude is
+        ``1 + mount_step`` times higher (the sensor re-seated); traverses with a
+        negative screw speed (the loaded return) are ``return_factor`` times
+        higher (flank loading, backlash, preload differing by direction).
         """
         rig = self.rig
         log_factor = np.zeros(times.size)
+        if rig.mount_step:
+            starts = np.asarray(self.program.traverse_starts, dtype=float)
+            traverse = np.searchsorted(starts, times, side='right') - 1
+            log_factor[traverse >= int(rig.mount_step_at * starts.size)] += math.log1p(rig.mount_step)
+        if rig.return_factor != 1.0:
+            log_factor[speeds < -STANDSTILL_SPEED] += math.log(rig.return_factor)
         if rig.run_scatter:
             starts = np.asarray(self.program.traverse_starts, dtype=float)
             traverse = np.clip(np.searchsorted(starts, times, side='right') - 1, 0, None)
@@ -226,8 +238,8 @@ class RigStream:
             if background.broadband_share > 0:
                 part += math.sqrt(background.broadband_share) * self._background_rng.standard_normal(count)
             signal += background.rms * part
-        if rig.run_scatter or rig.run_wander:
-            signal *= self._set_up_factor(times)
+        if rig.run_scatter or rig.run_wander or rig.mount_step or rig.return_factor != 1.0:
+            signal *= self._set_up_factor(times, speeds)
         signal += rig.sensor_noise * self._sensor_rng.standard_normal(count)
 
         start, stop = first / fs, (first + count) / fs

@@ -46,6 +46,14 @@ class SyntheticPlan:
     theta: float = 1.0
     constants: ModelConstants = field(default_factory=lambda: ModelConstants(0.02, -1.0e-3, 0.33))
     spectrum_bins: int = 0          # > 0: synthesise spectra with this many bins up to 2 kHz
+    # Out and back, physics outside the catalogue, temperature histories (all off by default):
+    out_and_back: bool = False      # each run followed by a return at its speed and load (direction -1)
+    return_factor: float = 1.0      # amplitude factor of the returns (flank loading, backlash, preload)
+    step_factor: float = 1.0        # amplitude factor from run step_at x runs on (the sensor re-seated)
+    step_at: float = 0.5
+    warm_start: float = 0.0         # K above ambient at the start (thermal: a warm actuator cooling)
+    cool_down_every: int = 0        # runs between cool-down pauses (0: none)
+    cool_down_pause: float = 0.0    # s of standstill of each pause (the nut cools, revolutions stand still)
 
 
 def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> dict:
@@ -135,17 +143,25 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
                                 else np.arange(len(conditions)) for _ in range(plan.sessions)])
     rows = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run',
                             'recording')}
-    theta_eff, spectra, a22_list = [], [], []
-    clock, revs, temp = 0.0, 0.0, plan.ambient
+    theta_eff, spectra, a22_list, directions = [], [], [], []
+    clock, revs, temp = 0.0, 0.0, plan.ambient + plan.warm_start
     depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
     total_revs = sum(plan.stroke / plan.lead for _ in conditions)
     per_session = max(len(order) // plan.sessions, 1)
-    for run, index in enumerate(order):
-        session = run // per_session
-        if run and run % per_session == 0:
+    legs = [(number, index, way) for number, index in enumerate(order) for way in ((1, -1) if plan.out_and_back
+                                                                                   else (1,))]
+    for run, (number, index, way) in enumerate(legs):
+        session = number // per_session
+        if way > 0 and number and number % per_session == 0:
             revs, clock, depleted = 0.0, 0.0, 0.0   # relubricated; a new recording starts
             if heat:
                 temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / heat['tau'])
+        elif way > 0 and number and plan.cool_down_every and number % plan.cool_down_every == 0:
+            clock += plan.cool_down_pause
+            if heat:
+                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.cool_down_pause / heat['tau'])
+        factor = ((plan.return_factor if way < 0 else 1.0)
+                  * (plan.step_factor if run >= plan.step_at * len(legs) else 1.0))
         speed, load = conditions[index]
         nut_speed = plan.lead * speed / (2 * math.pi)
         n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
@@ -158,6 +174,7 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
                 target = plan.ambient + heat['rise']
                 temp = target + (temp - target) * math.exp(-plan.window / heat['tau'])
             position = (k + 0.5) * plan.window * nut_speed
+            position = position if way > 0 else plan.stroke - position
             theta = plan.theta
             film = 1.0
             if loss:
@@ -184,7 +201,7 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
             if res:
                 r = res['top_ratio'] * speed / res['top_speed']
                 amplitude *= float(resonance.magnification(r, res['damping_ratio']))
-            noise = math.exp(run_gain + rng.normal(0.0, plan.window_noise))
+            noise = factor * math.exp(run_gain + rng.normal(0.0, plan.window_noise))
             amplitude *= noise
             background = 0.0
             if noise_floor:
@@ -201,6 +218,7 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
             rows['temperature'].append(temp + rng.normal(0, 0.05) if plan.record_temperature else math.nan)
             rows['run'].append(run)
             rows['recording'].append(session)
+            directions.append(float(way))
             theta_eff.append(theta * film)
             a22_list.append(a22)
             if plan.spectrum_bins:
@@ -213,7 +231,7 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
         if heat:
             temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / heat['tau'])
     resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-    table = WindowTable(theta=plan.theta,
+    table = WindowTable(theta=plan.theta, direction=directions,
                         spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
     single = effect is None or isinstance(effect, str)
     truth = {'effect': effect, 'params': laws.get(effect, {}) if single else laws,

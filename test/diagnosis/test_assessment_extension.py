@@ -74,3 +74,26 @@ def test_calibration_without_extension_assesses_as_before():
     w, f, a = abs(window.screw_speed), abs(window.axial_load), window.vibration_rms
     expected = (c.c_f * f - np.log(a / (c.c_sys * w ** 2 * f ** (-1 / 3)))) / (c.c_lambda * w ** 0.68 * f ** -0.073)
     assert assessed.theta_oil == pytest.approx(expected, rel=1e-12)
+
+
+def test_two_named_effects_are_both_stored_and_both_undone_in_assessment():
+    effects = ('position_dependent_stiffness', 'thermal_viscosity')
+    params = {name: CASES[name] for name in effects}
+    plan = SyntheticPlan(sessions=2)
+    reference, _ = synthetic_table(np.random.default_rng(21), effects, plan, params=params)
+    result = diagnose_table(reference)
+    assert {effect.id for effect, _, _ in result.named_effects()} == set(effects)
+    extended = calibration_from_dict(calibration_to_dict(result.calibration()))
+    stored = extended.extension['effects']
+    assert sorted(item['effect'] for item in stored) == sorted(effects)
+    assert extended.extension['effect'] == result.chosen.effect.id
+    paper = fit_constants(reference.speed, reference.load, reference.rms, 1.0)
+    assessed, _ = synthetic_table(np.random.default_rng(22), effects, dataclasses.replace(plan, theta=0.8),
+                                  params=params)
+    windows = windows_of(assessed)
+    errors = {}
+    for name, calibration in (('paper', paper), ('extended', extended)):
+        assessor = Assessor(calibration)
+        runs = np.array([run.theta_oil for run in assessor.assess_runs(assessor.assess_windows(windows))])
+        errors[name] = float(np.sqrt(np.mean((runs - 0.8) ** 2)))
+    assert errors['extended'] < errors['paper']
