@@ -656,6 +656,20 @@ def _held_out_tiebreak(table, first: Candidate, second: Candidate, correlation: 
     return first if first.fit.cv_rmse > second.fit.cv_rmse else second
 
 
+def _settle_tie(best: Candidate, runner: Candidate, loser: Candidate, notes: list, loser_reason: str,
+                decided_by: str) -> Candidate:
+    """Drop ``loser`` of two candidates that fit the amplitudes equally well; note why; return the winner.
+
+    ``loser_reason`` may name the winner as ``{winner}``.
+    """
+    winner = runner if loser is best else best
+    loser.status = 'dropped'
+    loser.reason += loser_reason.replace('{winner}', winner.effect.id)
+    notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; {decided_by}: '
+                 f'{winner.effect.id}')
+    return winner
+
+
 def _separation_advice(a: Effect, b: Effect) -> str:
     return (f'to separate {a.id} from {b.id}, record {a.to_separate}; for {b.id}: {b.to_separate}')
 
@@ -738,23 +752,18 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
             elif _held_out_tiebreak(table, best, runner, correlation):
                 loser = _held_out_tiebreak(table, best, runner, correlation)
-                winner = runner if loser is best else best
-                loser.status = 'dropped'
-                loser.reason += (f'; fits the amplitudes as well as {winner.effect.id} but predicts held-out runs '
-                                 f'worse (temperature and revolutions not collinear, r = {correlation:+.2f} over runs)')
-                notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; temperature '
-                             f'and revolutions are not collinear (r = {correlation:+.2f} over runs), so the held-out '
-                             f'runs decide: {winner.effect.id}')
-                best, verdict = winner, winner.effect.id
+                collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
+                best = _settle_tie(best, runner, loser, notes,
+                                   f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
+                                   f'({collinearity})', f'{collinearity}, so the held-out runs decide')
+                verdict = best.effect.id
             elif _spectral_tiebreak(table, location, best, runner):
                 loser = _spectral_tiebreak(table, location, best, runner)
-                winner = runner if loser is best else best
-                loser.status = 'dropped'
-                loser.reason += (f'; fits as well as {winner.effect.id} but '
-                                 f'{loser.evidence_against or "the other has independent evidence"}')
-                notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; '
-                             f'decided by evidence from outside the fit: {winner.effect.id}')
-                best, verdict = winner, winner.effect.id
+                best = _settle_tie(best, runner, loser, notes,
+                                   '; fits as well as {winner} but '
+                                   + (loser.evidence_against or 'the other has independent evidence'),
+                                   'decided by evidence from outside the fit')
+                verdict = best.effect.id
             else:
                 tied = [best.effect.id, runner.effect.id]
                 verdict = AMBIGUOUS
