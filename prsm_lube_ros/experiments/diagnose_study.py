@@ -169,6 +169,8 @@ def _run_random(args, effects: list[str], command: str) -> int:
             print(f'diagnose_study: unknown kind(s) {", ".join(unknown)}; known: {", ".join(kinds)}', file=sys.stderr)
             return 2
         kinds = list(args.kinds)
+    elif args.effects:      # effects chosen by name: those, none and two; the other kinds only when asked
+        kinds = [kind for kind in kinds if kind not in OUTSIDE_KINDS and kind != THERMAL_FREE]
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     cases = [(kind, seed, tuple(effects), args.quick) for seed in seeds for kind in kinds]
     records, start = [], time.time()
