@@ -41,7 +41,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from ..estimation.calibration import operating_levels
+from ..estimation.calibration import condition_labels
 from ..validation import finite_or_none
 
 #: p-value below which lack of fit is significant.
@@ -130,13 +130,7 @@ class LackOfFit:
 
 def run_conditions(table) -> np.ndarray:
     """Condition index of each run (in :attr:`WindowTable.runs` order): its (speed level, load level) pair."""
-    speed, load = table.run_means('speed'), table.run_means('load')
-    pairs = []
-    for values in (speed, load):
-        levels = np.asarray(operating_levels(values))
-        pairs.append(np.argmin(np.abs(np.abs(values)[:, None] - levels[None, :]), axis=1))
-    _, condition = np.unique(np.column_stack(pairs), axis=0, return_inverse=True)
-    return np.asarray(condition).reshape(-1)
+    return condition_labels(table.run_means('speed'), table.run_means('load'))
 
 
 REPEAT_ADVICE = 'record each (speed, load) condition in two runs or more'

@@ -220,14 +220,20 @@ def merged_setpoints(values, clusters=None, unit: str = '', name: str = 'values'
     return words
 
 
-def operating_conditions(speeds, loads) -> int:
-    """Distinct (speed level, load level) pairs among the windows."""
+def condition_labels(speeds, loads) -> np.ndarray:
+    """Index of each (speed, load)'s condition: its pair of operating levels (:func:`operating_levels`)."""
     speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
     if speeds.size == 0:
-        return 0
-    pairs = set(zip(_nearest_level(speeds, operating_levels(speeds)).tolist(),
-                    _nearest_level(loads, operating_levels(loads)).tolist()))
-    return len(pairs)
+        return np.zeros(0, dtype=int)
+    pairs = np.column_stack([_nearest_level(speeds, operating_levels(speeds)),
+                             _nearest_level(loads, operating_levels(loads))])
+    _, labels = np.unique(pairs, axis=0, return_inverse=True)
+    return np.asarray(labels).reshape(-1)
+
+
+def operating_conditions(speeds, loads) -> int:
+    """Distinct (speed level, load level) pairs among the windows."""
+    return int(np.unique(condition_labels(speeds, loads)).size)
 
 
 def form_testable(conditions: int) -> bool:
@@ -316,12 +322,9 @@ def replicated_conditions(speeds, loads, clusters) -> bool:
     """Whether some (speed, load) condition was recorded in two runs or more."""
     if clusters is None or len(speeds) == 0:
         return False
-    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
-    pairs = np.column_stack([_nearest_level(speeds, operating_levels(speeds)),
-                             _nearest_level(loads, operating_levels(loads))])
     runs_of = {}
-    for (i, j), run in zip(pairs.tolist(), np.asarray(clusters).tolist()):
-        runs_of.setdefault((i, j), set()).add(run)
+    for condition, run in zip(condition_labels(speeds, loads).tolist(), np.asarray(clusters).tolist()):
+        runs_of.setdefault(condition, set()).add(run)
     return any(len(runs) > 1 for runs in runs_of.values())
 
 

@@ -42,6 +42,7 @@ of a normal: variances are multiplied by :attr:`RunScatter.predictive_factor`
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 import math
 
 import numpy as np
@@ -67,7 +68,7 @@ class RunScatter:
     estimated: bool = True  # False: tau could not be estimated and ASSUMED_RUN_STD stands for it
     note: str = ''          # where the figures come from when not from REML (an old calibration file)
 
-    @property
+    @cached_property
     def predictive_factor(self) -> float:
         """Variance factor that makes one sigma span the central 68.3 % of a Student t with :attr:`dof` dof."""
         from scipy.special import stdtrit     # scipy.special: no scipy.optimize at start-up
