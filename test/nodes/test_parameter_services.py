@@ -7,10 +7,9 @@ context, as ``ros2 param list/describe/get/set`` would: nothing here goes
 through the node object itself.
 """
 import os
-import threading
 
 import pytest
-from spinning import SpinningContext
+from spinning import SpinningContext, answered
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
@@ -49,24 +48,11 @@ def sides():
         nodes.close()
 
 
-#: Calls per request.  A service can answer before DDS has matched its response writer with this
-#: client's reader; rmw_fastrtps then drops the answer ("failed to send response (timeout)", seen on
-#: Kilted under load).  Every request here is idempotent, so it is simply sent again.
-ATTEMPTS = 3
-
-
 def call(probe, srv_type, name, request):
-    """Call service ``name`` from the probe node and return the response (fails when no attempt is answered)."""
+    """Call service ``name`` from the probe node and return the response (sent again when unanswered)."""
     client = probe.nodes[0].create_client(srv_type, name)
     assert client.wait_for_service(timeout_sec=TIMEOUT), f'{name} is not served'
-    for _ in range(ATTEMPTS):
-        future = client.call_async(request)
-        done = threading.Event()
-        future.add_done_callback(lambda _: done.set())
-        if done.wait(TIMEOUT):
-            return future.result()
-        client.remove_pending_request(future)
-    raise AssertionError(f'{name} did not answer {ATTEMPTS} calls')
+    return answered(lambda: client.call_async(request), name, TIMEOUT)
 
 
 def double(value):

@@ -8,12 +8,11 @@ Jazzy); ``ros2 lifecycle set`` is ``<node>/change_state``.  Everything is called
 from a probe node in another context: nothing here goes through the node object.
 """
 import os
-import threading
 
 import pytest
 import yaml
 from polling import wait_for
-from spinning import SpinningContext
+from spinning import SpinningContext, answered
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
@@ -56,12 +55,9 @@ def sides():
         nodes.close()
 
 
-def answer(future, what):
-    """The result of a future the probe's executor completes."""
-    done = threading.Event()
-    future.add_done_callback(lambda _: done.set())
-    assert done.wait(TIMEOUT), f'no answer to {what}'
-    return future.result()
+def answer(send, what):
+    """The result of the future ``send()`` returns, sent again when unanswered (idempotent requests only)."""
+    return answered(send, what, TIMEOUT)
 
 
 def parameter_client(probe, node_name):
@@ -74,8 +70,8 @@ def parameter_client(probe, node_name):
 def dump(probe, node_name, path):
     """``ros2 param dump node_name > path``: list, get, written as its YAML."""
     client = parameter_client(probe, node_name)
-    names = sorted(answer(client.list_parameters(), 'list_parameters').result.names)
-    values = answer(client.get_parameters(names), 'get_parameters').values
+    names = sorted(answer(lambda: client.list_parameters(), 'list_parameters').result.names)
+    values = answer(lambda: client.get_parameters(names), 'get_parameters').values
     path.write_text(yaml.dump({node_name: {'ros__parameters': {
         name: parameter_value_to_python(value) for name, value in zip(names, values)}}}))
     return dict(zip(names, (parameter_value_to_python(v) for v in values)))
@@ -85,20 +81,20 @@ def load(probe, node_name, path):
     """``ros2 param load node_name path``: {name: (successful, reason)} of each parameter in the file."""
     client = parameter_client(probe, node_name)
     names = list(yaml.safe_load(path.read_text())[node_name]['ros__parameters'])
-    results = answer(client.load_parameter_file(str(path)), 'set_parameters').results
+    results = answer(lambda: client.load_parameter_file(str(path)), 'set_parameters').results
     return {name: (r.successful, r.reason) for name, r in zip(names, results)}
 
 
 def get(probe, node_name, name):
     """``ros2 param get node_name name``."""
     client = parameter_client(probe, node_name)
-    return parameter_value_to_python(answer(client.get_parameters([name]), 'get_parameters').values[0])
+    return parameter_value_to_python(answer(lambda: client.get_parameters([name]), 'get_parameters').values[0])
 
 
 def set_value(probe, node_name, name, value):
     """``ros2 param set node_name name value``: (successful, reason)."""
     client = parameter_client(probe, node_name)
-    result = answer(client.set_parameters([Parameter(name, value=value)]), 'set_parameters').results[0]
+    result = answer(lambda: client.set_parameters([Parameter(name, value=value)]), 'set_parameters').results[0]
     return result.successful, result.reason
 
 
@@ -117,7 +113,7 @@ def test_what_may_be_read_or_written_is_read_only_with_its_reason(sides, tmp_pat
     estimator(nodes, tmp_path)
     before = get(probe, '/prsm/lubrication_estimator', name)
     client = parameter_client(probe, '/prsm/lubrication_estimator')
-    described = answer(client.describe_parameters([name]), 'describe_parameters').descriptors[0]
+    described = answer(lambda: client.describe_parameters([name]), 'describe_parameters').descriptors[0]
     assert described.read_only                                   # ros2 param describe says so
     successful, reason = set_value(probe, '/prsm/lubrication_estimator', name, '/')
     assert not successful and 'read-only after start-up' in reason and name in reason, reason
@@ -134,7 +130,7 @@ def test_calibrate_still_reads_only_inside_the_recordings_folder(sides, tmp_path
     client = probe.probe.create_client(Calibrate, '/prsm/calibrate')
     assert client.wait_for_service(timeout_sec=TIMEOUT)
     for path in (str(outside), '../outside', '/etc/passwd'):
-        response = answer(client.call_async(Calibrate.Request(bag_paths=[path])), 'calibrate')
+        response = answer(lambda: client.call_async(Calibrate.Request(bag_paths=[path])), 'calibrate')
         assert not response.success and 'outside the recordings folder' in response.message, path
 
 
@@ -217,7 +213,7 @@ def test_each_lifecycle_transition_is_logged_once(sides):
     for transition in (Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_ACTIVATE,
                        Transition.TRANSITION_DEACTIVATE, Transition.TRANSITION_CLEANUP):
         request = ChangeState.Request(transition=Transition(id=transition))
-        assert answer(client.call_async(request), 'change_state').success
+        assert answered(lambda: client.call_async(request), 'change_state', TIMEOUT, attempts=1).success
     expected = ['configure: unconfigured -> inactive', 'activate: inactive -> active',
                 'deactivate: active -> inactive', 'cleanup: inactive -> unconfigured']
     wait_for(lambda: all(e in lines for e in expected), TIMEOUT, 'the transitions logged')

@@ -50,3 +50,26 @@ class SpinningContext:
         for node in self.nodes + ([self.probe] if self.probe is not None else []):
             node.destroy_node()
         rclpy.try_shutdown(context=self.context)
+
+
+#: Sends per idempotent request.  A service can answer before DDS has matched its response writer with
+#: the client's reader; rmw_fastrtps then drops the answer ("failed to send response (timeout)", seen on
+#: Kilted under load), so a request nothing has answered is simply sent again.
+ATTEMPTS = 3
+
+
+def answered(send, what: str, timeout: float, attempts: int = ATTEMPTS):
+    """The result of the future ``send()`` returns, sending again (up to ``attempts``) when none comes.
+
+    ``send`` must make an idempotent request (a get, a list, a set to the
+    same value, a refused call): a late answer to an earlier send is dropped.
+    """
+    import threading
+    for _ in range(attempts):
+        future = send()
+        done = threading.Event()
+        future.add_done_callback(lambda _: done.set())
+        if done.wait(timeout):
+            return future.result()
+        future.cancel()
+    raise AssertionError(f'no answer to {what} after {attempts} sends')
