@@ -62,17 +62,13 @@ def add_band_option(parser) -> None:
 def read_recordings(paths, args, *, spectra: bool = False):
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
     from dataclasses import replace
-    from ..estimation.conditioning import LOWEST_ORDER_FREQUENCY
-    from ..estimation.pipeline import recording_windows, require_usable
-    from ..estimation.windowing import WindowSettings
+    from ..estimation.pipeline import analysis_settings, recording_windows, require_usable
     from ..physics.actuator import load_actuator
     from ..validation import require_positive
     actuator = load_actuator(args.actuator)
-    settings = WindowSettings(window_length=require_positive('--window', args.window),
-                              spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if spectra else 0.0)
-    if getattr(args, 'band_high', None) is not None:
-        from ..estimation.conditioning import AnalysisBand
-        settings = replace(settings, band=AnalysisBand(high=require_positive('--band-high', args.band_high)))
+    band_high = getattr(args, 'band_high', None)
+    settings = analysis_settings(require_positive('--window', args.window), spectra=spectra,
+                                 band_high=None if band_high is None else require_positive('--band-high', band_high))
     recordings = []
     for path in paths:
         bar = progress_bar(100, Path(path).name)

@@ -435,7 +435,7 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
-    evidence = effect.independent_evidence(table, location)
+    evidence = effect.independent_evidence(table, location, fit.params)
     unphysical = fit.unphysical()
     form = _named_form(effect, fit.params, table, location, ties)
     if len(forms) == 1:

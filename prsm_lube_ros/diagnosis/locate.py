@@ -41,6 +41,17 @@ speeds at least (so not rotation orders, which move with speed) whose power
 stays put, wherever they stand out, while the total power changes with speed
 (so not a resonance of the thread-contact excitation, which scales with it).  That is the signature
 of vibration from elsewhere.
+
+The same spectra are order-tracked for a structural mode: a band standing out
+at the same frequency in Hz at two speeds or more while the rotation orders
+move past it (so a frequency where no order stays), at three speeds or more (two speeds can put two
+different orders on one bin), whose power and share of
+the paper's model's mean square both change with the operating point.  A mode that the
+thread-contact excitation drives rings at its natural frequency with a power
+that follows the excitation's approach to it (Eq. 13's |H(r)|), unlike a fixed
+line from elsewhere (constant power) or the contact's own response (constant
+share).  Below the frequency where neighbouring speeds move an order by two
+bins, fixed and moving content cannot be told apart and nothing is reported.
 """
 from __future__ import annotations
 
@@ -67,6 +78,14 @@ FLOOR_HALF_WIDTH = 8
 LINE_CONSTANCY = 2.5
 #: ... while the total power varies by more than this factor.
 POWER_SPREAD = 1.5
+#: Half width, bins, of the neighbourhood a mode's band (2 zeta f_r wide) is compared with.
+MODE_FLOOR_HALF_WIDTH = 32
+#: A mode's band stands out at this many speeds at least.
+MODE_MIN_SPEEDS = 3
+#: A mode's band: its share of the mean square varies between speeds by at least this factor.
+MODE_SHARE_SPREAD = 2.0
+#: ... and it carries at least this share of the mean square at the speed where it is strongest.
+MODE_MIN_SHARE = 0.02
 
 COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
                    'speed': 'rad/s', 'load': 'N', 'direction': 'sign of the screw speed'}
@@ -107,12 +126,19 @@ class SpectralLines:
     share_at_lowest_speed: float = 0.0                  # of the mean square RMS at the lowest speed
     testable: bool = False
     note: str = ''
+    mode_frequencies: list = field(default_factory=list)   # Hz, fixed bands whose power follows the speed
+    mode_shares: list = field(default_factory=list)        # per band: its share of the mean square per speed level
+    mode_speeds: list = field(default_factory=list)        # rad/s, the speed levels of mode_shares
+    mode_note: str = ''
 
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'testable': self.testable, 'frequencies_hz': [float(f) for f in self.frequencies],
                 'line_powers': [float(p) for p in self.powers], 'total_power': float(self.total_power),
-                'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note}
+                'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note,
+                'mode_frequencies_hz': [float(f) for f in self.mode_frequencies],
+                'mode_shares': [[float(v) for v in shares] for shares in self.mode_shares],
+                'mode_speed_levels': [float(v) for v in self.mode_speeds], 'mode_note': self.mode_note}
 
 
 @dataclass
@@ -442,34 +468,61 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
     return tests + flexible
 
 
-def spectral_lines(table: WindowTable) -> SpectralLines:
-    """Fixed-frequency lines with constant power (see module doc); untestable without spectra or with one speed."""
+def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> SpectralLines:
+    """Fixed-frequency lines with constant power and mode bands (module doc); untestable without spectra or one speed.
+
+    ``residual`` (the baseline's ``ln A_model - ln A`` per window) gives the
+    paper's model's mean square per speed, against which a mode band's power is
+    compared; without it the recorded mean square is used.
+    """
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
         return SpectralLines(note='no spectra (vibration samples not kept)')
     levels = operating_levels(table.speed)
     if len(levels) < 2:
         return SpectralLines(note='one screw speed only: fixed lines cannot be told from rotation orders')
     df = table.spectrum_resolution
-    ratio = max(levels) / min(levels)
-    # Below this frequency a rotation order moves by less than 2 bins between the extreme speeds.
-    lowest = max(3 * df, 2 * df / (ratio - 1))
     edges = np.array(levels)
+    order = np.argsort(edges)
+    # Below this frequency a rotation order moves by less than 2 bins between neighbouring speeds.
+    neighbours = edges[order][1:] / edges[order][:-1]
+    lowest = max(3 * df, 2 * df / (float(np.min(neighbours)) - 1))
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - edges[None, :]), axis=1)
     medians = np.array([np.median(table.spectra[index == i], axis=0) for i in range(len(levels))])
-    floors = median_filter(medians, size=(1, 2 * FLOOR_HALF_WIDTH + 1), mode='nearest')
-    excess = medians / np.maximum(floors, 1e-300)
-    # Allow a line to sit one bin off between speeds.
-    widened = np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
+    floors, excess, widened = _excess(medians, FLOOR_HALF_WIDTH)
     freqs = np.arange(medians.shape[1]) * df
-    slow = np.argsort(edges)[:2]
-    # Prominent at the two lowest speeds (where the thread contacts are weakest) at the same frequency.
+    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(levels))])
+    modelled = table.rms if residual is None else table.rms * np.exp(residual)
+    model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(levels))])
+    result = SpectralLines(testable=True)
+    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, order[:2], df)
+    # A line's Hann main lobe spans +-2 bins: a band must sit where orders move by 4 bins between speeds.
+    _mode_bands(result, medians, freqs, 2 * lowest, model_square, edges, df)
+    return result
+
+
+def _excess(medians: np.ndarray, half_width: int):
+    """(floors, excess, widened) of spectra per speed level (rows).
+
+    Floors are running medians over ``2 half_width + 1`` bins, excess the
+    spectra over them, widened the excess widened by a bin each side (a line
+    may sit one bin off between speeds).
+    """
+    floors = median_filter(medians, size=(1, 2 * half_width + 1), mode='nearest')
+    excess = medians / np.maximum(floors, 1e-300)
+    return floors, excess, np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
+
+
+def _line_groups(candidate: np.ndarray) -> list:
+    """Runs of candidate bins (gaps of up to two bins joined)."""
+    bins = np.flatnonzero(candidate)
+    return np.split(bins, np.flatnonzero(np.diff(bins) > 2) + 1) if bins.size else []
+
+
+def _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, slow, df) -> None:
+    """Lines prominent at the two lowest speeds whose power stays put while the total power moves."""
     candidate = np.all(widened[slow] >= LINE_PROMINENCE, axis=0) & (freqs >= lowest)
     candidate &= excess[slow].max(axis=0) >= LINE_PROMINENCE
-    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(levels))])
-    result = SpectralLines(testable=True)
-    bins = np.flatnonzero(candidate)
-    groups = np.split(bins, np.flatnonzero(np.diff(bins) > 2) + 1) if bins.size else []
-    for group in groups:
+    for group in _line_groups(candidate):
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
         prominent = widened[:, lo:hi].max(axis=1) >= LINE_PROMINENCE
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
@@ -483,21 +536,59 @@ def spectral_lines(table: WindowTable) -> SpectralLines:
             result.frequencies.append(float(freqs[peak]))
             result.powers.append(float(np.median(power)))
     result.total_power = float(sum(result.powers))
-    slowest = int(np.argmin(edges))
-    result.share_at_lowest_speed = result.total_power / float(mean_square[slowest])
+    result.share_at_lowest_speed = result.total_power / float(mean_square[slow[0]])
     if result.frequencies:
         result.note = (f'{len(result.frequencies)} line(s) at fixed frequencies '
                        f'({", ".join(f"{f:.0f}" for f in result.frequencies)} Hz) with constant power, '
                        f'{100 * result.share_at_lowest_speed:.2f} % of the power at the lowest speed')
     else:
         result.note = 'no fixed-frequency line with constant power'
-    return result
+
+
+def _mode_bands(result, medians, freqs, lowest, mean_square, edges, df) -> None:
+    """Bands fixed in Hz at three speeds or more whose power and share of ``mean_square`` follow the speed.
+
+    ``mean_square`` per speed level is the paper's model's: the contact's own
+    response (a fixed mode it excites broadband) keeps its share of it even when a
+    background floor changes its share of the recorded power.
+    """
+    floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
+    prominent = widened >= LINE_PROMINENCE
+    # Two speeds can put two different orders on one bin; three seldom do.
+    candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= lowest)
+    for group in _line_groups(candidate):
+        if any(abs(freqs[group[0]] - f) <= 3 * df for f in result.frequencies):
+            continue
+        lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
+        power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
+        share = power / mean_square
+        seen = prominent[:, lo:hi].any(axis=1)
+        if seen.sum() < MODE_MIN_SPEEDS or power[seen].min() <= 0:
+            continue
+        peaks = lo + np.argmax(medians[seen, lo:hi], axis=1)
+        if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
+            continue
+        varies = power[seen].max() / power[seen].min() > LINE_CONSTANCY
+        share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD
+        if varies and share_varies and share.max() >= MODE_MIN_SHARE:
+            peak = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
+            result.mode_frequencies.append(float(freqs[peak]))
+            result.mode_shares.append([float(v) for v in share])
+    result.mode_speeds = [float(v) for v in edges]
+    if result.mode_frequencies:
+        strongest = int(np.argmax([max(v) for v in result.mode_shares]))
+        shares = result.mode_shares[strongest]
+        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {edges[i]:.1f} rad/s' for i in np.argsort(edges))
+        result.mode_note = (f'a band fixed at {result.mode_frequencies[strongest]:.1f} Hz while the orders move, '
+                            f'its share of the power following the speed ({by_speed})')
+    else:
+        result.mode_note = 'no band fixed in frequency whose power follows the speed'
 
 
 def locate(table: WindowTable, residual: np.ndarray) -> Location:
     """Test the baseline residual against every covariate and the spectrum."""
     tests = covariate_tests(table, residual)
-    spectrum = spectral_lines(table)
+    spectrum = spectral_lines(table, residual)
     significant = [t for t in tests if t.p_value < SIGNIFICANCE]
     if significant:
         top = max(significant, key=lambda t: t.r_squared)
@@ -509,8 +600,9 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
     else:
         located = 'none'
         summary = 'no covariate carries a significant part of the residual'
-    if spectrum.frequencies:
-        summary += '; spectrum: ' + spectrum.note
-        if located == 'none':
-            located = 'spectrum'
+    for found, note in ((spectrum.frequencies, spectrum.note), (spectrum.mode_frequencies, spectrum.mode_note)):
+        if found:
+            summary += '; spectrum: ' + note
+            if located == 'none':
+                located = 'spectrum'
     return Location(tests, spectrum, located, summary)

@@ -65,6 +65,22 @@ class RecordingWindows:
         return reason + (f'; {self.problems[-1]}' if self.problems else '')
 
 
+def analysis_settings(window_length: float = 1.0, *, spectra: bool = False,
+                      band_high: float | None = None) -> WindowSettings:
+    """The window settings ``calibrate``, ``assess`` and ``diagnose`` use (the studies too).
+
+    window_length s; ``spectra`` keeps each window's spectrum at a resolution
+    that separates the lowest rotation orders (:data:`.conditioning.LOWEST_ORDER_FREQUENCY`);
+    ``band_high`` (Hz) the analysis band's upper edge (default: from the first recording).
+    """
+    from .conditioning import LOWEST_ORDER_FREQUENCY
+    settings = WindowSettings(window_length=window_length,
+                              spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if spectra else 0.0)
+    if band_high is not None:
+        settings = replace(settings, band=AnalysisBand(high=band_high))
+    return settings
+
+
 def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings | None = None,
                       namespace: str = '/prsm', on_problem: ProblemSink | None = None,
                       progress: Callable[[float], None] | None = None,

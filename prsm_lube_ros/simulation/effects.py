@@ -46,7 +46,7 @@ REFERENCE_VISCOSITY_RANGE = (30.0, 300.0)
 #: Drawn range of background tone frequencies, Hz.
 TONE_FREQUENCY_RANGE = (60.0, 900.0)
 #: Drawn range of the damping ratio of the structural mode.
-RESONANCE_DAMPING_RANGE = (0.02, 0.10)
+RESONANCE_DAMPING_RANGE = (0.02, 0.20)
 #: Drawn range of the steady temperature rise of nut and oil while running, K.
 TEMPERATURE_RISE_RANGE = (5.0, 25.0)
 #: Drawn range of the thermal time constant of nut and oil, s.

@@ -107,8 +107,9 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
             rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
             stroke=plan.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
             reference_load=min(plan.loads)),
-        'resonance': lambda rng: draw_resonance(rng, order=rig.roller_pass_order, top_speed=max(plan.speeds),
-                                                bottom_speed=min(plan.speeds), orders=(1, 2, rig.roller_pass_order)),
+        'resonance': lambda rng: draw_resonance(
+            rng, order=rig.roller_pass_order, top_speed=max(plan.speeds), bottom_speed=min(plan.speeds),
+            orders=(1, 2, 3, rig.roller_pass_order, 6)),
         'thermal_viscosity': lambda rng: draw_thermal_viscosity(
             rng, viscosity_temperature_coefficient=actuator.viscosity_temperature_coefficient),
         'lubricant_depletion': lambda rng: draw_lubricant_depletion(

@@ -139,9 +139,46 @@ class RigStream:
         self._wander_phases = wander_rng.uniform(0.0, 2.0 * math.pi, WANDER_TERMS)
         self._next_index: int | None = None
         self._last_angle = float(program.motion(0.0)[0])
+        self._mode = self._structural_mode(sequence)
         # A warm (or cooled) actuator at the start: the nut relaxes from there (thermal effect only).
         self.temperature = rig.ambient_temperature + rig.initial_temperature_offset
         self.revolutions = 0.0
+
+    def _structural_mode(self, sequence: np.random.SeedSequence):
+        """The resonance's mode as a resonator ringing at f_r: (b, a, gain, state, rng), or None.
+
+        None without a resonance, or when f_r is not below 0.45 times the sample
+        rate (the mode cannot show in the recording: its gain then scales the
+        whole thread-contact signal).  The random stream is keyed off the seed
+        without spawning from it, so cases without a resonance are unchanged.
+        """
+        resonance, fs = self.effects.resonance, self.rig.vibration_rate
+        if resonance is None or resonance.natural_frequency >= 0.45 * fs:
+            return None
+        b, a = iirpeak(resonance.natural_frequency, 1.0 / (2.0 * resonance.damping_ratio), fs)
+        rng = np.random.default_rng(np.random.SeedSequence(sequence.entropy,
+                                                           spawn_key=tuple(sequence.spawn_key) + (1000, 3)))
+        decay = 1.0 / (2.0 * math.pi * resonance.natural_frequency * resonance.damping_ratio)
+        _, state = lfilter(b, a, rng.standard_normal(int(math.ceil(10.0 * decay * fs)) + 8), zi=np.zeros(2))
+        return [b, a, math.sqrt(resonator_energy(b, a)), state, rng]
+
+    def _through_mode(self, mix: np.ndarray, speeds: np.ndarray) -> np.ndarray:
+        """The thread-contact signal with the structural mode's response in it, same RMS as ``|H(r)|`` times ``mix``.
+
+        ``thread_contact_amplitude`` already carries the magnification
+        ``g = |H(r)|`` of the order that meets the mode.  Where g > 1 the extra
+        power ``g^2 - 1`` is the mode ringing at its natural frequency f_r
+        (a band fixed in Hz, width 2 zeta f_r, whose power follows the order's
+        approach to f_r and the contact excitation); where g < 1 (mass-controlled,
+        past resonance) the whole signal is attenuated.  Returns the signal to be
+        multiplied by that amplitude (unit mean square where mix has it).
+        """
+        gain = self.effects.resonance.amplitude_factor(speeds)
+        b, a, energy, state, rng = self._mode
+        ring, self._mode[3] = lfilter(b, a, rng.standard_normal(mix.size), zi=state)
+        quasi_static = np.minimum(gain, 1.0) / gain
+        ringing = np.sqrt(np.maximum(gain ** 2 - 1.0, 0.0)) / gain
+        return quasi_static * mix + ringing * ring / energy
 
     def relubricate(self) -> None:
         """Oil injected: the revolutions since the last lubrication restart at zero."""
@@ -228,6 +265,8 @@ class RigStream:
         mix = math.sqrt(rig.contact_share) / self._contact_gain * contact
         for order, scale, phase in zip(self._orders, self._harmonic_amplitudes, self._harmonic_phases):
             mix += scale * np.sin(order * angles + phase)
+        if self._mode is not None:
+            mix = self._through_mode(mix, speeds)
         signal = amplitude * mix
         background = self.effects.background_vibration
         if background is not None:

@@ -98,3 +98,53 @@ def test_a_step_between_runs_is_a_shape_in_time():
     binned = next(t for t in covariate_tests(table, residual) if t.covariate == 'time' and t.kind == 'binned means')
     assert binned.p_value < 1e-3
     assert 'step' in binned.shape or 'rise' in binned.shape
+
+
+def spectra_table(mode_share=None, line_power=0.0, seed=0):
+    """Four speeds, orders 1 and 3.75 moving with speed over a flat floor; optional fixed band and fixed line.
+
+    ``mode_share`` per speed: the share of each window's mean square in a band fixed at 50 Hz (a mode
+    ringing); ``line_power`` (m/s^2)^2: a line fixed at 120 Hz whose power does not follow the speed.
+    """
+    rng = np.random.default_rng(seed)
+    df, bins, per_level = 0.5, 801, 30
+    freqs = np.arange(bins) * df
+    speeds = np.repeat([10.0, 14.0, 19.0, 26.0], per_level)
+    mean_square = (speeds / 10.0) ** 4
+    spectra = np.empty((speeds.size, bins))
+    for row, (speed, ms) in enumerate(zip(speeds, mean_square)):
+        level = int(np.searchsorted([10.0, 14.0, 19.0, 26.0], speed))
+        share = 0.0 if mode_share is None else mode_share[level]
+        psd = np.full(bins, (1 - 0.2 - share) * ms / (bins * df))
+        for order in (1.0, 3.75, 7.5, 15.0):
+            psd[int(round(order * speed / (2 * np.pi) / df))] += 0.05 * ms / df
+        if share:
+            band = np.abs(freqs - 50.0) <= 2.0
+            psd[band] += share * ms / (band.sum() * df)
+        psd[int(120 / df)] += line_power / df
+        spectra[row] = psd * rng.gamma(20.0, 1 / 20.0, bins)
+    rms = np.sqrt(mean_square + line_power)
+    n = speeds.size
+    return WindowTable(speed=speeds, load=np.full(n, 100.0), rms=rms, position=np.zeros(n),
+                       revolutions=np.arange(n) * 1.0, time=np.arange(n) * 1.0, temperature=np.full(n, np.nan),
+                       run=np.repeat(np.arange(4), per_level), recording=np.zeros(n), spectra=spectra,
+                       spectrum_resolution=df)
+
+
+def test_a_band_fixed_in_hz_whose_share_follows_speed_is_a_mode_and_moving_orders_are_not():
+    lines = spectral_lines(spectra_table(mode_share=[0.05, 0.1, 0.2, 0.4]))
+    assert lines.testable and len(lines.mode_frequencies) == 1
+    assert abs(lines.mode_frequencies[0] - 50.0) <= 2.5
+    assert lines.mode_shares[0][3] > 2 * lines.mode_shares[0][0]
+    assert '50.0 Hz' in lines.mode_note and lines.frequencies == []
+    assert spectral_lines(spectra_table()).mode_frequencies == []       # orders alone: no mode
+
+
+def test_a_fixed_line_of_constant_power_is_background_not_a_mode():
+    lines = spectral_lines(spectra_table(line_power=0.05))
+    assert any(abs(f - 120.0) <= 1.0 for f in lines.frequencies)
+    assert lines.mode_frequencies == []
+
+
+def test_a_fixed_band_with_a_constant_share_is_the_contact_response_not_a_mode():
+    assert spectral_lines(spectra_table(mode_share=[0.2, 0.2, 0.2, 0.2])).mode_frequencies == []

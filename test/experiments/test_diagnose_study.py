@@ -45,13 +45,13 @@ def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
 def test_tables_report_misses_and_wrong_names():
     records = [
         {'kind': 'resonance', 'seed': 0, 'effects': ['resonance'], 'forms': {'resonance': ''}, 'verdict': 'adequate',
-         'named': [], 'right': False, 'gain': None, 'baseline_rms': 0.3, 'pure_error_rms': 0.05, 'seconds': 1.0},
+         'named': [], 'right': False, 'gain': None, 'lack_of_fit': True, 'seconds': 1.0},
         {'kind': 'none', 'seed': 0, 'effects': [], 'verdict': 'resonance', 'named': ['resonance'], 'right': False,
-         'gain': 0.1, 'baseline_rms': 0.05, 'pure_error_rms': 0.05, 'seconds': 1.0},
+         'gain': 0.1, 'lack_of_fit': False, 'seconds': 1.0},
         {'kind': 'two', 'seed': 0, 'effects': ['a', 'b'], 'verdict': 'a', 'named': ['a'], 'right': False,
          'gain': 0.5, 'seconds': 1.0}]
     summary = summarise(records)
-    assert summary['right'] == 0 and summary['adequate_over_twice_scatter'] == 1
+    assert summary['right'] == 0 and summary['adequate_with_lack_of_fit'] == 1 and summary['lack_of_fit'] == 1
     assert summary['wrong_effect_named'] == 1 and summary['adequate_on_unaffected'] == 0
     text = confusion_markdown(records, 'cmd', 60.0, 2)
     assert '## Misses (3)' in text and 'one named' in text

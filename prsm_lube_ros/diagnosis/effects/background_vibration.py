@@ -54,7 +54,7 @@ class BackgroundVibration(Effect, law.Extension):
         """background_rms B (m/s^2)."""
         return {'background_rms': float(p[0] * scales['rms_scale']), **scales}
 
-    def independent_evidence(self, table, location) -> str:
+    def independent_evidence(self, table, location, params=None) -> str:
         """Fixed-frequency spectral lines with constant power, at least :data:`MIN_LINE_SHARE` of the power."""
         lines = location.spectrum if location is not None else None
         if lines is None or not lines.frequencies or lines.share_at_lowest_speed < MIN_LINE_SHARE:

@@ -89,8 +89,12 @@ class Effect(Extension):
         """The form the fitted parameters and the data show (default :attr:`form`)."""
         return self.form
 
-    def independent_evidence(self, table, location) -> str:
-        """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none."""
+    def independent_evidence(self, table, location, params: dict | None = None) -> str:
+        """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none.
+
+        ``params`` (the fitted parameters, when there is a fit) lets the evidence
+        be checked against what the fitted law predicts.
+        """
         return ''
 
     def contrary_evidence(self, table, location) -> str:

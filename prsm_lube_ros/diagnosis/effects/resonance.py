@@ -78,6 +78,33 @@ class Resonance(Effect, law.Extension):
     def _resonant_speed(self, p, scales) -> float:
         return scales['top_speed'] / p[0]
 
+    def independent_evidence(self, table, location, params=None) -> str:
+        """A band fixed in Hz while the orders move, its power following the speed (the mode ringing).
+
+        With fitted ``params`` the band must also follow the fitted transfer:
+        the mode rings with the share ``1 - 1/|H|^2`` of the response where
+        ``|H| > 1``, so the speed where the band is strongest must be where
+        (or next to where) that predicted share is largest, and the prediction
+        must reach a quarter of the band's largest share.
+        """
+        lines = location.spectrum if location is not None else None
+        if lines is None or not lines.mode_frequencies:
+            return ''
+        if params is not None and not self._follows_transfer(lines, params):
+            return ''
+        return 'spectrum: ' + lines.mode_note
+
+    @staticmethod
+    def _follows_transfer(lines, params) -> bool:
+        """Whether the strongest mode band's shares per speed follow the fitted magnification (see above)."""
+        speeds = np.asarray(lines.mode_speeds, dtype=float)
+        shares = np.asarray(max(lines.mode_shares, key=max), dtype=float)
+        gain = law.magnification(speeds / params['resonant_speed'], params['damping_ratio'])
+        predicted = np.where(gain > 1.0, 1.0 - 1.0 / np.maximum(gain, 1.0) ** 2, 0.0)
+        rank = np.argsort(np.argsort(speeds))
+        strongest, expected = rank[int(np.argmax(shares))], rank[int(np.argmax(predicted))]
+        return abs(int(strongest) - int(expected)) <= 1 and predicted.max() >= 0.25 * shares.max()
+
     def to_params(self, p, scales):
         """resonant_speed (rad/s), damping_ratio and the band's top and bottom speeds."""
         return {'resonant_speed': float(self._resonant_speed(p, scales)), 'damping_ratio': float(p[1]), **scales}
