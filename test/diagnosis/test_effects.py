@@ -119,3 +119,20 @@ def test_fixed_fixed_shaft_is_softest_mid_travel_and_fixed_free_is_monotone():
     profile = law.compliance_ratio_profile(x / s, c * o1 * (s + o2) / total, c * o2 * (s + o1) / total,
                                            c * s ** 2 / 4 / total)
     assert profile == pytest.approx(exact)
+
+
+def test_a_mode_band_is_resonance_evidence_only_where_the_fitted_transfer_puts_it():
+    from prsm_lube_ros.diagnosis.locate import SpectralLines
+    resonance = get_effect('resonance')
+    speeds = [10.0, 14.0, 19.0, 26.0]
+    rising = SpectralLines(testable=True, mode_frequencies=[50.0], mode_shares=[[0.02, 0.05, 0.12, 0.3]],
+                           mode_speeds=speeds, mode_note='a band fixed at 50.0 Hz')
+    location = SimpleNamespace(spectrum=rising)
+    above = {'resonant_speed': 30.0, 'damping_ratio': 0.05}      # |H| grows to the top speed
+    assert resonance.independent_evidence(None, location) == 'spectrum: a band fixed at 50.0 Hz'
+    assert resonance.independent_evidence(None, location, above).startswith('spectrum')
+    below = {'resonant_speed': 5.0, 'damping_ratio': 0.05}       # past resonance everywhere: |H| < 1, no ring
+    assert resonance.independent_evidence(None, location, below) == ''
+    inside = {'resonant_speed': 12.0, 'damping_ratio': 0.05}     # strongest at 10-14 rad/s, not at the top
+    assert resonance.independent_evidence(None, location, inside) == ''
+    assert resonance.independent_evidence(None, SimpleNamespace(spectrum=SpectralLines()), above) == ''
