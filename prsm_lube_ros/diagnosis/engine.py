@@ -560,7 +560,7 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
 def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
     """The candidate to drop from a tie on evidence outside the amplitude fit, or None."""
     for cand in (first, second):
-        cand.evidence_against = cand.effect.contrary_evidence(table, location)
+        cand.evidence_against = cand.effect.contrary_evidence(table, location, cand.fit.params)
     support = [bool(first.evidence), bool(second.evidence)]
     against = [bool(first.evidence_against), bool(second.evidence_against)]
     if support[0] and not support[1]:

@@ -52,6 +52,16 @@ that follows the excitation's approach to it (Eq. 13's |H(r)|), unlike a fixed
 line from elsewhere (constant power) or the contact's own response (constant
 share).  Below the frequency where neighbouring speeds move an order by two
 bins, fixed and moving content cannot be told apart and nothing is reported.
+
+The spectral shape is compared between the lowest and the highest speed
+(:func:`spectral_shape`): each window's spectrum summarised as medians over
+third-octave bands (medians step over narrow order lines), averaged per speed
+and normalised to unit sum.  Anything that multiplies the whole response (the
+paper's law, a lubrication change, a mode the orders have passed) leaves that
+shape alone; power added from elsewhere with its own spectrum (a background
+floor) changes it, the more the lower the speed.  The distance between the two
+shapes (total variation, 0..1) is compared with the distance between halves of
+the runs at one speed.
 """
 from __future__ import annotations
 
@@ -80,6 +90,12 @@ LINE_CONSTANCY = 2.5
 POWER_SPREAD = 1.5
 #: Half width, bins, of the neighbourhood a mode's band (2 zeta f_r wide) is compared with.
 MODE_FLOOR_HALF_WIDTH = 32
+#: Third-octave bands of the shape test hold this many spectrum bins at least (medians step over lines).
+SHAPE_MIN_BINS = 8
+#: The shape changes when its distance exceeds this many times the distance between halves of one speed's runs ...
+SHAPE_NOISE_FACTOR = 3.0
+#: ... and this total variation.
+SHAPE_MIN_DISTANCE = 0.03
 #: A mode's band stands out at this many speeds at least.
 MODE_MIN_SPEEDS = 3
 #: A mode's band: its share of the mean square varies between speeds by at least this factor.
@@ -142,6 +158,29 @@ class SpectralLines:
 
 
 @dataclass
+class SpectralShape:
+    """How the spectrum's shape differs between the lowest and the highest speed (module doc)."""
+
+    testable: bool = False
+    distance: float = math.nan      # total variation between the two normalised band spectra, 0..1
+    noise: float = math.nan         # the same between halves of the runs at one speed (the larger of the two)
+    structure: float = math.nan     # total variation of the highest speed's shape from a white spectrum
+    bands: int = 0
+    note: str = ''
+
+    @property
+    def changes(self) -> bool:
+        """The shape differs beyond :data:`SHAPE_NOISE_FACTOR` times the noise and :data:`SHAPE_MIN_DISTANCE`."""
+        return self.testable and self.distance > max(SHAPE_NOISE_FACTOR * self.noise, SHAPE_MIN_DISTANCE)
+
+    def as_json(self) -> dict:
+        """Plain mapping."""
+        return {'testable': self.testable, 'distance': _finite(self.distance), 'noise': _finite(self.noise),
+                'structure': _finite(self.structure), 'bands': self.bands, 'changes': self.changes,
+                'note': self.note}
+
+
+@dataclass
 class Location:
     """All covariate tests, the spectrum's lines and the covariate that carries the mismatch."""
 
@@ -149,6 +188,7 @@ class Location:
     spectrum: SpectralLines
     located: str              # covariate name, 'spectrum' or 'none'
     summary: str
+    shape: SpectralShape = field(default_factory=SpectralShape)
 
     def test(self, covariate: str) -> CovariateTest | None:
         """The test of one covariate, if run."""
@@ -157,7 +197,8 @@ class Location:
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'located': self.located, 'summary': self.summary,
-                'tests': [t.as_json() for t in self.tests], 'spectrum': self.spectrum.as_json()}
+                'tests': [t.as_json() for t in self.tests], 'spectrum': self.spectrum.as_json(),
+                'spectral_shape': self.shape.as_json()}
 
 
 def _finite(value):
@@ -487,7 +528,10 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     neighbours = edges[order][1:] / edges[order][:-1]
     lowest = max(3 * df, 2 * df / (float(np.min(neighbours)) - 1))
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - edges[None, :]), axis=1)
-    medians = np.array([np.median(table.spectra[index == i], axis=0) for i in range(len(levels))])
+    valid = ~np.isnan(table.spectra).any(axis=1)
+    if any(not np.any(valid & (index == i)) for i in range(len(levels))):
+        return SpectralLines(note='a screw speed without a window spectrum')
+    medians = np.array([np.median(table.spectra[valid & (index == i)], axis=0) for i in range(len(levels))])
     floors, excess, widened = _excess(medians, FLOOR_HALF_WIDTH)
     freqs = np.arange(medians.shape[1]) * df
     mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(levels))])
@@ -585,6 +629,55 @@ def _mode_bands(result, medians, freqs, lowest, mean_square, edges, df) -> None:
         result.mode_note = 'no band fixed in frequency whose power follows the speed'
 
 
+def _band_edges(resolution: float, bins: int) -> list:
+    """(first, stop) bin ranges of third-octave bands holding :data:`SHAPE_MIN_BINS` bins or more."""
+    width = 2 ** (1 / 6) - 2 ** (-1 / 6)            # a third-octave band's width over its centre
+    centre, edges = SHAPE_MIN_BINS / width * resolution, []
+    while centre * 2 ** (1 / 6) < bins * resolution:
+        lo, hi = int(math.ceil(centre * 2 ** (-1 / 6) / resolution)), int(centre * 2 ** (1 / 6) / resolution)
+        if hi - lo >= SHAPE_MIN_BINS:
+            edges.append((lo, hi))
+        centre *= 2 ** (1 / 3)
+    return edges
+
+
+def _shape(band_power: np.ndarray) -> np.ndarray:
+    """Mean band power over windows (rows), normalised to unit sum."""
+    mean = band_power.mean(axis=0)
+    return mean / mean.sum()
+
+
+def spectral_shape(table: WindowTable) -> SpectralShape:
+    """The third-octave spectral shape at the lowest against the highest speed (module doc)."""
+    if table.spectra is None or not math.isfinite(table.spectrum_resolution):
+        return SpectralShape(note='no spectra (vibration samples not kept)')
+    levels = operating_levels(table.speed)
+    edges = _band_edges(table.spectrum_resolution, table.spectra.shape[1])
+    if len(levels) < 2 or len(edges) < 3:
+        return SpectralShape(note='one screw speed, or too few spectrum bins for third-octave bands')
+    index = np.argmin(np.abs(np.abs(table.speed)[:, None] - np.array(levels)[None, :]), axis=1)
+    valid = ~np.isnan(table.spectra).any(axis=1)
+    bands = np.column_stack([np.median(table.spectra[:, lo:hi], axis=1) * (hi - lo) for lo, hi in edges])
+    shapes, noise = [], 0.0
+    for level in (int(np.argmin(levels)), int(np.argmax(levels))):
+        rows = np.flatnonzero(valid & (index == level))
+        runs = np.unique(table.run[rows])
+        halves = (np.isin(table.run[rows], runs[::2]) if runs.size >= 2 else np.arange(rows.size) % 2 == 0)
+        if rows.size < 4 or halves.all() or not halves.any():
+            return SpectralShape(note='too few windows at the lowest or highest speed')
+        shapes.append(_shape(bands[rows]))
+        noise = max(noise, 0.5 * float(np.abs(_shape(bands[rows[halves]]) - _shape(bands[rows[~halves]])).sum()))
+    distance = 0.5 * float(np.abs(shapes[0] - shapes[1]).sum())
+    white = np.array([hi - lo for lo, hi in edges], dtype=float)
+    structure = 0.5 * float(np.abs(shapes[1] - white / white.sum()).sum())
+    result = SpectralShape(testable=True, distance=distance, noise=noise, structure=structure, bands=len(edges))
+    verb = 'changes' if result.changes else 'keeps'
+    result.note = (f'the spectral shape {verb} between the lowest and highest speed: total variation '
+                   f'{distance:.3f} over {len(edges)} third-octave bands, {noise:.3f} between halves of one '
+                   "speed's runs")
+    return result
+
+
 def locate(table: WindowTable, residual: np.ndarray) -> Location:
     """Test the baseline residual against every covariate and the spectrum."""
     tests = covariate_tests(table, residual)
@@ -605,4 +698,4 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
             summary += '; spectrum: ' + note
             if located == 'none':
                 located = 'spectrum'
-    return Location(tests, spectrum, located, summary)
+    return Location(tests, spectrum, located, summary, spectral_shape(table))

@@ -161,11 +161,14 @@ def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     freqs = np.arange(table.spectra.shape[1]) * table.spectrum_resolution
     fig, ax = plt.subplots(figsize=(7.0, 3.4), dpi=110)
     for i, level in enumerate(levels):
-        ax.semilogy(freqs, np.median(table.spectra[index == i], axis=0), linewidth=0.9,
+        ax.semilogy(freqs, np.nanmedian(table.spectra[index == i], axis=0), linewidth=0.9,
                     label=f'{level * 30 / math.pi:.0f} r/min')
     for f in diagnosis.location.spectrum.frequencies:
         ax.axvline(f, color='k', linestyle=':', linewidth=0.8)
-    ax.set_xlabel('frequency, Hz (dotted: fixed lines with constant power)')
+    for f in diagnosis.location.spectrum.mode_frequencies:
+        ax.axvline(f, color='tab:red', linestyle='--', linewidth=0.8)
+    ax.set_xlabel('frequency, Hz (dotted: fixed lines with constant power; dashed: a band fixed in Hz whose power '
+                  'follows the speed)', fontsize=8)
     ax.set_ylabel('PSD, (m/s$^2$)$^2$/Hz')
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)

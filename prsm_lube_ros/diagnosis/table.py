@@ -28,6 +28,9 @@ from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitud
 #: Columns every table has, in SI units (temperature in degC, time in s).
 COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
 
+#: Spectra are kept when at least this share of the windows has one (of one size).
+SPECTRA_NEEDED = 0.9
+
 
 @dataclass(frozen=True)
 class WindowTable:
@@ -161,8 +164,10 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         raise InputError('diagnose: no steady window under load in the recordings; record runs at constant '
                          'speed under axial load')
     spectrum_array = None
-    if spectra and all(s is not None for s in spectra) and len({s.size for s in spectra}) == 1:
-        spectrum_array = np.vstack(spectra)
+    sizes = [s.size for s in spectra if s is not None]
+    if sizes and len(set(sizes)) == 1 and len(sizes) >= SPECTRA_NEEDED * len(spectra):
+        # Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
+        spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=directions, **rows)
 

@@ -709,10 +709,14 @@ def _forward_fill(values: np.ndarray) -> np.ndarray:
 
 
 def _power_spectrum(samples: np.ndarray, rate: float, segment: int):
-    """Welch power spectral density, (m/s^2)^2/Hz, and its bin width in Hz."""
+    """Welch power spectral density, (m/s^2)^2/Hz, and its bin width in Hz.
+
+    A window shorter than ``segment`` (lost blocks) is zero-padded to it, so
+    every window of a recording has the same bins.
+    """
     from scipy.signal import welch
     nperseg = min(segment, samples.size)
     if nperseg < 8:
         return None, math.nan
-    freqs, psd = welch(samples, fs=rate, nperseg=nperseg)
+    freqs, psd = welch(samples, fs=rate, nperseg=nperseg, nfft=max(segment, nperseg))
     return psd, float(freqs[1] - freqs[0])

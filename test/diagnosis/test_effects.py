@@ -136,3 +136,20 @@ def test_a_mode_band_is_resonance_evidence_only_where_the_fitted_transfer_puts_i
     inside = {'resonant_speed': 12.0, 'damping_ratio': 0.05}     # strongest at 10-14 rad/s, not at the top
     assert resonance.independent_evidence(None, location, inside) == ''
     assert resonance.independent_evidence(None, SimpleNamespace(spectrum=SpectralLines()), above) == ''
+
+
+def test_a_background_the_spectral_shape_does_not_show_is_argued_against_unless_lines_hold_it():
+    from prsm_lube_ros.diagnosis.locate import SpectralLines, SpectralShape
+    background = get_effect('background_vibration')
+    table = SimpleNamespace(speed=np.repeat([10.0, 20.0], 20), rms=np.repeat([0.1, 0.4], 20))
+    keeps = SpectralShape(testable=True, distance=0.005, noise=0.004, structure=0.6, bands=15, note='keeps')
+    location = SimpleNamespace(shape=keeps, spectrum=SpectralLines(testable=True))
+    strong = {'background_rms': 0.09}          # 81 % of the power at 10 rad/s, 5 % at 20 rad/s
+    assert 'fitted background would carry 81 %' in background.contrary_evidence(table, location, strong)
+    assert background.contrary_evidence(table, location, {'background_rms': 0.01}) == ''    # too small to show
+    lined = SimpleNamespace(shape=keeps, spectrum=SpectralLines(testable=True, frequencies=[480.0]))
+    assert background.contrary_evidence(table, lined, strong) == ''
+    white_contact = SpectralShape(testable=True, distance=0.005, noise=0.004, structure=0.05, bands=15)
+    assert background.contrary_evidence(table, SimpleNamespace(shape=white_contact, spectrum=None), strong) == ''
+    changes = SpectralShape(testable=True, distance=0.2, noise=0.01, structure=0.6, bands=15, note='changes')
+    assert background.independent_evidence(table, SimpleNamespace(shape=changes, spectrum=None)) == 'spectrum: changes'

@@ -148,3 +148,33 @@ def test_a_fixed_line_of_constant_power_is_background_not_a_mode():
 
 def test_a_fixed_band_with_a_constant_share_is_the_contact_response_not_a_mode():
     assert spectral_lines(spectra_table(mode_share=[0.2, 0.2, 0.2, 0.2])).mode_frequencies == []
+
+
+def shape_table(background=0.0, seed=0):
+    """Three speeds; the contact's broadband response peaks near 300 Hz and scales with speed^4; an optional
+    white background of ``background`` (m/s^2)^2 adds to every window."""
+    rng = np.random.default_rng(seed)
+    df, bins, per_run, runs_per_level = 1.0, 1001, 10, 4
+    freqs = np.arange(bins) * df
+    contact_shape = np.exp(-0.5 * ((freqs - 300.0) / 60.0) ** 2) + 0.05
+    contact_shape /= contact_shape.sum() * df
+    levels = [10.0, 15.0, 22.0]
+    speeds = np.repeat(levels, per_run * runs_per_level)
+    spectra = np.empty((speeds.size, bins))
+    for row, speed in enumerate(speeds):
+        psd = (speed / 10.0) ** 4 * contact_shape + background / (bins * df)
+        spectra[row] = psd * rng.gamma(20.0, 1 / 20.0, bins)
+    n = speeds.size
+    return WindowTable(speed=speeds, load=np.full(n, 100.0), rms=np.sqrt((speeds / 10.0) ** 4 + background),
+                       position=np.zeros(n), revolutions=np.arange(n) * 1.0, time=np.arange(n) * 1.0,
+                       temperature=np.full(n, np.nan), run=np.repeat(np.arange(n // per_run), per_run),
+                       recording=np.zeros(n), spectra=spectra, spectrum_resolution=df)
+
+
+def test_a_white_floor_changes_the_spectral_shape_and_a_scaling_does_not():
+    from prsm_lube_ros.diagnosis.locate import spectral_shape
+    scaled = spectral_shape(shape_table())
+    assert scaled.testable and not scaled.changes and scaled.structure > 0.2
+    floor = spectral_shape(shape_table(background=1.0))     # half the power at the lowest speed
+    assert floor.changes and floor.distance > 0.1 and 'changes' in floor.note
+    assert not spectral_shape(table_with()[0]).testable

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...physics.effects import background_vibration as law
+from ..locate import SHAPE_NOISE_FACTOR
 from .base import Effect, register
 
 #: Bounds of B over the smallest recorded RMS.
@@ -20,6 +21,12 @@ FRACTION_RANGE = (0.0, 1.5)
 MIN_LINE_SHARE = 1e-3
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
 LINE_SHARE = 0.4
+#: Contrary evidence: the highest speed's spectral shape differs from white by at least this total variation ...
+SHAPE_STRUCTURE = 0.2
+#: ... and the shape change a white background would cause is this many times what is seen ...
+SHAPE_CONTRARY_FACTOR = 5.0
+#: ... and at least this total variation.
+SHAPE_MIN_EXPECTED = 0.1
 
 
 @register
@@ -55,11 +62,50 @@ class BackgroundVibration(Effect, law.Extension):
         return {'background_rms': float(p[0] * scales['rms_scale']), **scales}
 
     def independent_evidence(self, table, location, params=None) -> str:
-        """Fixed-frequency spectral lines with constant power, at least :data:`MIN_LINE_SHARE` of the power."""
+        """Fixed lines with constant power (at least :data:`MIN_LINE_SHARE` of it), or a spectral shape that changes.
+
+        Power added from elsewhere with a spectrum of its own changes the
+        shape of the recorded spectrum between the lowest and the highest speed;
+        whatever multiplies the whole response does not.
+        """
         lines = location.spectrum if location is not None else None
-        if lines is None or not lines.frequencies or lines.share_at_lowest_speed < MIN_LINE_SHARE:
+        if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
+            return 'spectrum: ' + lines.note
+        shape = getattr(location, 'shape', None)
+        if shape is not None and shape.changes:
+            return 'spectrum: ' + shape.note
+        return ''
+
+    def contrary_evidence(self, table, location, params=None) -> str:
+        """The spectral shape keeps although the fitted B's share of the power differs between the speeds.
+
+        A background with a spectrum unlike the contact's (white, say) whose
+        share changes by ds between the lowest and highest speed moves the shape
+        by about ds times the highest speed's distance from white; when that is
+        :data:`SHAPE_CONTRARY_FACTOR` times what is seen (or the noise), the
+        fitted background is not in the spectrum.  The shape at the highest speed
+        must have structure (:data:`SHAPE_STRUCTURE` from white): a background
+        with the contact's own spectral shape cannot be told by the spectrum,
+        and is not argued against; nor is one when the spectrum holds fixed lines
+        (the shape's band medians step over lines).
+        """
+        shape, lines = getattr(location, 'shape', None), getattr(location, 'spectrum', None)
+        if params is None or shape is None or not shape.testable or shape.changes or shape.structure < SHAPE_STRUCTURE:
             return ''
-        return 'spectrum: ' + lines.note
+        if lines is not None and (lines.frequencies or lines.mode_frequencies):
+            return ''                  # power in lines, which the band medians of the shape step over
+        from ...estimation.calibration import operating_levels
+        levels = np.array(operating_levels(table.speed))
+        index = np.argmin(np.abs(np.abs(table.speed)[:, None] - levels[None, :]), axis=1)
+        square = [float(np.mean(table.rms[index == i] ** 2)) for i in (int(np.argmin(levels)), int(np.argmax(levels)))]
+        shares = [min(params['background_rms'] ** 2 / m, 1.0) for m in square]
+        # A white background changing its share by this much would move the shape by about this much.
+        expected = abs(shares[0] - shares[1]) * shape.structure
+        seen = max(shape.distance, SHAPE_NOISE_FACTOR * shape.noise)
+        if expected < max(SHAPE_CONTRARY_FACTOR * seen, SHAPE_MIN_EXPECTED):
+            return ''
+        return (f'spectrum: the fitted background would carry {100 * shares[0]:.0f} % of the power at the lowest '
+                f'speed and {100 * shares[1]:.0f} % at the highest, yet {shape.note}')
 
     def form_name(self, params, table, location) -> str:
         """Lines, floor or both, from the spectrum: lines carrying less than :data:`LINE_SHARE` of B^2 leave a floor.

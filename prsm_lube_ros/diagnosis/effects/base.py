@@ -97,7 +97,7 @@ class Effect(Extension):
         """
         return ''
 
-    def contrary_evidence(self, table, location) -> str:
+    def contrary_evidence(self, table, location, params: dict | None = None) -> str:
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
 
