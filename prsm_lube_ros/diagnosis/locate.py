@@ -96,6 +96,8 @@ SHAPE_MIN_BINS = 8
 SHAPE_NOISE_FACTOR = 3.0
 #: ... and this total variation.
 SHAPE_MIN_DISTANCE = 0.03
+#: Bands (where the lowest speed's share is up most) whose power is compared between the speeds.
+SHAPE_ADDED_BANDS = 3
 #: A mode's band stands out at this many speeds at least.
 MODE_MIN_SPEEDS = 3
 #: A mode's band: its share of the mean square varies between speeds by at least this factor.
@@ -165,6 +167,7 @@ class SpectralShape:
     distance: float = math.nan      # total variation between the two normalised band spectra, 0..1
     noise: float = math.nan         # the same between halves of the runs at one speed (the larger of the two)
     structure: float = math.nan     # total variation of the highest speed's shape from a white spectrum
+    added_ratio: float = math.nan   # band power at the highest over the lowest speed where the lowest's share is up
     bands: int = 0
     note: str = ''
 
@@ -173,11 +176,17 @@ class SpectralShape:
         """The shape differs beyond :data:`SHAPE_NOISE_FACTOR` times the noise and :data:`SHAPE_MIN_DISTANCE`."""
         return self.testable and self.distance > max(SHAPE_NOISE_FACTOR * self.noise, SHAPE_MIN_DISTANCE)
 
+    @property
+    def floor_added(self) -> bool:
+        """The shape changes as power of constant size would change it: where the lowest speed's share is up,
+        the band power does not fall as the speed rises (a mode past which the orders move makes it fall)."""
+        return self.changes and self.added_ratio >= 1.0 / LINE_CONSTANCY
+
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'testable': self.testable, 'distance': _finite(self.distance), 'noise': _finite(self.noise),
-                'structure': _finite(self.structure), 'bands': self.bands, 'changes': self.changes,
-                'note': self.note}
+                'structure': _finite(self.structure), 'added_power_ratio': _finite(self.added_ratio),
+                'bands': self.bands, 'changes': self.changes, 'floor_added': self.floor_added, 'note': self.note}
 
 
 @dataclass
@@ -647,18 +656,24 @@ def _shape(band_power: np.ndarray) -> np.ndarray:
     return mean / mean.sum()
 
 
-def spectral_shape(table: WindowTable) -> SpectralShape:
-    """The third-octave spectral shape at the lowest against the highest speed (module doc)."""
+def spectral_shape(table: WindowTable, exclude=()) -> SpectralShape:
+    """The third-octave spectral shape at the lowest against the highest speed (module doc).
+
+    Bands within an octave of a frequency of ``exclude`` (Hz: a mode's band,
+    which changes the shape by itself, skirts included) are left out.
+    """
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
         return SpectralShape(note='no spectra (vibration samples not kept)')
     levels = operating_levels(table.speed)
-    edges = _band_edges(table.spectrum_resolution, table.spectra.shape[1])
+    df = table.spectrum_resolution
+    edges = [(lo, hi) for lo, hi in _band_edges(df, table.spectra.shape[1])
+             if not any(lo * df <= 2 * f and hi * df >= f / 2 for f in exclude)]
     if len(levels) < 2 or len(edges) < 3:
         return SpectralShape(note='one screw speed, or too few spectrum bins for third-octave bands')
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - np.array(levels)[None, :]), axis=1)
     valid = ~np.isnan(table.spectra).any(axis=1)
     bands = np.column_stack([np.median(table.spectra[:, lo:hi], axis=1) * (hi - lo) for lo, hi in edges])
-    shapes, noise = [], 0.0
+    shapes, powers, noise = [], [], 0.0
     for level in (int(np.argmin(levels)), int(np.argmax(levels))):
         rows = np.flatnonzero(valid & (index == level))
         runs = np.unique(table.run[rows])
@@ -666,15 +681,22 @@ def spectral_shape(table: WindowTable) -> SpectralShape:
         if rows.size < 4 or halves.all() or not halves.any():
             return SpectralShape(note='too few windows at the lowest or highest speed')
         shapes.append(_shape(bands[rows]))
+        powers.append(bands[rows].mean(axis=0))
         noise = max(noise, 0.5 * float(np.abs(_shape(bands[rows[halves]]) - _shape(bands[rows[~halves]])).sum()))
     distance = 0.5 * float(np.abs(shapes[0] - shapes[1]).sum())
     white = np.array([hi - lo for lo, hi in edges], dtype=float)
     structure = 0.5 * float(np.abs(shapes[1] - white / white.sum()).sum())
-    result = SpectralShape(testable=True, distance=distance, noise=noise, structure=structure, bands=len(edges))
+    up = np.argsort(shapes[1] - shapes[0])[:SHAPE_ADDED_BANDS]     # where the lowest speed's share is up most
+    added = float(np.median(powers[1][up] / np.maximum(powers[0][up], 1e-300)))
+    result = SpectralShape(testable=True, distance=distance, noise=noise, structure=structure, added_ratio=added,
+                           bands=len(edges))
     verb = 'changes' if result.changes else 'keeps'
     result.note = (f'the spectral shape {verb} between the lowest and highest speed: total variation '
                    f'{distance:.3f} over {len(edges)} third-octave bands, {noise:.3f} between halves of one '
                    "speed's runs")
+    if result.changes:
+        result.note += (f'; where the lowest speed\'s share is up, the band power at the highest speed is '
+                        f'{added:.2f} times that at the lowest')
     return result
 
 
@@ -698,4 +720,4 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
             summary += '; spectrum: ' + note
             if located == 'none':
                 located = 'spectrum'
-    return Location(tests, spectrum, located, summary, spectral_shape(table))
+    return Location(tests, spectrum, located, summary, spectral_shape(table, exclude=spectrum.mode_frequencies))

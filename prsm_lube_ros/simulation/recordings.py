@@ -109,7 +109,7 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
             reference_load=min(plan.loads)),
         'resonance': lambda rng: draw_resonance(
             rng, order=rig.roller_pass_order, top_speed=max(plan.speeds), bottom_speed=min(plan.speeds),
-            orders=(1, 2, 3, rig.roller_pass_order, 6)),
+            orders=(1, 2, 3, rig.roller_pass_order, 6, 3 * rig.roller_pass_order, 6 * rig.roller_pass_order)),
         'thermal_viscosity': lambda rng: draw_thermal_viscosity(
             rng, viscosity_temperature_coefficient=actuator.viscosity_temperature_coefficient),
         'lubricant_depletion': lambda rng: draw_lubricant_depletion(

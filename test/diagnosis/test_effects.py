@@ -151,5 +151,8 @@ def test_a_background_the_spectral_shape_does_not_show_is_argued_against_unless_
     assert background.contrary_evidence(table, lined, strong) == ''
     white_contact = SpectralShape(testable=True, distance=0.005, noise=0.004, structure=0.05, bands=15)
     assert background.contrary_evidence(table, SimpleNamespace(shape=white_contact, spectrum=None), strong) == ''
-    changes = SpectralShape(testable=True, distance=0.2, noise=0.01, structure=0.6, bands=15, note='changes')
-    assert background.independent_evidence(table, SimpleNamespace(shape=changes, spectrum=None)) == 'spectrum: changes'
+    floor = SpectralShape(testable=True, distance=0.2, noise=0.01, structure=0.6, added_ratio=1.3, bands=15,
+                          note='changes')
+    assert background.independent_evidence(table, SimpleNamespace(shape=floor, spectrum=None)) == 'spectrum: changes'
+    skirts = SpectralShape(testable=True, distance=0.2, noise=0.01, structure=0.6, added_ratio=0.05, bands=15)
+    assert background.independent_evidence(table, SimpleNamespace(shape=skirts, spectrum=None)) == ''

@@ -177,4 +177,5 @@ def test_a_white_floor_changes_the_spectral_shape_and_a_scaling_does_not():
     assert scaled.testable and not scaled.changes and scaled.structure > 0.2
     floor = spectral_shape(shape_table(background=1.0))     # half the power at the lowest speed
     assert floor.changes and floor.distance > 0.1 and 'changes' in floor.note
+    assert floor.floor_added and floor.added_ratio > 0.9           # the floor's bands keep their power
     assert not spectral_shape(table_with()[0]).testable

@@ -72,7 +72,7 @@ class BackgroundVibration(Effect, law.Extension):
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
         shape = getattr(location, 'shape', None)
-        if shape is not None and shape.changes:
+        if shape is not None and shape.floor_added:
             return 'spectrum: ' + shape.note
         return ''
 

@@ -90,9 +90,14 @@ class Resonance(Effect, law.Extension):
         lines = location.spectrum if location is not None else None
         if lines is None or not lines.mode_frequencies:
             return ''
-        if params is not None and not self._follows_transfer(lines, params):
+        if params is None:
+            return 'spectrum: ' + lines.mode_note
+        if not self._follows_transfer(lines, params):
             return ''
-        return 'spectrum: ' + lines.mode_note
+        strongest = int(np.argmax([max(v) for v in lines.mode_shares]))
+        order = lines.mode_frequencies[strongest] * 2.0 * math.pi / params['resonant_speed']
+        return (f'spectrum: {lines.mode_note}; at the fitted resonant speed it is order {order:.2f}, '
+                f'natural frequency {lines.mode_frequencies[strongest]:.1f} Hz')
 
     @staticmethod
     def _follows_transfer(lines, params) -> bool:
