@@ -115,6 +115,9 @@ def test_two_effects_at_once_are_named_together(effects, params, forms):
     assert document['confident'] is True and document['adequacy']['chosen']['significant'] is False
     assert result.second.fit.cv_rmse < 0.5 * result.baseline.cv_rmse
     assert any('two effects at once' in note for note in document['notes'])
+    stored = result.calibration().extension                   # what diagnose --calibration-out writes
+    assert {item['effect'] for item in stored['effects']} == set(effects)
+    assert stored['effect'] == document['verdict']
 
 
 def test_one_effect_is_not_reported_as_two():
