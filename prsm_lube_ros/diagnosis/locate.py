@@ -52,6 +52,10 @@ that follows the excitation's approach to it (Eq. 13's |H(r)|), unlike a fixed
 line from elsewhere (constant power) or the contact's own response (constant
 share).  Below the frequency where neighbouring speeds move an order by two
 bins, fixed and moving content cannot be told apart and nothing is reported.
+When the orders themselves carry the excitation (lines, no broadband to ring),
+the mode shows in their powers instead: the same order grows and falls as its
+frequency in Hz approaches and leaves f_r, and every order follows the one
+transfer |H(f / f_r)|^2 in Hz (:func:`order_tracked_mode`).
 
 The spectral shape is compared between the lowest and the highest speed
 (:func:`spectral_shape`): each window's spectrum summarised as medians over
@@ -148,10 +152,13 @@ class SpectralLines:
     mode_shares: list = field(default_factory=list)        # per band: its share of the mean square per speed level
     mode_speeds: list = field(default_factory=list)        # rad/s, the speed levels of mode_shares
     mode_note: str = ''
+    order_mode: dict = field(default_factory=dict)        # order-tracked line gains following a mode (see below)
 
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'testable': self.testable, 'frequencies_hz': [float(f) for f in self.frequencies],
+                'order_tracked_mode': {k: (_finite(v) if isinstance(v, float) else v)
+                                       for k, v in self.order_mode.items()},
                 'line_powers': [float(p) for p in self.powers], 'total_power': float(self.total_power),
                 'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note,
                 'mode_frequencies_hz': [float(f) for f in self.mode_frequencies],
@@ -550,7 +557,115 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, order[:2], df)
     # A line's Hann main lobe spans +-2 bins: a band must sit where orders move by 4 bins between speeds.
     _mode_bands(result, medians, freqs, 2 * lowest, model_square, edges, df)
+    result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
     return result
+
+
+def _order_lines(medians, floors, excess, speeds, df) -> list:
+    """Rotation-order lines: peaks standing at the same order (f / f_S) at three speeds or more.
+
+    Returns ``[(order, {level: power})]``, power (m/s^2)^2 of the line over its floor at each speed level.
+    """
+    peaks = []                                   # (order, level, power)
+    for level, speed in enumerate(speeds):
+        rotation = speed / (2.0 * math.pi)
+        row = excess[level]
+        local = (row[1:-1] >= LINE_PROMINENCE) & (row[1:-1] >= row[:-2]) & (row[1:-1] > row[2:])
+        for peak in np.flatnonzero(local) + 1:
+            if peak < 3:
+                continue
+            lo, hi = peak - 2, min(peak + 3, medians.shape[1])
+            power = float(np.sum(np.maximum(medians[level, lo:hi] - floors[level, lo:hi], 0.0)) * df)
+            peaks.append((peak * df / rotation, level, power))
+    peaks.sort()
+    lines, used = [], set()
+    for i, (order, _, _) in enumerate(peaks):
+        if i in used:
+            continue
+        # The same order within 1.5 bins at each speed (the coarsest tolerance among the speeds).
+        tolerance = 1.5 * df * 2.0 * math.pi / min(speeds)
+        group = {}
+        for j in range(i, len(peaks)):
+            if peaks[j][0] - order > tolerance:
+                break
+            if j not in used and peaks[j][1] not in group:
+                group[peaks[j][1]] = peaks[j][2]
+                used.add(j)
+        if len(group) >= MODE_MIN_SPEEDS:
+            lines.append((order, group))
+    return lines
+
+
+def order_tracked_mode(medians, floors, excess, speeds, df) -> dict:
+    """A mode the rotation orders pass through, from the powers of order lines (module doc).
+
+    Each line seen at the same order at three speeds or more gives its power
+    per speed; ``ln P = a_order + b_speed + ln |H(f / f_r)|^2`` with f the line's
+    frequency in Hz is fitted against ``ln P = a_order + b_speed``: the speed
+    terms take anything common to all orders at one speed (the contact law, a
+    background in the total, lubrication), so only a gain that depends on the
+    frequency in Hz, the same for every order, counts.  f_r and zeta on a grid
+    (f_r within a factor 2 of the lines, zeta 0.02-0.3); evidence when the F
+    test gives p < :data:`SIGNIFICANCE` and the residual sum of squares falls by
+    half, also without the point the order and speed terms leave furthest out (a
+    tone from elsewhere on one order's frequency at one speed).  Returns {} when
+    untestable, else the fit and its test.
+    """
+    lines = _order_lines(medians, floors, excess, speeds, df)
+    points = [(o, level, p) for o, group in lines for level, p in group.items() if p > 0]
+    n_orders, n_levels = len(lines), len({level for _, level, _ in points})
+    n_params = n_orders + n_levels - 1
+    if n_orders < 2 or len(points) - n_params - 2 < 2:
+        return {}
+    order_of = {o: k for k, (o, _) in enumerate(lines)}
+    levels = sorted({level for _, level, _ in points})
+    design = np.zeros((len(points), n_params))
+    for row, (o, level, _) in enumerate(points):
+        design[row, order_of[o]] = 1.0
+        if levels.index(level) > 0:
+            design[row, n_orders + levels.index(level) - 1] = 1.0
+    log_power = np.log([p for _, _, p in points])
+    frequency = np.array([o * speeds[level] / (2.0 * math.pi) for o, level, _ in points])
+    statistic, p_value, natural, zeta, null_residual = _mode_through_orders(design, log_power, frequency)
+    keep = np.arange(len(points)) != int(np.argmax(np.abs(null_residual)))
+    robust = (_mode_through_orders(design[keep], log_power[keep], frequency[keep])[1]
+              if len(points) - 1 - n_params - 2 >= 2 else 1.0)
+    found = p_value < SIGNIFICANCE and robust < SIGNIFICANCE
+    return {'found': found, 'natural_frequency_hz': natural, 'damping_ratio': zeta, 'orders': n_orders,
+            'order_values': [round(float(o), 3) for o, _ in lines],
+            'points': len(points), 'f_statistic': float(statistic), 'p_value': p_value,
+            'note': (f'the powers of {n_orders} rotation orders at {n_levels} speeds follow one mode at '
+                     f'{natural:.1f} Hz (zeta {zeta:.2f}) in Hz, whatever the order: F = {statistic:.3g}, '
+                     f'p = {p_value:.2g}') if found else ''}
+
+
+def _mode_through_orders(design, log_power, frequency):
+    """(F, p, f_r, zeta, null residual) of ``ln P = design + ln |H(f / f_r)|^2`` against ``ln P = design``.
+
+    f_r on a log grid from half the lowest to twice the highest line frequency,
+    zeta on a grid of 0.02-0.3; the F test on (2, points - parameters - 2) degrees
+    of freedom, significant only when the residual sum of squares also halves.
+    """
+    from ..physics.effects.resonance import magnification
+
+    def fit(target):
+        coef, *_ = np.linalg.lstsq(design, target, rcond=None)
+        residual = target - design @ coef
+        return float(np.sum(residual ** 2)), residual
+
+    null, null_residual = fit(log_power)
+    best = (null, math.nan, math.nan)
+    for natural in np.geomspace(frequency.min() / 2.0, frequency.max() * 2.0, 120):
+        for zeta in (0.02, 0.03, 0.05, 0.08, 0.12, 0.18, 0.3):
+            fitted = fit(log_power - 2.0 * np.log(magnification(frequency / natural, zeta)))[0]
+            if fitted < best[0]:
+                best = (fitted, float(natural), zeta)
+    dof = design.shape[0] - design.shape[1] - 2
+    statistic = ((null - best[0]) / 2.0) / max(best[0] / dof, 1e-300)
+    p_value = float(stats.f.sf(statistic, 2, dof)) if best[0] > 0 else 0.0
+    if best[0] > 0.5 * null:
+        p_value = max(p_value, 1.0)
+    return statistic, p_value, best[1], best[2], null_residual
 
 
 def _excess(medians: np.ndarray, half_width: int):
@@ -715,7 +830,8 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
     else:
         located = 'none'
         summary = 'no covariate carries a significant part of the residual'
-    for found, note in ((spectrum.frequencies, spectrum.note), (spectrum.mode_frequencies, spectrum.mode_note)):
+    for found, note in ((spectrum.frequencies, spectrum.note), (spectrum.mode_frequencies, spectrum.mode_note),
+                        (spectrum.order_mode.get('found'), spectrum.order_mode.get('note'))):
         if found:
             summary += '; spectrum: ' + note
             if located == 'none':

@@ -156,3 +156,16 @@ def test_a_background_the_spectral_shape_does_not_show_is_argued_against_unless_
     assert background.independent_evidence(table, SimpleNamespace(shape=floor, spectrum=None)) == 'spectrum: changes'
     skirts = SpectralShape(testable=True, distance=0.2, noise=0.01, structure=0.6, added_ratio=0.05, bands=15)
     assert background.independent_evidence(table, SimpleNamespace(shape=skirts, spectrum=None)) == ''
+
+
+def test_order_tracked_line_powers_are_resonance_evidence_where_the_fitted_speed_meets_a_tracked_order():
+    from prsm_lube_ros.diagnosis.locate import SpectralLines
+    resonance = get_effect('resonance')
+    found = {'found': True, 'natural_frequency_hz': 40.0, 'damping_ratio': 0.08, 'orders': 3,
+             'order_values': [5.0, 10.0, 15.0], 'note': 'one mode at 40.0 Hz'}
+    location = SimpleNamespace(spectrum=SpectralLines(testable=True, order_mode=found))
+    meets_order_10 = {'resonant_speed': 2 * math.pi * 40.0 / 10.0, 'damping_ratio': 0.08}
+    assert 'order 10.00' in resonance.independent_evidence(None, location, meets_order_10)
+    elsewhere = {'resonant_speed': 2 * math.pi * 40.0 / 7.0, 'damping_ratio': 0.08}     # order 7 is not tracked
+    assert resonance.independent_evidence(None, location, elsewhere) == ''
+    assert resonance.independent_evidence(None, location) == 'spectrum: one mode at 40.0 Hz'

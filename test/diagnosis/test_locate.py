@@ -179,3 +179,39 @@ def test_a_white_floor_changes_the_spectral_shape_and_a_scaling_does_not():
     assert floor.changes and floor.distance > 0.1 and 'changes' in floor.note
     assert floor.floor_added and floor.added_ratio > 0.9           # the floor's bands keep their power
     assert not spectral_shape(table_with()[0]).testable
+
+
+def order_table(natural=None, zeta=0.08, seed=0, stray=False):
+    """Five speeds, four rotation orders as lines over a flat floor; with ``natural`` (Hz) every line's power is
+    multiplied by |H(f / natural)|^2 at its frequency f in Hz (the orders pass through one mode); ``stray``: a
+    tone from elsewhere sits on order 10 at 19 rad/s (twenty times its power)."""
+    from prsm_lube_ros.physics.effects.resonance import magnification
+    rng = np.random.default_rng(seed)
+    df, bins, per_level = 0.25, 801, 20
+    levels = [10.0, 14.0, 19.0, 26.0, 33.0]
+    speeds = np.repeat(levels, per_level)
+    spectra = np.empty((speeds.size, bins))
+    for row, speed in enumerate(speeds):
+        scale = (speed / 10.0) ** 4 * (1.0 + 0.3 * (speed == 19.0))     # a common factor per speed
+        psd = np.full(bins, 0.5 * scale / (bins * df))
+        for order, share in ((5.0, 0.1), (7.5, 0.1), (10.0, 0.1), (15.0, 0.1)):
+            frequency = order * speed / (2 * np.pi)
+            gain = 1.0 if natural is None else float(magnification(frequency / natural, zeta)) ** 2
+            gain *= 20.0 if stray and order == 10.0 and speed == 19.0 else 1.0
+            psd[int(round(frequency / df))] += share * scale * gain / df
+        spectra[row] = psd * rng.gamma(30.0, 1 / 30.0, bins)
+    n = speeds.size
+    return WindowTable(speed=speeds, load=np.full(n, 100.0), rms=np.sqrt(spectra.sum(axis=1) * df),
+                       position=np.zeros(n), revolutions=np.arange(n) * 1.0, time=np.arange(n) * 1.0,
+                       temperature=np.full(n, np.nan), run=np.repeat(np.arange(n // 10), 10),
+                       recording=np.zeros(n), spectra=spectra, spectrum_resolution=df)
+
+
+def test_orders_passing_through_a_mode_follow_its_transfer_in_hz():
+    found = spectral_lines(order_table(natural=40.0)).order_mode
+    assert found['found'] and found['orders'] >= 3
+    assert found['natural_frequency_hz'] == pytest.approx(40.0, rel=0.1)
+    assert '40' in found['note'] or '39' in found['note'] or '41' in found['note']
+    plain = spectral_lines(order_table()).order_mode            # a factor common to all orders per speed: no mode
+    assert plain and not plain['found']
+    assert not spectral_lines(order_table(stray=True)).order_mode['found']

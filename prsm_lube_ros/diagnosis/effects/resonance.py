@@ -79,7 +79,7 @@ class Resonance(Effect, law.Extension):
         return scales['top_speed'] / p[0]
 
     def independent_evidence(self, table, location, params=None) -> str:
-        """A band fixed in Hz while the orders move, its power following the speed (the mode ringing).
+        """Order lines whose powers follow one mode in Hz, or a band fixed in Hz whose power follows the speed.
 
         With fitted ``params`` the band must also follow the fitted transfer:
         the mode rings with the share ``1 - 1/|H|^2`` of the response where
@@ -88,8 +88,11 @@ class Resonance(Effect, law.Extension):
         must reach a quarter of the band's largest share.
         """
         lines = location.spectrum if location is not None else None
-        if lines is None or not lines.mode_frequencies:
+        if lines is None:
             return ''
+        tracked = self._order_evidence(lines, params)
+        if tracked or not lines.mode_frequencies:
+            return tracked
         if params is None:
             return 'spectrum: ' + lines.mode_note
         if not self._follows_transfer(lines, params):
@@ -98,6 +101,23 @@ class Resonance(Effect, law.Extension):
         order = lines.mode_frequencies[strongest] * 2.0 * math.pi / params['resonant_speed']
         return (f'spectrum: {lines.mode_note}; at the fitted resonant speed it is order {order:.2f}, '
                 f'natural frequency {lines.mode_frequencies[strongest]:.1f} Hz')
+
+    @staticmethod
+    def _order_evidence(lines, params) -> str:
+        """Order-tracked line powers following one mode in Hz; with ``params``, at a tracked order's frequency.
+
+        The fitted resonant speed omega_r and the spectrum's f_r must agree:
+        ``2 pi f_r / omega_r`` within 15 % of one of the tracked orders.
+        """
+        found = lines.order_mode or {}
+        if not found.get('found'):
+            return ''
+        if params is not None:
+            implied = found['natural_frequency_hz'] * 2.0 * math.pi / params['resonant_speed']
+            if not any(abs(implied / order - 1.0) <= 0.15 for order in found.get('order_values', ())):
+                return ''
+            return f'spectrum: {found["note"]}; at the fitted resonant speed that is order {implied:.2f}'
+        return 'spectrum: ' + found['note']
 
     @staticmethod
     def _follows_transfer(lines, params) -> bool:
