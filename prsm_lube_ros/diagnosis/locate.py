@@ -185,8 +185,11 @@ class SpectralShape:
 
     @property
     def floor_added(self) -> bool:
-        """The shape changes as power of constant size would change it: where the lowest speed's share is up,
-        the band power does not fall as the speed rises (a mode past which the orders move makes it fall)."""
+        """The shape changes as power of constant size would change it.
+
+        Where the lowest speed's share is up, the band power does not fall as the
+        speed rises (a mode past which the orders move makes it fall).
+        """
         return self.changes and self.added_ratio >= 1.0 / LINE_CONSTANCY
 
     def as_json(self) -> dict:
