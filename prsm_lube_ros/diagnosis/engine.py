@@ -84,6 +84,8 @@ from .table import WindowTable
 BIC_MARGIN = 10.0
 #: Relative fall of the held-out error a candidate needs.
 MIN_GAIN = 0.05
+#: BIC drop a second effect must give over the first alone (the first has already shown the model misses).
+SECOND_BIC_MARGIN = 5.0
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative).
 EVIDENCE_TOLERANCE = 0.02
 #: BIC drop a form with more parameters needs over the simpler forms of the same effect.
@@ -473,11 +475,12 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     return leader_adds, runner_adds
 
 
-def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
+def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location,
+              margin: float = BIC_MARGIN) -> SecondEffect | None:
     """The best of ``combos`` (CombinedEffects, chosen by BIC) when it earns its parameters over ``reference``.
 
-    Earning: physical constants, BIC lower by :data:`BIC_MARGIN` and held-out
-    error lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
+    Earning: physical constants, BIC lower by ``margin`` and held-out error
+    lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
     """
     combos = [both for both in combos if not both.applicable(table)]
     if not combos or not reference.cv_rmse > 0:
@@ -487,7 +490,7 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     delta = _delta_bic(fit, reference)
-    if delta > -BIC_MARGIN or gain < MIN_GAIN:
+    if delta > -margin or gain < MIN_GAIN:
         return None
     kept = both.first if both.added is both.second else both.second
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
@@ -501,7 +504,7 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location) -> S
     family = other.family
     combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
               for form in family.variants()]
-    return _fit_pair(table, combos, first.fit, other, folds, location)
+    return _fit_pair(table, combos, first.fit, other, folds, location, margin=SECOND_BIC_MARGIN)
 
 
 def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
