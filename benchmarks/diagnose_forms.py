@@ -4,7 +4,7 @@
 """Is each effect named with the right physical form, and are two effects named together?
 
 Window tables from the window-table simulator
-(:mod:`prsm_lube_ros.simulation.synthetic_tables`), two sessions of the six
+(:mod:`prsm_lube_ros.experiments.synthetic_tables`), two sessions of the six
 conditions in random order each; for every form of each effect ``--seeds``
 cases, the strength drawn by the simulator over its physical ranges, diagnosed
 with :func:`prsm_lube_ros.diagnosis.diagnose_table`.  Per true form: how often
@@ -33,7 +33,7 @@ import numpy as np
 from prsm_lube_ros.diagnosis import diagnose_table
 from prsm_lube_ros.diagnosis.effects import registered
 from prsm_lube_ros.physics.effects.background_vibration import FORMS as BACKGROUND_FORMS
-from prsm_lube_ros.simulation.synthetic_tables import _draw_effect, SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import _draw_effect, SyntheticPlan, synthetic_table
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Two sessions (relubricated between them) as the diagnose study records: within one session temperature and

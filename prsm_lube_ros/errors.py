@@ -15,6 +15,10 @@ kinds apart branch on the subclass, never on the wording:
 
 This module imports nothing of the package.
 """
+from typing import Callable
+
+#: Where a reader or pipeline sends each one-line problem it meets in otherwise usable input.
+ProblemSink = Callable[[str], None]
 
 
 class InputError(ValueError):

@@ -25,7 +25,7 @@ ALLOWED = {
     'estimation': {'physics', 'recording'},
     'diagnosis': {'physics', 'recording', 'estimation'},
     'fleet': {'physics', 'recording', 'estimation'},
-    'simulation': {'physics', 'recording', 'estimation', 'diagnosis'},
+    'simulation': {'physics', 'recording', 'estimation'},
     'experiments': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'fleet'},
     'nodes': {'physics', 'recording', 'estimation', 'simulation', 'fleet', 'msg', 'srv', 'action'},
     'cli': {'physics', 'recording', 'estimation', 'diagnosis', 'simulation', 'experiments', 'nodes', 'fleet'},

@@ -14,7 +14,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from ..errors import InputError, NotIdentifiable
+from ..errors import InputError, NotIdentifiable, ProblemSink
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
 from .assessment import Assessor, RunAssessment, WindowAssessment
@@ -23,12 +23,10 @@ from .conditioning import AnalysisBand, band_text
 from .domain import CalibrationDomain
 from .windowing import MIN_AXIAL_LOAD, usable_windows, Window, WindowBuilder, WindowSettings
 
-ProblemSink = Callable[[str], None]
-
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
 #: overhead stops mattering (an hour: 0.63 s CPU with 10 s slices, 0.34 s with 60 s; nothing gained
 #: beyond), short enough that memory stays flat (a 60 s slice of 4 kHz float32 samples is about 1 MB).
-SLICE_SECONDS = 60.0
+ASSESSMENT_SLICE_SECONDS = 60.0
 
 
 @dataclass
@@ -84,7 +82,7 @@ def analysis_settings(window_length: float = 1.0, *, spectra: bool = False,
 def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings | None = None,
                       namespace: str = '/prsm', on_problem: ProblemSink | None = None,
                       progress: Callable[[float], None] | None = None,
-                      slice_seconds: float = SLICE_SECONDS) -> RecordingWindows:
+                      slice_seconds: float = ASSESSMENT_SLICE_SECONDS) -> RecordingWindows:
     """Stream one recording through a :class:`WindowBuilder` and return its windows.
 
     Problems (bad messages, truncation) are collected and, if given, passed to

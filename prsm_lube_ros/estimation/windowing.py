@@ -22,7 +22,7 @@ the band are left out and said once (:attr:`WindowBuilder.band_refusal`);
 
 Memory stays flat: only windows that can still receive data are open; a window
 is closed once every input stream has passed its end by ``completion_delay``
-(a stream silent for ``stale_timeout`` while others advance stops holding
+(a stream silent for ``stream_timeout`` while others advance stops holding
 windows open, so lost topics give NaN windows with a reason, not a stall).
 Bad input (non-finite samples, empty blocks, rates <= 0, stamps going back)
 is left out and reported once per kind through ``problems``.
@@ -54,7 +54,7 @@ class WindowSettings:
     max_speed_spread: float = 0.03
     min_coverage: float = 0.8
     completion_delay: float = 0.5
-    stale_timeout: float = 3.0
+    stream_timeout: float = 3.0
     reset_after_backstep: float = 5.0
     spectrum_segment: int = 0
     #: Band of the window RMS (see :mod:`.conditioning`); None: raw RMS (calibrations without a band).
@@ -73,7 +73,7 @@ class WindowSettings:
             'max_speed_spread': self.max_speed_spread > 0,
             'min_coverage': 0 < self.min_coverage <= 1,
             'completion_delay': self.completion_delay >= 0,
-            'stale_timeout': self.stale_timeout > 0,
+            'stream_timeout': self.stream_timeout > 0,
             'reset_after_backstep': self.reset_after_backstep > 0,
             'spectrum_segment': self.spectrum_segment >= 0,
             'spectrum_lowest_frequency': self.spectrum_lowest_frequency >= 0,
@@ -571,7 +571,7 @@ class WindowBuilder:
         if not known:
             return
         lead = max(known)
-        live = [p for p in known if p >= lead - self.settings.stale_timeout]
+        live = [p for p in known if p >= lead - self.settings.stream_timeout]
         horizon = min(live) - self.settings.completion_delay
         self._close(horizon)
 

@@ -71,7 +71,7 @@ def _simulate_rig(effect: str, seed: int, order: str, sessions: int):
 
 
 def _simulate_synthetic(effect: str, seed: int, order: str, sessions: int):
-    from ..simulation.synthetic_tables import SyntheticPlan, synthetic_table
+    from .synthetic_tables import SyntheticPlan, synthetic_table
     rng = np.random.default_rng(10_000 + seed)
     plan = SyntheticPlan(repeats=1, sessions=sessions, random_order=order == 'random', spectrum_bins=128)
     table, truth = synthetic_table(rng, None if effect == NONE else effect, plan)

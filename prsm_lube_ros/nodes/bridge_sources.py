@@ -103,7 +103,7 @@ def recording_events(recording, on_problem=None) -> Iterator[List[Event]]:
 
 
 def rig_block_events(block) -> List[Event]:
-    """Events of one :class:`~prsm_lube_ros.simulation.signal.RigBlock`: the block and its span's sensor data."""
+    """Events of one :class:`~prsm_lube_ros.simulation.rig_acceleration.RigBlock`: the block and its sensor data."""
     chunk = block.topics
     events: List[Event] = []
     rate = float(chunk.sample_rate)

@@ -210,7 +210,7 @@ def window_settings(values: dict) -> WindowSettings:
     """WindowSettings from parameter values (InputError when out of range)."""
     return WindowSettings(window_length=values['window_length'], min_speed=values['min_speed'],
                           max_speed_spread=values['max_speed_spread'], min_coverage=values['min_coverage'],
-                          completion_delay=values['completion_delay'], stale_timeout=values['stream_timeout'])
+                          completion_delay=values['completion_delay'], stream_timeout=values['stream_timeout'])
 
 
 def health_thresholds(values: dict) -> HealthThresholds:

@@ -14,7 +14,7 @@ Parameter ``source`` (read-only) chooses where the data come from:
   sim time.  Without ``loop`` the ``ros2 run`` process ends with status 0 after
   the last message (``exit_at_end``).  A bag that cannot be opened, or holds no
   ``<ns>/vibration``, ends the node at start with one line and status 2.
-- ``simulator``: :class:`~prsm_lube_ros.simulation.signal.RigSignalGenerator` in
+- ``simulator``: :class:`~prsm_lube_ros.simulation.rig_acceleration.RigSignalGenerator` in
   real time; ``speed``, ``load`` and ``theta_oil`` may be changed while it runs.
 - ``hardware``: the nut accelerometer through NI-DAQmx (:mod:`.daq`) published
   as VibrationBlocks; speed and load come from the EMA stack's own topics,
@@ -85,7 +85,7 @@ from ..estimation.conditioning import HIGHPASS_CORNER
 from ..msg import VibrationBlock
 from ..recording.reader import open_recording
 from ..simulation.rig_config import load_rig_config
-from ..simulation.signal import RigSignalGenerator
+from ..simulation.rig_acceleration import RigSignalGenerator
 from .bridge_health import SourceHealth
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer

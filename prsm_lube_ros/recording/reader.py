@@ -60,20 +60,20 @@ import yaml
 
 from . import mcap_file, sqlite_file
 from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
-from ..errors import ConfigError, exception_text, RecordingError
+from ..errors import ConfigError, exception_text, ProblemSink, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
 from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
-#: default length of one time slice, s of log time
-SLICE_SECONDS = 10.0
+#: default length of one time slice, s of log time (the offline pipeline streams longer ones:
+#: :data:`prsm_lube_ros.estimation.pipeline.ASSESSMENT_SLICE_SECONDS`)
+DEFAULT_SLICE_SECONDS = 10.0
 #: log time a file read in file order may go back before that is reported (memory held), s
 HELD_BACK_SECONDS = 60.0
 #: the first 16 bytes of every sqlite3 database file
 SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
 _ROSBAGS_CHUNK_BYTES = 1 << 20
-ProblemSink = Callable[[str], None]
 
 
 @dataclass
@@ -677,7 +677,7 @@ class Recording:
         return '\n'.join(lines)
 
     def slices(self, on_problem: Optional[ProblemSink] = None, progress: Optional[Callable[[float], None]] = None,
-               slice_seconds: float = SLICE_SECONDS, engine: str = 'fast') -> Iterator[List[InputBatch]]:
+               slice_seconds: float = DEFAULT_SLICE_SECONDS, engine: str = 'fast') -> Iterator[List[InputBatch]]:
         """The namespace's topics as lists of batches, one list per time slice, in log time order.
 
         ``on_problem`` gets each problem once, as one line, after all data has
@@ -784,7 +784,7 @@ def find_actuators(path) -> List[str]:
 
 
 def iter_batches(path, namespace: str = DEFAULT_NAMESPACE, on_problem: Optional[ProblemSink] = None,
-                 slice_seconds: float = SLICE_SECONDS) -> Iterator[List[InputBatch]]:
+                 slice_seconds: float = DEFAULT_SLICE_SECONDS) -> Iterator[List[InputBatch]]:
     """Shorthand: ``open_recording(path, namespace).slices(on_problem, slice_seconds=...)``."""
     return open_recording(path, namespace).slices(on_problem, slice_seconds=slice_seconds)
 

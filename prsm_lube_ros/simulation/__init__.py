@@ -3,13 +3,14 @@
 """Simulated rigs that write contract recordings with a known truth, for the demo, tests and studies.
 
 Owns: the rig's configuration (``rig_config``), its drive program
-(``drive``), the acceleration signal streamed or live (``signal``), the
+(``drive``), the acceleration signal streamed or live (``rig_acceleration``), the
 recordings and ``truth.json`` (``recordings``), which effects act and
 their drawn strengths (``effects``; the laws are
-:mod:`prsm_lube_ros.physics.effects`), and a second simulator of window
-tables made by other means (``synthetic_tables``).  May import the base
-layer, :mod:`..physics`, :mod:`..recording`, :mod:`..estimation` and
-:mod:`..diagnosis` (for the window table type); no ROS.
+:mod:`prsm_lube_ros.physics.effects`) and a fleet in service (``fleet``).
+May import the base layer, :mod:`..physics`, :mod:`..recording` and
+:mod:`..estimation`; no ROS.  (The second simulator, of window tables made
+by other means, builds diagnosis tables and so lives in
+:mod:`prsm_lube_ros.experiments.synthetic_tables`.)
 
 The rig simulator in detail: the simulated test rig of the paper.
 

@@ -43,7 +43,7 @@ from ..validation import require
 from .drive import DriveProgram, schedule_session
 from .recordings import _blocks, _record, _streams, simulate_experiment
 from .rig_config import ExperimentPlan, RigConfig
-from .signal import RigStream
+from .rig_acceleration import RigStream
 
 DAY = 86400.0   # s
 #: each actuator's odometer reads this many days of its mean usage at the fleet's epoch

@@ -19,7 +19,7 @@ from .effects import (draw_background_vibration, draw_lubricant_depletion, draw_
                       draw_resonance, draw_thermal_viscosity, Effects)
 from .nuisances import RecordingNuisances
 from .rig_config import CHUNK_DURATION, ExperimentPlan, ProgressCallback, RigConfig
-from .signal import RigStream, thread_contact_amplitude
+from .rig_acceleration import RigStream, thread_contact_amplitude
 
 
 # ---------------------------------------------------------------------------------------------

@@ -10,7 +10,7 @@ import pytest
 from prsm_lube_ros.diagnosis import diagnose_table
 from prsm_lube_ros.diagnosis.adequacy import lack_of_fit
 from prsm_lube_ros.diagnosis.fitting import fit_model
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 PLAN = SyntheticPlan()
 

@@ -10,7 +10,7 @@ from prsm_lube_ros.estimation.assessment import Assessor
 from prsm_lube_ros.estimation.calibration import fit_constants
 from prsm_lube_ros.estimation.calibration_file import calibration_from_dict, calibration_to_dict
 from prsm_lube_ros.diagnosis import diagnose_table
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 from prsm_lube_ros.estimation.windowing import Window
 
 CASES = {

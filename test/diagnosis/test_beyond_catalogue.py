@@ -9,7 +9,7 @@ import pytest
 from prsm_lube_ros.diagnosis.engine import _held_out_tiebreak, COLLINEAR, diagnose_table
 from prsm_lube_ros.simulation.drive import DriveProgram, schedule_session
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, RigConfig
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 
 def test_a_step_in_time_is_modelled_empirically_not_pushed_onto_a_candidate():
@@ -103,7 +103,7 @@ def test_cool_down_pauses_lengthen_a_session_and_keep_its_strokes():
 
 
 def test_rig_set_up_factor_has_the_step_and_the_return_factor():
-    from prsm_lube_ros.simulation.signal import RigStream
+    from prsm_lube_ros.simulation.rig_acceleration import RigStream
     rig = RigConfig(mount_step=0.2, mount_step_at=0.5, return_factor=0.7)
     plan = ExperimentPlan(speeds=(10.0, 20.0), loads=(100.0, 200.0), return_under_load=True)
     program = DriveProgram()

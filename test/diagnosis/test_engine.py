@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from prsm_lube_ros.diagnosis import AMBIGUOUS, diagnose_table
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 PLAN = SyntheticPlan(spectrum_bins=128)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from prsm_lube_ros.diagnosis.locate import covariate_tests, locate, spectral_lines
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 from prsm_lube_ros.diagnosis.table import WindowTable
 
 

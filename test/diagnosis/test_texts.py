@@ -14,7 +14,7 @@ import pytest
 from prsm_lube_ros.diagnosis import diagnose_table
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, RigConfig, RPM
 from prsm_lube_ros.simulation.recordings import simulate_experiment
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 ON_A_LINE = SyntheticPlan(speeds_rpm=(100.0, 150.0, 200.0), loads=(100.0,), repeats=3)
 

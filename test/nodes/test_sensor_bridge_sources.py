@@ -14,7 +14,7 @@ from prsm_lube_ros.recording.batches import AxialLoadBatch, ScrewStateBatch, Vib
 from prsm_lube_ros.nodes.bridge_sources import batch_events, Pacer, rig_block_events, stamps_ns
 from prsm_lube_ros.nodes.daq import DaqSettings, NiDaqAccelerometer, STANDARD_GRAVITY
 from prsm_lube_ros.simulation.rig_config import RigConfig
-from prsm_lube_ros.simulation.signal import RigSignalGenerator
+from prsm_lube_ros.simulation.rig_acceleration import RigSignalGenerator
 
 T0 = 1767225600.0
 

@@ -19,7 +19,7 @@ from prsm_lube_ros.physics.effects import resonance
 from prsm_lube_ros.simulation.drive import DriveProgram, schedule_session
 from prsm_lube_ros.simulation.recordings import draw_effects, simulate_endurance, simulate_experiment
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, load_experiment_plan, load_rig_config, RigConfig
-from prsm_lube_ros.simulation.signal import RigSignalGenerator, RigStream, thread_contact_amplitude
+from prsm_lube_ros.simulation.rig_acceleration import RigSignalGenerator, RigStream, thread_contact_amplitude
 from prsm_lube_ros.simulation.effects import (BackgroundVibration, Effects, LubricantDepletion,
                                               PositionDependentStiffness, Resonance, ThermalViscosity)
 

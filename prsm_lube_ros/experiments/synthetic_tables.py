@@ -22,7 +22,7 @@ from ..diagnosis.table import WindowTable
 from ..physics.effects import (background_vibration, lubricant_depletion as depletion,
                                position_dependent_stiffness as stiffness, resonance, thermal_viscosity as thermal)
 from ..physics.vibration_model import acceleration_amplitude, ModelConstants
-from .effects import BACKGROUND_FRACTION_RANGE
+from ..simulation.effects import BACKGROUND_FRACTION_RANGE
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from prsm_lube_ros.simulation.effects import draw_background_vibration, draw_lubricant_depletion, draw_resonance
-from prsm_lube_ros.simulation.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 PLAN = SyntheticPlan(random_order=False)
 
