@@ -54,24 +54,37 @@ def declare_parameter_table(node, table: dict, resolve: Optional[dict] = None) -
     ``/prsm/calibrate``, or ``/ema_left/calibrate`` after ``-r __ns:=/ema_left``),
     and only then made read-only, so ``ros2 param get`` reports the names the
     node uses.  Raises :class:`InputError` (one line naming the parameter, its
-    value and its range) when an override does not fit.
+    value and its range, or type) when a value given at start-up does not fit.
     """
     resolve = resolve or {}
     for name, (default, ptype, description, bounds, read_only) in table.items():
-        descriptor = parameter_descriptor(name, ptype, description, bounds, read_only)
+        # Declared first with any type and no range, so that a value given at start-up is checked here in
+        # our words (rclpy's exceptions carry only text); the real descriptor follows once it fits.
+        value = node.declare_parameter(name, default, ParameterDescriptor(
+            name=name, description=description, dynamic_typing=True)).value
+        problem = value_problem(value, ptype, bounds)
+        if problem:
+            raise InputError(f'parameter {name}: {problem}')
         try:
-            if name not in resolve:
-                node.declare_parameter(name, default, descriptor)
-                continue
-            writable = parameter_descriptor(name, ptype, description, bounds, False)
-            value = node.declare_parameter(name, default, writable).value
-            resolved = resolve[name](value)
-            if resolved != value:
-                node.set_parameters([Parameter(name, value=resolved)])
-            node.set_descriptor(name, descriptor)
+            if name in resolve:
+                resolved = resolve[name](value)
+                if resolved != value:
+                    node.set_parameters([Parameter(name, value=resolved)])
+            node.set_descriptor(name, parameter_descriptor(name, ptype, description, bounds, read_only))
         except ParameterException as exc:
-            raise InputError(f'parameter {name}: {_reason(exc, name)}') from None
+            raise InputError(f'parameter {name}: {value!r} refused by rclpy ({type(exc).__name__})') from None
     return {name: node.get_parameter(name).value for name in table}
+
+
+def value_problem(value, ptype: int, bounds) -> Optional[str]:
+    """Why ``value`` does not fit a parameter of type ``ptype`` and inclusive range ``bounds`` (None: it fits)."""
+    given = Parameter.Type.from_parameter_value(value)
+    if given.value != ptype:
+        expected = Parameter.Type(ptype).name.lower().replace('_', ' ')
+        return f'{value!r} is of type {given.name.lower().replace("_", " ")}, expected {expected}'
+    if bounds and ptype in (DOUBLE, INTEGER) and not bounds[0] <= value <= bounds[1]:
+        return f'{value!r} is out of its range {bounds[0]:g} to {bounds[1]:g}'
+    return None
 
 
 def same_value(parameter: Parameter, current: Parameter) -> bool:
@@ -118,13 +131,3 @@ class ReadOnlyAfterStartUp:
 def resolved_names(node) -> Callable[[str], str]:
     """A resolver for :func:`declare_parameter_table`: a service or topic name resolved in ``node``."""
     return lambda value: node.resolve_service_name(value) if str(value).strip() else value
-
-
-def _reason(exc: ParameterException, name: str) -> str:
-    """rclpy's explanation without its boilerplate: 'out of range Min: 0.05, Max: 60.0, value: -1.0'."""
-    text = str(exc).strip()
-    if 'Reason:' in text:
-        text = text.split('Reason:', 1)[1].strip()
-    if text.endswith(f': {name}'):
-        text = text[:-len(name) - 2]
-    return text.replace(f'Parameter {name} ', '').replace(f"Trying to set parameter '{name}' to ", 'value ')
