@@ -73,7 +73,7 @@ def check_calibration(calibration, origin: str) -> None:
         raise ConfigError(f'{origin}: {what}')
 
     c = calibration.constants
-    values = {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda}
+    values = c.by_name()
     for name, value in values.items():
         if not math.isfinite(value):
             refuse(f'constants {name} is {value} (must be finite)')

@@ -36,7 +36,7 @@ def calibration_to_dict(calibration: Calibration) -> dict:
         'format': FORMAT,
         'version': VERSION,
         'created': datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds'),
-        'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
+        'constants': c.by_name(),
         'std': {'c_sys': calibration.c_sys_std, 'c_f': calibration.c_f_std,
                 'c_lambda': calibration.c_lambda_std},
         # C_sys is fitted as ln C_sys: one sigma is a factor (C_sys x/ c_sys_factor), the std above its linearisation.

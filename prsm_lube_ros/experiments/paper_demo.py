@@ -98,8 +98,7 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
     say('1d checks against the simulator\'s truth')
     ok = True
     summary = {'seed': seed, 'true_theta': list(stages), 'stages': {},
-               'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
-                               'fit_rmse': calibration.fit_rmse}}
+               'calibration': {**c.by_name(), 'fit_rmse': calibration.fit_rmse}}
     for name, truth in zip(stage_names, stages):
         values = np.array(per_stage[name])
         reference = name == stage_names[-1]

@@ -16,7 +16,7 @@ from typing import Callable, Sequence
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration
-from ..estimation.windowing import AT_REST, WindowSettings
+from ..estimation.windowing import WindowSettings
 from ..validation import reference_theta as checked_reference_theta
 
 _NAMESPACE = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*[/_]?')
@@ -98,7 +98,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
     theta = reference_theta(theta)
     paths = resolve_bag_paths(bag_paths, folder)
     try:
-        from ..estimation.pipeline import calibrate_recordings, recording_windows
+        from ..estimation.pipeline import calibrate_recordings, recording_windows, require_usable
     except ImportError as exc:    # the bag reader is not installed with this build
         raise InputError(f'calibrate: cannot read recordings on this installation ({exc})') from None
     problems: list[str] = []
@@ -115,9 +115,10 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
             on_progress('reading', read, len(paths), steady)
         recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
                                       on_problem=report)
-        if not any(w.steady for w in recording.windows):
-            raise InputError(f'calibrate: {path}: no steady window under {namespace}: '
-                             f'{_main_reason(recording.windows)}')
+        try:
+            require_usable(recording, settings)     # the command line's words for the same lack
+        except InputError as exc:
+            raise InputError(f'calibrate: {exc} (topics under {namespace})') from None
         recordings.append(recording)
         steady += sum(1 for w in recording.windows if w.steady)
         settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
@@ -125,17 +126,3 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
         on_progress('fitting', len(paths), len(paths), steady)
     calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)
     return CalibrationOutcome(calibration, tuple(str(p) for p in paths), tuple(problems))
-
-
-def _main_reason(windows) -> str:
-    """The most frequent reason why windows of a moving screw were not steady, in words."""
-    counts: dict[str, int] = {}
-    example: dict[str, str] = {}
-    for window in windows:
-        if window.reason_kind and window.reason_kind != AT_REST:
-            counts[window.reason_kind] = counts.get(window.reason_kind, 0) + 1
-            example.setdefault(window.reason_kind, window.reason)
-    if not counts:
-        return 'the screw never turned faster than min_speed'
-    kind, count = max(counts.items(), key=lambda item: item[1])
-    return f'{example[kind]} ({count} of {len(windows)} windows)'

@@ -13,7 +13,7 @@ only its load scaling (Eq. 20) enters.  All functions accept numpy arrays.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 import math
 
 import numpy as np
@@ -44,6 +44,10 @@ class ModelConstants:
     def as_vector(self) -> np.ndarray:
         """Parameters in the linear form of the fit: (ln C_sys, C_F, C_lambda)."""
         return np.array([math.log(self.c_sys), self.c_f, self.c_lambda])
+
+    def by_name(self) -> dict[str, float]:
+        """``{'c_sys': ..., 'c_f': ..., 'c_lambda': ...}``: the keys of calibration files and JSON documents."""
+        return asdict(self)
 
     @classmethod
     def from_vector(cls, vector) -> 'ModelConstants':

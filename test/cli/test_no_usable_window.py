@@ -50,3 +50,22 @@ def test_assess_of_a_standstill_recording_is_not_zero_runs_with_status_zero(tmp_
     last = captured.err.strip().splitlines()[-1]
     assert 'no usable window' in last and 'standstill' in last and str(bag) in last
     assert not (tmp_path / 'a.json').exists()
+
+
+@pytest.mark.parametrize('case', ['standstill', 'accelerating'])
+def test_the_calibrate_service_says_it_in_the_commands_words(tmp_path, capsys, case):
+    """One answer to "which recording has no usable window, and why": the node's request and the CLI agree."""
+    from prsm_lube_ros.errors import InputError
+    from prsm_lube_ros.estimation.pipeline import analysis_settings
+    from prsm_lube_ros.estimation.windowing import MIN_AXIAL_LOAD
+    from prsm_lube_ros.nodes.calibration_request import calibrate_from_request
+    from prsm_lube_ros.physics.actuator import load_actuator
+    entries = bf.contract_entries(seconds=6.0)
+    bag = bf.write_rosbag2(tmp_path / case, standstill(entries) if case == 'standstill' else entries)
+    main(['calibrate', str(bag), '--out', str(tmp_path / 'c.yaml')])
+    command_line = capsys.readouterr().err.strip().splitlines()[-1]
+    with pytest.raises(InputError) as refused:
+        calibrate_from_request([case], 1.0, folder=tmp_path, lead=load_actuator(None).lead, namespace='/prsm',
+                               settings=analysis_settings(), min_axial_load=MIN_AXIAL_LOAD)
+    because = command_line[command_line.index('no usable window'):]
+    assert str(refused.value) == f'calibrate: {bag}: {because} (topics under /prsm)'
