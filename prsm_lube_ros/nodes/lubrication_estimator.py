@@ -99,7 +99,7 @@ from ..physics.actuator import load_actuator
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .parameters import declare_parameter_table, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 
 NODE_NAME = 'lubrication_estimator'
@@ -110,65 +110,108 @@ _INTEGER = ParameterType.PARAMETER_INTEGER
 _STRING = ParameterType.PARAMETER_STRING
 _STRINGS = ParameterType.PARAMETER_STRING_ARRAY
 
-#: name: (default, type, description, range (low, high) or None, read_only)
+#: Defaults of the window and health parameters: the dataclasses' own.
+_WINDOW, _HEALTH = WindowSettings(), HealthThresholds()
+#: name: how the parameter is declared (default, type, description, range, read-only)
 PARAMETERS = {
-    'actuators': ([''], _STRINGS, 'namespace or topic prefix of each actuator watched; inputs are '
-                  '<ns>/vibration, <ns>/joint_states, <ns>/axial_load, <ns>/temperature; \'\' is the node\'s '
-                  'namespace, relative entries are resolved in it (reported resolved)', None, True),
-    'hardware_ids': ([''], _STRINGS, 'diagnostic hardware_id of each actuator, in the order of actuators '
-                     '(missing or empty: the actuator name)', None, True),
-    'calibration_file': ('~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
-                         'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name '
-                         'with / as _ (e.g. prsm); empty: none. Loaded at start; the calibrate service '
-                         'writes it when persist is set (read-only: it decides where the node writes)', None, True),
-    'history_dir': ('', _STRING, 'Parquet assessment history of the fleet (prsm-lube assess --history); when '
-                    'set, each actuator\'s depletion forecast (prsm-lube trend) is added to its diagnostics', None,
-                    True),
-    'forecast_period': (600.0, _DOUBLE, 's between re-reads of history_dir for the forecast', (1.0, 86400.0), True),
-    'recordings_dir': ('~/prsm_recordings', _STRING, 'folder the calibrate service may read bags from; '
-                       'relative bag paths are taken from it, paths outside it are refused (read-only: it '
-                       'decides what the node reads)', None, True),
-    'actuator_file': ('', _STRING, 'actuator geometry YAML (config/actuator.yaml layout) for the screw lead; '
-                      'empty: the contract\'s default actuator', None, True),
-    'window_length': (1.0, _DOUBLE, 'window length in s of header-stamp time for the vibration RMS',
-                      (0.05, 60.0), False),
-    'min_speed': (1.0, _DOUBLE, 'screw speed in rad/s above which the screw counts as moving',
-                  (0.001, 1000.0), False),
-    'max_speed_spread': (0.03, _DOUBLE, 'largest relative speed variation inside a steady window',
-                         (0.001, 1.0), False),
-    'min_coverage': (0.8, _DOUBLE, 'smallest fraction of a window the vibration samples must cover '
-                     '(less: blocks lost, window not assessed)', (0.05, 1.0), False),
-    'completion_delay': (0.5, _DOUBLE, 's of header-stamp time every input must pass a window\'s end '
-                         'before the window is closed (covers jitter between topics)', (0.0, 30.0), False),
-    'stream_timeout': (3.0, _DOUBLE, 's of header-stamp time after which a silent input stops holding '
-                       'windows open (its windows then close with a reason)', (0.1, 3600.0), False),
-    'min_axial_load': (MIN_AXIAL_LOAD, _DOUBLE, 'smallest axial load in N at which theta_oil is evaluated',
-                       (0.0, 1.0e7), False),
-    'warn_below': (0.85, _DOUBLE, 'theta_oil below this is WARN', (0.0, 2.0), False),
-    'error_below': (0.70, _DOUBLE, 'theta_oil below this is ERROR', (0.0, 2.0), False),
-    'hysteresis': (0.03, _DOUBLE, 'a level clears only when theta_oil rises above its threshold plus this',
-                   (0.0, 1.0), False),
-    'stale_timeout': (5.0, _DOUBLE, 's of node clock without vibration after which the status is STALE',
-                      (0.1, 3600.0), False),
-    'max_unassessed_windows': (30, _INTEGER, 'consecutive windows without theta_oil while the screw moves '
-                               'after which the status is at least WARN (0: never)', (0, 1000000), False),
-    'level_smoothing': (8, _INTEGER, 'assessed windows whose mean theta_oil sets the diagnostic level (1: each '
-                        'window alone; the per-window theta_oil is published unsmoothed)', (1, 1000), False),
-    'diagnostics_period': (1.0, _DOUBLE, 's of node clock between /diagnostics messages', (0.05, 60.0), True),
-    'vibration_topic': ('vibration', _STRING, 'vibration topic below each actuator namespace', None, True),
-    'joint_states_topic': ('joint_states', _STRING, 'joint states topic below each actuator namespace',
-                           None, True),
-    'axial_load_topic': ('axial_load', _STRING, 'axial load topic below each actuator namespace', None, True),
-    'temperature_topic': ('temperature', _STRING, 'temperature topic below each actuator namespace (optional '
-                          'input)', None, True),
-    'state_topic': ('lubrication_state', _STRING, 'output topic below each actuator namespace', None, True),
-    'diagnostics_topic': ('/diagnostics', _STRING, 'diagnostics topic', None, True),
-    'calibrate_service': ('calibrate', _STRING, 'calibration service of the first actuator (each '
-                          'actuator also has <ns>/calibrate); reported resolved', None, True),
-    'screw_joint': ('screw', _STRING, 'name of the screw entry in JointState', None, True),
-    'qos_depth': (500, _INTEGER, 'queue depth of the input subscriptions (best effort, sensor data); joint '
-                  'states, load and temperature are taken once per vibration block (at most every 0.2 s without '
-                  'vibration), so it must hold what a topic brings meanwhile', (1, 100000), True),
+    'actuators': ParameterSpec(
+        [''], _STRINGS,
+        'namespace or topic prefix of each actuator watched; inputs are <ns>/vibration, <ns>/joint_states, '
+        "<ns>/axial_load, <ns>/temperature; '' is the node's namespace, relative entries are resolved in it "
+        '(reported resolved)', read_only=True),
+    'hardware_ids': ParameterSpec(
+        [''], _STRINGS,
+        'diagnostic hardware_id of each actuator, in the order of actuators (missing or empty: the actuator '
+        'name)', read_only=True),
+    'calibration_file': ParameterSpec(
+        '~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
+        'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name with / as _ (e.g. '
+        'prsm); empty: none. Loaded at start; the calibrate service writes it when persist is set (read-only: '
+        'it decides where the node writes)', read_only=True),
+    'history_dir': ParameterSpec(
+        '', _STRING,
+        "Parquet assessment history of the fleet (prsm-lube assess --history); when set, each actuator's "
+        'depletion forecast (prsm-lube trend) is added to its diagnostics', read_only=True),
+    'forecast_period': ParameterSpec(
+        600.0, _DOUBLE,
+        's between re-reads of history_dir for the forecast', bounds=(1.0, 86400.0), read_only=True),
+    'recordings_dir': ParameterSpec(
+        '~/prsm_recordings', _STRING,
+        'folder the calibrate service may read bags from; relative bag paths are taken from it, paths outside '
+        'it are refused (read-only: it decides what the node reads)', read_only=True),
+    'actuator_file': ParameterSpec(
+        '', _STRING,
+        "actuator geometry YAML (config/actuator.yaml layout) for the screw lead; empty: the contract's "
+        'default actuator', read_only=True),
+    'window_length': ParameterSpec(
+        _WINDOW.window_length, _DOUBLE,
+        'window length in s of header-stamp time for the vibration RMS', bounds=(0.05, 60.0)),
+    'min_speed': ParameterSpec(
+        _WINDOW.min_speed, _DOUBLE,
+        'screw speed in rad/s above which the screw counts as moving', bounds=(0.001, 1000.0)),
+    'max_speed_spread': ParameterSpec(
+        _WINDOW.max_speed_spread, _DOUBLE,
+        'largest relative speed variation inside a steady window', bounds=(0.001, 1.0)),
+    'min_coverage': ParameterSpec(
+        _WINDOW.min_coverage, _DOUBLE,
+        'smallest fraction of a window the vibration samples must cover (less: blocks lost, window not '
+        'assessed)', bounds=(0.05, 1.0)),
+    'completion_delay': ParameterSpec(
+        _WINDOW.completion_delay, _DOUBLE,
+        "s of header-stamp time every input must pass a window's end before the window is closed (covers "
+        'jitter between topics)', bounds=(0.0, 30.0)),
+    'stream_timeout': ParameterSpec(
+        _WINDOW.stream_timeout, _DOUBLE,
+        's of header-stamp time after which a silent input stops holding windows open (its windows then close '
+        'with a reason)', bounds=(0.1, 3600.0)),
+    'min_axial_load': ParameterSpec(
+        MIN_AXIAL_LOAD, _DOUBLE,
+        'smallest axial load in N at which theta_oil is evaluated', bounds=(0.0, 1.0e7)),
+    'warn_below': ParameterSpec(_HEALTH.warn_below, _DOUBLE, 'theta_oil below this is WARN', bounds=(0.0, 2.0)),
+    'error_below': ParameterSpec(_HEALTH.error_below, _DOUBLE, 'theta_oil below this is ERROR', bounds=(0.0, 2.0)),
+    'hysteresis': ParameterSpec(
+        _HEALTH.hysteresis, _DOUBLE,
+        'a level clears only when theta_oil rises above its threshold plus this', bounds=(0.0, 1.0)),
+    'stale_timeout': ParameterSpec(
+        _HEALTH.stale_timeout, _DOUBLE,
+        's of node clock without vibration after which the status is STALE', bounds=(0.1, 3600.0)),
+    'max_unassessed_windows': ParameterSpec(
+        _HEALTH.max_unassessed_windows, _INTEGER,
+        'consecutive windows without theta_oil while the screw moves after which the status is at least WARN '
+        '(0: never)', bounds=(0, 1000000)),
+    'level_smoothing': ParameterSpec(
+        _HEALTH.level_smoothing, _INTEGER,
+        'assessed windows whose mean theta_oil sets the diagnostic level (1: each window alone; the per-window '
+        'theta_oil is published unsmoothed)', bounds=(1, 1000)),
+    'diagnostics_period': ParameterSpec(
+        1.0, _DOUBLE,
+        's of node clock between /diagnostics messages', bounds=(0.05, 60.0), read_only=True),
+    'vibration_topic': ParameterSpec(
+        'vibration', _STRING,
+        'vibration topic below each actuator namespace', read_only=True),
+    'joint_states_topic': ParameterSpec(
+        'joint_states', _STRING,
+        'joint states topic below each actuator namespace', read_only=True),
+    'axial_load_topic': ParameterSpec(
+        'axial_load', _STRING,
+        'axial load topic below each actuator namespace', read_only=True),
+    'temperature_topic': ParameterSpec(
+        'temperature', _STRING,
+        'temperature topic below each actuator namespace (optional input)', read_only=True),
+    'state_topic': ParameterSpec(
+        'lubrication_state', _STRING,
+        'output topic below each actuator namespace', read_only=True),
+    'diagnostics_topic': ParameterSpec('/diagnostics', _STRING, 'diagnostics topic', read_only=True),
+    'calibrate_service': ParameterSpec(
+        'calibrate', _STRING,
+        'calibration service of the first actuator (each actuator also has <ns>/calibrate); reported resolved',
+        read_only=True),
+    'screw_joint': ParameterSpec('screw', _STRING, 'name of the screw entry in JointState', read_only=True),
+    'qos_depth': ParameterSpec(
+        500, _INTEGER,
+        'queue depth of the input subscriptions (best effort, sensor data); joint states, load and temperature '
+        'are taken once per vibration block (at most every 0.2 s without vibration), so it must hold what a '
+        'topic brings meanwhile', bounds=(1, 100000), read_only=True),
 }
 
 #: LubricationState: reliable, and transient local so that a dashboard or logger started late gets the last
@@ -208,17 +251,12 @@ def calibration_path(template: str, actuator: str) -> str:
 
 def window_settings(values: dict) -> WindowSettings:
     """WindowSettings from parameter values (InputError when out of range)."""
-    return WindowSettings(window_length=values['window_length'], min_speed=values['min_speed'],
-                          max_speed_spread=values['max_speed_spread'], min_coverage=values['min_coverage'],
-                          completion_delay=values['completion_delay'], stream_timeout=values['stream_timeout'])
+    return WindowSettings(**{name: values[name] for name in WINDOW_PARAMETERS})
 
 
 def health_thresholds(values: dict) -> HealthThresholds:
     """HealthThresholds from parameter values (InputError when inconsistent)."""
-    return HealthThresholds(warn_below=values['warn_below'], error_below=values['error_below'],
-                            hysteresis=values['hysteresis'], stale_timeout=values['stale_timeout'],
-                            max_unassessed_windows=int(values['max_unassessed_windows']),
-                            level_smoothing=int(values['level_smoothing']))
+    return HealthThresholds(**{name: values[name] for name in HEALTH_PARAMETERS})
 
 
 @dataclass

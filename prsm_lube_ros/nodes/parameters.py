@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Node parameters declared from a table, with descriptions, ranges and one-line errors.
 
-Both nodes describe their parameters as ``{name: (default, type, description,
-bounds, read_only)}``; :func:`declare_parameter_table` declares them so that
+Both nodes describe their parameters as ``{name: ParameterSpec(default, type,
+description, bounds=..., read_only=...)}``; :func:`declare_parameter_table` declares them so that
 ``ros2 param describe`` shows the description and range, and turns a value a
 user passed (``--ros-args -p``, a params file) that breaks its range or type
 into an :class:`InputError` naming the parameter, instead of a traceback.
@@ -21,7 +21,7 @@ and the other parameters go on to rclpy and the node's own callback.
 """
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Any, Callable, NamedTuple, Optional
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
     SetParametersResult
@@ -32,6 +32,21 @@ from ..errors import InputError
 
 DOUBLE = ParameterType.PARAMETER_DOUBLE
 INTEGER = ParameterType.PARAMETER_INTEGER
+
+
+class ParameterSpec(NamedTuple):
+    """One row of a node's parameter table."""
+
+    #: value when none is given at start-up
+    default: Any
+    #: ``rcl_interfaces.msg.ParameterType`` constant
+    type: int
+    #: what ``ros2 param describe`` shows
+    description: str
+    #: inclusive (low, high) of a number; None: any value of the type
+    bounds: Optional[tuple] = None
+    #: fixed after start-up (see :class:`ReadOnlyAfterStartUp`)
+    read_only: bool = False
 
 
 def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_only: bool) -> ParameterDescriptor:

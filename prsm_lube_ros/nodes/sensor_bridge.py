@@ -91,7 +91,7 @@ from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .fast_drain import FastDrain, missing_api
 from .imu_blocks import check_axis, ImuBlockAssembler
-from .parameters import declare_parameter_table, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
 from .startup import run_node
@@ -104,80 +104,118 @@ _DOUBLE = ParameterType.PARAMETER_DOUBLE
 _INTEGER = ParameterType.PARAMETER_INTEGER
 _STRING = ParameterType.PARAMETER_STRING
 
-#: name: (default, type, description, range (low, high) or None, read_only)
+#: name: how the parameter is declared (default, type, description, range, read-only)
 PARAMETERS = {
-    'source': ('simulator', _STRING, 'where the data come from: playback (a recorded bag), simulator (the rig '
-               'simulator in real time), hardware (NI-DAQmx accelerometer) or imu (a sensor_msgs/Imu topic)', None,
-               True),
-    'namespace': ('', _STRING, 'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature '
-                  '(a namespace ending in _ is a plain prefix); \'\': the node\'s namespace; reported resolved', None,
-                  True),
-    'reliability': ('reliable', _STRING, 'QoS of the publishers: reliable (serves best-effort and reliable '
-                    'readers) or best_effort', None, True),
-    'qos_depth': (100, _INTEGER, 'KEEP_LAST depth of the publishers', (1, 100000), True),
-    'frame_id': ('nut_accelerometer', _STRING, 'header.frame_id of the VibrationBlocks (playback, hardware; the '
-                 'simulator uses its rig file\'s, imu the IMU\'s when it sets one)', None, True),
-    'hardware_id': ('', _STRING, 'diagnostic hardware_id of the source status (empty: the DAQ channel, bag, IMU '
-                    'topic or rig simulator)', None, True),
-    'stale_timeout': (2.0, _DOUBLE, 's without a published vibration block before the source status is STALE',
-                      (0.01, 3600.0), True),
-    'diagnostics_period': (1.0, _DOUBLE, 's between the source status messages on /diagnostics', (0.05, 60.0),
-                           True),
-    # playback
-    'bag': ('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', None, True),
-    'bag_namespace': ('', _STRING, 'playback: actuator namespace inside the bag (empty: namespace)', None, True),
-    'playback_rate': (1.0, _DOUBLE, 'playback: 1.0 replays in real time, larger is faster (header-stamp time '
-                      'over wall time)', (0.01, 10000.0), False),
-    'loop': (False, _BOOL, 'playback: start over at the end (header stamps then go back)', None, True),
-    'publish_clock': (False, _BOOL, 'playback: publish the replay time on /clock for nodes with use_sim_time',
-                      None, True),
-    'clock_period': (0.01, _DOUBLE, 'playback: s of replay time between /clock messages', (0.0001, 10.0), True),
-    'wait_for_subscribers': (2.0, _DOUBLE, 'playback: s of wall time to wait for a vibration subscriber before '
-                             'the first message (best-effort readers miss what is sent before they match)',
-                             (0.0, 3600.0), True),
-    'exit_at_end': (True, _BOOL, 'playback without loop: end the process (ros2 run) after the last message',
-                    None, True),
-    # simulator
-    'speed': (10.471975511965976, _DOUBLE, 'simulator: commanded screw speed in rad/s (ramps at the rig\'s '
-              'live_acceleration)', (-1000.0, 1000.0), False),
-    'load': (100.0, _DOUBLE, 'simulator: commanded axial load in N', (0.0, 1.0e6), False),
-    'theta_oil': (1.0, _DOUBLE, 'simulator: true lubrication supply factor (1 = fully lubricated)', (0.0, 2.0),
-                  False),
-    'seed': (0, _INTEGER, 'simulator: random seed', (0, 2 ** 31 - 1), True),
-    'rig_config': ('', _STRING, 'simulator: rig YAML (config/rig_simulator.yaml layout); empty: defaults', None,
-                   True),
-    # hardware
-    'daq_channel': ('Dev1/ai0', _STRING, 'hardware: NI-DAQmx physical channel of the nut accelerometer', None,
-                    True),
-    'sample_rate': (4000.0, _DOUBLE, 'hardware: samples per second (paper: 4 kHz); imu: the IMU\'s expected rate, '
-                    '0 = the rate measured from the stamps', (0.0, 1.0e6), True),
-    'block_length': (0.1, _DOUBLE, 'hardware, imu: s per VibrationBlock (rounded to whole samples)',
-                     (0.001, 10.0), True),
-    'sensitivity': (100.0, _DOUBLE, 'hardware: accelerometer sensitivity in mV/g (paper: 100 mV/g)',
-                    (0.001, 1.0e5), True),
-    'iepe_current': (0.004, _DOUBLE, 'hardware: IEPE excitation current in A (0: no excitation)', (0.0, 0.1),
-                     True),
-    'range_g': (50.0, _DOUBLE, 'hardware: measurement range +/- g', (0.001, 1.0e5), True),
-    'buffer_seconds': (10.0, _DOUBLE, 'hardware: ring buffer of the continuous acquisition in s', (0.1, 3600.0),
-                       True),
-    # imu
-    'imu_topic': ('imu/data', _STRING, 'imu: sensor_msgs/Imu topic (relative: in the node\'s namespace); reported '
-                  'resolved', None, True),
-    'imu_axis': ('z', _STRING, 'imu: axis of linear_acceleration along the screw: x, y or z', None, True),
-    'rate_tolerance': (0.05, _DOUBLE, 'imu: largest relative difference between the rate of the stamps and '
-                       'sample_rate before the measured rate is used (reported once)', (0.001, 0.5), True),
-    'jitter_tolerance': (0.25, _DOUBLE, 'imu: largest deviation of one stamp interval from the sample period, '
-                         'as a fraction of it, before the block is closed early', (0.01, 0.49), True),
-    'imu_highpass': (HIGHPASS_CORNER, _DOUBLE, 'imu: corner in Hz of the high-pass that takes gravity (DC) out of '
-                     'the samples, the lower edge of the windows\' band (0: samples passed on unchanged)', (0.0, 100.0),
-                     True),
-    # hardware and imu
-    'relay_joint_states': ('', _STRING, 'hardware, imu: JointState topic of the EMA stack to republish on '
-                           '<namespace>/joint_states (empty: the stack publishes there itself)', None, True),
-    'relay_joint': ('', _STRING, 'hardware, imu: name of the screw joint in the relayed JointState, renamed to screw '
-                    '(empty: already named screw)', None, True),
-    'relay_axial_load': ('', _STRING, 'hardware, imu: WrenchStamped topic of the EMA stack to republish on '
-                         '<namespace>/axial_load (empty: none)', None, True),
+    'source': ParameterSpec(
+        'simulator', _STRING,
+        'where the data come from: playback (a recorded bag), simulator (the rig simulator in real time), '
+        'hardware (NI-DAQmx accelerometer) or imu (a sensor_msgs/Imu topic)', read_only=True),
+    'namespace': ParameterSpec(
+        '', _STRING,
+        'topics are <namespace>/vibration, /joint_states, /axial_load, /temperature (a namespace ending in _ '
+        "is a plain prefix); '': the node's namespace; reported resolved", read_only=True),
+    'reliability': ParameterSpec(
+        'reliable', _STRING,
+        'QoS of the publishers: reliable (serves best-effort and reliable readers) or best_effort', read_only=True),
+    'qos_depth': ParameterSpec(100, _INTEGER, 'KEEP_LAST depth of the publishers', bounds=(1, 100000), read_only=True),
+    'frame_id': ParameterSpec(
+        'nut_accelerometer', _STRING,
+        "header.frame_id of the VibrationBlocks (playback, hardware; the simulator uses its rig file's, imu "
+        "the IMU's when it sets one)", read_only=True),
+    'hardware_id': ParameterSpec(
+        '', _STRING,
+        'diagnostic hardware_id of the source status (empty: the DAQ channel, bag, IMU topic or rig simulator)',
+        read_only=True),
+    'stale_timeout': ParameterSpec(
+        2.0, _DOUBLE,
+        's without a published vibration block before the source status is STALE',
+        bounds=(0.01, 3600.0), read_only=True),
+    'diagnostics_period': ParameterSpec(
+        1.0, _DOUBLE,
+        's between the source status messages on /diagnostics', bounds=(0.05, 60.0), read_only=True),
+    'bag': ParameterSpec('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', read_only=True),
+    'bag_namespace': ParameterSpec(
+        '', _STRING,
+        'playback: actuator namespace inside the bag (empty: namespace)', read_only=True),
+    'playback_rate': ParameterSpec(
+        1.0, _DOUBLE,
+        'playback: 1.0 replays in real time, larger is faster (header-stamp time over wall time)',
+        bounds=(0.01, 10000.0)),
+    'loop': ParameterSpec(False, _BOOL, 'playback: start over at the end (header stamps then go back)', read_only=True),
+    'publish_clock': ParameterSpec(
+        False, _BOOL,
+        'playback: publish the replay time on /clock for nodes with use_sim_time', read_only=True),
+    'clock_period': ParameterSpec(
+        0.01, _DOUBLE,
+        'playback: s of replay time between /clock messages', bounds=(0.0001, 10.0), read_only=True),
+    'wait_for_subscribers': ParameterSpec(
+        2.0, _DOUBLE,
+        'playback: s of wall time to wait for a vibration subscriber before the first message (best-effort '
+        'readers miss what is sent before they match)', bounds=(0.0, 3600.0), read_only=True),
+    'exit_at_end': ParameterSpec(
+        True, _BOOL,
+        'playback without loop: end the process (ros2 run) after the last message', read_only=True),
+    'speed': ParameterSpec(
+        10.471975511965976, _DOUBLE,
+        "simulator: commanded screw speed in rad/s (ramps at the rig's live_acceleration)", bounds=(-1000.0, 1000.0)),
+    'load': ParameterSpec(100.0, _DOUBLE, 'simulator: commanded axial load in N', bounds=(0.0, 1.0e6)),
+    'theta_oil': ParameterSpec(
+        1.0, _DOUBLE,
+        'simulator: true lubrication supply factor (1 = fully lubricated)', bounds=(0.0, 2.0)),
+    'seed': ParameterSpec(0, _INTEGER, 'simulator: random seed', bounds=(0, 2 ** 31 - 1), read_only=True),
+    'rig_config': ParameterSpec(
+        '', _STRING,
+        'simulator: rig YAML (config/rig_simulator.yaml layout); empty: defaults', read_only=True),
+    'daq_channel': ParameterSpec(
+        'Dev1/ai0', _STRING,
+        'hardware: NI-DAQmx physical channel of the nut accelerometer', read_only=True),
+    'sample_rate': ParameterSpec(
+        4000.0, _DOUBLE,
+        "hardware: samples per second (paper: 4 kHz); imu: the IMU's expected rate, 0 = the rate measured from "
+        'the stamps', bounds=(0.0, 1.0e6), read_only=True),
+    'block_length': ParameterSpec(
+        0.1, _DOUBLE,
+        'hardware, imu: s per VibrationBlock (rounded to whole samples)', bounds=(0.001, 10.0), read_only=True),
+    'sensitivity': ParameterSpec(
+        100.0, _DOUBLE,
+        'hardware: accelerometer sensitivity in mV/g (paper: 100 mV/g)', bounds=(0.001, 1.0e5), read_only=True),
+    'iepe_current': ParameterSpec(
+        0.004, _DOUBLE,
+        'hardware: IEPE excitation current in A (0: no excitation)', bounds=(0.0, 0.1), read_only=True),
+    'range_g': ParameterSpec(50.0, _DOUBLE, 'hardware: measurement range +/- g', bounds=(0.001, 1.0e5), read_only=True),
+    'buffer_seconds': ParameterSpec(
+        10.0, _DOUBLE,
+        'hardware: ring buffer of the continuous acquisition in s', bounds=(0.1, 3600.0), read_only=True),
+    'imu_topic': ParameterSpec(
+        'imu/data', _STRING,
+        "imu: sensor_msgs/Imu topic (relative: in the node's namespace); reported resolved", read_only=True),
+    'imu_axis': ParameterSpec(
+        'z', _STRING,
+        'imu: axis of linear_acceleration along the screw: x, y or z', read_only=True),
+    'rate_tolerance': ParameterSpec(
+        0.05, _DOUBLE,
+        'imu: largest relative difference between the rate of the stamps and sample_rate before the measured '
+        'rate is used (reported once)', bounds=(0.001, 0.5), read_only=True),
+    'jitter_tolerance': ParameterSpec(
+        0.25, _DOUBLE,
+        'imu: largest deviation of one stamp interval from the sample period, as a fraction of it, before the '
+        'block is closed early', bounds=(0.01, 0.49), read_only=True),
+    'imu_highpass': ParameterSpec(
+        HIGHPASS_CORNER, _DOUBLE,
+        'imu: corner in Hz of the high-pass that takes gravity (DC) out of the samples, the lower edge of the '
+        "windows' band (0: samples passed on unchanged)", bounds=(0.0, 100.0), read_only=True),
+    'relay_joint_states': ParameterSpec(
+        '', _STRING,
+        'hardware, imu: JointState topic of the EMA stack to republish on <namespace>/joint_states (empty: the '
+        'stack publishes there itself)', read_only=True),
+    'relay_joint': ParameterSpec(
+        '', _STRING,
+        'hardware, imu: name of the screw joint in the relayed JointState, renamed to screw (empty: already '
+        'named screw)', read_only=True),
+    'relay_axial_load': ParameterSpec(
+        '', _STRING,
+        'hardware, imu: WrenchStamped topic of the EMA stack to republish on <namespace>/axial_load (empty: '
+        'none)', read_only=True),
 }
 SIMULATOR_PARAMETERS = ('speed', 'load', 'theta_oil')
 #: Most IMU messages taken from the queue per callback (the rest wait for the next one).

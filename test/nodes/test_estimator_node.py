@@ -521,7 +521,7 @@ def test_bad_calibration_requests_answer_false_and_the_node_keeps_serving(graph,
         ([outside], 1.0, 'outside the recordings folder'),
         (['../outside_bag'], 1.0, 'outside the recordings folder'),
         ([tmp_path / 'other_ns'], 1.0, '/prsm'),
-        ([tmp_path / 'no_load'], 1.0, 'no axial load'),
+        ([tmp_path / 'no_load'], 1.0, 'no usable window: no message could be read on axial_load'),
         ([tmp_path / 'one_level'], 1.0, 'cannot identify'),
         ([tmp_path / 'one_level'], -1.0, 'reference_theta'),
         ([tmp_path / 'one_level', 'one_level'], 1.0, 'named twice'),     # absolute and relative: one bag
