@@ -86,6 +86,9 @@ BIC_MARGIN = 10.0
 MIN_GAIN = 0.05
 #: BIC drop a second effect must give over the first alone (the first has already shown the model misses).
 SECOND_BIC_MARGIN = 5.0
+#: BIC rise a second effect may cost when what the first leaves is located on its covariate (a BIC
+#: difference under 2 is no evidence either way).
+LOCATED_BIC_TOLERANCE = 2.0
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative).
 EVIDENCE_TOLERANCE = 0.02
 #: BIC drop a form with more parameters needs over the simpler forms of the same effect.
@@ -149,12 +152,14 @@ class SecondEffect:
     first_params: dict          # and its parameters in the joint fit
     first_form: str
     combined: Effect | None = None   # the joint model (CombinedEffect) ``fit`` belongs to
+    basis: str = ''             # why it is named on top of the first (see :func:`_add_second`)
+    route: int = 1              # which of :func:`_add_second`'s rules named it (1 the strongest)
 
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
         return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
                 'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
-                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse)}
+                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'basis': self.basis}
 
     def first_as_json(self) -> dict:
         """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
@@ -482,6 +487,15 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
     Earning: physical constants, BIC lower by ``margin`` and held-out error
     lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
     """
+    pair = _best_pair(table, combos, reference, other, folds, location)
+    if pair is None or pair.delta_bic > -margin or pair.gain < MIN_GAIN:
+        return None
+    pair.basis = f'held-out error {100 * pair.gain:.0f} % lower than the first alone, BIC {pair.delta_bic:+.0f}'
+    return pair
+
+
+def _best_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
+    """The best of ``combos`` by BIC with physical constants, as a :class:`SecondEffect` on ``reference``."""
     combos = [both for both in combos if not both.applicable(table)]
     if not combos or not reference.cv_rmse > 0:
         return None
@@ -490,8 +504,6 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     delta = _delta_bic(fit, reference)
-    if delta > -margin or gain < MIN_GAIN:
-        return None
     kept = both.first if both.added is both.second else both.second
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
     return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
@@ -499,12 +511,38 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
                         kept, first_params, kept.form_name(first_params, table, location), combined=both)
 
 
-def _add_second(table, first: Candidate, other: Candidate, folds, location) -> SecondEffect | None:
-    """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC."""
+def _add_second(table, first: Candidate, other: Candidate, folds, location, left: Location) -> SecondEffect | None:
+    """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC.
+
+    The pair names ``other`` when its constants are physical and, beside
+    (1) a BIC drop of :data:`SECOND_BIC_MARGIN` with the held-out error lower by
+    :data:`MIN_GAIN` than the first alone, either (2) the first effect's residual
+    ``left`` is located on ``other``'s covariate (a significance test of its
+    own) and the pair lowers the held-out error by :data:`MIN_GAIN` with a BIC
+    at most :data:`LOCATED_BIC_TOLERANCE` higher, or (3) ``other`` has evidence outside the amplitude fit (its spectrum
+    signature, with the pair's parameters) and the pair predicts held-out runs
+    no worse than :data:`EVIDENCE_TOLERANCE` -- the rules a single effect earns by.
+    """
     family = other.family
     combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
               for form in family.variants()]
-    return _fit_pair(table, combos, first.fit, other, folds, location, margin=SECOND_BIC_MARGIN)
+    pair = _best_pair(table, combos, first.fit, other, folds, location)
+    if pair is None:
+        return None
+    if pair.delta_bic <= -SECOND_BIC_MARGIN and pair.gain >= MIN_GAIN:
+        pair.basis = f'held-out error {100 * pair.gain:.0f} % lower than the first alone, BIC {pair.delta_bic:+.0f}'
+        return pair
+    if left.located == other.effect.covariate and pair.delta_bic < LOCATED_BIC_TOLERANCE and pair.gain >= MIN_GAIN:
+        pair.route = 2
+        pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
+                      f'{100 * pair.gain:.0f} % lower, BIC {pair.delta_bic:+.1f}')
+        return pair
+    evidence = other.evidence and pair.effect.independent_evidence(table, location, pair.params)
+    if evidence and pair.gain >= -EVIDENCE_TOLERANCE:
+        pair.route = 3
+        pair.basis = f'{evidence}; held-out error {100 * pair.gain:+.1f} % lower than the first alone'
+        return pair
+    return None
 
 
 def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
@@ -514,24 +552,26 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
     or when another candidate alone predicted held-out runs better than the
     paper's model by :data:`MIN_GAIN` (an effect drifting between replicate runs,
     depletion say, leaves no lack of fit in the condition means).
-    Returns ``(second or None, tied)``: two that earn with BICs within
-    :data:`BIC_MARGIN` of each other tie, and neither is named.
+    Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
+    within :data:`BIC_MARGIN` of each other tie, and neither is named; one named
+    by a stronger rule of :func:`_add_second` goes before the others.
     """
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= MIN_GAIN
                       for c in candidates)
-    if (not remaining.significant and not others_gain
-            and locate(table, first.fit.log_residual).located == 'none'):
+    left = locate(table, first.fit.log_residual)
+    if not remaining.significant and not others_gain and left.located == 'none':
         return None, []
     earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
-        second = _add_second(table, first, cand, folds, location)
+        second = _add_second(table, first, cand, folds, location, left)
         if second is not None:
             earning.append(second)
-    earning.sort(key=lambda second: second.fit.cv_rmse)
-    if len(earning) > 1 and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
+    earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
+    if len(earning) > 1 and earning[1].route == earning[0].route == 1 \
+            and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
         return None, earning[:2]
     return (earning[0] if earning else None), []
 

@@ -25,6 +25,8 @@ from ..errors import InputError
 from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
+#: Longest time between two windows holding a temperature across which it is interpolated, s.
+TEMPERATURE_GAP = 30.0
 #: Columns every table has, in SI units (temperature in degC, time in s).
 COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
 
@@ -150,7 +152,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         rows['position'].extend(position.tolist())
         rows['revolutions'].extend(w.revolutions for w in chosen)
         rows['time'].extend(0.5 * (w.start + w.end) - t0 for w in chosen)
-        rows['temperature'].extend(w.temperature for w in chosen)
+        rows['temperature'].extend(_temperatures(windows, chosen))
         rows['run'].extend((local_run + run_offset).tolist())
         rows['recording'].extend([rec_index] * len(chosen))
         back = {r for r in np.unique(run_ids) if np.nanmedian(travel[run_ids == r]) < 0}
@@ -170,6 +172,33 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=directions, **rows)
+
+
+def _temperatures(windows: Sequence, chosen: Sequence) -> list:
+    """Mean temperature of each chosen window, degC; interpolated in time where no sample fell in it.
+
+    Temperature changes slowly and is often published at 1 Hz, so a 1 s window
+    can hold no sample (NaN) although the sensor ran: such a window takes the
+    linear interpolation between the nearest windows of the recording (steady
+    or not) that hold one, when those lie at most :data:`TEMPERATURE_GAP` s apart.
+    """
+    own = np.array([w.temperature for w in chosen], dtype=float)
+    if np.isfinite(own).all():
+        return own.tolist()
+    times = np.array([0.5 * (w.start + w.end) for w in windows], dtype=float)
+    values = np.array([w.temperature for w in windows], dtype=float)
+    known = np.isfinite(values) & np.isfinite(times)
+    if known.sum() < 2:
+        return own.tolist()
+    order = np.argsort(times[known], kind='stable')
+    at, value = times[known][order], values[known][order]
+    mid = np.array([0.5 * (w.start + w.end) for w in chosen], dtype=float)
+    after = np.searchsorted(at, mid)
+    inside = (after > 0) & (after < at.size)
+    gap = np.where(inside, at[np.minimum(after, at.size - 1)] - at[np.maximum(after - 1, 0)], np.inf)
+    fill = ~np.isfinite(own) & inside & (gap <= TEMPERATURE_GAP)
+    own[fill] = np.interp(mid[fill], at, value)
+    return own.tolist()
 
 
 def _stroke_position(travel: np.ndarray, run_ids: np.ndarray) -> np.ndarray:

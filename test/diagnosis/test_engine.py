@@ -155,3 +155,50 @@ def test_a_within_run_effect_is_still_named_on_three_conditions():
     """What the plan cannot test is the speed and load form; a shape along the stroke it can."""
     result = diagnose_table(_on_a_line('position_dependent_stiffness', seed=22))
     assert result.verdict == 'position_dependent_stiffness'
+
+
+def _second_case(monkeypatch, gain, delta_bic, located='none', evidence=''):
+    """What engine._add_second decides for a pair fit with ``gain`` and ``delta_bic`` (the fit itself stubbed)."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.locate import Location
+    pair = SimpleNamespace(gain=gain, delta_bic=delta_bic, params={}, route=1, basis='',
+                           effect=SimpleNamespace(independent_evidence=lambda table, location, params: evidence))
+    monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
+    first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
+    other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence=evidence,
+                            effect=SimpleNamespace(covariate='position'))
+    left = Location([], None, located, '')
+    return engine._add_second(None, first, other, None, None, left)
+
+
+@pytest.mark.parametrize('gain, delta_bic, located, evidence, route', [
+    (0.06, -6.0, 'none', '', 1),            # BIC and held-out error: the strongest rule
+    (0.06, -4.0, 'none', '', None),         # BIC drop short of SECOND_BIC_MARGIN, nothing else
+    (0.06, 0.4, 'position', '', 2),         # what the first leaves follows the other's covariate
+    (0.06, 0.4, 'time', '', None),          # located, but not on the other's covariate
+    (0.06, 2.5, 'position', '', None),      # located, but the pair costs more than LOCATED_BIC_TOLERANCE
+    (0.03, -1.0, 'position', '', None),     # located, but the held-out gain is under MIN_GAIN
+    (-0.01, 1.0, 'none', 'spectrum: 2 lines', 3),   # evidence outside the fit, held-out no worse than 2 %
+    (-0.03, 1.0, 'none', 'spectrum: 2 lines', None),  # evidence, but held-out runs predicted worse
+])
+def test_a_second_effect_is_named_by_the_rules_a_single_effect_earns_by(
+        monkeypatch, gain, delta_bic, located, evidence, route):
+    second = _second_case(monkeypatch, gain, delta_bic, located, evidence)
+    assert (second.route if second is not None else None) == route
+    if second is not None:
+        assert second.basis
+
+
+def test_a_window_without_a_temperature_sample_takes_its_neighbours_in_time():
+    """1 Hz temperature, 1 s windows: a window can hold no sample although the sensor ran (diagnosis.table)."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis.table import _temperatures, TEMPERATURE_GAP
+    temps = [30.0, np.nan, 31.0, np.nan, np.nan, np.nan]
+    starts = [0.0, 1.0, 2.0, 3.0, 4.0, 4.0 + TEMPERATURE_GAP + 10]
+    windows = [SimpleNamespace(start=s, end=s + 1.0, temperature=t) for s, t in zip(starts, temps)]
+    windows.append(SimpleNamespace(start=starts[-1] + 1.0, end=starts[-1] + 2.0, temperature=40.0))
+    filled = _temperatures(windows, windows[:6])
+    assert filled[:3] == [30.0, 30.5, 31.0]
+    # Before the last sample but more than TEMPERATURE_GAP from the one before: not invented.
+    assert all(np.isnan(filled[3:6]))
