@@ -169,3 +169,15 @@ def test_order_tracked_line_powers_are_resonance_evidence_where_the_fitted_speed
     elsewhere = {'resonant_speed': 2 * math.pi * 40.0 / 7.0, 'damping_ratio': 0.08}     # order 7 is not tracked
     assert resonance.independent_evidence(None, location, elsewhere) == ''
     assert resonance.independent_evidence(None, location) == 'spectrum: one mode at 40.0 Hz'
+
+
+@pytest.mark.parametrize('mode_bands, supported', [([], True), ([13.4], False)])
+def test_a_changing_spectral_shape_supports_a_background_only_without_a_mode_band(mode_bands, supported):
+    """A mode the orders pass changes the shape beyond its own octave: then the shape is no evidence of a floor."""
+    from prsm_lube_ros.diagnosis.locate import Location, SpectralLines, SpectralShape
+    shape = SpectralShape(testable=True, distance=0.12, noise=0.01, structure=0.5, added_ratio=14.9,
+                          note='the spectral shape changes between the lowest and highest speed')
+    assert shape.floor_added
+    location = Location([], SpectralLines(testable=True, mode_frequencies=mode_bands), 'spectrum', '', shape)
+    evidence = get_effect('background_vibration').independent_evidence(None, location, {'background_rms': 0.2})
+    assert bool(evidence) == supported

@@ -66,13 +66,16 @@ class BackgroundVibration(Effect, law.Extension):
 
         Power added from elsewhere with a spectrum of its own changes the
         shape of the recorded spectrum between the lowest and the highest speed;
-        whatever multiplies the whole response does not.
+        whatever multiplies the whole response does not.  A band fixed in Hz whose
+        power follows the speed (a mode the orders pass) changes the shape too,
+        beyond the octave around it that the shape leaves out: with such a band
+        located, a changing shape is no evidence of added power.
         """
         lines = location.spectrum if location is not None else None
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
         shape = getattr(location, 'shape', None)
-        if shape is not None and shape.floor_added:
+        if shape is not None and shape.floor_added and not (lines is not None and lines.mode_frequencies):
             return 'spectrum: ' + shape.note
         return ''
 
