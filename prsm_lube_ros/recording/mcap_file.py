@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from array import array
 from dataclasses import dataclass, field
+from enum import IntEnum
 from functools import lru_cache
 import struct
 from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
@@ -34,8 +35,35 @@ except ImportError:  # pragma: no cover - depends on the installed wheels
     _zstandard = None
 
 MAGIC = b'\x89MCAP0\r\n'
-OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06
-OP_MESSAGE_INDEX, OP_CHUNK_INDEX, OP_STATISTICS, OP_DATA_END = 0x07, 0x08, 0x0B, 0x0F
+
+
+class Opcode(IntEnum):
+    """Record opcodes of the MCAP specification (0x01-0x0F); :data:`FIRST_USER_OPCODE` and up are user records."""
+
+    HEADER = 0x01
+    FOOTER = 0x02
+    SCHEMA = 0x03
+    CHANNEL = 0x04
+    MESSAGE = 0x05
+    CHUNK = 0x06
+    MESSAGE_INDEX = 0x07
+    CHUNK_INDEX = 0x08
+    ATTACHMENT = 0x09
+    ATTACHMENT_INDEX = 0x0A
+    STATISTICS = 0x0B
+    METADATA = 0x0C
+    METADATA_INDEX = 0x0D
+    SUMMARY_OFFSET = 0x0E
+    DATA_END = 0x0F
+
+
+#: Records from this opcode on are an application's own; readers skip them.
+FIRST_USER_OPCODE = 0x80
+#: The opcodes this reader acts on, by their short names.
+OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL = Opcode.HEADER, Opcode.FOOTER, Opcode.SCHEMA, Opcode.CHANNEL
+OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX, OP_CHUNK_INDEX = Opcode.MESSAGE, Opcode.CHUNK, Opcode.MESSAGE_INDEX, \
+    Opcode.CHUNK_INDEX
+OP_STATISTICS, OP_DATA_END = Opcode.STATISTICS, Opcode.DATA_END
 #: opcode + uint64 record length
 RECORD_PREFIX = 9
 #: channel_id uint16, sequence uint32, log_time uint64, publish_time uint64
@@ -433,7 +461,7 @@ def _definitions_into(summary: Summary, on_problem):
             elif opcode == OP_CHANNEL:
                 channel = parse_channel(content)
                 summary.channels.setdefault(channel.id, channel)
-            elif opcode < 0x80:
+            elif opcode < FIRST_USER_OPCODE:
                 on_problem(f'a record of opcode {opcode:#04x} among the messages (corrupt; a message with a damaged '
                            'opcode?) left out')
         except McapProblem as problem:
@@ -706,7 +734,8 @@ class McapFile:
                     cut = pos if head else None
                     break
                 opcode, length = _RECORD.unpack_from(head, 0)
-                if length > self.size - pos - RECORD_PREFIX or not (0 < opcode <= 0x0F or opcode >= 0x80):
+                known = 0 < opcode <= Opcode.DATA_END or opcode >= FIRST_USER_OPCODE
+                if length > self.size - pos - RECORD_PREFIX or not known:
                     cut = pos
                     break
                 if opcode == OP_MESSAGE_INDEX and pending is not None:
@@ -872,7 +901,8 @@ class DataLayout:
 
 #: Opcodes of the summary section (after DataEnd): Schema, Channel, ChunkIndex, AttachmentIndex, Statistics,
 #: MetadataIndex, SummaryOffset.
-SUMMARY_OPCODES = frozenset((OP_SCHEMA, OP_CHANNEL, OP_CHUNK_INDEX, 0x0A, OP_STATISTICS, 0x0D, 0x0E))
+SUMMARY_OPCODES = frozenset((OP_SCHEMA, OP_CHANNEL, OP_CHUNK_INDEX, Opcode.ATTACHMENT_INDEX, OP_STATISTICS,
+                             Opcode.METADATA_INDEX, Opcode.SUMMARY_OFFSET))
 
 
 def _ends_data(stream: BinaryIO, pos: int, opcode: int, length: int, size: int) -> bool:
@@ -892,7 +922,7 @@ def _ends_data(stream: BinaryIO, pos: int, opcode: int, length: int, size: int) 
         kind, record_length = _RECORD.unpack_from(stream.read(RECORD_PREFIX), 0)
         if kind == OP_FOOTER:
             return True
-        if not (kind in SUMMARY_OPCODES or kind >= 0x80):
+        if not (kind in SUMMARY_OPCODES or kind >= FIRST_USER_OPCODE):
             return False
         at += RECORD_PREFIX + record_length
     return True
