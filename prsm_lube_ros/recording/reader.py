@@ -98,36 +98,57 @@ class _RawChunk:
     progress: float                                   # fraction of the recording read
 
 
-def _list_topic(source, name: str, msgtype: str, count: int, definition: tuple) -> None:
-    """Add ``count`` messages of ``name`` to a source's listing (the first file to name a topic defines it)."""
-    if name in source.topics:
-        source.topics[name].message_count += count
-        return
-    source.topics[name] = TopicInfo(name, msgtype, count)
-    source.definitions[name] = definition
+class _Source:
+    """What the three storage sources share: their listing (topics, definitions, span) and the stream's shape.
+
+    A source lists every topic with its definition ``(msgtype, encoding, text,
+    message encoding)`` and streams the named topics in :class:`_RawChunk` pieces
+    through :meth:`raw_chunks`.
+    """
+
+    def __init__(self, label: str):
+        self.label = label
+        self.problems: List[str] = []
+        self.topics: Dict[str, TopicInfo] = {}
+        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        self.start_time: Optional[int] = None
+        self.end_time: Optional[int] = None
+
+    def list_topic(self, name: str, msgtype: str, count: int, definition: tuple) -> None:
+        """Add ``count`` messages of ``name`` to the listing (the first file to name a topic defines it)."""
+        if name in self.topics:
+            self.topics[name].message_count += count
+            return
+        self.topics[name] = TopicInfo(name, msgtype, count)
+        self.definitions[name] = definition
+
+    def widen_span(self, start: Optional[int], end: Optional[int]) -> None:
+        """Widen ``start_time``/``end_time`` (ns) to cover ``start``/``end`` (None: not known)."""
+        if start is not None:
+            self.start_time = start if self.start_time is None else min(self.start_time, start)
+        if end is not None:
+            self.end_time = end if self.end_time is None else max(self.end_time, end)
+
+    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
+        """Why ``topic`` cannot carry the contract's ``kind`` (None: it can)."""
+        msgtype, encoding, text, message_encoding = self.definitions[topic]
+        if message_encoding != 'cdr':
+            return f'has message encoding {message_encoding!r}, not cdr'
+        return check_layout(kind, msgtype, encoding, text)
+
+    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+        """The messages of ``topics`` in chunks; damage is reported through ``on_problem``."""
+        raise NotImplementedError
 
 
-def _widen_span(source, start: Optional[int], end: Optional[int]) -> None:
-    """Widen a source's ``start_time``/``end_time`` (ns) to cover ``start``/``end`` (None: not known)."""
-    if start is not None:
-        source.start_time = start if source.start_time is None else min(source.start_time, start)
-    if end is not None:
-        source.end_time = end if source.end_time is None else max(source.end_time, end)
-
-
-class _McapSource:
+class _McapSource(_Source):
     """One or more MCAP files (a bare file, or the files of a rosbag2 directory)."""
 
     def __init__(self, label: str, paths: List[Path]):
-        self.label = label
+        super().__init__(label)
         self.paths = paths
         self.files: List[mcap_file.McapFile] = []
         self.listings: List[mcap_file.Summary] = []       # per file: its summary, or what a scan found
-        self.problems: List[str] = []
-        self.topics: Dict[str, TopicInfo] = {}
-        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text)
-        self.start_time: Optional[int] = None
-        self.end_time: Optional[int] = None
         for path in paths:
             try:
                 mcap = mcap_file.McapFile(path)
@@ -154,16 +175,10 @@ class _McapSource:
             schema = summary.schemas.get(channel.schema_id)
             msgtype = schema.name if schema else '(no schema)'
             text = schema.data.decode('utf-8', 'replace') if schema else ''
-            _list_topic(self, channel.topic, msgtype, summary.message_counts.get(channel_id, 0),
-                        (msgtype, schema.encoding if schema else '', text, channel.message_encoding))
+            self.list_topic(channel.topic, msgtype, summary.message_counts.get(channel_id, 0),
+                            (msgtype, schema.encoding if schema else '', text, channel.message_encoding))
         if summary.message_counts or summary.complete:
-            _widen_span(self, summary.start_time, summary.end_time)
-
-    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
-        msgtype, encoding, text, message_encoding = self.definitions[topic]
-        if message_encoding != 'cdr':
-            return f'has message encoding {message_encoding!r}, not cdr'
-        return check_layout(kind, msgtype, encoding, text)
+            self.widen_span(summary.start_time, summary.end_time)
 
     @staticmethod
     def _horizons(layouts: List[mcap_file.DataLayout]) -> List[tuple]:
@@ -295,7 +310,7 @@ def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
         yield _pack(pending, 1.0)
 
 
-class _SqliteSource:
+class _SqliteSource(_Source):
     """The ``.db3`` files of a sqlite3 rosbag2 bag, read with Python's sqlite3 module.
 
     ``compression``: ``''``, ``'message'`` (every message a zstd frame) or
@@ -305,13 +320,8 @@ class _SqliteSource:
     """
 
     def __init__(self, label: str, paths: List[Path], compression: str = ''):
-        self.label = label
-        self.problems: List[str] = []
-        self.topics: Dict[str, TopicInfo] = {}
-        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        super().__init__(label)
         self.files: List[sqlite_file.SqliteFile] = []
-        self.start_time: Optional[int] = None
-        self.end_time: Optional[int] = None
         self._scratch = tempfile.TemporaryDirectory(prefix='prsm_lube_bag_') if compression == 'file' else None
         for path in paths:
             try:
@@ -326,12 +336,10 @@ class _SqliteSource:
                 raise RecordingError(f'{path}: cannot be read ({err.strerror or err})') from None
             self.files.append(db)
             for topic in db.topics.values():
-                _widen_span(self, topic.start_time, topic.end_time)
+                self.widen_span(topic.start_time, topic.end_time)
                 encoding, text = db.definitions.get(topic.msgtype, ('', ''))
-                _list_topic(self, topic.name, topic.msgtype, topic.message_count,
-                            (topic.msgtype, encoding, text, topic.serialization_format))
-
-    layout_problem = _McapSource.layout_problem
+                self.list_topic(topic.name, topic.msgtype, topic.message_count,
+                                (topic.msgtype, encoding, text, topic.serialization_format))
 
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         wanted = set(topics)
@@ -344,17 +352,14 @@ class _SqliteSource:
         return _pseudo_chunks(messages(), self.start_time or 0, self.end_time or 0)
 
 
-class _RosbagsSource:
+class _RosbagsSource(_Source):
     """A rosbag2 directory read through rosbags' Reader (sqlite3, compressed bags, reference path)."""
 
     def __init__(self, path: Path):
         from rosbags.rosbag2 import Reader
         from rosbags.interfaces import MessageDefinitionFormat
-        self.label = str(path)
+        super().__init__(str(path))
         self.path = path
-        self.problems: List[str] = []
-        self.topics: Dict[str, TopicInfo] = {}
-        self.definitions: Dict[str, tuple] = {}
         try:
             with Reader(path) as reader:
                 encodings = {MessageDefinitionFormat.MSG: 'ros2msg', MessageDefinitionFormat.IDL: 'ros2idl'}
@@ -364,17 +369,14 @@ class _RosbagsSource:
                         continue
                     self.topics[connection.topic] = TopicInfo(connection.topic, connection.msgtype,
                                                               connection.msgcount)
-                    self.definitions[connection.topic] = (
+                    self.definitions[connection.topic] = (      # rosbags' Reader gives CDR messages
                         connection.msgtype, encodings.get(connection.msgdef.format, ''),
-                        connection.msgdef.data or '')
+                        connection.msgdef.data or '', 'cdr')
                 count = reader.message_count
                 self.start_time = reader.start_time if count else None
                 self.end_time = reader.end_time - 1 if count else None
         except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
             raise RecordingError(f'{path}: not a readable rosbag2 bag ({exception_text(err)})') from None
-
-    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
-        return check_layout(kind, *self.definitions[topic])
 
     def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         from rosbags.rosbag2 import Reader
