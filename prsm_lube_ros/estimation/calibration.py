@@ -132,7 +132,7 @@ class Calibration:
         return text + ''.join(f'; {flag}' for flag in self.flags)
 
 
-def operating_levels(values: Sequence[float], tolerance: float = LEVEL_TOLERANCE) -> list[float]:
+def operating_levels(values: Sequence[float] | np.ndarray, tolerance: float = LEVEL_TOLERANCE) -> list[float]:
     """Distinct levels in ``values``: sorted values closer than ``tolerance`` (relative) merge."""
     ordered = np.sort(np.abs(np.asarray(values, dtype=float)))
     levels: list[list[float]] = []
