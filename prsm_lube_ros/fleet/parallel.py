@@ -176,7 +176,7 @@ def outcomes_fingerprint(outcomes: Sequence[BagOutcome]) -> str:
     ... and its theta and one-sigma).  ``repr``: NaN equals NaN and every
     float is compared to the last bit.
     """
-    result = []
+    result: list[tuple] = []
     for outcome in outcomes:
         assessment = outcome.assessment
         if assessment is None:
