@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, cast, Iterable, Sequence
 
 import numpy as np
 
@@ -60,7 +60,7 @@ class RecordingWindows:
         reason = (f'no stretch of {settings.window_length:g} s at steady speed and load with vibration '
                   'and load data covering it')
         if reasons:
-            common = max(reasons, key=reasons.get)
+            common = max(reasons, key=cast(Callable[[str], int], reasons.get))
             reason += f' (none of {len(self.windows)} windows steady; most: {common})'
         return reason + (f'; {self.problems[-1]}' if self.problems else '')
 
@@ -184,6 +184,9 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
     ``windows`` lists every window, steady or not, with ``theta_oil`` null and
     the reason in words where it was not assessable.
     """
+    runs: list[dict]
+    unassessed: list[dict]
+    run: Any   # a RunAssessment, then an unassessed run's mapping
     runs, unassessed, windows, problems = [], [], [], []
     for rec in assessments:
         problems.extend(rec.problems)

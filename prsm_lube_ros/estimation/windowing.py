@@ -212,6 +212,7 @@ def _grouped(keys: np.ndarray):
     if keys.size == 1:
         return slice(None), keys, np.zeros(1, np.int64), np.ones(1, np.int64)
     if (keys[1:] >= keys[:-1]).all():
+        order: slice | np.ndarray
         order, sorted_keys = slice(None), keys
     else:
         order = np.argsort(keys, kind='stable')
@@ -414,6 +415,7 @@ class WindowBuilder:
 
     def _band_covered(self, rates: np.ndarray, good: np.ndarray) -> np.ndarray:
         """Mask of blocks whose sample rate covers the band (choosing its upper edge at the first block)."""
+        assert self.band is not None  # called only for a band
         if not self.band.chosen:
             self.band = self.band.resolved(float(rates[np.flatnonzero(good)[0]]))
         covered = rates >= self.band.min_sample_rate * (1 - 1e-9)
