@@ -64,7 +64,7 @@ def assess_bag(path: str, job: BagJob) -> BagOutcome:
         return BagOutcome(str(path), error=f'{path}: {exc.__class__.__name__}: {exc}')
 
 
-def assess_bags(paths: Sequence[str], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
+def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
                 on_done: Callable[[BagOutcome], None] | None = None) -> list[BagOutcome]:
     """:func:`assess_bag` for every path; outcomes in the order of ``paths``.
 
