@@ -550,7 +550,7 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
 PAIR_POOL = 3
 
 
-def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
+def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) -> tuple[Candidate, SecondEffect] | None:
     """Two effects that only together explain the mismatch: ``(first, second)`` or None.
 
     Among the :data:`PAIR_POOL` candidates with the largest held-out gains
@@ -813,9 +813,9 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
             found = baseline_test.finding or 'the constants are unphysical'
             notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
                          'well as a model error')
-        pair = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
-        if pair is not None:
-            best, second = pair
+        together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
+        if together is not None:
+            best, second = together
             best.status = 'earns'
             best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
             verdict = best.effect.id

@@ -16,7 +16,7 @@ from __future__ import annotations
 import html
 import math
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -221,6 +221,7 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     if diagnosis.what_to_record:
         lines += ['', f'**What to record:** {diagnosis.what_to_record}']
     lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.']
+    test: Any   # a lack-of-fit test (or None), then a covariate test
     for label, test in (('paper\'s model', diagnosis.baseline_fit_test), ('chosen model', diagnosis.chosen_fit_test)):
         if test is not None:
             lines += ['', f'**Lack of fit, {label}:** {test.sentence}.']

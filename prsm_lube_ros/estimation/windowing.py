@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any
 
 import numpy as np
 
@@ -627,6 +628,7 @@ class WindowBuilder:
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra = [(None, math.nan)] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+        row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
                 chunks = self._chunks.pop(k, None)

@@ -49,7 +49,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from statistics import NormalDist
-from typing import Any, cast, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -320,7 +320,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
             high = None if high is None else max(high, bracket[2])
         result.crossings.append(Crossing(float(level), estimate, low, high))
     if odometer is not None:
-        fit_revolutions(result, cast(np.ndarray, odometer), y, sigma, cycles, shared, levels, rng)   # an array above
+        fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
     return result
 
 

@@ -52,7 +52,7 @@ class LiveResult:
     windows_before: list = field(default_factory=list)
     windows_after: list = field(default_factory=list)
     calibrated_at: float = math.nan          # s since start when the answer came
-    response: Calibrate.Response | None = None
+    response: object = None
     statuses: list = field(default_factory=list)   # (wall s, level, message) of the estimator's status
     bridge_statuses: int = 0
     problem: str = ''

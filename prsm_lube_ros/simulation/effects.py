@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, fields
 import math
-from typing import Any
+from typing import Any, Sequence, TypeVar
 
 import numpy as np
 
@@ -132,7 +132,10 @@ class Effects:
         return cls(**values)
 
 
-def _choose(rng: np.random.Generator, options, chosen=None):
+_T = TypeVar('_T')
+
+
+def _choose(rng: np.random.Generator, options: Sequence[_T], chosen: _T | None = None) -> _T:
     """``chosen`` when given (checked against ``options``), else one of ``options`` at random."""
     if chosen is None:
         return options[int(rng.integers(len(options)))]
