@@ -18,7 +18,7 @@ import re
 import shutil
 import tempfile
 import time
-from typing import Callable
+from typing import Any, Callable
 
 #: s after which a temporary without a writer pid is taken as stale
 LEGACY_AGE = 600.0
@@ -67,7 +67,7 @@ def remove_stale(folder: Path, name: str = '') -> list[Path]:
     return removed
 
 
-def write_atomically(path: Path, write: Callable[[object], None], *, binary: bool = True,
+def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool = True,
                      before_replace: Callable[[Path], None] | None = None) -> None:
     """``write(stream)`` into a temporary beside ``path``, fsync, rename over ``path``; stale temporaries removed.
 

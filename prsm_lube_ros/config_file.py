@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import fields, MISSING
 from pathlib import Path
-from typing import Iterable
+from typing import Any, Callable, cast, Iterable
 
 from .errors import ConfigError, InputError
 from .validation import as_number
@@ -112,13 +112,13 @@ def coerce_fields(path: str | Path, kind, values: dict, skip: Iterable[str] = ()
     unknown = sorted(set(values) - set(known) - skip)
     if unknown:
         raise ConfigError(f'{path}: unknown {label or kind.__name__} field(s) {", ".join(map(str, unknown))}')
-    result = {}
+    result: dict[str, Any] = {}
     for key, value in values.items():
         if key in skip:
             continue
         default = known[key].default
         if default is MISSING and known[key].default_factory is not MISSING:
-            default = known[key].default_factory()
+            default = cast(Callable[[], Any], known[key].default_factory)()
         name = f'{path}: {key}'
         if isinstance(default, tuple):
             if not isinstance(value, (list, tuple)):

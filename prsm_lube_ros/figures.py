@@ -57,8 +57,8 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
 
 
 def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[float], errors: Sequence[float],
-                          band_times: Sequence[float], band: tuple[Sequence[float], Sequence[float],
-                                                                   Sequence[float]],
+                          band_times: Sequence[float] | np.ndarray,
+                          band: tuple[Sequence[float], Sequence[float], Sequence[float]],
                           levels: Mapping[str, float], events: Sequence[float], title: str,
                           ylabel: str = 'theta_Oil', *, crossings: Sequence[tuple] = (),
                           as_of: float | None = None, confidence: float = 0.95) -> Path:

@@ -12,9 +12,11 @@ ROOT = Path(__file__).resolve().parents[1]
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'std_msgs', 'sensor_msgs', 'geometry_msgs',
                 'diagnostic_msgs', 'rosgraph_msgs', 'ament_index_python', 'launch', 'launch_ros'}
 #: System rosdep keys this package declares, each one found in rosdistro's rosdep/python.yaml as published
-#: (ros/rosdistro 8468e88, 2026-08-22): python3-rosbags-pip and python3-tqdm exist, so do the test tools'.
+#: (ros/rosdistro 8468e88, 2026-08-22): python3-rosbags-pip and python3-tqdm exist, so do the test tools'
+#: (python3-mypy: ros/rosdistro 000730dc).
 CHECKED_KEYS = {'python3-numpy', 'python3-scipy', 'python3-yaml', 'python3-matplotlib', 'python3-tqdm',
-                'python3-rosbags-pip', 'python3-pytest', 'python3-pytest-timeout', 'python3-flake8', 'pydocstyle'}
+                'python3-rosbags-pip', 'python3-pytest', 'python3-pytest-timeout', 'python3-flake8', 'pydocstyle',
+                'python3-mypy'}
 #: Python packages the code or the tests use that have no key in that file (searched by name and by the
 #: pip package a key installs): pip installs them from requirements/core.txt and requirements/test.txt.
 NO_ROSDEP_KEY = {'mcap', 'lz4', 'zstandard', 'isal', 'pyarrow', 'dask', 'distributed', 'duckdb', 'polars',
@@ -23,7 +25,7 @@ NO_ROSDEP_KEY = {'mcap', 'lz4', 'zstandard', 'isal', 'pyarrow', 'dask', 'distrib
 KEY_OF = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'pyyaml': 'python3-yaml',
           'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm', 'rosbags': 'python3-rosbags-pip',
           'pytest': 'python3-pytest', 'pytest-timeout': 'python3-pytest-timeout', 'flake8': 'python3-flake8',
-          'pydocstyle': 'pydocstyle'}
+          'pydocstyle': 'pydocstyle', 'mypy': 'python3-mypy'}
 
 
 def imported_top_level_modules():

@@ -38,6 +38,7 @@ def run(args) -> int:
     print(f'fit: relative RMS error {100 * calibration.fit_rmse:.2f} % on {calibration.windows_used} windows '
           f'({calibration.plan_summary}, {calibration.runs} runs); wrote {args.out}')
     print(f'standard errors: {calibration.standard_errors}')
+    assert calibration.band is not None and calibration.domain is not None  # the CLI always analyses in a band
     print(f'band: {calibration.band.text}; domain: {calibration.domain.text}')
     for flag in calibration.flags:
         print(f'warning: {flag}')

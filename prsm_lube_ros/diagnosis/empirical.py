@@ -134,7 +134,7 @@ def empirical_terms(table, residual, location: Location, significance: float) ->
             if values.size and np.ptp(values) > 0:
                 lo, hi = float(values.min()), float(values.max())
                 terms.append(EmpiricalTerm(test.covariate, 'smooth', scale=(0.5 * (lo + hi), 0.5 * (hi - lo))))
-    unique = {}
+    unique: dict[tuple[str, str], EmpiricalTerm] = {}
     for term in terms:
         unique.setdefault((term.covariate, term.form), term)
     return list(unique.values())

@@ -64,6 +64,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any, cast
 
 import numpy as np
 
@@ -122,17 +123,18 @@ class Candidate:
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
-        out = {'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
-               'reason': self.reason, 'equations': self.effect.equations, 'form': self.form,
-               'forms': [{'form': name, 'delta_bic': _num(delta)} for name, delta in self.forms],
-               'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
+        out: dict[str, Any] = {
+            'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
+            'reason': self.reason, 'equations': self.effect.equations, 'form': self.form,
+            'forms': [{'form': name, 'delta_bic': _num(delta)} for name, delta in self.forms],
+            'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
         if self.fit is not None:
             c = self.fit.constants
             out.update({'rmse': _num(self.fit.rmse), 'cv_rmse': _num(self.fit.cv_rmse),
                         'cv_run_rmse': _num(self.fit.cv_run_rmse), 'gain': _num(self.gain),
                         'delta_bic': _num(self.delta_bic), 'effective_windows': _num(self.fit.n_eff),
                         'params': _clean(self.fit.params),
-                        'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
+                        'constants': c.by_name(),
                         'explanation': self.effect.describe(self.fit.params)})
         return out
 
@@ -151,7 +153,7 @@ class SecondEffect:
     first_effect: Effect        # the first effect in its form in the pair
     first_params: dict          # and its parameters in the joint fit
     first_form: str
-    combined: Effect | None = None   # the joint model (CombinedEffect) ``fit`` belongs to
+    combined: CombinedEffect | None = None   # the joint model ``fit`` belongs to
     basis: str = ''             # why it is named on top of the first (see :func:`_add_second`)
     route: int = 1              # which of :func:`_add_second`'s rules named it (1 the strongest)
 
@@ -216,8 +218,7 @@ class EmpiricalFit:
                'explanation': term.describe(self.fit.params), 'gain': _num(self.gain),
                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'earns': self.earns,
                'causes': causes(term), 'overrules': self.overrules or None,
-               'constants': {'c_sys': self.fit.constants.c_sys, 'c_f': self.fit.constants.c_f,
-                             'c_lambda': self.fit.constants.c_lambda}}
+               'constants': self.fit.constants.by_name()}
         if term.form in ('step', 'stretch'):
             out['runs'] = [int(r) for r in term.runs]
         return out
@@ -262,7 +263,7 @@ class Diagnosis:
         if self.chosen is None:
             return []
         if self.second is None:
-            return [(self.chosen.effect, self.chosen.form, self.chosen.fit.params)]
+            return [(self.chosen.effect, self.chosen.form, cast(ModelFit, self.chosen.fit).params)]
         second = self.second
         return [(second.first_effect, second.first_form, second.first_params),
                 (second.effect, second.form, second.params)]
@@ -270,10 +271,12 @@ class Diagnosis:
     def calibration(self) -> Calibration:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
         fit = self.chosen.fit if self.chosen is not None else self.baseline
-        effect = self.chosen.effect if self.chosen is not None else None
+        assert fit is not None  # a chosen candidate earned its parameters, so it was fitted
+        effect: Effect | None = self.chosen.effect if self.chosen is not None else None
         if self.chosen is not None and self.second is not None and self.second.combined is not None:
             fit, effect = self.second.fit, self.second.combined
         table = self.table
+        assert table is not None  # diagnose_table always sets it
         covariance, scatter, residual_std, method = _constant_covariance(table, fit, effect)
         extension = {'effect': effect.id, 'params': _clean(fit.params)} if effect is not None else {}
         if self.chosen is not None and self.second is not None and self.second.combined is not None:
@@ -302,6 +305,7 @@ class Diagnosis:
         best = None
         if self.best is not None:
             f = self.best.fit
+            assert f is not None  # the best candidate is one of the fitted ones
             best = {'effect': self.best.effect.id, 'form': self.best.form, 'rmse': _num(f.rmse),
                     'cv_rmse': _num(f.cv_rmse), 'cv_run_rmse': _num(f.cv_run_rmse),
                     'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
@@ -310,11 +314,13 @@ class Diagnosis:
         effects = []
         if self.chosen is not None:
             keys = ('effect', 'form', 'params', 'explanation', 'gain', 'delta_bic', 'cv_rmse')
+            assert best is not None  # chosen is the best candidate
             effects.append({key: best[key] for key in keys})
             if self.second is not None:
                 effects[0].update(self.second.first_as_json())
                 effects.append(self.second.as_json())
         table = self.table
+        assert table is not None  # diagnose_table always sets it
         adequacy = {'baseline': self.baseline_fit_test.as_json() if self.baseline_fit_test else None,
                     'chosen': self.chosen_fit_test.as_json() if self.chosen_fit_test else None}
         return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy, 'effects': effects,
@@ -322,7 +328,7 @@ class Diagnosis:
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
                 'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
                              'cv_run_rmse': _num(base.cv_run_rmse),
-                             'constants': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda},
+                             'constants': c.by_name(),
                              'unphysical': base.unphysical(), 'effective_windows': _num(base.n_eff)},
                 'best': best, 'candidates': [cand.as_json() for cand in self.candidates],
                 'location': self.location.as_json(), 'notes': list(self.notes),
@@ -465,6 +471,7 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
 
 def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool, bool]:
     """Fit both effects together and say whether each adds to the other (BIC drop of BIC_MARGIN)."""
+    assert leader.fit is not None and runner.fit is not None  # both earn, so both were fitted
     both = CombinedEffect(leader.effect, runner.effect)
     first_vec = leader.fit.vector[3:] if both.first is leader.effect else runner.fit.vector[3:]
     second_vec = runner.fit.vector[3:] if both.second is runner.effect else leader.fit.vector[3:]
@@ -524,6 +531,7 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location, left
     no worse than :data:`EVIDENCE_TOLERANCE` -- the rules a single effect earns by.
     """
     family = other.family
+    assert family is not None and first.fit is not None  # set by _evaluate on fitted candidates
     combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
               for form in family.variants()]
     pair = _best_pair(table, combos, first.fit, other, folds, location)
@@ -556,6 +564,7 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
     within :data:`BIC_MARGIN` of each other tie, and neither is named; one named
     by a stronger rule of :func:`_add_second` goes before the others.
     """
+    assert first.fit is not None  # the named candidate was fitted
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= MIN_GAIN
                       for c in candidates)
@@ -580,7 +589,7 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
 PAIR_POOL = 3
 
 
-def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
+def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) -> tuple[Candidate, SecondEffect] | None:
     """Two effects that only together explain the mismatch: ``(first, second)`` or None.
 
     Among the :data:`PAIR_POOL` candidates with the largest held-out gains
@@ -609,7 +618,8 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location):
 def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
     """The candidate to drop from a tie on evidence outside the amplitude fit, or None."""
     for cand in (first, second):
-        cand.evidence_against = cand.effect.contrary_evidence(table, location, cand.fit.params)
+        # tied candidates both earn, so both were fitted
+        cand.evidence_against = cand.effect.contrary_evidence(table, location, cast(ModelFit, cand.fit).params)
     support = [bool(first.evidence), bool(second.evidence)]
     against = [bool(first.evidence_against), bool(second.evidence_against)]
     if support[0] and not support[1]:
@@ -650,7 +660,7 @@ def confounding(table: WindowTable) -> list[Confounding]:
     names = ['speed', 'load', 'revolutions', 'time'] + (['temperature'] if table.has_temperature else [])
     means = {name: table.run_means(name) for name in names}
     for name in ('speed', 'load'):
-        levels = np.array(operating_levels(means[name]))
+        levels: np.ndarray = np.array(operating_levels(means[name]))
         means[name] = levels[np.argmin(np.abs(means[name][:, None] - levels[None, :]), axis=1)]
     found = []
     for a in names[:2]:
@@ -702,6 +712,7 @@ def _held_out_tiebreak(table, first: Candidate, second: Candidate, correlation: 
     covariates = {first.effect.covariate, second.effect.covariate}
     if covariates != {'temperature', 'revolutions'} or not abs(correlation) < COLLINEAR:
         return None
+    assert first.fit is not None and second.fit is not None  # tied candidates both earn, so both were fitted
     return first if first.fit.cv_rmse > second.fit.cv_rmse else second
 
 
@@ -777,11 +788,14 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                      f'({"collinear" if abs(correlation) >= COLLINEAR else "not collinear"})')
     candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
     fitted = [c for c in candidates if c.fit is not None]
-    ranked = sorted(fitted, key=lambda c: c.fit.cv_rmse)
+    ranked = sorted(fitted, key=lambda c: cast(ModelFit, c.fit).cv_rmse)
     earning = [c for c in ranked if c.status == 'earns']
     best = earning[0] if earning else (ranked[0] if ranked else None)
+    second: SecondEffect | None
+    tied: list[str]
     verdict, tied, advice, second = ADEQUATE, [], '', None
     if earning:
+        assert best is not None  # earning[0]
         verdict = best.effect.id
         for runner in earning[1:]:
             close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
@@ -801,6 +815,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
             elif _held_out_tiebreak(table, best, runner, correlation):
                 loser = _held_out_tiebreak(table, best, runner, correlation)
+                assert loser is not None  # the same call just returned one
                 collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
                 best = _settle_tie(best, runner, loser, notes,
                                    f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
@@ -808,6 +823,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 verdict = best.effect.id
             elif _spectral_tiebreak(table, location, best, runner):
                 loser = _spectral_tiebreak(table, location, best, runner)
+                assert loser is not None  # the same call just returned one
                 best = _settle_tie(best, runner, loser, notes,
                                    '; fits as well as {winner} but '
                                    + (loser.evidence_against or 'the other has independent evidence'),
@@ -836,9 +852,9 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
             found = baseline_test.finding or 'the constants are unphysical'
             notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
                          'well as a model error')
-        pair = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
-        if pair is not None:
-            best, second = pair
+        together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
+        if together is not None:
+            best, second = together
             best.status = 'earns'
             best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
             verdict = best.effect.id
@@ -866,16 +882,17 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         advice += f'; {REPEAT_ADVICE}'
         notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
     empirical = _empirical(table, baseline, location, folds)
-    pair = second is not None and verdict == best.effect.id
-    followed = {best.effect.covariate} | ({second.effect.covariate} if pair else set()) if best else set()
+    pair = second is not None and verdict == cast(Candidate, best).effect.id   # a second comes with a best
+    paired = cast(SecondEffect, second)   # read only when pair
+    followed = {best.effect.covariate} | ({paired.effect.covariate} if pair else set()) if best else set()
     followed |= {registered()[name].covariate for name in tied if name in registered()}
     if empirical is not None and best is not None and verdict in (best.effect.id, AMBIGUOUS) \
-            and empirical.beats(second.fit if pair else best.fit, followed):
-        named = second.fit if pair else best.fit
+            and empirical.beats(paired.fit if pair else cast(ModelFit, best.fit), followed):
+        named_fit = paired.fit if pair else cast(ModelFit, best.fit)
         empirical.overrules = best.effect.id
         best.status = 'dropped'
         best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
-                        f'{empirical.term.covariate} (held-out error {100 * named.cv_rmse:.2f} % against '
+                        f'{empirical.term.covariate} (held-out error {100 * named_fit.cv_rmse:.2f} % against '
                         f'{100 * empirical.fit.cv_rmse:.2f} %): the located shape is not its law')
         verdict, second, tied = UNEXPLAINED, None, []
         advice = 'a candidate for the located mismatch is missing from the catalogue'
@@ -894,6 +911,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                 advice = _separation_advice(a.effect, b.effect)
         named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
         final = best.fit if second is None else second.fit
+        assert final is not None  # the named candidate was fitted
         if second is not None:
             notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
                          f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '

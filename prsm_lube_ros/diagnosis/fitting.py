@@ -105,7 +105,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict | 
     def residual(vector):
         return predict_log(columns, vector, effect, scales) - y
 
-    candidates = []
+    candidates: list[tuple[float, int, np.ndarray]] = []
     for start in (starts if starts is not None else effect.starts()):
         start = np.asarray(start, dtype=float)
         if start.size == 3 + lo.size:

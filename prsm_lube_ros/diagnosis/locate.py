@@ -71,6 +71,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -345,7 +346,7 @@ def _binned_means(residual, covariate, groups, name, within_run: bool) -> Covari
         same = 0
         for k in range(n_groups):
             sel = g_index == k
-            mine = np.bincount(index[sel], weights=-y[sel], minlength=b)
+            mine: np.ndarray = np.bincount(index[sel], weights=-y[sel], minlength=b)
             n_k = np.bincount(index[sel], minlength=b)
             have = n_k > 0
             if have.sum() >= 3:
@@ -508,7 +509,7 @@ def _level_means(residual, values, groups, name) -> CovariateTest | None:
 def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateTest]:
     """Every test the table supports: trends and level means, then binned means, strongest evidence first."""
     residual = np.asarray(residual, dtype=float)
-    tests = []
+    tests: list[Any] = []   # CovariateTest or None, then the tests found
     centred_r = residual - table.run_means(residual)[np.searchsorted(table.runs, table.run)]
     centred_x = table.position - table.run_means('position')[np.searchsorted(table.runs, table.run)]
     tests.append(_cluster_trend(centred_r, centred_x, table.run, 'position', 'within-run trend'))
@@ -518,7 +519,7 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
         tests.append(_level_means(residual, getattr(table, name), table.run, name))
     tests = [t for t in tests if t is not None]
     tests.sort(key=lambda t: (t.p_value, -t.r_squared))
-    flexible = [_binned_means(centred_r, table.position, table.run, 'position', True)]
+    flexible: list[Any] = [_binned_means(centred_r, table.position, table.run, 'position', True)]
     for name in ('revolutions', 'time', 'temperature'):
         flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
     flexible.append(_segment_run_means(table, residual))
@@ -836,6 +837,7 @@ def locate(table: WindowTable, residual: np.ndarray) -> Location:
     for found, note in ((spectrum.frequencies, spectrum.note), (spectrum.mode_frequencies, spectrum.mode_note),
                         (spectrum.order_mode.get('found'), spectrum.order_mode.get('note'))):
         if found:
+            assert note is not None  # a finding comes with its note
             summary += '; spectrum: ' + note
             if located == 'none':
                 located = 'spectrum'

@@ -16,13 +16,14 @@ from __future__ import annotations
 import html
 import math
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
 from ..errors import InputError
 from .empirical import causes
 from .engine import Diagnosis
-from .fitting import predict_log
+from .fitting import ModelFit, predict_log
 from .locate import COVARIATE_UNITS
 
 LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revolutions since start of recording',
@@ -53,11 +54,12 @@ def _values(table, name):
 
 def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
     table = diagnosis.table
+    assert table is not None  # diagnose_table always sets it
     name = _covariate(diagnosis)
     x = _values(table, name)
     panels = [('paper\'s model (Eq. 22)', diagnosis.baseline)]
     if diagnosis.chosen is not None:
-        panels.append((f'with {diagnosis.chosen.effect.id}', diagnosis.chosen.fit))
+        panels.append((f'with {diagnosis.chosen.effect.id}', cast(ModelFit, diagnosis.chosen.fit)))
         if diagnosis.second is not None:
             panels.append((f'and {diagnosis.second.effect.id}', diagnosis.second.fit))
     fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 3.6), dpi=110, sharey=True,
@@ -81,6 +83,7 @@ def _empirical_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     if empirical is None:
         return False
     table, term = diagnosis.table, empirical.term
+    assert table is not None  # diagnose_table always sets it
     measured = 100 * np.expm1(-table.run_means(diagnosis.baseline.log_residual))
     term_only = 100 * np.expm1(table.run_means(empirical.fit.log_residual - diagnosis.baseline.log_residual))
     if term.form in ('step', 'stretch'):
@@ -112,6 +115,7 @@ def _empirical_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
 
 def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
     table = diagnosis.table
+    assert table is not None  # diagnose_table always sets it
     measured = table.run_means(table.rms)
     base = table.run_means(np.exp(predict_log(table, diagnosis.baseline.vector)))
     speeds, loads = table.run_means('speed'), table.run_means('load')
@@ -121,6 +125,7 @@ def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
     ax.plot(order, base, 'x', color='tab:red', label='paper\'s model', markersize=8)
     if diagnosis.chosen is not None:
         fit, effect = diagnosis.chosen.fit, diagnosis.chosen.effect
+        assert fit is not None  # the chosen candidate was fitted
         chosen = table.run_means(np.exp(predict_log(table, fit.vector, effect, effect.scales(table))))
         ax.plot(order, chosen, '+', color='tab:green', label=f'with {effect.id}', markersize=10)
     ax.set_xticks(order, [f'{s * 30 / math.pi:.0f}/{f:.0f}' for s, f in zip(speeds, loads)], rotation=90,
@@ -135,17 +140,19 @@ def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
 
 
 def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
-    fitted = sorted([c for c in diagnosis.candidates if c.fit is not None], key=lambda c: -c.fit.cv_rmse)
+    fitted = sorted([c for c in diagnosis.candidates if c.fit is not None],
+                    key=lambda c: -cast(ModelFit, c.fit).cv_rmse)
     fig, ax = plt.subplots(figsize=(7.0, 0.5 * len(fitted) + 1.4), dpi=110)
     colours = {'earns': 'tab:green', 'rejected': 'tab:gray', 'dropped': 'tab:orange'}
     for i, cand in enumerate(fitted):
+        assert cand.fit is not None  # only fitted candidates are drawn
         ax.barh(i, 100 * cand.fit.cv_rmse, color=colours.get(cand.status, 'tab:gray'))
         ax.text(100 * cand.fit.cv_rmse, i, f' {100 * cand.gain:+.0f} %  ({cand.status})', va='center', fontsize=8)
     ax.axvline(100 * diagnosis.baseline.cv_rmse, color='tab:red', linestyle='--', label='paper\'s model')
     ax.set_yticks(range(len(fitted)), [c.effect.id for c in fitted], fontsize=8)
     ax.set_xlabel('relative RMS error on held-out runs, %  (label: gain over the paper\'s model)')
     ax.legend(fontsize=8, loc='lower right')
-    ax.set_xlim(0, 100 * max([diagnosis.baseline.cv_rmse] + [c.fit.cv_rmse for c in fitted]) * 1.5)
+    ax.set_xlim(0, 100 * max([diagnosis.baseline.cv_rmse] + [cast(ModelFit, c.fit).cv_rmse for c in fitted]) * 1.5)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
@@ -153,10 +160,11 @@ def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
 
 def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     table = diagnosis.table
+    assert table is not None  # diagnose_table always sets it
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
         return False
     from ..estimation.calibration import operating_levels
-    levels = np.array(operating_levels(table.speed))
+    levels: np.ndarray = np.array(operating_levels(table.speed))
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - levels[None, :]), axis=1)
     freqs = np.arange(table.spectra.shape[1]) * table.spectrum_resolution
     fig, ax = plt.subplots(figsize=(7.0, 3.4), dpi=110)
@@ -183,6 +191,7 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     lines = ['# prsm-lube diagnose', '']
     if diagnosis.chosen is not None:
         cand = diagnosis.chosen
+        assert cand.fit is not None  # the chosen candidate was fitted
         lines += [f'**Verdict: `{diagnosis.verdict}`** — {cand.effect.title}. Held-out error '
                   f'{100 * base.cv_rmse:.1f} % → {100 * cand.fit.cv_rmse:.1f} % ({100 * cand.gain:.0f} % lower).',
                   '']
@@ -212,6 +221,7 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     if diagnosis.what_to_record:
         lines += ['', f'**What to record:** {diagnosis.what_to_record}']
     lines += ['', f'**Where the model misses:** {diagnosis.location.summary}.']
+    test: Any   # a lack-of-fit test (or None), then a covariate test
     for label, test in (('paper\'s model', diagnosis.baseline_fit_test), ('chosen model', diagnosis.chosen_fit_test)):
         if test is not None:
             lines += ['', f'**Lack of fit, {label}:** {test.sentence}.']

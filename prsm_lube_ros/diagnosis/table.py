@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Sequence
+from typing import Any, cast, Sequence
 
 import numpy as np
 
@@ -113,9 +113,10 @@ class WindowTable:
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None
         values = {name: getattr(self, name)[mask] for name in COLUMNS}
+        assert self.direction is not None  # __post_init__ fills it
         return replace(self, spectra=spectra, direction=self.direction[mask], **values)
 
-    def run_means(self, column: str) -> np.ndarray:
+    def run_means(self, column: str | np.ndarray) -> np.ndarray:
         """Mean of ``column`` per run, in the order of :attr:`runs` (NaN-aware)."""
         values = np.asarray(getattr(self, column), dtype=float) if isinstance(column, str) else column
         out = np.full(self.runs.size, np.nan)
@@ -133,8 +134,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
     Keeps steady windows with a finite positive RMS, speed and load of at least
     ``min_axial_load``; raises :class:`InputError` when none is left.
     """
-    rows = {name: [] for name in COLUMNS}
-    directions = []
+    rows: dict[str, list] = {name: [] for name in COLUMNS}
+    directions: list[float] = []
     spectra, resolution = [], math.nan
     run_offset = 0
     for rec_index, windows in enumerate(windows_per_recording):
@@ -171,7 +172,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
         # Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
         spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
-                       sources=tuple(str(s) for s in sources), direction=directions, **rows)
+                       sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
+                       **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
 
 
 def _temperatures(windows: Sequence, chosen: Sequence) -> list:

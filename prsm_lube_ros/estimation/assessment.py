@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 
@@ -247,6 +247,14 @@ class Assessor:
         scatter = self.calibration.run_scatter
         pooled = []
         first = 0
+        # a run's value in the loop, then the list over runs
+        rms: Any
+        amplitude: Any
+        factor: Any
+        speed: Any
+        load: Any
+        temperature: Any
+        ln_var: Any
         for windows in runs:
             n = len(windows)
             last = first + n

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -132,7 +132,7 @@ class Calibration:
         return text + ''.join(f'; {flag}' for flag in self.flags)
 
 
-def operating_levels(values: Sequence[float], tolerance: float = LEVEL_TOLERANCE) -> list[float]:
+def operating_levels(values: Sequence[float] | np.ndarray, tolerance: float = LEVEL_TOLERANCE) -> list[float]:
     """Distinct levels in ``values``: sorted values closer than ``tolerance`` (relative) merge."""
     ordered = np.sort(np.abs(np.asarray(values, dtype=float)))
     levels: list[list[float]] = []
@@ -194,7 +194,7 @@ def _levels(levels, unit):
     return ', '.join(f'{v:.4g} {unit}' for v in levels) or 'none'
 
 
-def _nearest_level(values: np.ndarray, levels: Sequence[float]) -> np.ndarray:
+def _nearest_level(values: np.ndarray, levels: Sequence[float] | np.ndarray) -> np.ndarray:
     levels = np.asarray(levels, dtype=float)
     return np.argmin(np.abs(np.abs(values)[:, None] - levels[None, :]), axis=1)
 
@@ -322,7 +322,7 @@ def replicated_conditions(speeds, loads, clusters) -> bool:
     """Whether some (speed, load) condition was recorded in two runs or more."""
     if clusters is None or len(speeds) == 0:
         return False
-    runs_of = {}
+    runs_of: dict[Any, set] = {}
     for condition, run in zip(condition_labels(speeds, loads).tolist(), np.asarray(clusters).tolist()):
         runs_of.setdefault(condition, set()).add(run)
     return any(len(runs) > 1 for runs in runs_of.values())

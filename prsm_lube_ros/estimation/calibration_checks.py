@@ -28,6 +28,7 @@ Imports numpy, the physics and the plausibility bounds only.
 from __future__ import annotations
 
 import math
+from typing import Callable, NoReturn
 
 import numpy as np
 
@@ -69,7 +70,7 @@ def check_document(data: dict, origin: str) -> None:
 
 def check_calibration(calibration, origin: str) -> None:
     """Raise one :class:`ConfigError` line naming ``origin`` when ``calibration`` breaks a rule above."""
-    def refuse(what: str):
+    def refuse(what: str) -> NoReturn:
         raise ConfigError(f'{origin}: {what}')
 
     c = calibration.constants
@@ -105,7 +106,7 @@ def check_calibration(calibration, origin: str) -> None:
     _check_extension(calibration.extension, refuse)
 
 
-def _check_covariance(covariance: np.ndarray, refuse) -> None:
+def _check_covariance(covariance: np.ndarray, refuse: Callable[[str], NoReturn]) -> None:
     """Finite, symmetric, positive definite 3x3 (judged on the correlation matrix, so any units pass)."""
     if covariance.shape != (3, 3) or not np.all(np.isfinite(covariance)):
         refuse('covariance_ln_csys_cf_clambda must be a 3x3 matrix of finite numbers')
@@ -120,7 +121,7 @@ def _check_covariance(covariance: np.ndarray, refuse) -> None:
         refuse('covariance_ln_csys_cf_clambda is not positive definite (correlations beyond +-1)')
 
 
-def _levels(levels, name: str, limit: float, refuse) -> np.ndarray:
+def _levels(levels, name: str, limit: float, refuse: Callable[[str], NoReturn]) -> np.ndarray:
     """A level list as an array; each level finite, > 0 and at most ``limit``."""
     try:
         array = np.asarray(levels, dtype=float).reshape(-1)
@@ -131,7 +132,7 @@ def _levels(levels, name: str, limit: float, refuse) -> np.ndarray:
     return array
 
 
-def _check_extension(extension: dict, refuse) -> None:
+def _check_extension(extension: dict, refuse: Callable[[str], NoReturn]) -> None:
     """An extension names a known effect and gives finite numbers (or null) as parameters."""
     if not extension:
         return

@@ -41,6 +41,7 @@ from collections import deque
 from dataclasses import dataclass, replace
 import math
 import statistics
+from typing import Any
 
 from ..errors import InputError
 
@@ -210,7 +211,8 @@ class HealthMonitor:
         """Level and message at node-clock time ``now`` (s)."""
         t = self.thresholds
         silent = self.stale_for(now)
-        numbers = dict(theta_mean=self._judged, unassessed_moving=self._unassessed_moving, reason=self._reason)
+        numbers: dict[str, Any] = dict(theta_mean=self._judged, unassessed_moving=self._unassessed_moving,
+                                       reason=self._reason)
         if silent > t.stale_timeout:
             if self._last_input is None:
                 message = 'no vibration received yet'

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, cast, Iterable, Sequence
 
 import numpy as np
 
@@ -58,7 +58,7 @@ class RecordingWindows:
         reason = (f'no stretch of {settings.window_length:g} s at steady speed and load with vibration '
                   'and load data covering it')
         if reasons:
-            common = max(reasons, key=reasons.get)
+            common = max(reasons, key=cast(Callable[[str], int], reasons.get))
             reason += f' (none of {len(self.windows)} windows steady; most: {common})'
         return reason + (f'; {self.problems[-1]}' if self.problems else '')
 
@@ -182,6 +182,9 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
     ``windows`` lists every window, steady or not, with ``theta_oil`` null and
     the reason in words where it was not assessable.
     """
+    runs: list[dict]
+    unassessed: list[dict]
+    run: Any   # a RunAssessment, then an unassessed run's mapping
     runs, unassessed, windows, problems = [], [], [], []
     for rec in assessments:
         problems.extend(rec.problems)
@@ -204,8 +207,7 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
         run['theta_oil_std'] = None
     c = calibration.constants
     return {'runs': runs, 'unassessed_runs': unassessed, 'windows': windows,
-            'calibration': {'c_sys': c.c_sys, 'c_f': c.c_f, 'c_lambda': c.c_lambda,
-                            'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used,
+            'calibration': {**c.by_name(), 'fit_rmse': calibration.fit_rmse, 'windows_used': calibration.windows_used,
                             'flags': list(calibration.flags), 'band': band_text(calibration.band),
                             'domain': calibration.domain.text if calibration.domain is not None else None},
             'runs_flagged': sum(bool(run['theta_oil_flag']) for run in runs),

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any
 
 import numpy as np
 
@@ -212,6 +213,7 @@ def _grouped(keys: np.ndarray):
     if keys.size == 1:
         return slice(None), keys, np.zeros(1, np.int64), np.ones(1, np.int64)
     if (keys[1:] >= keys[:-1]).all():
+        order: slice | np.ndarray
         order, sorted_keys = slice(None), keys
     else:
         order = np.argsort(keys, kind='stable')
@@ -414,6 +416,7 @@ class WindowBuilder:
 
     def _band_covered(self, rates: np.ndarray, good: np.ndarray) -> np.ndarray:
         """Mask of blocks whose sample rate covers the band (choosing its upper edge at the first block)."""
+        assert self.band is not None  # called only for a band
         if not self.band.chosen:
             self.band = self.band.resolved(float(rates[np.flatnonzero(good)[0]]))
         covered = rates >= self.band.min_sample_rate * (1 - 1e-9)
@@ -625,6 +628,7 @@ class WindowBuilder:
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra = [(None, math.nan)] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+        row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
                 chunks = self._chunks.pop(k, None)

@@ -45,8 +45,12 @@ import shutil
 import sys
 import tempfile
 import time
+from typing import cast, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..diagnosis.fitting import ModelFit
 
 NONE = 'none'
 
@@ -90,10 +94,10 @@ def run_case(case: tuple) -> dict:
     return {'simulator': simulator, 'effect': effect, 'seed': seed, 'order': order, 'verdict': result.verdict,
             'tied': result.tied, 'baseline_cv_rmse': result.baseline.cv_rmse,
             'best': result.best.effect.id if result.best else None,
-            'best_cv_rmse': result.best.fit.cv_rmse if result.best else None,
+            'best_cv_rmse': cast('ModelFit', result.best.fit).cv_rmse if result.best else None,
             'true_effect_gain': true_candidate.gain if true_candidate else None,
             'chosen_gain': result.chosen.gain if result.chosen else None,
-            'chosen_run_gain': (1 - result.chosen.fit.cv_run_rmse / result.baseline.cv_run_rmse
+            'chosen_run_gain': (1 - cast('ModelFit', result.chosen.fit).cv_run_rmse / result.baseline.cv_run_rmse
                                 if result.chosen else None),
             'truth': truth, 'windows': len(table), 'runs': int(table.runs.size),
             'seconds': round(time.time() - start, 2)}

@@ -18,7 +18,7 @@ import json
 import math
 from pathlib import Path
 import sys
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -97,8 +97,8 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
     say()
     say('1d checks against the simulator\'s truth')
     ok = True
-    summary = {'seed': seed, 'true_theta': list(stages), 'stages': {},
-               'calibration': {**c.by_name(), 'fit_rmse': calibration.fit_rmse}}
+    summary: dict[str, Any] = {'seed': seed, 'true_theta': list(stages), 'stages': {},
+                               'calibration': {**c.by_name(), 'fit_rmse': calibration.fit_rmse}}
     for name, truth in zip(stage_names, stages):
         values = np.array(per_stage[name])
         reference = name == stage_names[-1]

@@ -25,11 +25,15 @@ from pathlib import Path
 import shutil
 import tempfile
 import time
+from typing import cast, TYPE_CHECKING
 import zlib
 
 import numpy as np
 
 from ..physics.effects.resonance import band_position
+
+if TYPE_CHECKING:
+    from ..diagnosis.fitting import ModelFit
 
 NONE, TWO = 'none', 'two'
 #: Kinds with physics outside the diagnosis catalogue, and the covariate diagnose must locate for each: a step of
@@ -84,7 +88,7 @@ def truth_form(name: str, params: dict | None, speeds) -> str:
     return ', '.join(words)
 
 
-def _named_effects(document: dict) -> list[str]:
+def _named_effects(document: dict) -> list[str | None]:
     """Effect IDs a ``diagnose`` JSON document names: its ``effects`` list if any, else the verdict's effect."""
     listed = document.get('effects')
     if isinstance(listed, list) and listed:
@@ -184,7 +188,7 @@ def run_random_case(case: tuple) -> dict:
         'chosen_form': _chosen_form(document), 'tied': list(result.tied),
         'windows': len(table), 'runs': int(table.runs.size),
         'baseline_cv_rmse': result.baseline.cv_rmse,
-        'chosen_cv_rmse': chosen.fit.cv_rmse if chosen is not None else None,
+        'chosen_cv_rmse': cast('ModelFit', chosen.fit).cv_rmse if chosen is not None else None,
         'gain': chosen.gain if chosen is not None else None,
         'located': result.location.located,
         'empirical': document.get('empirical'),

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any, cast
 
 import numpy as np
 
@@ -141,8 +142,8 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
     if order is None:
         order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
                                 else np.arange(len(conditions)) for _ in range(plan.sessions)])
-    rows = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run',
-                            'recording')}
+    rows: dict[str, list] = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time',
+                                             'temperature', 'run', 'recording')}
     theta_eff, spectra, a22_list, directions = [], [], [], []
     clock, revs, temp = 0.0, 0.0, plan.ambient + plan.warm_start
     depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
@@ -231,8 +232,9 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
         if heat:
             temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / heat['tau'])
     resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-    table = WindowTable(theta=plan.theta, direction=directions,
-                        spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution, **rows)
+    table = WindowTable(theta=plan.theta, direction=cast(Any, directions),   # __post_init__ makes arrays of the lists
+                        spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution,
+                        **cast(dict[str, Any], rows))
     single = effect is None or isinstance(effect, str)
     truth = {'effect': effect, 'params': laws.get(effect, {}) if single else laws,
              'theta_effective': np.array(theta_eff), 'amplitude_eq22': np.array(a22_list)}

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -87,7 +87,7 @@ def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def backtest(points: dict[str, Sequence[RecordingPoint]], days: float, *, relubrications: dict | None = None,
+def backtest(points: Mapping[str, Sequence[RecordingPoint]], days: float, *, relubrications: dict | None = None,
              levels: Sequence[float], confidence: float = INTERVAL) -> Backtest:
     """Forecast every actuator from ``points`` up to ``days`` before the newest one; score on the rest."""
     newest = max(p.time for items in points.values() for p in items)

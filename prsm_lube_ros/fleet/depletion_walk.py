@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 import math
-from typing import Sequence
+from typing import cast, Sequence, TypeGuard
 
 import numpy as np
 
@@ -78,18 +78,19 @@ USAGE_SCATTER_GRID = np.concatenate(([0.0], np.logspace(-4, 0, 81)))
 
 def _diffusion(data: Increments, usage_scatter: float) -> float:
     """q = usage_scatter k^2: a relative scatter s of each day's revolutions spreads ln theta by s k per day."""
+    assert data.without_diffusion is not None  # called on informative increments only
     k = data.without_diffusion[1]
     for _ in range(2):
         k = (_walk_likelihood(data, usage_scatter * k ** 2) or (0.0, k))[1]
     return usage_scatter * k ** 2
 
 
-def _informative(data: Increments | None) -> bool:
+def _informative(data: Increments | None) -> TypeGuard[Increments]:
     """True when ``data`` determines a drift (increments with information on it)."""
     return data is not None and data.without_diffusion is not None
 
 
-def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
+def fleet_usage_scatter(sets: Sequence[Increments | None]) -> float:
     """Relative variance of a day's revolutions: upper 95 % profile-likelihood bound over all actuators.
 
     Each actuator's diffusion is ``q = s k^2`` with its own drift k: the
@@ -102,7 +103,9 @@ def fleet_usage_scatter(sets: Sequence[Increments]) -> float:
     sets = [data for data in sets if _informative(data)]
     if not sets:
         return 0.0
-    totals = np.array([sum(_walk_likelihood(data, _diffusion(data, scatter))[0] for data in sets)
+    # informative increments have a likelihood at every diffusion (a None would raise here as before)
+    totals = np.array([sum(cast('tuple[float, float, float]', _walk_likelihood(data, _diffusion(data, scatter)))[0]
+                           for data in cast('list[Increments]', sets))   # filtered above
                        for scatter in USAGE_SCATTER_GRID])
     return float(USAGE_SCATTER_GRID[np.flatnonzero(totals >= totals.max() - PROFILE_DROP)[-1]])
 
@@ -123,11 +126,11 @@ def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = N
                 if (walk := _walk_likelihood(data, q)) is not None)[1]
     else:
         q = _diffusion(data, usage_scatter)
-    _, k, k_variance = _walk_likelihood(data, q)
+    _, k, k_variance = cast('tuple[float, float, float]', _walk_likelihood(data, q))
     return k, k_variance, q, max(data.steps.size - 1, 1)
 
 
-def depletion_state(days, y, sigma, cycles, q):
+def depletion_state(days, y, sigma, cycles, q) -> tuple[np.ndarray, np.ndarray, int]:
     """Kalman filter of (ln theta, k): level falls by k dt with diffusion q dt, reset at relubrications.
 
     Returns the state at the last recording, its covariance (scaled by the

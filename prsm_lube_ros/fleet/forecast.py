@@ -49,7 +49,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from statistics import NormalDist
-from typing import Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -102,7 +102,7 @@ class Crossing:
 
     def as_json(self) -> dict:
         """Mapping with UTC strings beside the epoch seconds."""
-        result = {'level': self.level}
+        result: dict[str, Any] = {'level': self.level}
         for name in ('time', 'low', 'high'):
             value = getattr(self, name)
             result[name] = value
@@ -159,6 +159,7 @@ class ActuatorForecast:
             nan = np.full(np.shape(times), math.nan)
             return nan, nan, nan
         (x, k), cov = self.state, self.state_covariance
+        assert cov is not None  # set with the state
         dt = np.maximum((np.asarray(times, float) - self.last_recording) / DAY, 0.0)
         centre = x - k * dt
         variance = cov[0, 0] - 2.0 * cov[0, 1] * dt + cov[1, 1] * dt ** 2 + self.diffusion * dt
@@ -234,7 +235,7 @@ def detect_relubrications(points: Sequence[RecordingPoint], *, min_jump: float =
 
 def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubrications: Sequence[float] | None = None,
                   levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
-                  usage_scatter: float | None = None, odometer: Sequence[float] | None = None,
+                  usage_scatter: float | None = None, odometer: Sequence[float] | np.ndarray | None = None,
                   seed: int = 0, confidence: float = INTERVAL) -> ActuatorForecast:
     """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
 
@@ -403,6 +404,7 @@ def _passage_draws(forecast: ActuatorForecast, level: float, rng) -> np.ndarray:
     draw with k <= 0 never crosses (``inf``); a draw already below ``level``
     crossed before the last recording (about 0 days).
     """
+    assert forecast.state is not None and forecast.state_covariance is not None  # only forecasts with a state
     draws = _posterior_draws(forecast.state, forecast.state_covariance, forecast.state_dof, rng)
     distance = np.maximum(draws[:, 0] - level, 1e-12)
     days = np.full(DRAWS, math.inf)
@@ -419,6 +421,7 @@ def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     days = _passage_draws(forecast, level, rng)
     with np.errstate(invalid='ignore'):               # inf - inf between never-crossing draws: still inf
         low, high = np.quantile(days, [tail, 1.0 - tail])
+    assert forecast.state is not None  # _passage_draws needed it too
     x, k = forecast.state
     return ((x - level) / k if k > 0 else math.inf), low, high, days
 
@@ -458,7 +461,7 @@ def history_points(history, *, on_problem=None, actuator: str | None = None) -> 
     return points
 
 
-def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
+def forecast_points(points: Mapping[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
                     only: str | None = None, odometers: dict | None = None, confidence: float = INTERVAL,
                     as_of: float | None = None) -> list[ActuatorForecast]:
@@ -484,7 +487,7 @@ def forecast_points(points: dict[str, Sequence[RecordingPoint]], *, relubricatio
     return sorted(forecasts, key=urgency_key)
 
 
-def _fleet_walk(points: dict[str, Sequence[RecordingPoint]], given: dict) -> tuple[dict[str, list[float]], float]:
+def _fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> tuple[dict[str, list[float]], float]:
     """Each actuator's relubrications (given, else detected) and the fleet's usage scatter."""
     found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
              for name, items in points.items()}

@@ -241,6 +241,7 @@ def history_writer(history: str | Path, calibration_path: str | Path, fit, *, ac
         span, key = assessment_span(outcome.assessment, outcome.content), actuator_key(actuator)
         clash = timeline.clash(key, span) if span is not None else None
         if clash is not None:
+            assert span is not None  # a clash needs a span
             return clash_line(span, clash, actuator)
         add_assessment(history, outcome.assessment, actuator_id=actuator, content=outcome.content,
                        calibration=identifier, namespace=namespace, fit=fit)

@@ -47,7 +47,7 @@ def assessment_span(assessment, content: str) -> Span | None:
 
 def table_spans(runs) -> list[Span]:
     """One span per content hash of a history ``runs`` table."""
-    found: dict[str, list] = {}
+    found: dict[str, tuple] = {}
     for content, path, start, end in zip(*(runs.column(name).to_pylist() for name in
                                            ('content_hash', 'recording_path', 'start', 'end'))):
         if start is None or end is None:

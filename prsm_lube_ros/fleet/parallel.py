@@ -64,7 +64,7 @@ def assess_bag(path: str, job: BagJob) -> BagOutcome:
         return BagOutcome(str(path), error=f'{path}: {exc.__class__.__name__}: {exc}')
 
 
-def assess_bags(paths: Sequence[str], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
+def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
                 on_done: Callable[[BagOutcome], None] | None = None) -> list[BagOutcome]:
     """:func:`assess_bag` for every path; outcomes in the order of ``paths``.
 
@@ -176,7 +176,7 @@ def outcomes_fingerprint(outcomes: Sequence[BagOutcome]) -> str:
     ... and its theta and one-sigma).  ``repr``: NaN equals NaN and every
     float is compared to the last bit.
     """
-    result = []
+    result: list[tuple] = []
     for outcome in outcomes:
         assessment = outcome.assessment
         if assessment is None:

@@ -93,7 +93,7 @@ def _csv_rows(path, columns):
         header_possible = False
         if len(row) < len(columns):
             raise ConfigError(f'{path}:{number}: expected "{",".join(columns)}", got {",".join(row)!r}')
-        values = [row[0].strip()]
+        values: list[str | float] = [row[0].strip()]
         for name, text in zip(columns[1:], (cell.strip() for cell in row[1:])):
             try:
                 value = float(text)

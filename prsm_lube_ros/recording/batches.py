@@ -13,9 +13,10 @@ epoch; SI units throughout.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
+from typing import Any, overload, Union
 
 import numpy as np
+import numpy.typing as npt
 
 
 @dataclass(frozen=True)
@@ -32,7 +33,7 @@ class VibrationBatch:
     samples: np.ndarray       # (offsets[-1],) m/s^2, float32 or float64
 
     @classmethod
-    def single(cls, stamp: float, sample_rate: float, samples) -> 'VibrationBatch':
+    def single(cls, stamp: float, sample_rate: float, samples: npt.ArrayLike) -> 'VibrationBatch':
         """Batch of one block (what a live subscription gets)."""
         samples = np.asarray(samples)
         return cls(np.array([stamp], float), np.array([sample_rate], float),
@@ -79,6 +80,14 @@ class TemperatureBatch:
 InputBatch = Union[VibrationBatch, ScrewStateBatch, AxialLoadBatch, TemperatureBatch]
 
 
-def stamp_seconds(sec, nanosec):
+@overload
+def stamp_seconds(sec: float, nanosec: float) -> float: ...
+
+
+@overload
+def stamp_seconds(sec: np.ndarray, nanosec: np.ndarray) -> np.ndarray: ...
+
+
+def stamp_seconds(sec: Any, nanosec: Any) -> Any:
     """``builtin_interfaces/Time`` as float seconds (scalars or arrays)."""
     return sec + np.asarray(nanosec, dtype=float) * 1e-9 if np.ndim(nanosec) else sec + nanosec * 1e-9

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import re
 import struct
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 from rosbags.typesys import get_types_from_idl, get_types_from_msg
@@ -226,7 +226,7 @@ class _Layout:
 def _probe(kind: str, data: bytes) -> _Layout:
     walker = _Walker(data)
     walker.header()
-    values = {'sec': (4, '<i4'), 'nanosec': (8, '<u4')}
+    values: Dict[str, Tuple[Optional[int], str]] = {'sec': (4, '<i4'), 'nanosec': (8, '<u4')}
     layout = _Layout(walker.structure, values)
     if kind == VIBRATION:
         values['sample_rates'] = (walker.take(8), '<f8')
@@ -342,7 +342,8 @@ def decode_messages(kind: str, buffer: np.ndarray, data_offsets: np.ndarray, dat
                     log_times: np.ndarray, vectorised: bool = True) -> Decoded:
     """Decode the messages of one topic from one chunk's buffer (see module docstring)."""
     n = data_offsets.size
-    parts = []        # (message indices, columns, samples)
+    parts: List[Tuple[np.ndarray, Dict[str, np.ndarray], Union[np.ndarray, list, None]]] = []
+    # (message indices, columns, samples)
     slow: List[int] = []
     without_screw = 0
     if vectorised and n:
@@ -366,6 +367,7 @@ def decode_messages(kind: str, buffer: np.ndarray, data_offsets: np.ndarray, dat
                     _LAYOUTS[kind, int(size)] = layout
                 offsets = data_offsets[todo]
                 rows = rows_at(buffer, offsets, layout.head)
+                assert layout.check is not None  # _probe sets it
                 same = layout.check(rows)
                 if not same.all():
                     rows, offsets = rows[same], offsets[same]
@@ -429,8 +431,8 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
     order = np.argsort(indices, kind='stable') if len(parts) > 1 else None
     offsets = samples = None
     if kind == VIBRATION:
-        pieces = []
-        counts = []
+        pieces: list = []
+        counts: List[int] = []
         for _, part_columns, part_samples in parts:
             if isinstance(part_samples, list):
                 pieces.extend(part_samples)

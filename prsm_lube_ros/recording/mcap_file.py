@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import lru_cache
 import struct
-from typing import BinaryIO, Dict, Iterator, List, Optional, Tuple
+from types import ModuleType
+from typing import BinaryIO, cast, Dict, Iterator, List, Optional, Tuple
 
 import lz4.frame
 import numpy as np
@@ -29,6 +30,7 @@ try:  # ISA-L's CRC-32 (same polynomial as zlib's): 3.3x zlib 1.2's here (benchm
 except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
     from zlib import crc32
 
+_zstandard: Optional[ModuleType]
 try:  # the zstandard package comes with ``mcap``; rosbags brings backports.zstd
     import zstandard as _zstandard
 except ImportError:  # pragma: no cover - depends on the installed wheels
@@ -166,7 +168,7 @@ class _Fields:
 
     __slots__ = ('data', 'pos')
 
-    def __init__(self, data: bytes, pos: int = 0):
+    def __init__(self, data: bytes | memoryview, pos: int = 0):
         self.data = data
         self.pos = pos
 
@@ -289,6 +291,7 @@ def _zstd_prefix(data, size: int) -> bytes:
     """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
     pieces: List[bytes] = []
     got = 0
+    assert _zstandard is not None  # decompress calls this only with zstandard installed
     reader = _zstandard.ZstdDecompressor().stream_reader(bytes(data))
     try:
         while got < size:
@@ -759,7 +762,7 @@ class McapFile:
                     pos += RECORD_PREFIX + length
                     continue
                 if opcode != OP_CHUNK and gathered.buffers:
-                    yield gathered.take()
+                    yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
                 if opcode in (OP_DATA_END, OP_FOOTER):
                     if _ends_data(stream, pos, opcode, length, self.size):
                         cut, ended = None, True
@@ -786,7 +789,7 @@ class McapFile:
             if pending is not None:
                 yield from self._finish_or_gather(pending, gathered)
             if gathered.buffers:
-                yield gathered.take()
+                yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
             if cut is None and not ended:
                 on_problem(f'ends at byte {pos} without a DataEnd record or footer (truncated: what followed '
                            'is lost)')
@@ -808,7 +811,7 @@ class McapFile:
                 yield chunk
             return
         if gathered.buffers:
-            yield gathered.take()
+            yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
         yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record, gathered.on_problem)
 
     def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
@@ -847,7 +850,7 @@ class McapFile:
                     at += RECORD_PREFIX + length
                 yield from self._finish_or_gather(pending, gathered)
         if gathered.buffers:
-            yield gathered.take()
+            yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
 
     def _open_chunk(self, content: bytes, pos: int, on_problem):
         """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
@@ -1030,7 +1033,8 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
         buffer = chunk.buffer
         for index in np.argsort(starts, kind='stable'):
             begin = int(starts[index])
-            sequence, log_time = struct.unpack_from('<IQ', buffer, begin - MESSAGE_HEADER + 2)
+            # ndarray has the buffer protocol; numpy's stubs declare __buffer__ for Python >= 3.12 only
+            sequence, log_time = struct.unpack_from('<IQ', buffer, begin - MESSAGE_HEADER + 2)  # type: ignore[arg-type]
             yield (summary.channels.get(int(ids[index])), sequence, log_time,
                    bytes(buffer[begin:begin + int(lengths[index])]))
     for line in check.lines():

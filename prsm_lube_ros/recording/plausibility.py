@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 #: Vibration sample rates accepted, Hz.
 MIN_SAMPLE_RATE = 1.0
@@ -45,7 +46,7 @@ MAX_AXIAL_LOAD = 1e7
 TEMPERATURE_RANGE = (-100.0, 500.0)
 
 
-def plausible_rates(rates) -> np.ndarray:
+def plausible_rates(rates: npt.ArrayLike) -> np.ndarray:
     """Mask of sample rates (Hz) in [MIN_SAMPLE_RATE, MAX_SAMPLE_RATE] (NaN and infinities fail)."""
     rates = np.asarray(rates, float)
     with np.errstate(invalid='ignore'):
@@ -57,7 +58,7 @@ def rate_problem(rate: float) -> str:
     return f'sample_rate {float(rate):g} Hz (outside {MIN_SAMPLE_RATE:g} Hz to {MAX_SAMPLE_RATE:g} Hz)'
 
 
-def plausible_durations(counts, rates) -> np.ndarray:
+def plausible_durations(counts: npt.ArrayLike, rates: npt.ArrayLike) -> np.ndarray:
     """Mask of blocks of ``counts`` samples at ``rates`` Hz lasting at most MAX_BLOCK_SECONDS (rates checked)."""
     counts, rates = np.asarray(counts, float), np.asarray(rates, float)
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
@@ -70,14 +71,14 @@ def duration_problem(count: int, rate: float) -> str:
             f'{MAX_BLOCK_SECONDS:g} s)')
 
 
-def plausible_magnitudes(values, limit: float) -> np.ndarray:
+def plausible_magnitudes(values: npt.ArrayLike, limit: float) -> np.ndarray:
     """Mask of finite ``values`` with magnitude at most ``limit`` (NaN and infinities fail)."""
     values = np.asarray(values)
     with np.errstate(invalid='ignore'):
         return np.abs(values) <= limit
 
 
-def plausible_temperatures(values) -> np.ndarray:
+def plausible_temperatures(values: npt.ArrayLike) -> np.ndarray:
     """Mask of finite temperatures (degC) within :data:`TEMPERATURE_RANGE`."""
     values = np.asarray(values, float)
     low, high = TEMPERATURE_RANGE
@@ -118,14 +119,14 @@ class SpikeCount:
     value is judged against the two after it, its last one by :meth:`finish`.
     """
 
-    def __init__(self, jump: float, relative: bool = False):
+    def __init__(self, jump: float, relative: bool = False) -> None:
         self.jump = math.log1p(jump) if relative else jump
         self.relative = relative
         self.count = 0
         self._tail = np.zeros(0)      # the last (up to 3) values; the last one not judged yet
         self._started = False
 
-    def add(self, values) -> None:
+    def add(self, values: npt.ArrayLike) -> None:
         """Judge ``values``, the next piece of the stream."""
         values = np.asarray(values, float).reshape(-1)
         if self.relative:

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 import math
 from pathlib import Path
 import tempfile
-from typing import Callable, Dict, Iterator, List, Optional
+from typing import Any, Callable, cast, Dict, Iterator, List, Optional
 
 import numpy as np
 import yaml
@@ -497,8 +497,9 @@ def _merge(parts: List[Decoded], kind: str) -> Decoded:
         columns = {name: np.concatenate([p.columns[name] for p in parts]) for name in parts[0].columns}
         merged = Decoded(np.concatenate([p.log_times for p in parts]), columns)
         if kind == VIBRATION:
-            merged.samples = np.concatenate([p.samples[p.offsets[0]:p.offsets[-1]] for p in parts])
-            counts = np.concatenate([np.diff(p.offsets) for p in parts])
+            ragged = cast(List[Any], parts)   # vibration parts carry their samples and offsets
+            merged.samples = np.concatenate([p.samples[p.offsets[0]:p.offsets[-1]] for p in ragged])
+            counts = np.concatenate([np.diff(p.offsets) for p in ragged])
             merged.offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])
     log_times = merged.log_times
     if log_times.size > 1 and (log_times[1:] < log_times[:-1]).any():
@@ -506,6 +507,7 @@ def _merge(parts: List[Decoded], kind: str) -> Decoded:
         merged = Decoded(log_times[order], {k: v[order] for k, v in merged.columns.items()},
                          merged.offsets, merged.samples)
         if kind == VIBRATION:
+            assert merged.samples is not None and merged.offsets is not None  # vibration data carry them
             merged.samples, merged.offsets = ragged_take(merged.samples, merged.offsets - merged.offsets[0],
                                                          order)
     return merged
@@ -527,6 +529,7 @@ def _batch(kind: str, pieces: List[Decoded]) -> InputBatch:
     columns = decoded.columns
     if kind == VIBRATION:
         offsets = decoded.offsets
+        assert offsets is not None and decoded.samples is not None  # vibration data carry them
         return VibrationBatch(columns['stamps'], columns['sample_rates'], offsets - offsets[0],
                               decoded.samples[offsets[0]:offsets[-1]])
     if kind == JOINT_STATES:
@@ -620,7 +623,7 @@ class Recording:
                 topic.layout_problem = self._source.layout_problem(topic.name, kind)
         #: namespaces with a vibration topic of the VibrationBlock layout
         self.actuators: List[str] = sorted(
-            namespace_of(t.name) for t in self.topics.values()
+            cast(str, namespace_of(t.name)) for t in self.topics.values()
             if namespace_of(t.name) is not None and t.layout_problem is None)
         #: contract topic of this namespace by kind (vibration, joint_states, axial_load, temperature)
         self.selected: Dict[str, str] = {kind: topic_name(namespace, kind) for kind in KINDS
@@ -668,7 +671,7 @@ class Recording:
         """What the recording holds, a few lines of text."""
         lines = [f'{self._source.label}: {len(self.topics)} topics']
         if self.start_time is not None:
-            lines[0] += f', {self.end_time - self.start_time:.1f} s from {self.start_time:.3f}'
+            lines[0] += f', {cast(float, self.end_time) - self.start_time:.1f} s from {self.start_time:.3f}'
         for topic in sorted(self.topics.values(), key=lambda t: t.name):
             mark = ' <- ' + next(k for k, v in self.selected.items() if v == topic.name) \
                 if topic.name in self.selected.values() else ''
@@ -691,7 +694,12 @@ class Recording:
             raise ValueError(f'engine must be fast or rosbags, not {engine!r}')
         if not slice_seconds > 0 or not math.isfinite(slice_seconds):
             raise ConfigError(f'slice_seconds: must be a positive number of seconds, not {slice_seconds}')
-        sink = on_problem or (lambda line: line in self.problems or self.problems.append(line))
+
+        def remember(line: str) -> None:
+            if line not in self.problems:
+                self.problems.append(line)
+
+        sink = on_problem or remember
         problems: List[str] = []
         kinds = [kind for kind in KINDS if kind in self.selected]
         by_topic = {topic: kind for kind, topic in self.selected.items()}

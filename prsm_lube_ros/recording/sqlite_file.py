@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 import sqlite3
-from typing import Dict, Iterator, List, Optional, Tuple
+from typing import Callable, Dict, Iterator, List, Optional, Tuple
 
 from ..errors import exception_text
 from .mcap_file import McapProblem, zstd_frame
@@ -63,7 +63,7 @@ def _connect(path: Path) -> sqlite3.Connection:
 class SqliteFile:
     """One ``.db3`` file of a rosbag2 bag, listed at opening; problems raise :class:`SqliteProblem`."""
 
-    def __init__(self, path, compressed_messages: bool = False):
+    def __init__(self, path: str | Path, compressed_messages: bool = False) -> None:
         self.path = Path(path)
         #: every message blob is a zstd frame (rosbag2's ``compression_mode: message``)
         self.compressed_messages = compressed_messages
@@ -89,7 +89,7 @@ class SqliteFile:
         finally:
             connection.close()
 
-    def messages(self, topic_ids: List[int], on_problem) -> Iterator[Tuple[int, int, bytes]]:
+    def messages(self, topic_ids: List[int], on_problem: Callable[[str], None]) -> Iterator[Tuple[int, int, bytes]]:
         """``(topic_id, timestamp, data)`` of the given topics in timestamp order.
 
         A database that fails part way ends the stream with one line to ``on_problem``.

@@ -21,8 +21,10 @@ from __future__ import annotations
 import bisect
 from pathlib import Path
 import shutil
+from typing import Literal
 
 import numpy as np
+from rosbags.interfaces import Connection
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.rosbag2.writer import CompressionFormat, CompressionMode
 
@@ -79,15 +81,15 @@ class ContractBagWriter:
         self.namespace = namespace
         self.typestore = contract_typestore()
         plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
-        self._writer = Writer(self._bag_dir, version=Writer.VERSION_LATEST, storage_plugin=plugin)
+        self._writer: Writer | None = Writer(self._bag_dir, version=Writer.VERSION_LATEST, storage_plugin=plugin)
         if compression is not None:
             if compression != 'zstd' or storage == 'sqlite3':
                 raise InputError(f'{self.path}: compression {compression!r} is not offered for {storage} storage '
                                  '(mcap storage supports zstd)')
             self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self._writer.open()
-        self._connections = {}
-        self._pending: list[tuple[int, int, object, bytes]] = []
+        self._connections: dict[str, Connection] = {}
+        self._pending: list[tuple[int, int, Connection, bytes]] = []
         self._sequence = 0
         self.message_counts: dict[str, int] = {}
         types = self.typestore.types
@@ -104,6 +106,7 @@ class ContractBagWriter:
     def _connection(self, topic: str, msgtype: str):
         name = topic_name(self.namespace or '/', topic)
         if name not in self._connections:
+            assert self._writer is not None, 'the bag is closed'
             self._connections[name] = self._writer.add_connection(name, msgtype, typestore=self.typestore)
             self.message_counts[name] = 0
         return self._connections[name]
@@ -172,6 +175,7 @@ class ContractBagWriter:
         else:
             cut = bisect.bisect_left(self._pending, before_ns, key=lambda item: item[0])
             ready, self._pending = self._pending[:cut], self._pending[cut:]
+        assert self._writer is not None, 'the bag is closed'
         write = self._writer.write
         for log_time, _, connection, data in ready:
             write(connection, log_time, data)
@@ -199,7 +203,7 @@ class ContractBagWriter:
         """Context manager entry."""
         return self
 
-    def __exit__(self, exc_type, exc, traceback) -> bool:
+    def __exit__(self, exc_type, exc, traceback) -> Literal[False]:
         """Finish the bag, or drop it when the body raised."""
         if exc_type is None:
             self.close()

@@ -28,7 +28,7 @@ class DriveProgram:
         """Standstill at ``angle`` (rad) and no load from time zero."""
         self._motion = [[0.0], [float(angle)], [0.0], [0.0]]   # start, angle, speed, acceleration
         self._load = [[0.0], [0.0], [0.0]]                      # start, load, rate
-        self._arrays = None
+        self._arrays: tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]] | None = None
         self.traverse_starts: list[float] = []                  # s, start of every stroke appended
 
     def _tables(self):

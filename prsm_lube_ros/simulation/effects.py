@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, fields
 import math
+from typing import Any, Sequence, TypeVar
 
 import numpy as np
 
@@ -103,7 +104,7 @@ class Effects:
 
     def as_dict(self) -> dict:
         """``{effect_id: parameters or None}`` for ``truth.json``."""
-        result = {}
+        result: dict[str, Any] = {}
         for name in effect_ids():
             law = self._laws.get(name)
             if law is None:
@@ -131,7 +132,10 @@ class Effects:
         return cls(**values)
 
 
-def _choose(rng: np.random.Generator, options, chosen=None):
+_T = TypeVar('_T')
+
+
+def _choose(rng: np.random.Generator, options: Sequence[_T], chosen: _T | None = None) -> _T:
     """``chosen`` when given (checked against ``options``), else one of ``options`` at random."""
     if chosen is None:
         return options[int(rng.integers(len(options)))]
@@ -190,9 +194,11 @@ def draw_resonance(rng: np.random.Generator, *, order: float, top_speed: float, 
     if band == 'above':
         resonant = top / rng.uniform(*RESONANCE_RATIO_RANGE)
     elif band == 'inside':
+        assert bottom_speed is not None  # the band is below or inside only with a bottom speed
         low = abs(bottom_speed)
         resonant = low * (top / low) ** rng.uniform(*RESONANCE_INSIDE_RANGE)
     else:
+        assert bottom_speed is not None  # the band is below or inside only with a bottom speed
         resonant = abs(bottom_speed) / rng.uniform(*RESONANCE_BELOW_RATIO_RANGE)
     natural = order * resonant / (2.0 * math.pi)
     return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(damping))

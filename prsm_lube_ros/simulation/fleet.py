@@ -33,7 +33,7 @@ import datetime
 import json
 import math
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -176,6 +176,7 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
         service = ActuatorService(actuator_id, rate, depletion, daily,
                                   start_revolutions=depletion * math.log(1.0 / initial_theta))
         theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
+        recordings: list[dict[str, Any]]
         relubrications, recordings = [], []
         seeds = recording_sequence.generate_state(fleet.days)
         for day in range(fleet.days):

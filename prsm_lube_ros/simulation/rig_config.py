@@ -50,7 +50,7 @@ class RigConfig:
     sensor_noise: float = 0.003
     run_scatter: float = 0.0
     run_wander: float = 0.0
-    wander_period: tuple = (20.0, 120.0)
+    wander_period: tuple[float, float] = (20.0, 120.0)
     vibration_rate: float = 4000.0
     vibration_block: float = 0.1
     joint_state_rate: float = 100.0

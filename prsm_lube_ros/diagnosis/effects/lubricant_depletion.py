@@ -42,7 +42,7 @@ class LubricantDepletion(Effect, law.Extension):
     physics = ('Oil is flung out of the thread contacts as the screw turns, so the effective theta_Oil falls '
                'with the revolutions run since the last lubrication and the amplitude rises through the session.')
     equations = 'theta_eff = theta_Oil exp(-N_rev / N_d)'
-    parameter_names = ('depletion_fraction',)
+    parameter_names: tuple[str, ...] = ('depletion_fraction',)
     covariate = 'revolutions'
     to_separate = ('runs in random order of speed and load, repeated conditions early and late in the session, '
                    'and a temperature record')

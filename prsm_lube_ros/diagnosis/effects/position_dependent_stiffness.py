@@ -56,7 +56,7 @@ class PositionDependentStiffness(Effect, law.Extension):
                'amplitude changes with nut position inside every run.')
     equations = ('A = A_22 (1 + rho(x) (F/F_ref)^(1/3)), rho = k_c / k_s, fixed-free: k_s = E A / b, '
                  'b = s + o_2 - x the free length to the fixed bearing beyond the stroke end')
-    parameter_names = ('contact_over_shaft', 'bearing_after_over_stroke')
+    parameter_names: tuple[str, ...] = ('contact_over_shaft', 'bearing_after_over_stroke')
     covariate = 'position'
     to_separate = 'full-stroke runs in both directions, so nut position is not tied to time or revolutions'
 

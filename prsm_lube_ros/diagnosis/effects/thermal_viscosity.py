@@ -40,7 +40,7 @@ class ThermalViscosity(Effect, law.Extension):
                '0.68 (Eq. 8), more asperities touch and the amplitude follows temperature.')
     equations = ('theta_Oil C_lambda omega^0.68 F^-0.073  ->  theta_Oil C_lambda omega^0.68 F^-0.073 '
                  'exp(-0.68 beta (T - T_ref))')
-    parameter_names = ('viscosity_temperature_coefficient',)
+    parameter_names: tuple[str, ...] = ('viscosity_temperature_coefficient',)
     covariate = 'temperature'
     to_separate = ('temperature that does not rise with revolutions: cool down between runs, or run a warm '
                    'actuator after a rest, or record the oil temperature with runs in random order')
