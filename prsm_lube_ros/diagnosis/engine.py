@@ -63,6 +63,7 @@ exact whatever the truth, so adequacy means nothing; see
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 import math
 from typing import Any, cast
 
@@ -104,13 +105,22 @@ CONFOUNDED = 0.9
 ADEQUATE, AMBIGUOUS, UNEXPLAINED, CANNOT_TELL = 'adequate', 'ambiguous', 'unexplained', 'cannot tell'
 
 
+class Status(StrEnum):
+    """Where a candidate stands; the values are the words of the text, the JSON and the report."""
+
+    EARNS = 'earns'                 # explains the mismatch well enough to be named
+    REJECTED = 'rejected'           # fitted, but does not earn its parameters (the reason says which rule)
+    NOT_TESTABLE = 'not testable'   # the recording cannot show it (the reason says what to record)
+    DROPPED = 'dropped'             # earned alone, but another effect explains it (or more)
+
+
 @dataclass
 class Candidate:
     """One candidate effect: its fit, scores and status."""
 
     effect: Effect
     fit: ModelFit | None
-    status: str                 # 'earns', 'rejected', 'not testable', 'dropped'
+    status: Status
     reason: str = ''
     gain: float = math.nan      # 1 - cv_rmse / baseline cv_rmse
     delta_bic: float = math.nan
@@ -443,7 +453,7 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     family = effect
     reason = effect.applicable(table) or _too_few_conditions(table, effect, location)
     if reason:
-        return Candidate(effect, None, 'not testable', reason, form=effect.form, family=family)
+        return Candidate(effect, None, Status.NOT_TESTABLE, reason, form=effect.form, family=family)
     testable = [form for form in effect.variants() if not form.applicable(table)]
     effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
@@ -453,15 +463,15 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     form = _named_form(effect, fit.params, table, location, ties)
     if len(forms) == 1:
         forms = [(form, 0.0)]
-    candidate = Candidate(effect, fit, 'rejected', gain=gain, delta_bic=delta, evidence=evidence,
+    candidate = Candidate(effect, fit, Status.REJECTED, gain=gain, delta_bic=delta, evidence=evidence,
                           form=form, forms=forms, family=family, form_vectors=vectors)
     if unphysical:
         candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
-        candidate.status = 'earns'
+        candidate.status = Status.EARNS
         candidate.reason = f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}'
     elif evidence and gain >= -EVIDENCE_TOLERANCE:
-        candidate.status = 'earns'
+        candidate.status = Status.EARNS
         candidate.reason = f'{evidence}; held-out error {100 * gain:+.1f} % lower'
     else:
         candidate.reason = (f'does not earn its {len(effect.parameter_names)} parameter(s): held-out error '
@@ -723,7 +733,7 @@ def _settle_tie(best: Candidate, runner: Candidate, loser: Candidate, notes: lis
     ``loser_reason`` may name the winner as ``{winner}``.
     """
     winner = runner if loser is best else best
-    loser.status = 'dropped'
+    loser.status = Status.DROPPED
     loser.reason += loser_reason.replace('{winner}', winner.effect.id)
     notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; {decided_by}: '
                  f'{winner.effect.id}')
@@ -789,7 +799,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
     fitted = [c for c in candidates if c.fit is not None]
     ranked = sorted(fitted, key=lambda c: cast(ModelFit, c.fit).cv_rmse)
-    earning = [c for c in ranked if c.status == 'earns']
+    earning = [c for c in ranked if c.status == Status.EARNS]
     best = earning[0] if earning else (ranked[0] if ranked else None)
     second: SecondEffect | None
     tied: list[str]
@@ -800,29 +810,27 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         for runner in earning[1:]:
             close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
             if not close:
-                runner.status = 'dropped'
+                runner.status = Status.DROPPED
                 runner.reason += f'; explains less than {best.effect.id}'
                 continue
             leader_adds, runner_adds = _pair_test(table, best, runner, folds)
             if leader_adds and not runner_adds:
-                runner.status = 'dropped'
+                runner.status = Status.DROPPED
                 runner.reason += f'; adds nothing given {best.effect.id}'
             elif runner_adds and not leader_adds:
-                best.status = 'dropped'
+                best.status = Status.DROPPED
                 best.reason += f'; adds nothing given {runner.effect.id}'
                 best, verdict = runner, runner.effect.id
             elif runner_adds and leader_adds:
                 notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
-            elif _held_out_tiebreak(table, best, runner, correlation):
-                loser = _held_out_tiebreak(table, best, runner, correlation)
+            elif (loser := _held_out_tiebreak(table, best, runner, correlation)) is not None:
                 assert loser is not None  # the same call just returned one
                 collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
                 best = _settle_tie(best, runner, loser, notes,
                                    f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
                                    f'({collinearity})', f'{collinearity}, so the held-out runs decide')
                 verdict = best.effect.id
-            elif _spectral_tiebreak(table, location, best, runner):
-                loser = _spectral_tiebreak(table, location, best, runner)
+            elif (loser := _spectral_tiebreak(table, location, best, runner)) is not None:
                 assert loser is not None  # the same call just returned one
                 best = _settle_tie(best, runner, loser, notes,
                                    '; fits as well as {winner} but '
@@ -855,7 +863,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
         if together is not None:
             best, second = together
-            best.status = 'earns'
+            best.status = Status.EARNS
             best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
             verdict = best.effect.id
         elif mismatch:
@@ -890,7 +898,7 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
             and empirical.beats(paired.fit if pair else cast(ModelFit, best.fit), followed):
         named_fit = paired.fit if pair else cast(ModelFit, best.fit)
         empirical.overrules = best.effect.id
-        best.status = 'dropped'
+        best.status = Status.DROPPED
         best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
                         f'{empirical.term.covariate} (held-out error {100 * named_fit.cv_rmse:.2f} % against '
                         f'{100 * empirical.fit.cv_rmse:.2f} %): the located shape is not its law')

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from .empirical import causes
-from .engine import Diagnosis
+from .engine import Diagnosis, Status
 from .fitting import ModelFit, predict_log
 from .locate import COVARIATE_UNITS
 
@@ -143,7 +143,7 @@ def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
     fitted = sorted([c for c in diagnosis.candidates if c.fit is not None],
                     key=lambda c: -cast(ModelFit, c.fit).cv_rmse)
     fig, ax = plt.subplots(figsize=(7.0, 0.5 * len(fitted) + 1.4), dpi=110)
-    colours = {'earns': 'tab:green', 'rejected': 'tab:gray', 'dropped': 'tab:orange'}
+    colours = {Status.EARNS: 'tab:green', Status.REJECTED: 'tab:gray', Status.DROPPED: 'tab:orange'}
     for i, cand in enumerate(fitted):
         assert cand.fit is not None  # only fitted candidates are drawn
         ax.barh(i, 100 * cand.fit.cv_rmse, color=colours.get(cand.status, 'tab:gray'))
