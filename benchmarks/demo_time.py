@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     load_before = os.getloadavg()[0]
     runs = [run_once(extra) for _ in range(args.repeats)]
     load_after = os.getloadavg()[0]
-    command = 'python benchmarks/demo_time.py ' + ' '.join((argv if argv is not None else sys.argv[1:]))
+    command = 'python benchmarks/demo_time.py ' + ' '.join(argv if argv is not None else sys.argv[1:])
     lines = ['# prsm-lube demo: wall time per step', '', f'`{command}` on {os.cpu_count()} CPUs, '
              f'{args.repeats} runs; load average (1 min) before and after: {load_before:.1f} and {load_after:.1f} '
              '(other jobs share the CPUs).', '',

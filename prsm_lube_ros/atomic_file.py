@@ -18,7 +18,8 @@ import re
 import shutil
 import tempfile
 import time
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 #: s after which a temporary without a writer pid is taken as stale
 LEGACY_AGE = 600.0

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from dataclasses import fields, MISSING
 from pathlib import Path
-from typing import Any, Callable, cast, Iterable
+from typing import Any, cast
+from collections.abc import Callable, Iterable
 
 from .errors import ConfigError, InputError
 from .validation import as_number

@@ -17,7 +17,6 @@ what the default namespace gives and ``-r __ns:=/ema_left`` moves every name.
 """
 from __future__ import annotations
 
-from typing import Optional
 
 PACKAGE = 'prsm_lube_ros'
 VIBRATION_BLOCK = f'{PACKAGE}/msg/VibrationBlock'
@@ -72,7 +71,7 @@ def topic_name(namespace: str, leaf: str) -> str:
     return f'{namespace}/{leaf}'
 
 
-def namespace_of(topic: str, leaf: str = VIBRATION_TOPIC) -> Optional[str]:
+def namespace_of(topic: str, leaf: str = VIBRATION_TOPIC) -> str | None:
     """The namespace whose ``leaf`` topic is ``topic`` (inverse of :func:`topic_name`); None if it is not one."""
     if topic.endswith('/' + leaf):
         return topic[:-len(leaf) - 1]

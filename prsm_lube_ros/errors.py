@@ -15,7 +15,7 @@ kinds apart branch on the subclass, never on the wording:
 
 This module imports nothing of the package.
 """
-from typing import Callable
+from collections.abc import Callable
 
 #: Where a reader or pipeline sends each one-line problem it meets in otherwise usable input.
 ProblemSink = Callable[[str], None]

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -74,7 +74,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     plt = _pyplot()
 
     def dates(seconds):
-        return [datetime.datetime.fromtimestamp(float(t), datetime.timezone.utc) for t in np.atleast_1d(seconds)]
+        return [datetime.datetime.fromtimestamp(float(t), datetime.UTC) for t in np.atleast_1d(seconds)]
     fig, ax = plt.subplots(figsize=(8.0, 4.4), dpi=120)
     if len(times):
         ax.errorbar(dates(times), values, yerr=errors, fmt='o', markersize=3, capsize=2,

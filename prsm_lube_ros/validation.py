@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import datetime
 import math
-from typing import Optional
 
 from .errors import ConfigError, InputError
 
@@ -22,7 +21,7 @@ def is_positive_number(value) -> bool:
             and math.isfinite(value) and value > 0)
 
 
-def finite_or_none(value) -> Optional[float]:
+def finite_or_none(value) -> float | None:
     """``float(value)`` when it is a finite number, else ``None`` (JSON has no NaN)."""
     if value is None:
         return None
@@ -33,10 +32,10 @@ def finite_or_none(value) -> Optional[float]:
     return value if math.isfinite(value) else None
 
 
-def utc_or_none(seconds) -> Optional[datetime.datetime]:
+def utc_or_none(seconds) -> datetime.datetime | None:
     """The UTC time of ``seconds`` since the epoch when it is a finite number, else ``None``."""
     seconds = finite_or_none(seconds)
-    return None if seconds is None else datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc)
+    return None if seconds is None else datetime.datetime.fromtimestamp(seconds, datetime.UTC)
 
 
 def _real(name: str, value, error: type[InputError], what: str) -> float:

@@ -286,4 +286,4 @@ def _utc(seconds) -> str:
     import datetime
     if seconds is None or not math.isfinite(seconds):
         return 'never'
-    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).strftime('%Y-%m-%d %H:%M')
+    return datetime.datetime.fromtimestamp(seconds, datetime.UTC).strftime('%Y-%m-%d %H:%M')

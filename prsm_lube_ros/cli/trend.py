@@ -75,7 +75,7 @@ def _options(args) -> TrendOptions:
     HealthThresholds(warn_below=args.warn_below, error_below=args.error_below)   # checks the order
     if not 0.0 < args.level < 1.0:
         raise InputError(f'--level must lie between 0 and 1 (a probability such as 0.95), got {args.level:g}')
-    now = datetime.datetime.now(datetime.timezone.utc).timestamp()
+    now = datetime.datetime.now(datetime.UTC).timestamp()
     as_of = _date('--as-of', args.as_of) if args.as_of else now
     by = _date('--by', args.by) if args.by else as_of + BY_DAYS * 86400.0
     return TrendOptions((args.warn_below, args.error_below), args.level, as_of, by)
@@ -88,13 +88,13 @@ def _date(option: str, text: str) -> float:
     try:
         if len(text.strip()) == 10:
             day = datetime.date.fromisoformat(text.strip())
-            stamp = datetime.datetime.combine(day, datetime.time.max, datetime.timezone.utc)
+            stamp = datetime.datetime.combine(day, datetime.time.max, datetime.UTC)
         else:
             stamp = datetime.datetime.fromisoformat(text.strip().replace('Z', '+00:00'))
     except ValueError:
         raise InputError(f'{option} {text!r} is not an ISO 8601 date or time (e.g. 2026-03-01)') from None
     if stamp.tzinfo is None:
-        stamp = stamp.replace(tzinfo=datetime.timezone.utc)
+        stamp = stamp.replace(tzinfo=datetime.UTC)
     return stamp.timestamp()
 
 

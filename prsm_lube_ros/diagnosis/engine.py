@@ -250,7 +250,7 @@ class Diagnosis:
     confounding: list = field(default_factory=list)   # Confounding findings
     baseline_fit_test: LackOfFit | None = None
     chosen_fit_test: LackOfFit | None = None
-    second: 'SecondEffect | None' = None     # a second effect named with the first (forward selection)
+    second: SecondEffect | None = None     # a second effect named with the first (forward selection)
     calibration_flags: list = field(default_factory=list)   # what calibrate says the recordings cannot vouch for
     empirical: EmpiricalFit | None = None    # an empirical term of the located shape (physics outside the catalogue)
     temperature_revolutions: float = math.nan   # Pearson correlation of run temperature and revolutions

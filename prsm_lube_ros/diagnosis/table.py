@@ -17,7 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Any, cast, Sequence
+from typing import Any, cast
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -108,7 +109,7 @@ class WindowTable:
         """True when most windows carry a temperature."""
         return bool(np.isfinite(self.temperature).mean() >= 0.8) if len(self) else False
 
-    def subset(self, mask) -> 'WindowTable':
+    def subset(self, mask) -> WindowTable:
         """Rows where ``mask`` is true (a boolean array or indices)."""
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None

@@ -28,7 +28,8 @@ Imports numpy, the physics and the plausibility bounds only.
 from __future__ import annotations
 
 import math
-from typing import Callable, NoReturn
+from typing import NoReturn
+from collections.abc import Callable
 
 import numpy as np
 

@@ -35,7 +35,7 @@ def calibration_to_dict(calibration: Calibration) -> dict:
     return {
         'format': FORMAT,
         'version': VERSION,
-        'created': datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds'),
+        'created': datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds'),
         'constants': c.by_name(),
         'std': {'c_sys': calibration.c_sys_std, 'c_f': calibration.c_f_std,
                 'c_lambda': calibration.c_lambda_std},

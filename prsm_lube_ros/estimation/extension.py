@@ -13,7 +13,7 @@ from the window's covariates (nut position, revolutions, temperature).
 from __future__ import annotations
 
 from types import SimpleNamespace
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

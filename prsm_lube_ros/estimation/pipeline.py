@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, cast, Iterable, Sequence
+from typing import Any, cast
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 

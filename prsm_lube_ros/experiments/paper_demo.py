@@ -18,7 +18,8 @@ import json
 import math
 from pathlib import Path
 import sys
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 import math
-from typing import cast, Sequence, TypeGuard
+from typing import cast, TypeGuard
+from collections.abc import Sequence
 
 import numpy as np
 

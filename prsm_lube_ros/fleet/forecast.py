@@ -49,7 +49,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from statistics import NormalDist
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 

@@ -60,7 +60,7 @@ from pathlib import Path
 import re
 import shutil
 import tempfile
-from typing import Callable
+from collections.abc import Callable
 
 import pyarrow as pa
 import pyarrow.dataset as ds
@@ -170,7 +170,7 @@ def assessment_tables(assessment, *, content: str, calibration: str, namespace: 
     recording assessed with that calibration (null without ``fit``).
     ``actuator_id`` goes into the schema metadata.
     """
-    assessed_at = assessed_at or datetime.datetime.now(datetime.timezone.utc)
+    assessed_at = assessed_at or datetime.datetime.now(datetime.UTC)
     common = {'recording_path': str(assessment.path), 'content_hash': content, 'calibration_id': calibration,
               'assessed_at': assessed_at, 'namespace': namespace}
     shared = _calibration_std(fit, assessment.runs)

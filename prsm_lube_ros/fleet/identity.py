@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import datetime
-from typing import Callable
+from collections.abc import Callable
 
 #: s: spans whose start and end agree to within this are one recording stored twice
 SAME_RECORDING = 1.0
@@ -78,7 +78,7 @@ class Timeline:
 def clash_line(span: Span, other: Span, actuator: str) -> str:
     """The one line refusing ``span``: which recording it overlaps and what to do."""
     def utc(seconds: float) -> str:
-        return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='seconds')
+        return datetime.datetime.fromtimestamp(seconds, datetime.UTC).isoformat(timespec='seconds')
     return (f'{span.path}: not added to the history: it overlaps {other.path} in time ({utc(span.start)} .. '
             f'{utc(span.end)} against {utc(other.start)} .. {utc(other.end)}) under actuator {actuator!r}, so they '
             'come from two actuators; give each its own id (--actuator-id ID or folder)')

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 import socket
 import struct
 import time
-from typing import Iterator
+from collections.abc import Iterator
 import warnings
 
 from ..errors import InputError
@@ -44,7 +44,7 @@ def _read_exactly(sock: socket.socket, size: int, deadline: float) -> bytes:
         sock.settimeout(remaining)
         try:
             chunk = sock.recv(size - len(data))
-        except socket.timeout:
+        except TimeoutError:
             raise NotAScheduler('sent no Dask handshake') from None
         if not chunk:
             raise NotAScheduler('closed the connection without a Dask handshake')

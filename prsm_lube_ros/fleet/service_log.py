@@ -106,7 +106,7 @@ def _csv_rows(path, columns):
                     raise ConfigError(f'{path}:{number}: time {text!r} is neither ISO 8601 nor seconds '
                                       'since the epoch') from None
                 if stamp.tzinfo is None:
-                    stamp = stamp.replace(tzinfo=datetime.timezone.utc)
+                    stamp = stamp.replace(tzinfo=datetime.UTC)
                 value = stamp.timestamp()
             if not math.isfinite(value):
                 raise ConfigError(f'{path}:{number}: {name} {text!r} is not finite')

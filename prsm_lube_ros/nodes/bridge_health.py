@@ -22,7 +22,6 @@ from collections import deque
 from dataclasses import dataclass
 import math
 import threading
-from typing import List, Optional, Tuple
 
 from ..estimation.health import ERROR, OK, STALE, WARN
 
@@ -38,13 +37,13 @@ class SourceStatus:
 
     level: int
     message: str
-    values: List[Tuple[str, object]]
+    values: list[tuple[str, object]]
 
 
 class SourceHealth:
     """Counts of one bridge source; thread-safe (the worker records, the diagnostics timer reads)."""
 
-    def __init__(self, source: str, stale_timeout: float, expected_block_rate: Optional[float] = None):
+    def __init__(self, source: str, stale_timeout: float, expected_block_rate: float | None = None):
         self.source = source
         self.stale_timeout = float(stale_timeout)
         self.expected_block_rate = expected_block_rate      # blocks/s; None: not known (playback)
@@ -54,8 +53,8 @@ class SourceHealth:
         self.last_error = ''
         self.failed = False
         self.active = True                                  # False: publishing halted on purpose
-        self._first_block: Optional[float] = None
-        self._last_block: Optional[float] = None
+        self._first_block: float | None = None
+        self._last_block: float | None = None
         self._block_times: deque = deque()
         self._loss_times: deque = deque()
         self._lock = threading.Lock()

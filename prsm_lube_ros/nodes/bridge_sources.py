@@ -22,14 +22,14 @@ from __future__ import annotations
 import math
 import threading
 import time
-from typing import Iterator, List, Tuple
+from collections.abc import Iterator
 
 import numpy as np
 
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from ..recording.plausibility import plausible_durations, plausible_rates
 
-Event = Tuple[float, str, int, tuple]
+Event = tuple[float, str, int, tuple]
 KINDS = ('vibration', 'joint_states', 'axial_load', 'temperature')
 _NS = 1_000_000_000
 
@@ -64,9 +64,9 @@ def _search_ns(seconds: float, guess: int) -> int:
     return guess
 
 
-def batch_events(batches) -> List[Event]:
+def batch_events(batches) -> list[Event]:
     """Events of one slice of recorded batches (any mix of kinds), in due order (stable by stamp)."""
-    events: List[Event] = []
+    events: list[Event] = []
     for batch in batches:
         if len(batch) == 0:
             continue
@@ -96,16 +96,16 @@ def batch_events(batches) -> List[Event]:
     return events
 
 
-def recording_events(recording, on_problem=None) -> Iterator[List[Event]]:
+def recording_events(recording, on_problem=None) -> Iterator[list[Event]]:
     """Events of a :class:`~prsm_lube_ros.recording.reader.Recording`, one sorted list per time slice."""
     for batches in recording.slices(on_problem=on_problem):
         yield batch_events(batches)
 
 
-def rig_block_events(block) -> List[Event]:
+def rig_block_events(block) -> list[Event]:
     """Events of one :class:`~prsm_lube_ros.simulation.rig_acceleration.RigBlock`: the block and its sensor data."""
     chunk = block.topics
-    events: List[Event] = []
+    events: list[Event] = []
     rate = float(chunk.sample_rate)
     for stamp, samples in zip(chunk.block_stamps, chunk.samples):
         stamp = int(stamp)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import os
 from pathlib import Path
 import re
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from ..errors import InputError
 from ..estimation.calibration import Calibration

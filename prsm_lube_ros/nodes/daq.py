@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import importlib
 import math
 import time
-from typing import Callable, Tuple
+from collections.abc import Callable
 
 import numpy as np
 
@@ -145,7 +145,7 @@ class NiDaqAccelerometer:
                 pass
         self.running = False
 
-    def read_block(self) -> Tuple[int, np.ndarray]:
+    def read_block(self) -> tuple[int, np.ndarray]:
         """The next block: ``(stamp_ns of its first sample, samples in m/s^2 as float32)``.
 
         Raises InputError (one line) when the acquisition fails (buffer overrun,

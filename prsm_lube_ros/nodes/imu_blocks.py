@@ -40,7 +40,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 import math
-from typing import Callable, List, Optional
+from collections.abc import Callable
 
 import numpy as np
 
@@ -84,7 +84,7 @@ class ImuBlockAssembler:
     """
 
     def __init__(self, block_length: float, sample_rate: float = 0.0, rate_tolerance: float = 0.05,
-                 jitter_tolerance: float = 0.25, on_problem: Optional[Callable[[str, str], None]] = None,
+                 jitter_tolerance: float = 0.25, on_problem: Callable[[str, str], None] | None = None,
                  highpass: float = 0.0):
         checks = {'block_length': block_length > 0 and math.isfinite(block_length),
                   'sample_rate': sample_rate >= 0 and math.isfinite(sample_rate),
@@ -98,16 +98,16 @@ class ImuBlockAssembler:
         self.rate_tolerance = float(rate_tolerance)
         self.jitter_tolerance = float(jitter_tolerance)
         self.on_problem = on_problem
-        self.period_ns: Optional[float] = 1e9 / sample_rate if sample_rate > 0 else None
+        self.period_ns: float | None = 1e9 / sample_rate if sample_rate > 0 else None
         self.problems = {kind: 0 for kind in PROBLEM_KINDS}
         self.lost_samples = 0
         self.dropped_samples = 0
         self.last_problem = ''
         self._rate_checked = False
-        self._last_stamp: Optional[int] = None
+        self._last_stamp: int | None = None
         self._intervals: deque = deque(maxlen=RATE_WINDOW)
         self._first_stamp = 0             # ns, stamp of the current block's first sample
-        self._values: List[float] = []
+        self._values: list[float] = []
         self._gravity_filter = HighPassFilter(highpass) if highpass > 0 else None
 
     @property
@@ -116,14 +116,14 @@ class ImuBlockAssembler:
         return 1e9 / self.period_ns if self.period_ns else math.nan
 
     @property
-    def block_size(self) -> Optional[int]:
+    def block_size(self) -> int | None:
         """Samples in a full block; None while the rate is not known."""
         return max(1, int(round(self.block_length * self.sample_rate))) if self.period_ns else None
 
-    def push(self, stamp_ns: int, value: float) -> List[AssembledBlock]:
+    def push(self, stamp_ns: int, value: float) -> list[AssembledBlock]:
         """Add one sample; return the blocks it completed or closed (none, one, or two)."""
         stamp_ns = int(stamp_ns)
-        done: List[AssembledBlock] = []
+        done: list[AssembledBlock] = []
         if self._last_stamp is not None:
             interval = stamp_ns - self._last_stamp
             kind = self._problem_of(interval)
@@ -141,11 +141,11 @@ class ImuBlockAssembler:
             done += self._close()
         return done
 
-    def flush(self) -> List[AssembledBlock]:
+    def flush(self) -> list[AssembledBlock]:
         """The current (partial) block, if it has samples and a known rate."""
         return self._close()
 
-    def pause(self) -> List[AssembledBlock]:
+    def pause(self) -> list[AssembledBlock]:
         """End of a stretch of samples (the source deactivated): :meth:`flush`, and the next sample starts afresh.
 
         The time until that sample is a pause of the bridge, not samples the
@@ -159,7 +159,7 @@ class ImuBlockAssembler:
         return blocks
 
     # -- checks -------------------------------------------------------------------------------------
-    def _problem_of(self, interval: int) -> Optional[str]:
+    def _problem_of(self, interval: int) -> str | None:
         """The kind of problem of one interval, reported and counted; None when it fits the period.
 
         Gaps and jitter are judged once the rate is checked (after :data:`RATE_WINDOW` intervals).
@@ -181,7 +181,7 @@ class ImuBlockAssembler:
                                 f'{periods:.2f} sample periods (tolerance {self.jitter_tolerance:g})')
         return None
 
-    def _follow_rate(self) -> List[AssembledBlock]:
+    def _follow_rate(self) -> list[AssembledBlock]:
         """Compare the measured period with the one in use; adopt it when they differ beyond the tolerance.
 
         The first comparison (end of the warm-up) keeps the block open: its
@@ -211,7 +211,7 @@ class ImuBlockAssembler:
             self.on_problem(kind, line)
         return kind
 
-    def _close(self) -> List[AssembledBlock]:
+    def _close(self) -> list[AssembledBlock]:
         """The current samples as a block, and a new block begun.
 
         Before the rate is known (``sample_rate`` 0, first :data:`RATE_WINDOW`

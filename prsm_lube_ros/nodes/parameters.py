@@ -21,7 +21,8 @@ and the other parameters go on to rclpy and the node's own callback.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple, Optional
+from typing import Any, NamedTuple
+from collections.abc import Callable
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
     SetParametersResult
@@ -44,7 +45,7 @@ class ParameterSpec(NamedTuple):
     #: what ``ros2 param describe`` shows
     description: str
     #: inclusive (low, high) of a number; None: any value of the type
-    bounds: Optional[tuple] = None
+    bounds: tuple | None = None
     #: fixed after start-up (see :class:`ReadOnlyAfterStartUp`)
     read_only: bool = False
 
@@ -60,7 +61,7 @@ def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_o
     return descriptor
 
 
-def declare_parameter_table(node, table: dict, resolve: Optional[dict] = None) -> dict:
+def declare_parameter_table(node, table: dict, resolve: dict | None = None) -> dict:
     """Declare every parameter of ``table`` on ``node``; return their values by name.
 
     ``resolve`` maps names of read-only parameters that hold ROS names to a
@@ -91,7 +92,7 @@ def declare_parameter_table(node, table: dict, resolve: Optional[dict] = None) -
     return {name: node.get_parameter(name).value for name in table}
 
 
-def value_problem(value, ptype: int, bounds) -> Optional[str]:
+def value_problem(value, ptype: int, bounds) -> str | None:
     """Why ``value`` does not fit a parameter of type ``ptype`` and inclusive range ``bounds`` (None: it fits)."""
     given = Parameter.Type.from_parameter_value(value)
     if given.value != ptype:

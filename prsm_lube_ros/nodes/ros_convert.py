@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import array
 import math
-from typing import Iterable, Union
+from typing import Union
+from collections.abc import Iterable
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue

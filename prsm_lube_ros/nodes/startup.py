@@ -17,7 +17,7 @@ from __future__ import annotations
 import signal
 import sys
 import threading
-from typing import Callable, Optional, Sequence
+from collections.abc import Callable, Sequence
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -33,7 +33,7 @@ STOP_POLL_PERIOD = 0.1
 _stop_requested = threading.Event()
 
 
-def init_ros(args: Optional[Sequence[str]] = None) -> None:
+def init_ros(args: Sequence[str] | None = None) -> None:
     """``rclpy.init`` without rclpy's signal handlers; SIGINT/SIGTERM set the stop flag instead.
 
     Off the main thread (a node started inside a test or another program)
@@ -57,7 +57,7 @@ def _request_stop(signum, frame) -> None:
     signal.signal(signum, signal.SIG_DFL)
 
 
-def build_node(factory: Callable[[], object], node_name: str) -> Optional[object]:
+def build_node(factory: Callable[[], object], node_name: str) -> object | None:
     """``factory()``; on :class:`InputError` print ``<node_name>: error: <line>``, shut rclpy down, return None."""
     try:
         return factory()
@@ -67,7 +67,7 @@ def build_node(factory: Callable[[], object], node_name: str) -> Optional[object
         return None
 
 
-def run_node(factory: Callable[[], object], node_name: str, args: Optional[Sequence[str]] = None,
+def run_node(factory: Callable[[], object], node_name: str, args: Sequence[str] | None = None,
              done: Callable[[object], bool] = lambda node: False,
              exit_status: Callable[[object], int] = lambda node: 0) -> int:
     """A node process from start to end: :func:`init_ros`, :func:`build_node`, :func:`spin_until_stopped`.

@@ -72,7 +72,7 @@ class Actuator:
         """Plain mapping, as written under ``actuator:`` in YAML."""
         return asdict(self)
 
-    def with_changes(self, **changes) -> 'Actuator':
+    def with_changes(self, **changes) -> Actuator:
         """Copy with some fields replaced (validated again)."""
         return replace(self, **changes)
 

@@ -50,7 +50,7 @@ class ModelConstants:
         return asdict(self)
 
     @classmethod
-    def from_vector(cls, vector) -> 'ModelConstants':
+    def from_vector(cls, vector) -> ModelConstants:
         """Inverse of :meth:`as_vector`."""
         return cls(c_sys=float(np.exp(vector[0])), c_f=float(vector[1]),
                    c_lambda=float(vector[2]))

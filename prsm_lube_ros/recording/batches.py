@@ -33,7 +33,7 @@ class VibrationBatch:
     samples: np.ndarray       # (offsets[-1],) m/s^2, float32 or float64
 
     @classmethod
-    def single(cls, stamp: float, sample_rate: float, samples: npt.ArrayLike) -> 'VibrationBatch':
+    def single(cls, stamp: float, sample_rate: float, samples: npt.ArrayLike) -> VibrationBatch:
         """Batch of one block (what a live subscription gets)."""
         samples = np.asarray(samples)
         return cls(np.array([stamp], float), np.array([sample_rate], float),

@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import re
 import struct
-from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 from rosbags.typesys import get_types_from_idl, get_types_from_msg
@@ -38,7 +37,7 @@ KINDS = {VIBRATION: VIBRATION_BLOCK, JOINT_STATES: JOINT_STATE, AXIAL_LOAD: WREN
 #: how many different structures one size group may show before the rest goes per message
 MAX_TEMPLATES = 4
 #: layouts found so far, by (kind, message size): most chunks reuse the previous chunk's
-_LAYOUTS: Dict[Tuple[str, int], '_Layout'] = {}
+_LAYOUTS: dict[tuple[str, int], _Layout] = {}
 
 _U32 = struct.Struct('<I')
 _F8 = struct.Struct('<d')
@@ -58,7 +57,7 @@ def _describe(desc, typs, depth: int = 0):
     return ('sequence', _describe(inner, typs, depth))
 
 
-def layout_signature(typename: str, typs: Optional[dict] = None, depth: int = 0) -> tuple:
+def layout_signature(typename: str, typs: dict | None = None, depth: int = 0) -> tuple:
     """Field names and types of ``typename``, nested types expanded, type names left out.
 
     ``typs`` are the definitions embedded in a recording; types they do not
@@ -100,7 +99,7 @@ def embedded_types(msgtype: str, encoding: str, text: str) -> dict:
     raise ValueError(f'unknown schema encoding {encoding!r}')
 
 
-def _fields_text(typename: str, typs: Optional[dict]) -> str:
+def _fields_text(typename: str, typs: dict | None) -> str:
     definition = (typs or {}).get(typename) or contract_typestore().fielddefs.get(typename)
     if definition is None:
         return '?'
@@ -116,7 +115,7 @@ def _fields_text(typename: str, typs: Optional[dict]) -> str:
     return ', '.join(f'{name} {name_of(desc)}' for name, desc in definition[1])
 
 
-def check_layout(kind: str, msgtype: str, encoding: str, text: str) -> Optional[str]:
+def check_layout(kind: str, msgtype: str, encoding: str, text: str) -> str | None:
     """None if ``msgtype`` (defined by the embedded ``text``) has the contract layout of ``kind``.
 
     Otherwise the reason, in words.  Without an embedded definition the type
@@ -151,9 +150,9 @@ class Decoded:
     """
 
     log_times: np.ndarray
-    columns: Dict[str, np.ndarray]
-    offsets: Optional[np.ndarray] = None
-    samples: Optional[np.ndarray] = None
+    columns: dict[str, np.ndarray]
+    offsets: np.ndarray | None = None
+    samples: np.ndarray | None = None
     undecodable: int = 0
     without_screw: int = 0
 
@@ -174,7 +173,7 @@ class _Walker:
             raise NotPlain
         self.data = data
         self.pos = 4
-        self.structure: List[Tuple[int, int]] = [(0, 2)]
+        self.structure: list[tuple[int, int]] = [(0, 2)]
 
     def align(self, size: int):
         self.pos = 4 + -(-(self.pos - 4) // size) * size
@@ -215,18 +214,18 @@ class _Walker:
 class _Layout:
     """Where the values sit in messages of one structure."""
 
-    structure: List[Tuple[int, int]]
-    values: Dict[str, Tuple[Optional[int], str]] = field(default_factory=dict)
-    samples: Tuple[int, int] = (0, 0)   # offset, count (vibration)
+    structure: list[tuple[int, int]]
+    values: dict[str, tuple[int | None, str]] = field(default_factory=dict)
+    samples: tuple[int, int] = (0, 0)   # offset, count (vibration)
     has_screw: bool = True
     head: int = 0                       # bytes of each message gathered as a row (all but samples)
-    check: Optional['_StructureCheck'] = None
+    check: _StructureCheck | None = None
 
 
 def _probe(kind: str, data: bytes) -> _Layout:
     walker = _Walker(data)
     walker.header()
-    values: Dict[str, Tuple[Optional[int], str]] = {'sec': (4, '<i4'), 'nanosec': (8, '<u4')}
+    values: dict[str, tuple[int | None, str]] = {'sec': (4, '<i4'), 'nanosec': (8, '<u4')}
     layout = _Layout(walker.structure, values)
     if kind == VIBRATION:
         values['sample_rates'] = (walker.take(8), '<f8')
@@ -256,7 +255,7 @@ def _probe(kind: str, data: bytes) -> _Layout:
     return layout
 
 
-def _column(rows: np.ndarray, offset: Optional[int], dtype: str) -> np.ndarray:
+def _column(rows: np.ndarray, offset: int | None, dtype: str) -> np.ndarray:
     """One value per row, read at ``offset`` of each row (NaN column for None)."""
     if offset is None:
         return np.full(rows.shape[0], np.nan)
@@ -282,7 +281,7 @@ class _StructureCheck:
     structure bytes, OR-ed over those words; the last ``width % 8`` bytes one by one.
     """
 
-    def __init__(self, template: np.ndarray, structure: List[Tuple[int, int]]):
+    def __init__(self, template: np.ndarray, structure: list[tuple[int, int]]):
         width = template.size
         mask = np.zeros(width, np.uint8)
         for begin, end in structure:
@@ -305,7 +304,7 @@ class _StructureCheck:
 
 
 def _decode_rows(kind: str, rows: np.ndarray, layout: _Layout, buffer: np.ndarray,
-                 offsets: np.ndarray) -> Tuple[dict, Optional[np.ndarray]]:
+                 offsets: np.ndarray) -> tuple[dict, np.ndarray | None]:
     values = layout.values
     columns = {'stamps': stamp_seconds(_column(rows, *values['sec']).astype(np.float64),
                                        _column(rows, *values['nanosec']))}
@@ -319,7 +318,7 @@ def _decode_rows(kind: str, rows: np.ndarray, layout: _Layout, buffer: np.ndarra
     return columns, samples
 
 
-def _decode_one(kind: str, data: bytes) -> Optional[tuple]:
+def _decode_one(kind: str, data: bytes) -> tuple | None:
     """Values of one message through the rosbags deserializer; None if it has no screw entry."""
     message = contract_typestore().deserialize_cdr(data, KINDS[kind])
     stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
@@ -342,9 +341,9 @@ def decode_messages(kind: str, buffer: np.ndarray, data_offsets: np.ndarray, dat
                     log_times: np.ndarray, vectorised: bool = True) -> Decoded:
     """Decode the messages of one topic from one chunk's buffer (see module docstring)."""
     n = data_offsets.size
-    parts: List[Tuple[np.ndarray, Dict[str, np.ndarray], Union[np.ndarray, list, None]]] = []
+    parts: list[tuple[np.ndarray, dict[str, np.ndarray], np.ndarray | list | None]] = []
     # (message indices, columns, samples)
-    slow: List[int] = []
+    slow: list[int] = []
     without_screw = 0
     if vectorised and n:
         sizes = [int(data_lengths[0])] if data_lengths.min() == data_lengths.max() else np.unique(data_lengths)
@@ -432,7 +431,7 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
     offsets = samples = None
     if kind == VIBRATION:
         pieces: list = []
-        counts: List[int] = []
+        counts: list[int] = []
         for _, part_columns, part_samples in parts:
             if isinstance(part_samples, list):
                 pieces.extend(part_samples)

@@ -20,7 +20,8 @@ from enum import IntEnum
 from functools import lru_cache
 import struct
 from types import ModuleType
-from typing import BinaryIO, cast, Dict, Iterator, List, Optional, Tuple
+from typing import BinaryIO, cast
+from collections.abc import Iterator
 
 import lz4.frame
 import numpy as np
@@ -30,7 +31,7 @@ try:  # ISA-L's CRC-32 (same polynomial as zlib's): 3.3x zlib 1.2's here (benchm
 except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
     from zlib import crc32
 
-_zstandard: Optional[ModuleType]
+_zstandard: ModuleType | None
 try:  # the zstandard package comes with ``mcap``; rosbags brings backports.zstd
     import zstandard as _zstandard
 except ImportError:  # pragma: no cover - depends on the installed wheels
@@ -128,7 +129,7 @@ class RawChunk:
 
     start_time: int                     # ns, earliest log time the chunk claims
     buffer: np.ndarray                  # uint8
-    groups: Dict[int, MessageGroup]     # by channel id
+    groups: dict[int, MessageGroup]     # by channel id
     file_offset: int
 
     def message_count(self) -> int:
@@ -140,11 +141,11 @@ class RawChunk:
 class Summary:
     """What the summary section (or a scan of the data section) says about a file."""
 
-    schemas: Dict[int, Schema] = field(default_factory=dict)
-    channels: Dict[int, Channel] = field(default_factory=dict)
-    message_counts: Dict[int, int] = field(default_factory=dict)
-    start_time: Optional[int] = None
-    end_time: Optional[int] = None
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    message_counts: dict[int, int] = field(default_factory=dict)
+    start_time: int | None = None
+    end_time: int | None = None
     complete: bool = False              # True when read from an intact summary section
     schema_count: int = 0               # as the Statistics record says
     channel_count: int = 0
@@ -289,7 +290,7 @@ def zstd_file(source, target, limit: int):
 
 def _zstd_prefix(data, size: int) -> bytes:
     """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
-    pieces: List[bytes] = []
+    pieces: list[bytes] = []
     got = 0
     assert _zstandard is not None  # decompress calls this only with zstandard installed
     reader = _zstandard.ZstdDecompressor().stream_reader(bytes(data))
@@ -307,7 +308,7 @@ def _zstd_prefix(data, size: int) -> bytes:
 
 # -- splitting chunk records ------------------------------------------------------------------------
 
-def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
+def walk_records(buf: bytes, start: int = 0, stop: int | None = None):
     """Yield ``(opcode, content_start, content_end)`` of consecutive records in ``buf[start:stop]``.
 
     Stops quietly at a record that does not fit (the caller compares the last
@@ -324,8 +325,8 @@ def walk_records(buf: bytes, start: int = 0, stop: Optional[int] = None):
         pos = end
 
 
-def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_record,
-                  on_problem=None, offsets: Optional[List[int]] = None) -> Tuple[RawChunk, int]:
+def split_records(buffers: list[bytes], start_time: int, file_offset: int, on_record,
+                  on_problem=None, offsets: list[int] | None = None) -> tuple[RawChunk, int]:
     """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
     Walks every record (no message index); each buffer is walked on its own,
@@ -337,7 +338,7 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
     with the bytes lost, the buffer named by its file offset (``offsets``,
     one per buffer; default ``file_offset``).
     """
-    per_channel: Dict[int, List[Tuple[int, int, int]]] = {}
+    per_channel: dict[int, list[tuple[int, int, int]]] = {}
     base = used = 0
     for number, buf in enumerate(buffers):
         used = 0
@@ -364,7 +365,7 @@ def split_records(buffers: List[bytes], start_time: int, file_offset: int, on_re
 
 
 def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record,
-                     on_problem=None) -> Tuple[RawChunk, int]:
+                     on_problem=None) -> tuple[RawChunk, int]:
     """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
 
     ``on_record(opcode, content)`` receives every non-message record (schemas,
@@ -380,7 +381,7 @@ def _overrun_problem(file_offset: int, used: int, size: int) -> str:
 
 
 def split_indexed(buf: bytes, start_time: int, file_offset: int,
-                  indexes: Dict[int, bytes], on_record, on_problem=None) -> Optional[RawChunk]:
+                  indexes: dict[int, bytes], on_record, on_problem=None) -> RawChunk | None:
     """Split a chunk with its MessageIndex records, vectorised; None if the index does not fit.
 
     The index is trusted only after checking that every entry points at a
@@ -472,7 +473,7 @@ def _definitions_into(summary: Summary, on_problem):
     return on_record
 
 
-def _add_index(indexes: Dict[int, bytes], content: bytes):
+def _add_index(indexes: dict[int, bytes], content: bytes):
     """Add one MessageIndex record's entries to a chunk's ``indexes``; a bad one makes them all unusable."""
     if len(content) >= _INDEX_HEAD.size:
         channel_id, entries = _INDEX_HEAD.unpack_from(content, 0)
@@ -491,7 +492,7 @@ def _compression_name(raw: bytes) -> str:
         raise McapProblem('record string is not UTF-8') from None
 
 
-def _chunk_header(content, at: int) -> Tuple[int, int, int, str, int, int]:
+def _chunk_header(content, at: int) -> tuple[int, int, int, str, int, int]:
     """A Chunk record's fields before its data, read from ``content`` at ``at``.
 
     Returns ``(message_start_time, uncompressed_size, uncompressed_crc,
@@ -553,13 +554,13 @@ class _Gathered:
         self.on_record = on_record
         self.on_problem = on_problem
         self.size = size
-        self.buffers: List[bytes] = []
-        self.offsets: List[int] = []
+        self.buffers: list[bytes] = []
+        self.offsets: list[int] = []
         self.bytes = 0
         self.file_offset = 0
-        self.start_time: Optional[int] = None
+        self.start_time: int | None = None
 
-    def add(self, buffer: bytes, start_time: Optional[int], file_offset: int) -> Optional[RawChunk]:
+    def add(self, buffer: bytes, start_time: int | None, file_offset: int) -> RawChunk | None:
         """Gather ``buffer`` (records); return a pseudo-chunk when enough is gathered."""
         if not self.buffers:
             self.file_offset = file_offset
@@ -570,7 +571,7 @@ class _Gathered:
             self.start_time = start_time if self.start_time is None else min(self.start_time, start_time)
         return self.take() if self.bytes >= self.size else None
 
-    def take(self) -> Optional[RawChunk]:
+    def take(self) -> RawChunk | None:
         """What is gathered as one pseudo-chunk (None if nothing)."""
         if not self.buffers:
             return None
@@ -580,7 +581,7 @@ class _Gathered:
         return chunk
 
 
-def _few_messages(records: bytes, indexes: Dict[int, bytes]) -> bool:
+def _few_messages(records: bytes, indexes: dict[int, bytes]) -> bool:
     """True for a chunk small enough that gathering it with its neighbours is cheaper than splitting it alone."""
     if indexes and -1 not in indexes:
         return sum(len(entries) for entries in indexes.values()) <= 16 * SMALL_CHUNK_MESSAGES
@@ -593,7 +594,7 @@ class McapFile:
     def __init__(self, path):
         self.path = path
         self.summary_problem = ''     # why the summary section was not used (a problem line), '' when it was
-        self.chunk_index: List[int] = []    # chunk offsets an intact summary's ChunkIndex records give
+        self.chunk_index: list[int] = []    # chunk offsets an intact summary's ChunkIndex records give
         with open(path, 'rb') as stream:
             stream.seek(0, 2)
             self.size = stream.tell()
@@ -617,7 +618,7 @@ class McapFile:
             summary.channels.setdefault(key, channel)
 
     # summary ------------------------------------------------------------------------------------
-    def _read_summary(self, stream: BinaryIO) -> Optional[Summary]:
+    def _read_summary(self, stream: BinaryIO) -> Summary | None:
         """The summary section, or None when the file has none or it is damaged."""
         footer_at = self.size - len(MAGIC) - RECORD_PREFIX - 20
         if footer_at < len(MAGIC):
@@ -680,7 +681,7 @@ class McapFile:
         self.chunk_index = chunk_index
         return summary if statistics else None
 
-    def index_problem(self, layout: 'DataLayout') -> str:
+    def index_problem(self, layout: DataLayout) -> str:
         """A line when chunks the summary's chunk index lists are not where it says ('' when all are).
 
         A chunk whose opcode became another (a user opcode, which readers
@@ -693,10 +694,10 @@ class McapFile:
         return (f'{len(missing)} chunk(s) the chunk index lists (at byte {missing[0]}'
                 f'{" ..." if len(missing) > 1 else ""}) are not in the data section (damaged records): not read')
 
-    def scan(self) -> Tuple[Summary, List[str]]:
+    def scan(self) -> tuple[Summary, list[str]]:
         """Rebuild the listing by reading the data section (file without a usable summary)."""
         summary = Summary()
-        problems: List[str] = []
+        problems: list[str] = []
         for chunk in self.chunks(problems.append, summary):
             for channel_id, group in chunk.groups.items():
                 if group.log_times.size == 0:
@@ -709,7 +710,7 @@ class McapFile:
         return summary, problems
 
     # data section -------------------------------------------------------------------------------
-    def chunks(self, on_problem, summary: Optional[Summary] = None,
+    def chunks(self, on_problem, summary: Summary | None = None,
                unchunked_batch: int = GATHER_BYTES) -> Iterator[RawChunk]:
         """Yield the file's messages chunk by chunk, in file order.
 
@@ -814,7 +815,7 @@ class McapFile:
             yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
         yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record, gathered.on_problem)
 
-    def chunks_at(self, offsets, on_problem, summary: Optional[Summary] = None) -> Iterator[RawChunk]:
+    def chunks_at(self, offsets, on_problem, summary: Summary | None = None) -> Iterator[RawChunk]:
         """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
 
         Reads each chunk with the MessageIndex records that follow it: what
@@ -863,7 +864,7 @@ class McapFile:
             raise McapProblem(f'its records do not match their CRC ({size} bytes, corrupt)')
         return [records, signed(start_time), {}, pos]
 
-    def _finish_chunk(self, records: bytes, start_time: int, indexes: Dict[int, bytes], pos: int,
+    def _finish_chunk(self, records: bytes, start_time: int, indexes: dict[int, bytes], pos: int,
                       on_record, on_problem=None) -> RawChunk:
         indexed = indexes and -1 not in indexes
         if indexed:
@@ -877,7 +878,7 @@ class McapFile:
                        f'{chunk.message_count()} (corrupt)')
         return chunk
 
-    def _salvage(self, stream: BinaryIO, cut: int, on_record) -> Optional[RawChunk]:
+    def _salvage(self, stream: BinaryIO, cut: int, on_record) -> RawChunk | None:
         """The readable beginning of a chunk cut off by the end of the file, if any."""
         stream.seek(cut)
         content = stream.read(min(self.size - cut, MAX_CHUNK_BYTES))
@@ -978,20 +979,20 @@ class ReadCheck:
     rosbag2's writer leaves a log time of 0 out of it.
     """
 
-    def __init__(self, summary: Optional[Summary], summary_problem: str = ''):
+    def __init__(self, summary: Summary | None, summary_problem: str = ''):
         self.summary = summary if summary is not None and summary.complete else None
         self.summary_problem = summary_problem
-        self.counts: Dict[int, int] = {}
+        self.counts: dict[int, int] = {}
         self.undefined = 0
 
-    def add(self, chunk: RawChunk, channels: Dict[int, Channel]) -> None:
+    def add(self, chunk: RawChunk, channels: dict[int, Channel]) -> None:
         """Count one chunk's messages (``channels``: those defined so far)."""
         for channel_id, group in chunk.groups.items():
             self.counts[channel_id] = self.counts.get(channel_id, 0) + int(group.log_times.size)
             if channel_id not in channels:
                 self.undefined += int(group.log_times.size)
 
-    def lines(self) -> List[str]:
+    def lines(self) -> list[str]:
         """One line per kind of disagreement (none for an intact file)."""
         lines = [self.summary_problem] if self.summary_problem else []
         if self.undefined:
@@ -1010,7 +1011,7 @@ class ReadCheck:
         return lines
 
 
-def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int, bytes]]:
+def raw_messages(path, on_problem) -> Iterator[tuple[Channel | None, int, int, bytes]]:
     """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
 
     ``channel`` is None for a message whose channel is nowhere defined.
@@ -1041,7 +1042,7 @@ def raw_messages(path, on_problem) -> Iterator[Tuple[Optional[Channel], int, int
         on_problem(line)
 
 
-def bare_read(path) -> Tuple[int, int]:
+def bare_read(path) -> tuple[int, int]:
     """Read, decompress and split every chunk without decoding; return (messages, message bytes).
 
     The cheapest pass that touches every message of an MCAP file: the baseline

@@ -53,7 +53,8 @@ from dataclasses import dataclass
 import math
 from pathlib import Path
 import tempfile
-from typing import Any, Callable, cast, Dict, Iterator, List, Optional
+from typing import Any, cast
+from collections.abc import Callable, Iterator
 
 import numpy as np
 import yaml
@@ -83,7 +84,7 @@ class TopicInfo:
     name: str
     msgtype: str
     message_count: int
-    layout_problem: Optional[str] = None   # why it is not the contract layout (contract topics only)
+    layout_problem: str | None = None   # why it is not the contract layout (contract topics only)
 
 
 # -- sources: where raw messages come from ---------------------------------------------------------
@@ -94,7 +95,7 @@ class _RawChunk:
 
     start_time: int                                   # ns log time; nothing later in the file is earlier
     buffer: np.ndarray
-    groups: Dict[str, mcap_file.MessageGroup]         # by topic
+    groups: dict[str, mcap_file.MessageGroup]         # by topic
     progress: float                                   # fraction of the recording read
 
 
@@ -108,11 +109,11 @@ class _Source:
 
     def __init__(self, label: str):
         self.label = label
-        self.problems: List[str] = []
-        self.topics: Dict[str, TopicInfo] = {}
-        self.definitions: Dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
-        self.start_time: Optional[int] = None
-        self.end_time: Optional[int] = None
+        self.problems: list[str] = []
+        self.topics: dict[str, TopicInfo] = {}
+        self.definitions: dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        self.start_time: int | None = None
+        self.end_time: int | None = None
 
     def list_topic(self, name: str, msgtype: str, count: int, definition: tuple) -> None:
         """Add ``count`` messages of ``name`` to the listing (the first file to name a topic defines it)."""
@@ -122,21 +123,21 @@ class _Source:
         self.topics[name] = TopicInfo(name, msgtype, count)
         self.definitions[name] = definition
 
-    def widen_span(self, start: Optional[int], end: Optional[int]) -> None:
+    def widen_span(self, start: int | None, end: int | None) -> None:
         """Widen ``start_time``/``end_time`` (ns) to cover ``start``/``end`` (None: not known)."""
         if start is not None:
             self.start_time = start if self.start_time is None else min(self.start_time, start)
         if end is not None:
             self.end_time = end if self.end_time is None else max(self.end_time, end)
 
-    def layout_problem(self, topic: str, kind: str) -> Optional[str]:
+    def layout_problem(self, topic: str, kind: str) -> str | None:
         """Why ``topic`` cannot carry the contract's ``kind`` (None: it can)."""
         msgtype, encoding, text, message_encoding = self.definitions[topic]
         if message_encoding != 'cdr':
             return f'has message encoding {message_encoding!r}, not cdr'
         return check_layout(kind, msgtype, encoding, text)
 
-    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+    def raw_chunks(self, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         """The messages of ``topics`` in chunks; damage is reported through ``on_problem``."""
         raise NotImplementedError
 
@@ -144,11 +145,11 @@ class _Source:
 class _McapSource(_Source):
     """One or more MCAP files (a bare file, or the files of a rosbag2 directory)."""
 
-    def __init__(self, label: str, paths: List[Path]):
+    def __init__(self, label: str, paths: list[Path]):
         super().__init__(label)
         self.paths = paths
-        self.files: List[mcap_file.McapFile] = []
-        self.listings: List[mcap_file.Summary] = []       # per file: its summary, or what a scan found
+        self.files: list[mcap_file.McapFile] = []
+        self.listings: list[mcap_file.Summary] = []       # per file: its summary, or what a scan found
         for path in paths:
             try:
                 mcap = mcap_file.McapFile(path)
@@ -181,7 +182,7 @@ class _McapSource(_Source):
             self.widen_span(summary.start_time, summary.end_time)
 
     @staticmethod
-    def _horizons(layouts: List[mcap_file.DataLayout]) -> List[tuple]:
+    def _horizons(layouts: list[mcap_file.DataLayout]) -> list[tuple]:
         """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
 
         For a file read in file order although its chunks go back in log time
@@ -190,7 +191,7 @@ class _McapSource(_Source):
         grows with how far back chunks go.
         """
         later = np.iinfo(np.int64).max
-        horizons: List[tuple] = []
+        horizons: list[tuple] = []
         for layout in reversed(layouts):
             times = layout.times
             suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
@@ -199,8 +200,8 @@ class _McapSource(_Source):
             later = int(suffix[0])
         return horizons[::-1]
 
-    def _groups(self, chunk: mcap_file.RawChunk, channels: Dict[int, mcap_file.Channel],
-                topics: List[str]) -> Dict[str, mcap_file.MessageGroup]:
+    def _groups(self, chunk: mcap_file.RawChunk, channels: dict[int, mcap_file.Channel],
+                topics: list[str]) -> dict[str, mcap_file.MessageGroup]:
         groups = {}
         for channel_id, group in chunk.groups.items():
             channel = channels.get(channel_id)
@@ -217,7 +218,7 @@ class _McapSource(_Source):
         summary.channels.update(self.listings[index].channels)
         return summary
 
-    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+    def raw_chunks(self, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         """The files' chunks in log time order of their start: in file order, or by seeking when they go back."""
         layouts = [mcap_file.data_layout(mcap.path, mcap.size) for mcap in self.files]
         times = np.concatenate([layout.times for layout in layouts] + [np.zeros(0, np.int64)])
@@ -232,7 +233,7 @@ class _McapSource(_Source):
             chunks = self._chunks_in_file_order(layouts, times, topics, on_problem, read)
         return self._checked_counts(chunks, read, on_problem)
 
-    def _checked_counts(self, chunks: Iterator[_RawChunk], checks: List[mcap_file.ReadCheck],
+    def _checked_counts(self, chunks: Iterator[_RawChunk], checks: list[mcap_file.ReadCheck],
                         on_problem: ProblemSink) -> Iterator[_RawChunk]:
         """``chunks``, then what each file's :class:`~.mcap_file.ReadCheck` found wrong, one line each."""
         yield from chunks
@@ -240,8 +241,8 @@ class _McapSource(_Source):
             for line in check.lines():
                 on_problem(self._about(mcap, line))
 
-    def _chunks_by_start_time(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
-                              on_problem: ProblemSink, read: List[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
+    def _chunks_by_start_time(self, layouts: list[mcap_file.DataLayout], times: np.ndarray, topics: list[str],
+                              on_problem: ProblemSink, read: list[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
         """Chunks that go back in time (reversed, shuffled, topic after topic), read by seeking.
 
         Sorted by their start times across all files, as the reference readers
@@ -264,8 +265,8 @@ class _McapSource(_Source):
                 yield _RawChunk(chunk.start_time, chunk.buffer, self._groups(chunk, summary.channels, topics),
                                 (chunk.start_time - first) / span)
 
-    def _chunks_in_file_order(self, layouts: List[mcap_file.DataLayout], times: np.ndarray, topics: List[str],
-                              on_problem: ProblemSink, read: List[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
+    def _chunks_in_file_order(self, layouts: list[mcap_file.DataLayout], times: np.ndarray, topics: list[str],
+                              on_problem: ProblemSink, read: list[mcap_file.ReadCheck]) -> Iterator[_RawChunk]:
         back = float(np.max(np.maximum.accumulate(times) - times)) * 1e-9 if times.size else 0.0
         if back > HELD_BACK_SECONDS:
             on_problem(f'chunks go back in log time by up to {back:.0f} s and cannot be read by seeking (damaged, '
@@ -283,7 +284,7 @@ class _McapSource(_Source):
             done += mcap.size
 
 
-def _pack(messages: List[tuple], progress: float) -> _RawChunk:
+def _pack(messages: list[tuple], progress: float) -> _RawChunk:
     """``(topic, log_time, bytes)`` in log time order -> one pseudo-chunk."""
     sizes = np.fromiter((len(m[2]) for m in messages), np.int64, len(messages))
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
@@ -319,9 +320,9 @@ class _SqliteSource(_Source):
     whichever is larger).
     """
 
-    def __init__(self, label: str, paths: List[Path], compression: str = ''):
+    def __init__(self, label: str, paths: list[Path], compression: str = ''):
         super().__init__(label)
-        self.files: List[sqlite_file.SqliteFile] = []
+        self.files: list[sqlite_file.SqliteFile] = []
         self._scratch = tempfile.TemporaryDirectory(prefix='prsm_lube_bag_') if compression == 'file' else None
         for path in paths:
             try:
@@ -341,7 +342,7 @@ class _SqliteSource(_Source):
                 self.list_topic(topic.name, topic.msgtype, topic.message_count,
                                 (topic.msgtype, encoding, text, topic.serialization_format))
 
-    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+    def raw_chunks(self, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         wanted = set(topics)
 
         def messages():
@@ -378,7 +379,7 @@ class _RosbagsSource(_Source):
         except Exception as err:  # rosbags/sqlite3/yaml raise assorted types on damaged bags
             raise RecordingError(f'{path}: not a readable rosbag2 bag ({exception_text(err)})') from None
 
-    def raw_chunks(self, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+    def raw_chunks(self, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         from rosbags.rosbag2 import Reader
         streamed = dict.fromkeys(topics, 0)
 
@@ -400,7 +401,7 @@ class _RosbagsSource(_Source):
                            "(rosbags' Reader could not match the rest to metadata.yaml)")
 
 
-def _mcap_library_chunks(path: Path, topics: List[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
+def _mcap_library_chunks(path: Path, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
     """Reference reading of a bare ``.mcap`` file with the ``mcap`` package."""
     from mcap.reader import make_reader
     try:
@@ -489,7 +490,7 @@ def _with_metadata_counts(source, info: dict):
 
 # -- slicing -----------------------------------------------------------------------------------------
 
-def _merge(parts: List[Decoded], kind: str) -> Decoded:
+def _merge(parts: list[Decoded], kind: str) -> Decoded:
     """Parts of one topic -> one, ordered by log time (stable)."""
     if len(parts) == 1:
         merged = parts[0]
@@ -497,7 +498,7 @@ def _merge(parts: List[Decoded], kind: str) -> Decoded:
         columns = {name: np.concatenate([p.columns[name] for p in parts]) for name in parts[0].columns}
         merged = Decoded(np.concatenate([p.log_times for p in parts]), columns)
         if kind == VIBRATION:
-            ragged = cast(List[Any], parts)   # vibration parts carry their samples and offsets
+            ragged = cast(list[Any], parts)   # vibration parts carry their samples and offsets
             merged.samples = np.concatenate([p.samples[p.offsets[0]:p.offsets[-1]] for p in ragged])
             counts = np.concatenate([np.diff(p.offsets) for p in ragged])
             merged.offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])
@@ -523,7 +524,7 @@ def _cut(decoded: Decoded, count: int):
     return head, rest
 
 
-def _batch(kind: str, pieces: List[Decoded]) -> InputBatch:
+def _batch(kind: str, pieces: list[Decoded]) -> InputBatch:
     """Pieces of one topic in log time order -> one batch."""
     decoded = pieces[0] if len(pieces) == 1 else _merge(pieces, kind)
     columns = decoded.columns
@@ -542,15 +543,15 @@ def _batch(kind: str, pieces: List[Decoded]) -> InputBatch:
 class _Slicer:
     """Holds decoded data until a whole time slice is complete, then hands it out."""
 
-    def __init__(self, kinds: List[str], slice_ns: int):
+    def __init__(self, kinds: list[str], slice_ns: int):
         self.kinds = kinds
         self.slice_ns = slice_ns
-        self.origin: Optional[int] = None
-        self.pending: Dict[str, List[Decoded]] = {kind: [] for kind in kinds}
+        self.origin: int | None = None
+        self.pending: dict[str, list[Decoded]] = {kind: [] for kind in kinds}
         #: end of the last slice handed out, ns; messages before it can no longer be placed
-        self.handed_out: Optional[int] = None
+        self.handed_out: int | None = None
         #: messages left out because they came after their slice was handed out, by kind
-        self.too_late: Dict[str, int] = dict.fromkeys(kinds, 0)
+        self.too_late: dict[str, int] = dict.fromkeys(kinds, 0)
 
     def add(self, kind: str, decoded: Decoded):
         """Queue decoded messages; parts are kept in log time order."""
@@ -571,7 +572,7 @@ class _Slicer:
         else:
             parts.append(decoded)
 
-    def flush(self, safe: Optional[int]) -> Iterator[List[InputBatch]]:
+    def flush(self, safe: int | None) -> Iterator[list[InputBatch]]:
         """Slices that end at or before log time ``safe`` (all when None)."""
         pending = self.pending
         while True:
@@ -614,24 +615,24 @@ class Recording:
         self.namespace = namespace
         self._source = _open_source(self.path)
         #: every topic of the recording, by name
-        self.topics: Dict[str, TopicInfo] = self._source.topics
+        self.topics: dict[str, TopicInfo] = self._source.topics
         #: problems noticed while opening (e.g. a missing summary section), one line each
-        self.problems: List[str] = list(self._source.problems)
+        self.problems: list[str] = list(self._source.problems)
         for topic in self.topics.values():
             kind = self._kind_of(topic.name)
             if kind is not None:
                 topic.layout_problem = self._source.layout_problem(topic.name, kind)
         #: namespaces with a vibration topic of the VibrationBlock layout
-        self.actuators: List[str] = sorted(
+        self.actuators: list[str] = sorted(
             cast(str, namespace_of(t.name)) for t in self.topics.values()
             if namespace_of(t.name) is not None and t.layout_problem is None)
         #: contract topic of this namespace by kind (vibration, joint_states, axial_load, temperature)
-        self.selected: Dict[str, str] = {kind: topic_name(namespace, kind) for kind in KINDS
+        self.selected: dict[str, str] = {kind: topic_name(namespace, kind) for kind in KINDS
                                          if topic_name(namespace, kind) in self.topics}
         self._validate()
 
     @staticmethod
-    def _kind_of(topic: str) -> Optional[str]:
+    def _kind_of(topic: str) -> str | None:
         for kind in KINDS:
             if topic.endswith(('/' + kind, '_' + kind)):
                 return kind
@@ -658,12 +659,12 @@ class Recording:
         return f' ({self.problems[-1]})' if self.problems else ''
 
     @property
-    def start_time(self) -> Optional[float]:
+    def start_time(self) -> float | None:
         """Log time of the first message, s since the epoch (None if empty)."""
         return None if self._source.start_time is None else self._source.start_time * 1e-9
 
     @property
-    def end_time(self) -> Optional[float]:
+    def end_time(self) -> float | None:
         """Log time of the last message, s since the epoch (None if empty)."""
         return None if self._source.end_time is None else self._source.end_time * 1e-9
 
@@ -681,8 +682,8 @@ class Recording:
         lines.extend('  problem: ' + line for line in self.problems)
         return '\n'.join(lines)
 
-    def slices(self, on_problem: Optional[ProblemSink] = None, progress: Optional[Callable[[float], None]] = None,
-               slice_seconds: float = DEFAULT_SLICE_SECONDS, engine: str = 'fast') -> Iterator[List[InputBatch]]:
+    def slices(self, on_problem: ProblemSink | None = None, progress: Callable[[float], None] | None = None,
+               slice_seconds: float = DEFAULT_SLICE_SECONDS, engine: str = 'fast') -> Iterator[list[InputBatch]]:
         """The namespace's topics as lists of batches, one list per time slice, in log time order.
 
         ``on_problem`` gets each problem once, as one line, after all data has
@@ -700,7 +701,7 @@ class Recording:
                 self.problems.append(line)
 
         sink = on_problem or remember
-        problems: List[str] = []
+        problems: list[str] = []
         kinds = [kind for kind in KINDS if kind in self.selected]
         by_topic = {topic: kind for kind, topic in self.selected.items()}
         slicer = _Slicer(kinds, int(round(slice_seconds * 1e9)))
@@ -744,7 +745,7 @@ class Recording:
         for line in problems:
             sink(line)
 
-    def _damage_lines(self, spikes: Dict[str, int], rate_spikes: int, streamed: Dict[str, int]) -> List[str]:
+    def _damage_lines(self, spikes: dict[str, int], rate_spikes: int, streamed: dict[str, int]) -> list[str]:
         """Lines for damage the container does not show: stamp and rate spikes, messages metadata.yaml lists unread.
 
         A sqlite3 row whose topic id changed leaves its topic without a trace
@@ -764,7 +765,7 @@ class Recording:
                              '(damaged storage: the rest are lost)')
         return lines
 
-    def _raw_chunks(self, topics: List[str], on_problem: ProblemSink, engine: str) -> Iterator[_RawChunk]:
+    def _raw_chunks(self, topics: list[str], on_problem: ProblemSink, engine: str) -> Iterator[_RawChunk]:
         source = self._source
         if engine == 'rosbags':
             if isinstance(source, _McapSource) and self.path.is_file():
@@ -782,7 +783,7 @@ def open_recording(path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
     return Recording(path, namespace)
 
 
-def find_actuators(path) -> List[str]:
+def find_actuators(path) -> list[str]:
     """Namespaces (or prefixes) of a recording that carry a vibration topic of the VibrationBlock layout."""
     source = _open_source(Path(path))
     actuators = []
@@ -793,8 +794,8 @@ def find_actuators(path) -> List[str]:
     return sorted(actuators)
 
 
-def iter_batches(path, namespace: str = DEFAULT_NAMESPACE, on_problem: Optional[ProblemSink] = None,
-                 slice_seconds: float = DEFAULT_SLICE_SECONDS) -> Iterator[List[InputBatch]]:
+def iter_batches(path, namespace: str = DEFAULT_NAMESPACE, on_problem: ProblemSink | None = None,
+                 slice_seconds: float = DEFAULT_SLICE_SECONDS) -> Iterator[list[InputBatch]]:
     """Shorthand: ``open_recording(path, namespace).slices(on_problem, slice_seconds=...)``."""
     return open_recording(path, namespace).slices(on_problem, slice_seconds=slice_seconds)
 
@@ -811,7 +812,7 @@ def bare_read(path) -> int:
     return count
 
 
-def topic_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+def topic_messages(path, on_problem: ProblemSink | None = None) -> Iterator[tuple]:
     """Every message of any recording as ``(topic, log_time, data)``, undecoded; per topic in reading order.
 
     Raises :class:`InputError` (one line naming the file) when it cannot be opened.
@@ -825,12 +826,12 @@ def topic_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[t
                 yield topic, log_time, bytes(buffer[start:start + length])
 
 
-def list_topics(path) -> Dict[str, TopicInfo]:
+def list_topics(path) -> dict[str, TopicInfo]:
     """Every topic of a recording with its type and message count, by name; InputError if it is unusable."""
     return _open_source(Path(path)).topics
 
 
-def raw_messages(path, on_problem: Optional[ProblemSink] = None) -> Iterator[tuple]:
+def raw_messages(path, on_problem: ProblemSink | None = None) -> Iterator[tuple]:
     """Every message of a bare ``.mcap`` file in file order: ``(topic, sequence, log_time, data)``, undecoded.
 
     ``topic`` is None for a message on a channel defined nowhere in the file.

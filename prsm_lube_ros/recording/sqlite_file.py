@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 import sqlite3
-from typing import Callable, Dict, Iterator, List, Optional, Tuple
+from collections.abc import Callable, Iterator
 
 from ..errors import exception_text
 from .mcap_file import McapProblem, zstd_frame
@@ -39,8 +39,8 @@ class SqliteTopic:
     msgtype: str
     serialization_format: str
     message_count: int = 0
-    start_time: Optional[int] = None   # ns
-    end_time: Optional[int] = None     # ns
+    start_time: int | None = None   # ns
+    end_time: int | None = None     # ns
 
 
 def _connect(path: Path) -> sqlite3.Connection:
@@ -67,8 +67,8 @@ class SqliteFile:
         self.path = Path(path)
         #: every message blob is a zstd frame (rosbag2's ``compression_mode: message``)
         self.compressed_messages = compressed_messages
-        self.topics: Dict[int, SqliteTopic] = {}
-        self.definitions: Dict[str, Tuple[str, str]] = {}   # type -> (encoding, text)
+        self.topics: dict[int, SqliteTopic] = {}
+        self.definitions: dict[str, tuple[str, str]] = {}   # type -> (encoding, text)
         connection = _connect(self.path)
         try:
             for topic_id, name, msgtype, serialization in connection.execute(
@@ -89,7 +89,7 @@ class SqliteFile:
         finally:
             connection.close()
 
-    def messages(self, topic_ids: List[int], on_problem: Callable[[str], None]) -> Iterator[Tuple[int, int, bytes]]:
+    def messages(self, topic_ids: list[int], on_problem: Callable[[str], None]) -> Iterator[tuple[int, int, bytes]]:
         """``(topic_id, timestamp, data)`` of the given topics in timestamp order.
 
         A database that fails part way ends the stream with one line to ``on_problem``.

@@ -199,7 +199,7 @@ class ContractBagWriter:
             self._writer = None
         shutil.rmtree(self._bag_dir, ignore_errors=True)
 
-    def __enter__(self) -> 'ContractBagWriter':
+    def __enter__(self) -> ContractBagWriter:
         """Context manager entry."""
         return self
 

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, fields
 import math
-from typing import Any, Sequence, TypeVar
+from typing import Any, TypeVar
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -116,7 +117,7 @@ class Effects:
         return result
 
     @classmethod
-    def from_dict(cls, mapping: dict | None) -> 'Effects':
+    def from_dict(cls, mapping: dict | None) -> Effects:
         """Inverse of :meth:`as_dict` (derived entries are ignored)."""
         values = {}
         for name, params in (mapping or {}).items():

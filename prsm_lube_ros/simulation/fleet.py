@@ -33,7 +33,8 @@ import datetime
 import json
 import math
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -116,7 +117,7 @@ class ActuatorService:
 
 
 def _iso(seconds: float) -> str:
-    return datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).isoformat(timespec='seconds')
+    return datetime.datetime.fromtimestamp(seconds, datetime.UTC).isoformat(timespec='seconds')
 
 
 def _reference(out_dir: Path, rig: RigConfig, plan: ExperimentPlan, seed: int, storage: str) -> None:
@@ -184,7 +185,7 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
             t = day * DAY + hour * 3600.0
             theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
             path = bag_path(out_dir / actuator_id, datetime.datetime.fromtimestamp(
-                epoch + t, datetime.timezone.utc).strftime('%Y%m%dT%H%M%S'), storage)
+                epoch + t, datetime.UTC).strftime('%Y%m%dT%H%M%S'), storage)
             if write_recordings:
                 require(not path.exists(), f'{path}: exists already, not overwriting')
                 path.parent.mkdir(parents=True, exist_ok=True)
@@ -223,7 +224,7 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
             'daily_revolutions': [float(v) for v in daily[:fleet.days]]})
     document = {'generator': 'prsm_lube_ros.simulation.fleet', 'seed': seed, 'storage': storage,
                 'epoch': epoch, 'law': 'theta_oil = theta_r exp(-N_rev / N_d), N_rev since the last lubrication',
-                'fleet': {key: value for key, value in asdict(fleet).items()},
+                'fleet': {**asdict(fleet)},
                 'thresholds': [float(v) for v in thresholds], 'reference': bag_path(Path('.'), 'reference',
                                                                                     storage).name,
                 'actuators': truth_actuators}

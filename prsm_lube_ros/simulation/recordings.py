@@ -7,7 +7,7 @@ from dataclasses import asdict, replace
 import json
 import math
 from pathlib import Path
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Iterator
+from collections.abc import Iterator
 
 import numpy as np
 from scipy.signal import iirpeak, lfilter

@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 import math
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 
 from ..config_file import build, coerce_fields, read_section

@@ -16,7 +16,7 @@ from prsm_lube_ros.estimation.pipeline import RecordingAssessment
 from prsm_lube_ros.estimation.windowing import Window
 from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, STAGING
 
-START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.timezone.utc).timestamp()
+START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.UTC).timestamp()
 
 
 def assessment(path, theta, runs=2):

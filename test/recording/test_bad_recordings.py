@@ -40,7 +40,7 @@ def copy_with_defects(source, target):
     with Reader(source) as reader:
         vib = [c for c in reader.connections if c.topic.endswith('/vibration')][0]
         load = [c for c in reader.connections if c.topic.endswith('/axial_load')][0]
-        blocks = [m for m in reader.messages(connections=[vib])]
+        blocks = [*reader.messages(connections=[vib])]
         zero_load_until = blocks[0][1] + 30_000_000_000  # the first run (100 r/min, ~23 s) and its rewind
         with Writer(target, version=Writer.VERSION_LATEST, storage_plugin=StoragePlugin.MCAP) as writer:
             conns = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=store) for c in reader.connections}

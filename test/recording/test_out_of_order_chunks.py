@@ -138,7 +138,7 @@ def test_chunks_in_any_order_give_the_same_slices_while_streaming(plain_and_grou
     bf.reorder_chunks(small, moved, (lambda n: range(n)[::-1]) if order == 'reversed' else rng.permutation)
     with open(moved, 'rb') as stream:
         assert sum(1 for _ in make_reader(stream).iter_messages()) > 0      # still valid for the reference
-    starts = [time for time in mcap_file.data_layout(moved, moved.stat().st_size).times]
+    starts = [*mcap_file.data_layout(moved, moved.stat().st_size).times]
     assert sum(b < a for a, b in zip(starts, starts[1:])) > len(starts) // 3
     expected = list(open_recording(small).slices(slice_seconds=1.0))
     problems = []

@@ -59,5 +59,5 @@ def merge(batches):
                               np.concatenate([b.sample_rates for b in batches]),
                               np.concatenate(([0], np.cumsum(counts))), samples)
     cls = type(first)
-    fields = [f for f in first.__dataclass_fields__]
+    fields = [*first.__dataclass_fields__]
     return cls(*[np.concatenate([getattr(b, f) for b in batches]) for f in fields])

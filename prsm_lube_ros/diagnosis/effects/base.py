@@ -22,7 +22,7 @@ attribute names (``speed``, ``load``, ``position``, ``revolutions``,
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -77,7 +77,7 @@ class Effect(Extension):
         """The fitted effect in words, with its size."""
         return self.physics
 
-    def variants(self) -> Sequence['Effect']:
+    def variants(self) -> Sequence[Effect]:
         """Physical forms of this effect (same id), each fitted; the engine chooses one by BIC.
 
         A form with more parameters than the best of the fewest-parameter forms
