@@ -21,6 +21,8 @@ import time
 from typing import Any
 from collections.abc import Callable
 
+__all__ = ['LEGACY_AGE', 'is_stale', 'process_alive', 'remove_stale', 'temporary_prefix', 'write_atomically']
+
 #: s after which a temporary without a writer pid is taken as stale
 LEGACY_AGE = 600.0
 _OWNED = re.compile(r'\.(\d+)\.[^.]+\.tmp$')

@@ -19,6 +19,8 @@ from .errors import ConfigError, InputError
 from .validation import as_number
 
 
+__all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'read_section', 'read_yaml']
+
 #: Largest YAML file read, bytes, and deepest nesting of mappings and lists it may have: configuration and
 #: calibration files are a few kB and a few levels deep; these bounds keep a hostile file from costing
 #: memory, time or the interpreter's recursion limit.

@@ -18,6 +18,12 @@ what the default namespace gives and ``-r __ns:=/ema_left`` moves every name.
 from __future__ import annotations
 
 
+__all__ = ['AXIAL_LOAD_TOPIC', 'CALIBRATE', 'CALIBRATE_SERVICE', 'DEFAULT_NAMESPACE', 'DIAGNOSTICS_TOPIC',
+           'JOINT_STATE', 'JOINT_STATES_TOPIC', 'LUBRICATION_STATE', 'LUBRICATION_STATE_TOPIC', 'LUBRICATION_TASK',
+           'PACKAGE', 'SCREW_JOINT', 'SOURCE_TASK', 'TEMPERATURE', 'TEMPERATURE_TOPIC', 'VIBRATION_BLOCK',
+           'VIBRATION_BLOCK_LAYOUT', 'VIBRATION_TOPIC', 'WRENCH_STAMPED', 'namespace_of', 'status_name',
+           'topic_name']
+
 PACKAGE = 'prsm_lube_ros'
 VIBRATION_BLOCK = f'{PACKAGE}/msg/VibrationBlock'
 LUBRICATION_STATE = f'{PACKAGE}/msg/LubricationState'

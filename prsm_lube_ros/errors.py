@@ -17,6 +17,8 @@ This module imports nothing of the package.
 """
 from collections.abc import Callable
 
+__all__ = ['ConfigError', 'InputError', 'NotIdentifiable', 'ProblemSink', 'RecordingError', 'exception_text']
+
 #: Where a reader or pipeline sends each one-line problem it meets in otherwise usable input.
 ProblemSink = Callable[[str], None]
 

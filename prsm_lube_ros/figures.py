@@ -9,6 +9,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 
+__all__ = ['grouped_bars', 'history_with_forecast', 'live_theta']
+
+
 def _pyplot():
     import matplotlib
     matplotlib.use('Agg', force=False)

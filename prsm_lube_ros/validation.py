@@ -15,6 +15,10 @@ import math
 from .errors import ConfigError, InputError
 
 
+__all__ = ['as_number', 'finite_or_none', 'is_positive_number', 'reference_theta', 'require', 'require_all_positive',
+           'require_positive', 'utc_or_none']
+
+
 def is_positive_number(value) -> bool:
     """True for a real number (not a bool) that is finite and > 0."""
     return (isinstance(value, (int, float)) and not isinstance(value, bool)

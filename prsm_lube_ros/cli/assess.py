@@ -8,6 +8,9 @@ import sys
 from .common import add_recording_options, EXIT_USER_ERROR
 
 
+__all__ = ['add_command', 'run']
+
+
 def add_command(subparsers) -> None:
     """Add ``assess`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(

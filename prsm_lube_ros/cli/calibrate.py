@@ -6,6 +6,9 @@ from __future__ import annotations
 from .common import add_band_option, add_recording_options
 
 
+__all__ = ['add_command', 'run']
+
+
 def add_command(subparsers) -> None:
     """Add ``calibrate`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(

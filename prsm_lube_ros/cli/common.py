@@ -13,6 +13,9 @@ import sys
 from ..errors import ConfigError
 from ..validation import finite_or_none
 
+__all__ = ['EXIT_USER_ERROR', 'add_band_option', 'add_recording_options', 'percent_updater', 'progress_bar',
+           'read_recordings', 'warn', 'write_json']
+
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
 

@@ -16,6 +16,9 @@ from __future__ import annotations
 import sys
 
 
+__all__ = ['add_command', 'run']
+
+
 def add_command(subparsers) -> None:
     """Add ``demo`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(

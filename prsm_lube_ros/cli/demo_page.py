@@ -12,6 +12,8 @@ import html
 import os
 from pathlib import Path
 
+__all__ = ['STYLE', 'write_page']
+
 STYLE = """
 body { font-family: sans-serif; max-width: 60em; margin: 2em auto; padding: 0 1em; color: #222; }
 h2 { border-bottom: 1px solid #ccc; padding-bottom: .2em; }

@@ -36,6 +36,9 @@ import shutil
 import time
 import numpy as np
 
+__all__ = ['LIVE_TOLERANCE', 'StepResult', 'URGENT', 'concealed_effect', 'diagnosis_step', 'fleet_step', 'live_step',
+           'run_command']
+
 #: Largest distance of the live median theta_Oil after the calibration from the truth.
 LIVE_TOLERANCE = 0.03
 #: Actuators of the trend's table whose true crossing is checked against their interval.

@@ -6,6 +6,9 @@ from __future__ import annotations
 import math
 
 
+__all__ = ['add_command', 'run']
+
+
 def add_command(subparsers) -> None:
     """Add ``diagnose`` to the ``prsm-lube`` subcommands."""
     from .common import add_band_option, add_recording_options

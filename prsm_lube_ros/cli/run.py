@@ -23,6 +23,8 @@ import sys
 
 from ..errors import InputError
 
+__all__ = ['BRIDGE_MODULE', 'CONFIG_FILES', 'add_command', 'cmd_run', 'default_config_files', 'parse_override']
+
 BRIDGE_MODULE = 'prsm_lube_ros.nodes.sensor_bridge'
 CONFIG_FILES = ('estimator.yaml', 'sensor_bridge.yaml')
 

@@ -4,6 +4,9 @@
 from __future__ import annotations
 
 
+__all__ = ['add_command', 'run']
+
+
 def add_command(subparsers) -> None:
     """Add ``simulate`` to the ``prsm-lube`` subcommands."""
     from ..physics.effects import effect_ids

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 from .common import EXIT_USER_ERROR
 
+__all__ = ['BY_DAYS', 'TrendOptions', 'add_command', 'run']
+
 #: days after the as-of date of the default ``--by`` date
 BY_DAYS = 30.0
 

@@ -44,6 +44,8 @@ from scipy import stats
 from ..estimation.calibration import condition_labels
 from ..validation import finite_or_none
 
+__all__ = ['LOF_P', 'LOF_TOLERANCE', 'LackOfFit', 'REPEAT_ADVICE', 'SETUP_SCATTER', 'lack_of_fit', 'run_conditions']
+
 #: p-value below which lack of fit is significant.
 LOF_P = 0.01
 #: Smallest relative excess RMS per run that counts as a material lack of fit.

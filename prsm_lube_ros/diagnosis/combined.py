@@ -8,6 +8,8 @@ import numpy as np
 from .effects import Effect
 
 
+__all__ = ['CombinedEffect', 'GRID']
+
 #: Starts of each effect paired in the multi-start grid of a joint fit.
 GRID = 3
 

@@ -30,6 +30,8 @@ import numpy as np
 from .effects import Effect
 from .locate import Location, time_segment
 
+__all__ = ['CAUSES', 'EmpiricalTerm', 'LOG_BOUND', 'causes', 'empirical_terms']
+
 #: Causes of each shape, in words.
 CAUSES = {
     'step': ('a step in time is what a change of the set-up between two runs gives: the accelerometer re-seated, '

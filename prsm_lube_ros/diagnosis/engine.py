@@ -82,6 +82,11 @@ from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector
 from .locate import locate, Location, SIGNIFICANCE
 from .table import WindowTable
 
+__all__ = ['ADEQUATE', 'AMBIGUOUS', 'BIC_MARGIN', 'CANNOT_TELL', 'COLLINEAR', 'CONFOUNDED', 'Candidate',
+           'Confounding', 'Diagnosis', 'EVIDENCE_TOLERANCE', 'EmpiricalFit', 'FORM_MARGIN', 'FORM_TIE',
+           'LOCATED_BIC_TOLERANCE', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN', 'SecondEffect', 'Status',
+           'TIE_RATIO', 'UNEXPLAINED', 'confounding', 'diagnose_table', 'drift_correlation']
+
 #: BIC improvement (effective sample size) a candidate needs.
 BIC_MARGIN = 10.0
 #: Relative fall of the held-out error a candidate needs.

@@ -24,7 +24,8 @@ from ..errors import InputError
 from .empirical import causes
 from .engine import Diagnosis, Status
 from .fitting import ModelFit, predict_log
-from .locate import COVARIATE_UNITS
+
+__all__ = ['LABELS', 'write_report']
 
 LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revolutions since start of recording',
           'time': 'time since start of recording, s', 'temperature': 'temperature, degC',
@@ -310,6 +311,3 @@ def write_report(diagnosis: Diagnosis, folder) -> Path:
     page = folder / 'index.html'
     page.write_text(_html(markdown))
     return page
-
-
-__all__ = ['write_report', 'COVARIATE_UNITS']

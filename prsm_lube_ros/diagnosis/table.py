@@ -26,6 +26,8 @@ from ..errors import InputError
 from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
+__all__ = ['COLUMNS', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'table_from_windows']
+
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
 #: Columns every table has, in SI units (temperature in degC, time in s).

@@ -63,6 +63,8 @@ from .calibration import Calibration
 from .domain import domain_flag
 from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
 
+__all__ = ['Assessor', 'RunAssessment', 'THETA_PLAUSIBLE_MAX', 'WindowAssessment', 'theta_range_flag']
+
 #: Highest theta_Oil taken as a lubrication state (1 = reference; the paper's stages span 0.72-1).
 THETA_PLAUSIBLE_MAX = 1.5
 

@@ -45,6 +45,12 @@ from .domain import CalibrationDomain
 from .run_scatter import estimate_run_scatter, ols_covariance, RunScatter
 from .windowing import MIN_AXIAL_LOAD, usable_windows
 
+__all__ = ['CONSTANTS', 'C_LAMBDA_IDENTIFIED', 'Calibration', 'LEVEL_TOLERANCE', 'MIN_SPARE_CONDITIONS',
+           'MIN_WINDOWS', 'SETPOINT_TOLERANCE', 'calibration_flags', 'check_identifiable', 'condition_labels',
+           'fit_constants', 'fit_windows', 'form_advice', 'form_flag', 'form_testable', 'merged_setpoints',
+           'operating_conditions', 'operating_levels', 'replicated_conditions', 'run_level_covariance', 'scale_flag',
+           'scatter_flags', 'sign_flags']
+
 #: Relative tolerance within which two speeds or loads count as one operating level.
 LEVEL_TOLERANCE = 0.05
 #: Fewest windows for a fit with standard errors (three constants and one degree of freedom).

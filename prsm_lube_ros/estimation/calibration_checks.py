@@ -37,6 +37,8 @@ from ..errors import ConfigError
 from ..physics.vibration_model import acceleration_amplitude
 from ..recording.plausibility import MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED
 
+__all__ = ['MIN_PLAUSIBLE_RMS', 'OPTIONAL_FIGURES', 'check_calibration', 'check_document']
+
 #: Smallest window RMS (m/s^2) the constants may predict at their own reference conditions: 10 micro-g,
 #: the noise floor of an IEPE accelerometer (the paper's 100 mV/g sensor).
 MIN_PLAUSIBLE_RMS = 1e-4

@@ -25,6 +25,9 @@ from .conditioning import AnalysisBand, RAW_BAND_TEXT
 from .domain import CalibrationDomain
 from .run_scatter import RunScatter
 
+__all__ = ['FORMAT', 'VERSION', 'band_note', 'calibration_from_dict', 'calibration_to_dict', 'load_calibration',
+           'save_calibration']
+
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
 

@@ -55,6 +55,10 @@ import numpy as np
 
 from ..errors import InputError
 
+__all__ = ['ANTI_ALIAS_MARGIN', 'AnalysisBand', 'COMMON_BAND_HIGH', 'CONTINUITY_BLOCK_SHARE', 'CONTINUITY_PERIODS',
+           'DEFAULT_BAND', 'HIGHPASS_CORNER', 'HIGHPASS_ORDER', 'HighPassFilter', 'LOWEST_ORDER_FREQUENCY',
+           'RAW_BAND_TEXT', 'band_mean_square', 'band_text', 'rate_refusal', 'spectrum_segment']
+
 #: Lower band edge and high-pass corner, Hz: 0.3 x shaft order 1 at the paper's slowest 100 r/min.
 HIGHPASS_CORNER = 0.5
 #: Butterworth order of the streaming high-pass (the IMU source's gravity removal).

@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+__all__ = ['CalibrationDomain', 'SPEED_LOAD_MARGIN', 'TEMPERATURE_MARGIN', 'domain_flag']
+
 #: Relative margin on speed and load ranges (as ``calibration.LEVEL_TOLERANCE``: levels closer are one).
 SPEED_LOAD_MARGIN = 0.05
 #: Margin on the temperature range, K.

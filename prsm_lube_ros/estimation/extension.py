@@ -21,6 +21,9 @@ from ..errors import ConfigError
 from ..physics.effects import extension as effect_extension
 
 
+__all__ = ['eq22_inputs', 'window_covariates']
+
+
 def window_covariates(windows: Sequence, stroke: float | None = None) -> SimpleNamespace:
     """Covariate arrays of :class:`~prsm_lube_ros.estimation.windowing.Window` objects, named as in the window table.
 

@@ -45,6 +45,9 @@ from typing import Any
 
 from ..errors import InputError
 
+__all__ = ['ERROR', 'HealthMonitor', 'HealthStatus', 'HealthThresholds', 'LEVEL_NAMES', 'OK', 'REASON_WORDS',
+           'STALE', 'WARN', 'format_value', 'out_of_range', 'outside_domain', 'theta_level', 'uncalibrated']
+
 OK = 0
 WARN = 1
 ERROR = 2

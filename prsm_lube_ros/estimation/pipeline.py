@@ -24,6 +24,10 @@ from .conditioning import AnalysisBand, band_text
 from .domain import CalibrationDomain
 from .windowing import MIN_AXIAL_LOAD, usable_windows, Window, WindowBuilder, WindowSettings
 
+__all__ = ['ASSESSMENT_SLICE_SECONDS', 'RecordingAssessment', 'RecordingWindows', 'analysis_settings',
+           'assess_recording', 'assessment_json', 'calibrate_recordings', 'recording_windows', 'require_usable',
+           'with_band_and_domain']
+
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
 #: overhead stops mattering (an hour: 0.63 s CPU with 10 s slices, 0.34 s with 60 s; nothing gained
 #: beyond), short enough that memory stays flat (a 60 s slice of 4 kHz float32 samples is about 1 MB).

@@ -47,6 +47,9 @@ import math
 
 import numpy as np
 
+__all__ = ['ASSUMED_RUN_STD', 'MAX_PREDICTIVE_FACTOR', 'MAX_VARIANCE_RATIO', 'ONE_SIGMA_QUANTILE', 'RunScatter',
+           'estimate_run_scatter', 'ols_covariance']
+
 #: Run scatter (relative, ln units) assumed when the runs cannot estimate it: the middle of the 1-4 % seen on rigs.
 ASSUMED_RUN_STD = 0.03
 #: Largest variance factor for the t of few degrees of freedom (that of one degree of freedom, rounded down).

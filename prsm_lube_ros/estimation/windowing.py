@@ -42,6 +42,10 @@ from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AX
                                       plausible_durations, plausible_magnitudes, plausible_rates,
                                       plausible_temperatures, rate_problem, TEMPERATURE_RANGE)
 
+__all__ = ['AT_REST', 'BLOCKS_LOST', 'GATING_STREAMS', 'MIN_AXIAL_LOAD', 'NO_LOAD', 'NO_SPEED', 'NO_VIBRATION',
+           'SPANS_RUNS', 'SPEED_CHANGING', 'UNSTEADY_KINDS', 'Window', 'WindowBuilder', 'WindowSettings',
+           'assessable', 'not_assessable_reason', 'usable_windows']
+
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
 

@@ -52,6 +52,8 @@ import numpy as np
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
 
+__all__ = ['NONE', 'confusion', 'main', 'run_case', 'write_outputs']
+
 NONE = 'none'
 
 

@@ -29,6 +29,10 @@ import sys
 import time
 
 
+__all__ = ['backtest_history', 'backtest_summary', 'compare_with_truth', 'coverage_rows', 'coverage_table', 'main',
+           'simulate_and_assess', 'synthetic_points']
+
+
 def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, jobs: int = 1,
                         scheduler: str | None = None, storage: str = 'mcap') -> dict:
     """Simulate the fleet into ``out/fleet``, calibrate, assess into ``out/history``; return timings and counts."""

@@ -28,6 +28,8 @@ from ..estimation.pipeline import assess_recording, assessment_json, calibrate_r
 from ..estimation.windowing import WindowSettings
 from ..physics.actuator import Actuator
 
+__all__ = ['REFERENCE_TOLERANCE', 'RPM', 'STAGE_TOLERANCE', 'condition_label', 'run_demo']
+
 #: Tolerances of the paper's claims as the issue states them.
 STAGE_TOLERANCE = 0.03
 REFERENCE_TOLERANCE = 0.02

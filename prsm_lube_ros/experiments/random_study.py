@@ -35,6 +35,10 @@ from ..physics.effects.resonance import band_position
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
 
+__all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
+           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_rng', 'confusion_markdown', 'run_random_case',
+           'simulate_case', 'summarise', 'truth_form', 'write_random_outputs']
+
 NONE, TWO = 'none', 'two'
 #: Kinds with physics outside the diagnosis catalogue, and the covariate diagnose must locate for each: a step of
 #: the amplitude in time (the sensor re-seated) and a factor on the loaded return traverses (direction of travel).

@@ -36,6 +36,11 @@ import numpy as np
 from ..simulation.nuisances import RecordingNuisances
 from ..simulation.rig_config import ExperimentPlan, RigConfig, RPM
 
+__all__ = ['BLOCK_LENGTHS', 'CONTACT_MODE_SHARE', 'CaseSetup', 'JOINT_STATE_RATES', 'LOAD_COUNTS', 'LOAD_RATES',
+           'LOAD_SPAN', 'LOST_BLOCKS', 'LOWEST_LOAD', 'LOWEST_SPEED_RPM', 'REPEATED_STAMPS', 'RUN_SCATTER',
+           'RUN_WANDER', 'SAMPLE_RATES', 'SPEED_COUNTS', 'SPEED_SPAN', 'STAMP_JITTER', 'TEMPERATURE_RATES',
+           'draw_setup', 'recording_pairs']
+
 #: Vibration sample rates drawn from, Hz (1-20 kHz, as data acquisition cards offer them).
 SAMPLE_RATES = (1000.0, 2000.0, 2560.0, 4000.0, 5000.0, 8000.0, 10000.0, 12800.0, 20000.0)
 #: Vibration block lengths drawn from, s (5-200 ms); pairs giving a fractional block size are skipped.

@@ -26,6 +26,9 @@ from ..physics.vibration_model import acceleration_amplitude, ModelConstants
 from ..simulation.effects import BACKGROUND_FRACTION_RANGE
 
 
+__all__ = ['BACKGROUND_SHARES', 'SyntheticPlan', 'synthetic_table']
+
+
 @dataclass(frozen=True)
 class SyntheticPlan:
     """What is recorded: conditions, repeats, run order, window length and noise."""

@@ -28,6 +28,9 @@ from .forecast import (ActuatorForecast, DAY, detect_relubrications, forecast_po
                        two_sided_quantile)
 
 
+__all__ = ['ActuatorBacktest', 'Backtest', 'CrossingScore', 'backtest']
+
+
 @dataclass(frozen=True)
 class CrossingScore:
     """A level's crossing seen after the cut: when, whether inside the interval, estimate error (days)."""

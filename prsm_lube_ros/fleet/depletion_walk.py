@@ -20,6 +20,10 @@ from collections.abc import Sequence
 import numpy as np
 
 
+__all__ = ['Increments', 'PROFILE_DROP', 'USAGE_SCATTER_GRID', 'depletion_state', 'drift_and_diffusion',
+           'fleet_usage_scatter', 'increments']
+
+
 @dataclass(frozen=True)
 class Increments:
     """Changes of ln theta between consecutive recordings of one lubrication cycle, and their covariance."""

@@ -59,6 +59,11 @@ from ..estimation.health import HealthThresholds
 from ..validation import finite_or_none as _finite, utc_or_none
 from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
 
+__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'INTERVAL', 'KILO', 'ODOMETER_REACH', 'RecordingPoint',
+           'crossing_interval_text', 'detect_relubrications', 'fit_depletion', 'fit_revolutions', 'forecast_history',
+           'forecast_points', 'forecast_summaries', 'forecast_summary', 'history_points', 'recording_points',
+           'two_sided_quantile', 'urgency_key']
+
 DAY = 86400.0            # s
 #: probability inside the stated forecast interval (the default of ``trend --level``)
 INTERVAL = 0.95

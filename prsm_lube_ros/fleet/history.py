@@ -70,6 +70,10 @@ from ..atomic_file import remove_stale, temporary_prefix, write_atomically
 from ..errors import ConfigError, InputError, RecordingError
 from ..validation import finite_or_none as _finite, utc_or_none as _utc
 
+__all__ = ['CALIBRATIONS', 'LAYOUT_VERSION', 'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS',
+           'UTC_TIME', 'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
+           'history_calibration', 'history_writer', 'read_table', 'register_calibration']
+
 TABLES = ('runs', 'windows')
 RECORDINGS, CALIBRATIONS, STAGING = 'recordings', 'calibrations', '.staging'
 LAYOUT_VERSION = '2'

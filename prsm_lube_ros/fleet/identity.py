@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 import datetime
 from collections.abc import Callable
 
+__all__ = ['SAME_RECORDING', 'Span', 'Timeline', 'assessment_span', 'clash_line', 'table_spans']
+
 #: s: spans whose start and end agree to within this are one recording stored twice
 SAME_RECORDING = 1.0
 

@@ -27,6 +27,10 @@ from ..estimation.pipeline import assess_recording, recording_windows, Recording
 from ..estimation.windowing import WindowSettings
 
 
+__all__ = ['BagJob', 'BagOutcome', 'TASKS_PER_WORKER', 'assess_bag', 'assess_bags', 'assess_batch', 'batches',
+           'outcomes_fingerprint']
+
+
 @dataclass(frozen=True)
 class BagOutcome:
     """What assessing one recording gave: the assessment and content hash, or the error in one line."""

@@ -24,6 +24,9 @@ import numpy as np
 from .forecast import ActuatorForecast, Crossing, DAY
 
 
+__all__ = ['CrossingStatus', 'PlannedCrossing', 'plan', 'plan_crossing', 'planner_text', 'probability_crossed_by']
+
+
 class CrossingStatus(Enum):
     """Where a level's crossing stands on the as-of date."""
 

@@ -22,6 +22,8 @@ import warnings
 
 from ..errors import InputError
 
+__all__ = ['CONNECT_TIMEOUT', 'LOCAL_SCHEDULER', 'MAX_HANDSHAKE', 'NotAScheduler', 'dask_client', 'probe_scheduler']
+
 LOCAL_SCHEDULER = 'local'
 #: s to connect to a scheduler and read its handshake (the whole probe)
 CONNECT_TIMEOUT = 10.0

@@ -20,6 +20,9 @@ import math
 from ..errors import ConfigError
 
 
+__all__ = ['OdometerReading', 'odometer_problems', 'odometer_readings', 'read_odometer', 'read_relubrications']
+
+
 def read_relubrications(path) -> dict[str, list[float]]:
     """``{actuator: [s since the epoch]}`` from a CSV of ``actuator,time`` lines (a header line is allowed)."""
     result: dict[str, list[float]] = {}

@@ -25,6 +25,8 @@ import threading
 
 from ..estimation.health import ERROR, OK, STALE, WARN
 
+__all__ = ['RATE_SLACK', 'RATE_SPAN', 'SourceHealth', 'SourceStatus']
+
 #: s over which the block rate is measured and losses count as recent.
 RATE_SPAN = 10.0
 #: A block rate this fraction below the expected one is WARN.

@@ -29,6 +29,8 @@ import numpy as np
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from ..recording.plausibility import plausible_durations, plausible_rates
 
+__all__ = ['Event', 'KINDS', 'Pacer', 'batch_events', 'recording_events', 'rig_block_events', 'stamps_ns']
+
 Event = tuple[float, str, int, tuple]
 KINDS = ('vibration', 'joint_states', 'axial_load', 'temperature')
 _NS = 1_000_000_000

@@ -19,6 +19,9 @@ from ..estimation.calibration import Calibration
 from ..estimation.windowing import WindowSettings
 from ..validation import reference_theta as checked_reference_theta
 
+__all__ = ['CalibrationOutcome', 'calibrate_from_request', 'recording_namespace', 'recordings_folder',
+           'reference_theta', 'resolve_bag_paths']
+
 _NAMESPACE = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*[/_]?')
 
 

@@ -31,6 +31,8 @@ import numpy as np
 
 from ..errors import InputError
 
+__all__ = ['DaqSettings', 'NiDaqAccelerometer', 'STANDARD_GRAVITY', 'import_nidaqmx']
+
 #: Standard gravity, m/s^2 per g.
 STANDARD_GRAVITY = 9.80665
 

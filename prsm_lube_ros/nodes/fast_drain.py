@@ -27,6 +27,9 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 
 
+__all__ = ['DrainedCallbackGroup', 'FastDrain', 'missing_api']
+
+
 class DrainedCallbackGroup(ReentrantCallbackGroup):
     """Callback group whose entities the executor never waits on: the node takes their messages itself."""
 

@@ -47,6 +47,8 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.conditioning import HighPassFilter
 
+__all__ = ['AXES', 'AssembledBlock', 'GAP_PERIODS', 'ImuBlockAssembler', 'PROBLEM_KINDS', 'RATE_WINDOW', 'check_axis']
+
 #: Intervals whose median is the measured sample period.
 RATE_WINDOW = 16
 #: An interval of this many periods or more is a gap (at least one sample lost).

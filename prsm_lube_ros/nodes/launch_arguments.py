@@ -15,6 +15,9 @@ import os
 
 from ..errors import InputError
 
+__all__ = ['BRIDGE_EXECUTABLE', 'BringupPlan', 'ESTIMATOR_EXECUTABLE', 'LAUNCH_ARGUMENTS', 'LOG_LEVELS', 'NodePlan',
+           'bringup_plan', 'flag']
+
 #: (name, default, description) of each launch argument.
 LAUNCH_ARGUMENTS = (
     ('namespace', 'prsm', 'namespace of both nodes: their topics, services and actions are relative names in it '

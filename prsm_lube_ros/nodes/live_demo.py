@@ -38,6 +38,9 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ..msg import LubricationState
 from ..srv import Calibrate
 
+__all__ = ['CALIBRATE_SERVICE', 'LiveResult', 'Observer', 'STATE_TOPIC', 'STATUS_PART', 'graph_environment',
+           'run_live_graph', 'stop_child', 'write_parameters']
+
 #: The contract's default namespace: topics and the service of the actuator ``prsm``.
 STATE_TOPIC = '/prsm/lubrication_state'
 CALIBRATE_SERVICE = '/prsm/calibrate'

@@ -102,6 +102,11 @@ from .fast_drain import FastDrain
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 
+__all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
+           'HEALTH_PARAMETERS', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME', 'PARAMETERS', 'STATE_QOS',
+           'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments', 'calibration_path',
+           'health_thresholds', 'join_batches', 'main', 'window_settings']
+
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
 

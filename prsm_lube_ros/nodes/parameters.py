@@ -31,6 +31,9 @@ from rclpy.parameter import Parameter
 
 from ..errors import InputError
 
+__all__ = ['DOUBLE', 'INTEGER', 'ParameterSpec', 'ReadOnlyAfterStartUp', 'declare_parameter_table',
+           'parameter_descriptor', 'resolved_names', 'same_value', 'value_problem']
+
 DOUBLE = ParameterType.PARAMETER_DOUBLE
 INTEGER = ParameterType.PARAMETER_INTEGER
 

@@ -31,6 +31,11 @@ from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatc
 #: Name of the screw's entry in ``JointState`` (CONTRACT.md).
 
 
+__all__ = ['Stamp', 'batch_messages', 'diagnostic_status', 'header_seconds', 'joint_state_msg', 'load_batch',
+           'lubrication_state_msg', 'screw_batch', 'stamp_seconds', 'status_level', 'temperature_batch',
+           'temperature_msg', 'time_from_ns', 'time_msg', 'vibration_batch', 'vibration_block_msg', 'wrench_msg']
+
+
 def stamp_seconds(stamp) -> float:
     """``builtin_interfaces/Time`` as float seconds since the epoch."""
     return stamp.sec + stamp.nanosec * 1e-9

@@ -96,6 +96,9 @@ from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, t
                           wrench_msg)
 from .startup import run_node
 
+__all__ = ['BridgeCore', 'MAX_IMU_DRAIN', 'ManagedSensorBridge', 'NODE_NAME', 'PARAMETERS', 'SIMULATOR_PARAMETERS',
+           'SOURCES', 'SensorBridge', 'create_node', 'main', 'main_managed', 'publisher_qos']
+
 NODE_NAME = 'sensor_bridge'
 SOURCES = ('playback', 'simulator', 'hardware', 'imu')
 

@@ -25,6 +25,8 @@ from rclpy.signals import SignalHandlerOptions
 
 from ..errors import InputError
 
+__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'build_node', 'init_ros', 'run_node', 'spin_until_stopped']
+
 #: Exit status of a node whose configuration or source cannot be used.
 EXIT_BAD_INPUT = 2
 #: Longest wait of the spin loop before it looks at the stop flag again [s].

@@ -18,6 +18,9 @@ from ..errors import InputError
 from ..validation import require_all_positive
 
 
+__all__ = ['Actuator', 'load_actuator']
+
+
 @dataclass(frozen=True)
 class Actuator:
     """One planetary roller screw and what it is made of."""

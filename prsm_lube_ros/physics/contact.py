@@ -41,6 +41,12 @@ from ..errors import InputError
 from ..validation import require_all_positive
 from .actuator import Actuator
 
+__all__ = ['MAX_ELLIPTICITY', 'PrincipalCurvatures', 'ThreadContact', 'contact_deformation', 'contact_normal_force',
+           'contact_stiffness', 'curvature_difference', 'curvature_difference_of_ellipticity', 'curvature_sum',
+           'deformation_per_force', 'effective_radii', 'elliptic_integrals', 'ellipticity', 'load_sharing_factor',
+           'normal_deformation', 'normal_stiffness', 'principal_curvatures', 'reduced_compliance',
+           'semi_major_axis_coefficient', 'stiffness_coefficient', 'thread_contact']
+
 #: Largest ellipticity a/b searched for; F(rho) closer to 1 than this allows is rejected.
 MAX_ELLIPTICITY = 1.0e6
 

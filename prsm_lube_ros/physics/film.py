@@ -31,6 +31,13 @@ from .contact import contact_deformation, contact_normal_force, load_sharing_fac
 from .kinematics import sliding_velocity_coefficient
 from .vibration_model import LOAD_EXPONENT, VELOCITY_EXPONENT
 
+__all__ = ['DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT', 'ELLIPTICITY_EXPONENT', 'HAMROCK_DOWSON_FACTOR',
+           'MATERIALS_EXPONENT', 'dimensionless_minimum_film', 'effective_modulus', 'film_constant', 'film_ratio',
+           'film_ratio_coefficient', 'film_thickness_from_dimensionless', 'fully_lubricated_film_thickness',
+           'hamrock_dowson_film_thickness', 'load_parameter', 'materials_parameter',
+           'oil_excitation_from_film_ratio', 'oil_viscosity', 'speed_parameter', 'starved_film_thickness',
+           'viscosity_at_temperature']
+
 #: Hamrock-Dowson point-contact minimum film (Eq. 8): leading factor and exponents.
 HAMROCK_DOWSON_FACTOR = 3.63
 MATERIALS_EXPONENT = 0.49

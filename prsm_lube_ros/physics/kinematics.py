@@ -21,6 +21,12 @@ from ..validation import require_positive
 from .actuator import Actuator
 
 
+__all__ = ['actuator_sliding_velocity', 'roller_contact_velocity', 'roller_revolution_speed',
+           'roller_rotation_speed', 'screw_contact_velocity', 'sliding_speed', 'sliding_velocity',
+           'sliding_velocity_coefficient', 'sliding_velocity_coefficient_from_geometry',
+           'sliding_velocity_from_contact_velocities']
+
+
 def roller_revolution_speed(screw_speed, screw_diameter: float, roller_diameter: float):
     """Eq. 1: roller revolution (carrier) speed ``omega_P = d_S / (2 (d_S + d_R)) omega_S``.
 

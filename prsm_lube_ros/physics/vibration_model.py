@@ -18,6 +18,11 @@ import math
 
 import numpy as np
 
+__all__ = ['FREQUENCY_EXPONENT', 'LOAD_EXPONENT', 'ModelConstants', 'STIFFNESS_EXPONENT', 'VELOCITY_EXPONENT',
+           'acceleration_amplitude', 'acceleration_from_displacement', 'design_matrix', 'excitation_scale',
+           'film_speed_load_term', 'forced_response_amplitude', 'load_excitation_factor', 'lubrication_index',
+           'oil_excitation_factor', 'quasi_static_amplitude', 'reduced_log_amplitude', 'stiffness_load_scale']
+
 #: Exponent of the sliding velocity in the Hamrock-Dowson film (Eq. 8, 9, 19).
 VELOCITY_EXPONENT = 0.68
 #: Exponent of the contact load in the Hamrock-Dowson film (Eq. 8, 9, 19).

@@ -19,6 +19,9 @@ import numpy as np
 import numpy.typing as npt
 
 
+__all__ = ['AxialLoadBatch', 'InputBatch', 'ScrewStateBatch', 'TemperatureBatch', 'VibrationBatch', 'stamp_seconds']
+
+
 @dataclass(frozen=True)
 class VibrationBatch:
     """Consecutive ``VibrationBlock`` messages of one topic.

@@ -31,6 +31,9 @@ from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, JOINT_STATE, JOINT_STATE
 from .batches import stamp_seconds
 from .typestore import contract_typestore
 
+__all__ = ['COLUMNS', 'Decoded', 'KINDS', 'MAX_TEMPLATES', 'NotPlain', 'check_layout', 'decode_messages',
+           'embedded_types', 'layout_signature', 'ragged_take', 'rows_at']
+
 #: topic leaf name -> contract message type
 KINDS = {VIBRATION: VIBRATION_BLOCK, JOINT_STATES: JOINT_STATE, AXIAL_LOAD: WRENCH_STAMPED,
          TEMPERATURE_KIND: TEMPERATURE}

@@ -31,6 +31,14 @@ try:  # ISA-L's CRC-32 (same polynomial as zlib's): 3.3x zlib 1.2's here (benchm
 except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
     from zlib import crc32
 
+__all__ = ['Channel', 'DataLayout', 'FIRST_USER_OPCODE', 'GATHER_BYTES', 'MAGIC', 'MAX_CHUNK_BYTES',
+           'MESSAGE_HEADER', 'McapFile', 'McapProblem', 'MessageGroup', 'OP_CHANNEL', 'OP_CHUNK', 'OP_CHUNK_INDEX',
+           'OP_DATA_END', 'OP_FOOTER', 'OP_HEADER', 'OP_MESSAGE', 'OP_MESSAGE_INDEX', 'OP_SCHEMA', 'OP_STATISTICS',
+           'Opcode', 'RECORD_PREFIX', 'RawChunk', 'ReadCheck', 'SMALL_CHUNK_BYTES', 'SMALL_CHUNK_MESSAGES',
+           'SUMMARY_OPCODES', 'Schema', 'Summary', 'bare_read', 'data_layout', 'decompress', 'parse_channel',
+           'parse_schema', 'raw_messages', 'signed', 'split_indexed', 'split_records', 'split_sequential',
+           'walk_records', 'zstd_file', 'zstd_frame']
+
 _zstandard: ModuleType | None
 try:  # the zstandard package comes with ``mcap``; rosbags brings backports.zstd
     import zstandard as _zstandard

@@ -31,6 +31,11 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+__all__ = ['MAX_ACCELERATION', 'MAX_AXIAL_LOAD', 'MAX_BLOCK_SECONDS', 'MAX_SAMPLE_RATE', 'MAX_SCREW_SPEED',
+           'MIN_SAMPLE_RATE', 'RATE_SPIKE_FRACTION', 'STAMP_SPIKE_SECONDS', 'SpikeCount', 'TEMPERATURE_RANGE',
+           'duration_problem', 'plausible_durations', 'plausible_magnitudes', 'plausible_rates',
+           'plausible_temperatures', 'rate_problem']
+
 #: Vibration sample rates accepted, Hz.
 MIN_SAMPLE_RATE = 1.0
 MAX_SAMPLE_RATE = 1e6

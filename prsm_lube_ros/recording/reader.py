@@ -66,6 +66,9 @@ from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBat
 from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
 from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
+__all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'Recording', 'SQLITE_MAGIC', 'TopicInfo', 'bare_read',
+           'find_actuators', 'iter_batches', 'list_topics', 'open_recording', 'raw_messages', 'topic_messages']
+
 #: default length of one time slice, s of log time (the offline pipeline streams longer ones:
 #: :data:`prsm_lube_ros.estimation.pipeline.ASSESSMENT_SLICE_SECONDS`)
 DEFAULT_SLICE_SECONDS = 10.0

@@ -22,6 +22,8 @@ from collections.abc import Callable, Iterator
 from ..errors import exception_text
 from .mcap_file import McapProblem, zstd_frame
 
+__all__ = ['FETCH_ROWS', 'SqliteFile', 'SqliteProblem', 'SqliteTopic']
+
 #: rows fetched from sqlite3 at a time while streaming
 FETCH_ROWS = 4096
 

@@ -18,6 +18,9 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from ..contract import PACKAGE
 
 
+__all__ = ['contract_typestore', 'interface_dir', 'message_definition']
+
+
 def interface_dir() -> Path:
     """Folder holding ``msg/`` and ``srv/``.
 

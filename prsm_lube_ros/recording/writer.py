@@ -33,6 +33,8 @@ from ..contract import (AXIAL_LOAD_TOPIC, JOINT_STATE, JOINT_STATES_TOPIC, SCREW
 from ..errors import InputError
 from .typestore import contract_typestore
 
+__all__ = ['ContractBagWriter', 'STORAGE_FORMATS', 'bag_path', 'check_storage']
+
 #: Storage forms :class:`ContractBagWriter` can write.
 STORAGE_FORMATS = ('mcap', 'sqlite3', 'mcap-file')
 

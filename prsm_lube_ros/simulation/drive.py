@@ -13,6 +13,9 @@ from ..validation import require
 from .rig_config import ExperimentPlan, RigConfig
 
 
+__all__ = ['DriveProgram', 'Stroke', 'append_stroke', 'schedule_session']
+
+
 # ---------------------------------------------------------------------------------------------
 # Drive program: screw motion and applied load as piecewise polynomials of time
 # ---------------------------------------------------------------------------------------------

@@ -29,6 +29,13 @@ from ..physics.effects.position_dependent_stiffness import PositionDependentStif
 from ..physics.effects.resonance import Resonance
 from ..physics.effects.thermal_viscosity import LAWS as VISCOSITY_LAWS, ThermalViscosity
 
+__all__ = ['BACKGROUND_FRACTION_RANGE', 'DEPLETION_FALL_RANGE', 'DRAWN_ARRANGEMENTS', 'Effects',
+           'REFERENCE_VISCOSITY_RANGE', 'RESONANCE_BANDS', 'RESONANCE_BELOW_RATIO_RANGE', 'RESONANCE_DAMPING_RANGE',
+           'RESONANCE_INSIDE_RANGE', 'RESONANCE_RATIO_RANGE', 'STIFFNESS_CHANGE_RANGE', 'TEMPERATURE_RISE_RANGE',
+           'THERMAL_TIME_CONSTANT_RANGE', 'TONE_FREQUENCY_RANGE', 'VOGEL_DISTANCE_RANGE',
+           'draw_background_vibration', 'draw_lubricant_depletion', 'draw_position_dependent_stiffness',
+           'draw_resonance', 'draw_thermal_viscosity']
+
 #: Drawn range of the amplitude change over one stroke at the reference load (fraction).
 STIFFNESS_CHANGE_RANGE = (0.05, 0.30)
 #: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).

@@ -46,6 +46,8 @@ from .recordings import _blocks, _record, _streams, simulate_experiment
 from .rig_config import ExperimentPlan, RigConfig
 from .rig_acceleration import RigStream
 
+__all__ = ['ActuatorService', 'DAY', 'FleetPlan', 'ODOMETER_DAYS', 'simulate_fleet']
+
 DAY = 86400.0   # s
 #: each actuator's odometer reads this many days of its mean usage at the fleet's epoch
 ODOMETER_DAYS = 365

@@ -18,6 +18,9 @@ import numpy as np
 from ..validation import require
 
 
+__all__ = ['RecordingNuisances']
+
+
 @dataclass(frozen=True)
 class RecordingNuisances:
     """Recording faults the simulator adds (all off by default).

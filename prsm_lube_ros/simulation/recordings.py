@@ -22,6 +22,9 @@ from .rig_config import CHUNK_DURATION, ExperimentPlan, ProgressCallback, RigCon
 from .rig_acceleration import RigStream, thread_contact_amplitude
 
 
+__all__ = ['draw_effects', 'session_revolutions', 'simulate_endurance', 'simulate_experiment']
+
+
 # ---------------------------------------------------------------------------------------------
 # Recording
 # ---------------------------------------------------------------------------------------------

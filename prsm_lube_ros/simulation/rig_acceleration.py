@@ -17,6 +17,10 @@ from .effects import Effects
 from .rig_config import RigConfig, STANDSTILL_SPEED
 
 
+__all__ = ['RigBlock', 'RigChunk', 'RigSignalGenerator', 'RigStream', 'WANDER_TERMS', 'effective_load',
+           'expected_rms', 'resonator_energy', 'thread_contact_amplitude']
+
+
 # ---------------------------------------------------------------------------------------------
 # Truth: the amplitude the signal is scaled to
 # ---------------------------------------------------------------------------------------------

@@ -18,6 +18,9 @@ from ..physics.vibration_model import ModelConstants
 from ..validation import as_number, require
 
 
+__all__ = ['CHUNK_DURATION', 'ExperimentPlan', 'ProgressCallback', 'ROLLER_PASS', 'RPM', 'RigConfig',
+           'STANDSTILL_SPEED', 'load_experiment_plan', 'load_rig_config']
+
 RPM = 2.0 * math.pi / 60.0
 #: Harmonic order placeholder for the roller-pass order ``roller_count omega_P / omega_S`` (Eq. 1).
 ROLLER_PASS = 'roller_pass'

@@ -15,6 +15,9 @@ from ...physics.effects import background_vibration as law
 from ..locate import SHAPE_NOISE_FACTOR
 from .base import Effect, register
 
+__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'SHAPE_CONTRARY_FACTOR',
+           'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE']
+
 #: Bounds of B over the smallest recorded RMS.
 FRACTION_RANGE = (0.0, 1.5)
 #: Smallest share of the power at the lowest speed in fixed spectral lines that counts as evidence.

@@ -29,6 +29,9 @@ import numpy as np
 from ...physics.effects import Extension
 
 
+__all__ = ['Effect', 'register', 'registered']
+
+
 class Effect(Extension):
     """A candidate physical effect the paper's model leaves out, with how to fit it (subclass and register it).
 

@@ -22,6 +22,9 @@ import numpy as np
 from ...physics.effects import lubricant_depletion as law
 from .base import Effect, register
 
+__all__ = ['LINEAR_RATE_RANGE', 'LinearDepletion', 'LubricantDepletion', 'MIN_RESTS', 'RATE_RANGE', 'RECOVERY_RANGE',
+           'RecoveringDepletion', 'RecoveringLinearDepletion']
+
 #: Bounds of N_max / N_d (exponential: theta falls by 1 - exp(-x) over the longest recording).
 RATE_RANGE = (0.0, 3.0)
 #: Bounds of N_max / N_d for the linear form (theta stays above the law's floor).

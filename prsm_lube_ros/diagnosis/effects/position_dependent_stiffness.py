@@ -37,6 +37,9 @@ import numpy as np
 from ...physics.effects import position_dependent_stiffness as law
 from .base import Effect, register
 
+__all__ = ['FixedBeforeStartStiffness', 'FixedFixedStiffness', 'OFFSET_RANGE', 'PositionDependentStiffness',
+           'SCALE_RANGE']
+
 #: Bounds of c s = k_c s / (E A), the contact-to-shaft stiffness ratio over one stroke length of shaft.
 SCALE_RANGE = (0.0, 5.0)
 #: Bounds of a bearing offset over the stroke (bearing to the nearest end of travel).

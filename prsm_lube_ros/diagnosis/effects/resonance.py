@@ -28,6 +28,9 @@ import numpy as np
 from ...physics.effects import resonance as law
 from .base import Effect, register
 
+__all__ = ['BOTTOM_RATIO_RANGE', 'DAMPING_RANGE', 'REPORTED_ORDERS', 'Resonance', 'ResonanceBelowBand',
+           'ResonanceInBand', 'TOP_RATIO_RANGE']
+
 #: Bounds of the frequency ratio at the highest recorded speed (mode above the band).
 TOP_RATIO_RANGE = (0.05, 0.98)
 #: Bounds of the frequency ratio at the lowest recorded speed (mode below the band).

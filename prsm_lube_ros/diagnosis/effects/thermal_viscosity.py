@@ -19,6 +19,9 @@ import numpy as np
 from ...physics.effects import thermal_viscosity as law
 from .base import Effect, register
 
+__all__ = ['BETA_RANGE', 'LOG_VISCOSITY_RANGE', 'MIN_SPREAD', 'ThermalViscosity', 'VOGEL_DISTANCE_RANGE',
+           'VogelViscosity', 'WaltherViscosity']
+
 #: Bounds of the viscosity-temperature coefficient beta, 1/K (mineral oils: about 0.02-0.05).
 BETA_RANGE = (0.0, 0.15)
 #: Bounds of the Vogel distance D = T_ref - T_V, K (oils: about 80-200 K).

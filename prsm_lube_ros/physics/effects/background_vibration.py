@@ -31,6 +31,8 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 
 
+__all__ = ['BackgroundVibration', 'Extension', 'FORMS', 'Law', 'contact_amplitude', 'log_gain', 'total_amplitude']
+
 #: Spectral forms of the background (see module doc).
 FORMS = ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')
 

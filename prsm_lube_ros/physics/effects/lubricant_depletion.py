@@ -27,6 +27,9 @@ import numpy as np
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 
+__all__ = ['Extension', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'effective_revolutions',
+           'rest_durations', 'theta_factor']
+
 #: Forms of the loss (see module doc).
 FORMS = ('exponential', 'linear')
 #: Smallest supply factor the linear form falls to (a film of residual oil stays).

@@ -44,6 +44,10 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 from ..vibration_model import STIFFNESS_EXPONENT
 
+__all__ = ['ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law', 'MIN_FREE_LENGTH', 'PositionDependentStiffness',
+           'arrangement_ratios', 'compliance_ratio_profile', 'contact_stiffness_at', 'fixed_fixed_shaft_stiffness',
+           'series_stiffness_amplification', 'shaft_axial_stiffness', 'shaft_stiffness_for']
+
 #: Shortest free shaft length the law is evaluated at, m (the nut cannot sit on the bearing).
 MIN_FREE_LENGTH = 1e-3
 

@@ -32,6 +32,9 @@ from ...validation import require, require_all_positive
 from ..vibration_model import forced_response_amplitude
 
 
+__all__ = ['BAND_POSITIONS', 'Extension', 'Law', 'Resonance', 'band_position', 'magnification', 'natural_frequency']
+
+
 def magnification(frequency_ratio, damping_ratio):
     """``|H(r)| = 1 / sqrt((1 - r^2)^2 + (2 zeta r)^2)``: Eq. 13's forced response over Eq. 14's X0 = F0/K.
 

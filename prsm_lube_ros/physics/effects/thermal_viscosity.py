@@ -41,6 +41,10 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 from ..vibration_model import VELOCITY_EXPONENT
 
+__all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'ThermalViscosity', 'WALTHER_OFFSET', 'film_factor',
+           'law_viscosity_ratio', 'viscosity_ratio', 'vogel_viscosity_ratio', 'walther_slope',
+           'walther_viscosity_ratio']
+
 #: Viscosity-temperature laws (see module doc).
 LAWS = ('exponential', 'vogel', 'walther')
 #: degC to K.
