@@ -775,6 +775,18 @@ def _untestable_advice(test: LackOfFit) -> str:
     return REPEAT_ADVICE if test.dof_pure <= 0 else 'record more (speed, load) conditions'
 
 
+@dataclass
+class _Outcome:
+    """The verdict as :func:`diagnose_table` builds it, step by step."""
+
+    verdict: str = ADEQUATE
+    best: Candidate | None = None
+    second: SecondEffect | None = None
+    tied: list[str] = field(default_factory=list)
+    advice: str = ''
+    notes: list[str] = field(default_factory=list)
+
+
 def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis:
     """Run the whole diagnosis on a window table (see module doc)."""
     check_identifiable(table.speed, table.load)
@@ -786,120 +798,148 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     baseline = fit_model(table, None, folds)
     baseline_test = lack_of_fit(table, baseline.log_residual, baseline.n_params)
     location = locate(table, baseline.log_residual)
+    confounded_with = confounding(table)
+    correlation = drift_correlation(table)
+    out = _Outcome(notes=_plan_notes(table, baseline, folds, confounded_with, correlation))
+    candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
+    ranked = sorted([c for c in candidates if c.fit is not None], key=lambda c: cast(ModelFit, c.fit).cv_rmse)
+    earning = [c for c in ranked if c.status == Status.EARNS]
+    out.best = earning[0] if earning else (ranked[0] if ranked else None)
+    conditions = operating_conditions(table.speed, table.load)
+    if earning:
+        _settle_earning(table, earning, out, folds, location, correlation)
+    else:
+        _when_none_earns(table, ranked, baseline, baseline_test, location, folds, conditions, out)
+    _qualify_verdict(out, bool(confounded_with), conditions, baseline_test)
+    empirical = _empirical(table, baseline, location, folds)
+    _let_empirical_overrule(out, empirical)
+    chosen_test = _name_second_and_test(table, out, candidates, folds, location)
+    return Diagnosis(verdict=out.verdict, baseline=baseline, candidates=candidates, best=out.best,
+                     location=location, tied=out.tied, notes=out.notes, what_to_record=out.advice, table=table,
+                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
+                     second=out.second, empirical=empirical if out.verdict == UNEXPLAINED else None,
+                     temperature_revolutions=correlation)
+
+
+def _plan_notes(table, baseline: ModelFit, folds, confounded_with, correlation: float) -> list[str]:
+    """What the plan and the paper's model say before any candidate: unphysical constants, confounding, ..."""
     notes = []
     if baseline.unphysical():
         notes.append('the paper\'s model fits with unphysical constants (' + '; '.join(baseline.unphysical())
                      + '): evidence that its form misses something')
-    confounded_with = confounding(table)
-    confounded = bool(confounded_with)
-    conditions = operating_conditions(table.speed, table.load)
     notes.extend(c.note for c in confounded_with)
     if len(folds) < table.runs.size:
         notes.append(f'{table.runs.size - len(folds)} run(s) not held out: without them the constants '
                      'would not be identifiable')
-    correlation = drift_correlation(table)
     if math.isfinite(correlation):
         notes.append(f'temperature and revolutions over runs: r = {correlation:+.2f} '
                      f'({"collinear" if abs(correlation) >= COLLINEAR else "not collinear"})')
-    candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
-    fitted = [c for c in candidates if c.fit is not None]
-    ranked = sorted(fitted, key=lambda c: cast(ModelFit, c.fit).cv_rmse)
-    earning = [c for c in ranked if c.status == Status.EARNS]
-    best = earning[0] if earning else (ranked[0] if ranked else None)
-    second: SecondEffect | None
-    tied: list[str]
-    verdict, tied, advice, second = ADEQUATE, [], '', None
-    if earning:
-        assert best is not None  # earning[0]
-        verdict = best.effect.id
-        for runner in earning[1:]:
-            close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
-            if not close:
-                runner.status = Status.DROPPED
-                runner.reason += f'; explains less than {best.effect.id}'
-                continue
-            leader_adds, runner_adds = _pair_test(table, best, runner, folds)
-            if leader_adds and not runner_adds:
-                runner.status = Status.DROPPED
-                runner.reason += f'; adds nothing given {best.effect.id}'
-            elif runner_adds and not leader_adds:
-                best.status = Status.DROPPED
-                best.reason += f'; adds nothing given {runner.effect.id}'
-                best, verdict = runner, runner.effect.id
-            elif runner_adds and leader_adds:
-                notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
-            elif (loser := _held_out_tiebreak(table, best, runner, correlation)) is not None:
-                assert loser is not None  # the same call just returned one
-                collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
-                best = _settle_tie(best, runner, loser, notes,
-                                   f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
-                                   f'({collinearity})', f'{collinearity}, so the held-out runs decide')
-                verdict = best.effect.id
-            elif (loser := _spectral_tiebreak(table, location, best, runner)) is not None:
-                assert loser is not None  # the same call just returned one
-                best = _settle_tie(best, runner, loser, notes,
-                                   '; fits as well as {winner} but '
-                                   + (loser.evidence_against or 'the other has independent evidence'),
-                                   'decided by evidence from outside the fit')
-                verdict = best.effect.id
-            else:
-                tied = [best.effect.id, runner.effect.id]
-                verdict = AMBIGUOUS
-                advice = _separation_advice(best.effect, runner.effect)
-                collinear = ''
-                if {best.effect.covariate, runner.effect.covariate} == {'temperature', 'revolutions'} \
-                        and math.isfinite(correlation):
-                    collinear = (f' (temperature and revolutions are collinear over runs, r = {correlation:+.2f}; '
-                                 'pauses that let the nut cool while the revolutions stand still separate them)')
-                notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
+    return notes
+
+
+def _settle_earning(table, earning: list[Candidate], out: _Outcome, folds, location, correlation: float) -> None:
+    """Among candidates that earn alone: the one named, or a tie (``ambiguous``), each runner-up with its reason."""
+    best = earning[0]
+    out.verdict = best.effect.id
+    for runner in earning[1:]:
+        close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
+        if not close:
+            runner.status = Status.DROPPED
+            runner.reason += f'; explains less than {best.effect.id}'
+            continue
+        leader_adds, runner_adds = _pair_test(table, best, runner, folds)
+        if leader_adds and not runner_adds:
+            runner.status = Status.DROPPED
+            runner.reason += f'; adds nothing given {best.effect.id}'
+        elif runner_adds and not leader_adds:
+            best.status = Status.DROPPED
+            best.reason += f'; adds nothing given {runner.effect.id}'
+            best, out.verdict = runner, runner.effect.id
+        elif runner_adds and leader_adds:
+            out.notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
+        elif (loser := _held_out_tiebreak(table, best, runner, correlation)) is not None:
+            collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
+            best = _settle_tie(best, runner, loser, out.notes,
+                               f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
+                               f'({collinearity})', f'{collinearity}, so the held-out runs decide')
+            out.verdict = best.effect.id
+        elif (loser := _spectral_tiebreak(table, location, best, runner)) is not None:
+            best = _settle_tie(best, runner, loser, out.notes,
+                               '; fits as well as {winner} but '
+                               + (loser.evidence_against or 'the other has independent evidence'),
+                               'decided by evidence from outside the fit')
+            out.verdict = best.effect.id
+        else:
+            out.tied = [best.effect.id, runner.effect.id]
+            out.verdict = AMBIGUOUS
+            out.advice = _separation_advice(best.effect, runner.effect)
+            collinear = ''
+            if {best.effect.covariate, runner.effect.covariate} == {'temperature', 'revolutions'} \
+                    and math.isfinite(correlation):
+                collinear = (f' (temperature and revolutions are collinear over runs, r = {correlation:+.2f}; '
+                             'pauses that let the nut cool while the revolutions stand still separate them)')
+            out.notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
                              'neither adds anything given the other: the recording cannot tell them apart'
                              + collinear)
-                break
-    else:
-        pattern = location.located not in ('none', 'spectrum')
-        mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
-        if mismatch and not pattern and not form_testable(conditions):
-            # Three conditions fit the constants exactly: run scatter or unphysical constants are no evidence
-            # against the form on such a plan (unit-to-unit scatter moves the constants anywhere).
-            mismatch = False
-            found = baseline_test.finding or 'the constants are unphysical'
-            notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
+            break
+    out.best = best
+
+
+def _when_none_earns(table, ranked: list[Candidate], baseline: ModelFit, baseline_test: LackOfFit, location,
+                     folds, conditions: int, out: _Outcome) -> None:
+    """No candidate earns alone: two that only together explain a mismatch, ``unexplained``, or adequate."""
+    pattern = location.located not in ('none', 'spectrum')
+    mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
+    if mismatch and not pattern and not form_testable(conditions):
+        # Three conditions fit the constants exactly: run scatter or unphysical constants are no evidence
+        # against the form on such a plan (unit-to-unit scatter moves the constants anywhere).
+        mismatch = False
+        found = baseline_test.finding or 'the constants are unphysical'
+        out.notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
                          'well as a model error')
-        together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
-        if together is not None:
-            best, second = together
-            best.status = Status.EARNS
-            best.reason += f'; with {second.effect.id} it does: the two explain the mismatch only together'
-            verdict = best.effect.id
-        elif mismatch:
-            verdict = UNEXPLAINED
-            advice = _unexplained_advice(pattern, baseline_test)
-            notes.append(_mismatch_note(location, baseline_test, pattern))
-    if verdict == AMBIGUOUS and confounded:
-        advice = 'runs in random order of speed and load; ' + advice
-    if verdict == ADEQUATE and confounded:
-        verdict = AMBIGUOUS
-        advice = 'the same conditions with the runs in random order of speed and load'
-        notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
-                     'that follows time, revolutions or temperature would be absorbed by the speed and load laws: '
-                     'adequacy cannot be confirmed')
-    if verdict == ADEQUATE and not form_testable(conditions):
-        verdict = CANNOT_TELL
-        advice = form_advice(conditions)
-        notes.append(f'the paper\'s model fits, but {form_flag(conditions)}: adequacy cannot be confirmed')
-    if verdict in (ADEQUATE, CANNOT_TELL) and not baseline_test.testable and form_testable(conditions):
-        verdict = CANNOT_TELL
-        advice = _untestable_advice(baseline_test)
-        notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}; adequacy cannot be confirmed')
-    elif verdict == CANNOT_TELL and baseline_test.dof_pure <= 0:
-        advice += f'; {REPEAT_ADVICE}'
-        notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
-    empirical = _empirical(table, baseline, location, folds)
-    pair = second is not None and verdict == cast(Candidate, best).effect.id   # a second comes with a best
-    paired = cast(SecondEffect, second)   # read only when pair
+    together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
+    if together is not None:
+        out.best, out.second = together
+        out.best.status = Status.EARNS
+        out.best.reason += f'; with {out.second.effect.id} it does: the two explain the mismatch only together'
+        out.verdict = out.best.effect.id
+    elif mismatch:
+        out.verdict = UNEXPLAINED
+        out.advice = _unexplained_advice(pattern, baseline_test)
+        out.notes.append(_mismatch_note(location, baseline_test, pattern))
+
+
+def _qualify_verdict(out: _Outcome, confounded: bool, conditions: int, baseline_test: LackOfFit) -> None:
+    """What the plan cannot confirm: confounded run order, too few conditions, no lack-of-fit test."""
+    if out.verdict == AMBIGUOUS and confounded:
+        out.advice = 'runs in random order of speed and load; ' + out.advice
+    if out.verdict == ADEQUATE and confounded:
+        out.verdict = AMBIGUOUS
+        out.advice = 'the same conditions with the runs in random order of speed and load'
+        out.notes.append('the paper\'s model fits, but with the run order confounded with speed or load an effect '
+                         'that follows time, revolutions or temperature would be absorbed by the speed and load '
+                         'laws: adequacy cannot be confirmed')
+    if out.verdict == ADEQUATE and not form_testable(conditions):
+        out.verdict = CANNOT_TELL
+        out.advice = form_advice(conditions)
+        out.notes.append(f'the paper\'s model fits, but {form_flag(conditions)}: adequacy cannot be confirmed')
+    if out.verdict in (ADEQUATE, CANNOT_TELL) and not baseline_test.testable and form_testable(conditions):
+        out.verdict = CANNOT_TELL
+        out.advice = _untestable_advice(baseline_test)
+        out.notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}; adequacy cannot be confirmed')
+    elif out.verdict == CANNOT_TELL and baseline_test.dof_pure <= 0:
+        out.advice += f'; {REPEAT_ADVICE}'
+        out.notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
+
+
+def _let_empirical_overrule(out: _Outcome, empirical: EmpiricalFit | None) -> None:
+    """A named (or tied) effect gives way to an empirical term that predicts held-out runs better."""
+    best = out.best
+    pair = out.second is not None and best is not None and out.verdict == best.effect.id
+    paired = cast(SecondEffect, out.second)   # read only when pair
     followed = {best.effect.covariate} | ({paired.effect.covariate} if pair else set()) if best else set()
-    followed |= {registered()[name].covariate for name in tied if name in registered()}
-    if empirical is not None and best is not None and verdict in (best.effect.id, AMBIGUOUS) \
+    followed |= {registered()[name].covariate for name in out.tied if name in registered()}
+    if empirical is not None and best is not None and out.verdict in (best.effect.id, AMBIGUOUS) \
             and empirical.beats(paired.fit if pair else cast(ModelFit, best.fit), followed):
         named_fit = paired.fit if pair else cast(ModelFit, best.fit)
         empirical.overrules = best.effect.id
@@ -907,33 +947,36 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
                         f'{empirical.term.covariate} (held-out error {100 * named_fit.cv_rmse:.2f} % against '
                         f'{100 * empirical.fit.cv_rmse:.2f} %): the located shape is not its law')
-        verdict, second, tied = UNEXPLAINED, None, []
-        advice = 'a candidate for the located mismatch is missing from the catalogue'
-        notes.append(f'{best.effect.id} is not named: an empirical {empirical.term.form} in '
-                     f'{empirical.term.covariate} predicts held-out runs better')
-    if verdict == UNEXPLAINED and empirical is not None and empirical.earns:
-        notes.append(empirical.note)
-    chosen_test = None
-    if best is not None and verdict == best.effect.id:
-        if second is None:
-            second, tie = _second_effect(table, best, candidates, folds, location)
-            if tie:
-                a, b = tie
-                notes.append(f'{best.effect.id} leaves a mismatch that {a.effect.id} and {b.effect.id} explain '
+        out.verdict, out.second, out.tied = UNEXPLAINED, None, []
+        out.advice = 'a candidate for the located mismatch is missing from the catalogue'
+        out.notes.append(f'{best.effect.id} is not named: an empirical {empirical.term.form} in '
+                         f'{empirical.term.covariate} predicts held-out runs better')
+    if out.verdict == UNEXPLAINED and empirical is not None and empirical.earns:
+        out.notes.append(empirical.note)
+
+
+def _name_second_and_test(table, out: _Outcome, candidates, folds, location) -> LackOfFit | None:
+    """With one effect named: the second effect (forward selection) and the lack of fit of what is named."""
+    best = out.best
+    if best is None or out.verdict != best.effect.id:
+        return None
+    if out.second is None:
+        out.second, tie = _second_effect(table, best, candidates, folds, location)
+        if tie:
+            a, b = tie
+            out.notes.append(f'{best.effect.id} leaves a mismatch that {a.effect.id} and {b.effect.id} explain '
                              'equally well on top of it: no second effect is named')
-                advice = _separation_advice(a.effect, b.effect)
-        named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
-        final = best.fit if second is None else second.fit
-        assert final is not None  # the named candidate was fitted
-        if second is not None:
-            notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
+            out.advice = _separation_advice(a.effect, b.effect)
+    second = out.second
+    named = best.effect.id if second is None else f'{best.effect.id} with {second.effect.id}'
+    final = best.fit if second is None else second.fit
+    assert final is not None  # the named candidate was fitted
+    if second is not None:
+        out.notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
                          f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '
                          f'BIC {second.delta_bic:+.0f}')
-        chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
-        if chosen_test.significant:
-            notes.append(f'{named} leaves a misfit ({chosen_test.finding}): it explains part of the mismatch, not all')
-    return Diagnosis(verdict=verdict, baseline=baseline, candidates=candidates, best=best, location=location,
-                     tied=tied, notes=notes, what_to_record=advice, table=table,
-                     confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
-                     second=second, empirical=empirical if verdict == UNEXPLAINED else None,
-                     temperature_revolutions=correlation)
+    chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
+    if chosen_test.significant:
+        out.notes.append(f'{named} leaves a misfit ({chosen_test.finding}): it explains part of the mismatch, '
+                         'not all')
+    return chosen_test
