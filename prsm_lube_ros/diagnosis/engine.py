@@ -973,8 +973,7 @@ def _name_second_and_test(table, out: _Outcome, candidates, folds, location) -> 
     assert final is not None  # the named candidate was fitted
     if second is not None:
         out.notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
-                         f'{best.effect.id} leaves, held-out error {100 * second.gain:.0f} % lower, '
-                         f'BIC {second.delta_bic:+.0f}')
+                         f'{best.effect.id} leaves: {second.basis}')
     chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
     if chosen_test.significant:
         out.notes.append(f'{named} leaves a misfit ({chosen_test.finding}): it explains part of the mismatch, '
