@@ -138,7 +138,6 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
     else:
         given = {name: (params or {}).get(name) for name in effect}
     laws = {name: dict(p) if p is not None else _draw_effect(name, rng, plan) for name, p in given.items()}
-    stiff, res = laws.get('position_dependent_stiffness'), laws.get('resonance')
     heat, loss, noise_floor = (laws.get('thermal_viscosity'), laws.get('lubricant_depletion'),
                                laws.get('background_vibration'))
     conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
@@ -179,32 +178,8 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
                 temp = target + (temp - target) * math.exp(-plan.window / heat['tau'])
             position = (k + 0.5) * plan.window * nut_speed
             position = position if way > 0 else plan.stroke - position
-            theta = plan.theta
-            film = 1.0
-            if loss:
-                form = loss.get('form', 'exponential')
-                fall = -math.log1p(-loss['fall']) if form == 'exponential' else loss['fall']
-                theta *= float(depletion.theta_factor(depleted, fall / total_revs, form))
-            if heat:
-                film = float(thermal.film_factor(temp, plan.ambient, heat['beta'], heat.get('law', 'exponential'),
-                                                 heat.get('shape', math.nan)))
-            a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
-            amplitude = a22
-            if stiff and 'contact_ratio' in stiff:
-                # Any arrangement through the law: EA = 1, contact_ratio = k_c / (E A) in 1/m.
-                shaft = stiffness.shaft_stiffness_for(stiff['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
-                                                      plan.stroke, stiff['bearing_before'], stiff['bearing_after'])
-                contact = stiffness.contact_stiffness_at(load, stiff['contact_ratio'], float(np.mean(plan.loads)))
-                amplitude *= float(stiffness.series_stiffness_amplification(contact, shaft))
-            elif stiff:
-                length = stiff['free_length_start'] + (stiff['free_length_end']
-                                                       - stiff['free_length_start']) * position / plan.stroke
-                contact = stiffness.contact_stiffness_at(load, stiff['ratio_long'] / stiff['long_length'],
-                                                         float(np.mean(plan.loads)))
-                amplitude *= float(stiffness.series_stiffness_amplification(contact, 1.0 / length))
-            if res:
-                r = res['top_ratio'] * speed / res['top_speed']
-                amplitude *= float(resonance.magnification(r, res['damping_ratio']))
+            theta, film, a22, amplitude = _window_amplitude(plan, laws, speed, load, position, depleted,
+                                                            total_revs, temp)
             noise = factor * math.exp(run_gain + rng.normal(0.0, plan.window_noise))
             amplitude *= noise
             background = 0.0
@@ -268,3 +243,40 @@ def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, backgroun
             line(tone, tone_share * background ** 2)
         psd += floor_share * background ** 2 / 2000.0
     return psd * rng.chisquare(8, size=bins) / 8
+
+
+def _window_amplitude(plan: SyntheticPlan, laws: dict, speed: float, load: float, position: float,
+                      depleted: float, total_revs: float, temp: float) -> tuple[float, float, float, float]:
+    """One window's truth before noise: (theta, film factor, Eq. 22 amplitude, amplitude with the laws), m/s^2.
+
+    ``depleted``: effective revolutions of the depletion, of ``total_revs`` in the plan; ``temp`` degC.
+    """
+    stiff, res = laws.get('position_dependent_stiffness'), laws.get('resonance')
+    heat, loss = laws.get('thermal_viscosity'), laws.get('lubricant_depletion')
+    theta = plan.theta
+    film = 1.0
+    if loss:
+        form = loss.get('form', 'exponential')
+        fall = -math.log1p(-loss['fall']) if form == 'exponential' else loss['fall']
+        theta *= float(depletion.theta_factor(depleted, fall / total_revs, form))
+    if heat:
+        film = float(thermal.film_factor(temp, plan.ambient, heat['beta'], heat.get('law', 'exponential'),
+                                         heat.get('shape', math.nan)))
+    a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
+    amplitude = a22
+    if stiff and 'contact_ratio' in stiff:
+        # Any arrangement through the law: EA = 1, contact_ratio = k_c / (E A) in 1/m.
+        shaft = stiffness.shaft_stiffness_for(stiff['arrangement'], 1.0, math.sqrt(4 / math.pi), position,
+                                              plan.stroke, stiff['bearing_before'], stiff['bearing_after'])
+        contact = stiffness.contact_stiffness_at(load, stiff['contact_ratio'], float(np.mean(plan.loads)))
+        amplitude *= float(stiffness.series_stiffness_amplification(contact, shaft))
+    elif stiff:
+        length = stiff['free_length_start'] + (stiff['free_length_end']
+                                               - stiff['free_length_start']) * position / plan.stroke
+        contact = stiffness.contact_stiffness_at(load, stiff['ratio_long'] / stiff['long_length'],
+                                                 float(np.mean(plan.loads)))
+        amplitude *= float(stiffness.series_stiffness_amplification(contact, 1.0 / length))
+    if res:
+        r = res['top_ratio'] * speed / res['top_speed']
+        amplitude *= float(resonance.magnification(r, res['damping_ratio']))
+    return theta, film, a22, amplitude
