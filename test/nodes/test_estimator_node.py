@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 import pytest
-from spinning import SpinningContext
+from spinning import SpinningContext, torn_down
 
 rclpy = pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
@@ -163,13 +163,8 @@ class Graph(SpinningContext):
 
 @pytest.fixture
 def graph():
-    """A fresh ROS graph for one test, always torn down."""
-    g = Graph()
-    try:
-        yield g
-    finally:
-        g.close()
-    assert not g.errors, f'executor raised: {g.errors}'
+    """A fresh ROS graph for one test, always torn down (a callback that raised fails the test)."""
+    yield from torn_down(Graph())
 
 
 def call(graph, name, bag_paths, theta=1.0, persist=False, timeout=30, recording_namespace=''):

@@ -40,6 +40,7 @@ from prsm_lube_ros.simulation.rig_config import ExperimentPlan, RigConfig  # noq
 from prsm_lube_ros.estimation.windowing import WindowSettings  # noqa: E402
 from bridge_graph import BridgeGraph  # noqa: E402
 from polling import settle, stop_process, wait_for  # noqa: E402
+from spinning import torn_down  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -116,12 +117,8 @@ class Graph(BridgeGraph):
 
 @pytest.fixture
 def graph():
-    """A fresh ROS graph for one test, always torn down."""
-    g = Graph()
-    try:
-        yield g
-    finally:
-        g.close()
+    """A fresh ROS graph for one test, always torn down (a callback that raised fails the test)."""
+    yield from torn_down(Graph())
 
 
 def bridge_command(bag, *params):

@@ -73,3 +73,12 @@ def answered(send, what: str, timeout: float, attempts: int = ATTEMPTS):
             return future.result()
         future.cancel()
     raise AssertionError(f'no answer to {what} after {attempts} sends')
+
+
+def torn_down(side: SpinningContext):
+    """Fixture body: yield ``side`` to one test, then close it and fail if a callback raised meanwhile."""
+    try:
+        yield side
+    finally:
+        side.close()
+    assert not side.errors, f'executor raised: {side.errors}'
