@@ -275,18 +275,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     sigma = np.array([p.independent_std / p.theta_oil for p in points])
     shared = points[-1].calibration_std / points[-1].theta_oil     # common to all recordings, relative
     origin = times[0]
-    design = np.zeros((len(points), used.size + 1))
-    design[np.arange(len(points)), index] = 1.0
-    design[:, -1] = -(times - origin) / DAY
-    weights = 1.0 / sigma
-    solution, *_ = np.linalg.lstsq(design * weights[:, None], y * weights, rcond=None)
-    residual = y - design @ solution
-    dof = len(points) - design.shape[1]
-    chi2 = float(np.sum((residual * weights) ** 2))
-    covariance = np.linalg.pinv((design * weights[:, None]).T @ (design * weights[:, None]))
-    scaled = chi2 / dof > 1.0
-    if scaled:
-        covariance = covariance * (chi2 / dof)
+    solution, covariance, residual, dof, scaled = _fit_cycles(times - origin, y, sigma, index, used.size)
     rate = solution[-1]                                  # 1/day
     result.fit_rmse = float(np.sqrt(np.mean(residual ** 2)))
     rate_std = math.sqrt(covariance[-1, -1])
@@ -296,7 +285,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     last_level = solution[last]                          # ln a_last at t = origin
     result.theta_now = float(math.exp(last_level - rate * (times[-1] - origin) / DAY))
     rng = np.random.default_rng(seed)
-    pair = np.array([last, design.shape[1] - 1])
+    pair = np.array([last, used.size])
     block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
     draws = _posterior_draws(np.array([last_level, rate]), block, dof if scaled else 0, rng)
     walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
@@ -314,17 +303,8 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
             continue
         if result.state is not None:     # its own generator: the crossings above draw what they always drew
             result.passage_days[level] = _passage_draws(result, math.log(level), np.random.default_rng(seed + 1))
-        with np.errstate(divide='ignore', invalid='ignore'):
-            days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
-            quantiles = np.quantile(days, [tail, 1.0 - tail])
-        low, high = (float(origin + v * DAY) if math.isfinite(v) else None for v in quantiles)
-        estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
-        bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
-        if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
-            estimate = bracket[0]
-            low = bracket[1] if low is None else min(low, bracket[1])
-            high = None if high is None else max(high, bracket[2])
-        result.crossings.append(Crossing(float(level), estimate, low, high))
+        result.crossings.append(_crossing_seen_or_fitted(level, draws, tail, origin, last_level, rate,
+                                                         (times, y, sigma, cycles)))
     if odometer is not None:
         fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
     return result
@@ -332,6 +312,49 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
 
 #: revolutions per unit of the filter's axis against revolutions (keeps its numbers near those in days)
 KILO = 1000.0
+
+
+def _fit_cycles(since: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycle_index: np.ndarray,
+                cycle_count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, bool]:
+    """Weighted least squares of ln theta = ln a_c - rate t: one level per lubrication cycle, one rate.
+
+    ``since``: time since the first recording, s.
+    Returns ``(solution, covariance, residual, dof, scaled)``: levels then the
+    rate (1/day), their covariance (scaled by chi^2/dof when above 1, ``scaled``).
+    """
+    design = np.zeros((len(y), cycle_count + 1))
+    design[np.arange(len(y)), cycle_index] = 1.0
+    design[:, -1] = -since / DAY
+    weights = 1.0 / sigma
+    solution, *_ = np.linalg.lstsq(design * weights[:, None], y * weights, rcond=None)
+    residual = y - design @ solution
+    dof = len(y) - design.shape[1]
+    chi2 = float(np.sum((residual * weights) ** 2))
+    covariance = np.linalg.pinv((design * weights[:, None]).T @ (design * weights[:, None]))
+    scaled = chi2 / dof > 1.0
+    if scaled:
+        covariance = covariance * (chi2 / dof)
+    return solution, covariance, residual, dof, scaled
+
+
+def _crossing_seen_or_fitted(level: float, draws: np.ndarray, tail: float, origin: float, last_level: float,
+                             rate: float, series: tuple) -> Crossing:
+    """A crossing of ``level`` the recordings already show (bracketed), or where the fitted law and its draws put it.
+
+    ``series``: (times s, ln theta, its sigma, lubrication cycle) of the recordings.
+    """
+    with np.errstate(divide='ignore', invalid='ignore'):
+        days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
+        quantiles = np.quantile(days, [tail, 1.0 - tail])
+    low, high = (float(origin + v * DAY) if math.isfinite(v) else None for v in quantiles)
+    estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
+    times, y, sigma, cycles = series
+    bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
+    if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
+        estimate = bracket[0]
+        low = bracket[1] if low is None else min(low, bracket[1])
+        high = None if high is None else max(high, bracket[2])
+    return Crossing(float(level), estimate, low, high)
 
 
 def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarray, sigma: np.ndarray,
