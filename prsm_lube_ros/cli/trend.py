@@ -200,7 +200,7 @@ def _table(forecasts, plans, options: TrendOptions, with_odometer: bool) -> str:
 
 def _row(forecast, planned, with_odometer: bool) -> list[str]:
     """The cells of one actuator's row."""
-    from ..fleet.forecast import crossing_interval_text
+    from ..fleet.forecast_summary import crossing_interval_text
     from ..fleet.planner import planner_text
     if forecast.reason:
         return [forecast.actuator, str(len(forecast.points)), '–', '–', '–', forecast.reason]

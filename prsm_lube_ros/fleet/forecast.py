@@ -40,9 +40,8 @@ the estimator's ``warn_below`` and ``error_below``
 (:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).  With an
 odometer the same filter runs against revolutions (:func:`fit_revolutions`).
 
-:func:`forecast_summaries` is the one call for the estimator's diagnostics:
-every actuator it names from a history folder, the table read and the fleet's
-usage scatter fitted once; :func:`forecast_summary` does it for one.
+The diagnostics' and the trend table's words for a forecast are in
+:mod:`.forecast_summary`.
 """
 from __future__ import annotations
 
@@ -60,9 +59,9 @@ from ..validation import finite_or_none as _finite, utc_or_none
 from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
 
 __all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'INTERVAL', 'KILO', 'ODOMETER_REACH', 'RecordingPoint',
-           'crossing_interval_text', 'detect_relubrications', 'fit_depletion', 'fit_revolutions', 'forecast_history',
-           'forecast_points', 'forecast_summaries', 'forecast_summary', 'history_points', 'recording_points',
-           'two_sided_quantile', 'urgency_key']
+           'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk', 'forecast_history',
+           'forecast_points', 'history_points', 'history_readers', 'recording_points', 'two_sided_quantile',
+           'urgency_key', 'utc_minutes']
 
 DAY = 86400.0            # s
 #: probability inside the stated forecast interval (the default of ``trend --level``)
@@ -112,7 +111,7 @@ class Crossing:
         for name in ('time', 'low', 'high'):
             value = getattr(self, name)
             result[name] = value
-            result[f'{name}_utc'] = _utc(value)
+            result[f'{name}_utc'] = utc_minutes(value)
         return result
 
 
@@ -176,9 +175,9 @@ class ActuatorForecast:
         """Plain mapping for the trend JSON."""
         return {'actuator': self.actuator, 'reason': self.reason, 'tau_days': _finite(self.tau_days),
                 'tau_days_std': _finite(self.tau_days_std), 'theta_now': _finite(self.theta_now),
-                'last_recording': _finite(self.last_recording), 'last_recording_utc': _utc(self.last_recording),
+                'last_recording': _finite(self.last_recording), 'last_recording_utc': utc_minutes(self.last_recording),
                 'fit_rmse_ln': _finite(self.fit_rmse), 'recordings': len(self.points),
-                'relubrications': [{'time': t, 'time_utc': _utc(t)} for t in self.relubrications],
+                'relubrications': [{'time': t, 'time_utc': utc_minutes(t)} for t in self.relubrications],
                 'crossings': [c.as_json() for c in self.crossings],
                 'revolutions': {'depletion_revolutions': _finite(self.depletion_revolutions),
                                 'depletion_revolutions_std': _finite(self.depletion_revolutions_std),
@@ -189,7 +188,7 @@ class ActuatorForecast:
                             'recording_path': p.recording_path} for p in self.points]}
 
 
-def _utc(seconds) -> str | None:
+def utc_minutes(seconds) -> str | None:
     """ISO 8601 UTC to the minute of ``seconds`` since the epoch, None when not finite."""
     stamp = utc_or_none(seconds)
     return None if stamp is None else stamp.isoformat(timespec='minutes')
@@ -481,7 +480,7 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
 
 def history_points(history, *, on_problem=None, actuator: str | None = None) -> dict[str, list[RecordingPoint]]:
     """Each actuator's recording points from a history folder; :class:`InputError` when it has none."""
-    actuator_key, read_table = _history_readers()
+    actuator_key, read_table = history_readers()
     points = recording_points(read_table(history, 'runs', on_problem=on_problem))
     if not points:
         raise InputError(f'{history}: no assessed run in the history')
@@ -503,27 +502,27 @@ def forecast_points(points: Mapping[str, Sequence[RecordingPoint]], *, relubrica
     or partition key.  ``as_of`` keeps the points and relubrications up to
     that time (s since the epoch) only.
     """
-    actuator_key, _ = _history_readers()
+    actuator_key, _ = history_readers()
     given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
     odometers = {actuator_key(k): v for k, v in (odometers or {}).items()}
     if as_of is not None:
         points = {name: kept for name, items in points.items() if (kept := [p for p in items if p.time <= as_of])}
         given = {name: [t for t in times if t <= as_of] for name, times in given.items()}
-    found, scatter = _fleet_walk(points, given)
+    found, scatter = fleet_walk(points, given)
     names = [actuator_key(only)] if only is not None else list(points)
-    forecasts = [_fit_one(name, points.get(name, []), found.get(name, []), levels, scatter, odometers.get(name),
-                          confidence) for name in names]
+    forecasts = [fit_one(name, points.get(name, []), found.get(name, []), levels, scatter, odometers.get(name),
+                         confidence) for name in names]
     return sorted(forecasts, key=urgency_key)
 
 
-def _fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> tuple[dict[str, list[float]], float]:
+def fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> tuple[dict[str, list[float]], float]:
     """Each actuator's relubrications (given, else detected) and the fleet's usage scatter."""
     found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
              for name, items in points.items()}
     return found, fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
 
 
-def _fit_one(name, points, relubrications, levels, scatter, odometer, confidence=INTERVAL) -> ActuatorForecast:
+def fit_one(name, points, relubrications, levels, scatter, odometer, confidence=INTERVAL) -> ActuatorForecast:
     """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's."""
     try:
         return fit_depletion(name, points, relubrications=relubrications, levels=levels, usage_scatter=scatter,
@@ -562,76 +561,10 @@ def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[fl
                       np.array([p.independent_std / p.theta_oil for p in points]), cycles)
 
 
-def _history_readers():
+def history_readers():
     """``actuator_key`` and ``read_table`` of :mod:`.history`; an :class:`InputError` line without pyarrow."""
     try:
         from .history import actuator_key, read_table
     except ImportError as exc:
         raise InputError(f'reading the fleet history needs pyarrow ({exc}): pip install "pyarrow>=14"') from None
     return actuator_key, read_table
-
-
-def forecast_summaries(history, actuator_ids: Sequence[str], *, warn_below: float = HealthThresholds.warn_below,
-                       error_below: float = HealthThresholds.error_below) -> dict[str, dict[str, str]]:
-    """The forecast of each of ``actuator_ids`` as short key/value strings (diagnostics KeyValue lists).
-
-    One call per period for all of an estimator's actuators: the runs table
-    is read and the fleet's usage scatter fitted once.  Keys of each summary:
-    ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
-    ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
-    ``forecast`` holds ``ok`` or the reason there is none, and is the only key
-    (``none: <reason>``) for an id the history has no assessed run of.
-    Raises :class:`InputError` for a history that cannot be read (missing,
-    unreadable, pyarrow not installed).
-    """
-    return {name: {'forecast': f'none: {found}'} if isinstance(found, InputError) else found
-            for name, found in _summaries(history, actuator_ids, (warn_below, error_below)).items()}
-
-
-def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
-                     error_below: float = HealthThresholds.error_below) -> dict[str, str]:
-    """The forecast of one actuator as :func:`forecast_summaries` gives it.
-
-    Raises :class:`InputError` for a missing history or an actuator without runs.
-    """
-    found = _summaries(history, [actuator_id], (warn_below, error_below))[actuator_id]
-    if isinstance(found, InputError):
-        raise found
-    return found
-
-
-def _summaries(history, actuator_ids, levels) -> dict[str, dict[str, str] | InputError]:
-    """Summary of each id, or the :class:`InputError` saying why there is none."""
-    actuator_key, read_table = _history_readers()
-    points = recording_points(read_table(history, 'runs'))
-    found, scatter = _fleet_walk(points, {})
-    result: dict[str, dict[str, str] | InputError] = {}
-    for actuator_id in actuator_ids:
-        try:
-            key = actuator_key(actuator_id)
-        except InputError as exc:
-            result[actuator_id] = exc
-            continue
-        if key not in points:
-            result[actuator_id] = InputError(f'{history}: no assessed run of actuator {actuator_id!r}')
-            continue
-        result[actuator_id] = _summary(_fit_one(key, points[key], found[key], levels, scatter, None))
-    return result
-
-
-def _summary(forecast: ActuatorForecast) -> dict[str, str]:
-    """Short key/value strings of a forecast."""
-    if forecast.reason:
-        return {'forecast': forecast.reason}
-    summary = {'forecast': 'ok', 'tau_days': f'{forecast.tau_days:.3g}', 'theta_now': f'{forecast.theta_now:.3f}'}
-    for name, crossing in zip(('warn', 'error'), forecast.crossings):
-        summary[f'{name}_crossing'] = _utc(crossing.time) or 'never'
-        summary[f'{name}_interval'] = crossing_interval_text(crossing)
-    return summary
-
-
-def crossing_interval_text(crossing: Crossing) -> str:
-    """``low .. high`` in UTC minutes (``never`` for an open end); ``never`` alone when no crossing is estimated."""
-    if crossing.time is None:
-        return 'never'
-    return f'{_utc(crossing.low) or "never"} .. {_utc(crossing.high) or "never"}'

@@ -93,7 +93,7 @@ from ..estimation.conditioning import band_text
 from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, outside_domain, \
     uncalibrated
 from ..estimation.windowing import MIN_AXIAL_LOAD, WindowBuilder, WindowSettings
-from ..fleet.forecast import forecast_summaries
+from ..fleet.forecast_summary import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..srv import Calibrate

@@ -9,8 +9,8 @@ import pytest
 
 from prsm_lube_ros.errors import InputError
 from prsm_lube_ros.experiments.fleet_study import compare_with_truth, coverage_rows, synthetic_points
-from prsm_lube_ros.fleet.forecast import (DAY, detect_relubrications, fit_depletion, forecast_points,
-                                          forecast_summary, RecordingPoint)
+from prsm_lube_ros.fleet.forecast import DAY, detect_relubrications, fit_depletion, forecast_points, RecordingPoint
+from prsm_lube_ros.fleet.forecast_summary import forecast_summary
 from prsm_lube_ros.simulation.fleet import FleetPlan, simulate_fleet
 
 
@@ -132,7 +132,7 @@ def test_recordings_sharing_one_start_time_do_not_break_the_fleet():
 
 
 def test_forecast_summaries_of_several_actuators_in_one_call(small_fleet):
-    from prsm_lube_ros.fleet.forecast import forecast_summaries
+    from prsm_lube_ros.fleet.forecast_summary import forecast_summaries
     summaries = forecast_summaries(small_fleet['history'], ['A01', 'A03', 'A99', '/'])
     assert summaries['A01'] == forecast_summary(small_fleet['history'], 'A01')
     assert summaries['A03']['forecast'] == 'ok'
@@ -144,7 +144,7 @@ def test_forecast_summaries_of_several_actuators_in_one_call(small_fleet):
 
 def test_without_pyarrow_the_forecast_is_one_input_error_line(small_fleet, monkeypatch):
     import sys
-    from prsm_lube_ros.fleet.forecast import forecast_summaries
+    from prsm_lube_ros.fleet.forecast_summary import forecast_summaries
     monkeypatch.delitem(sys.modules, 'prsm_lube_ros.fleet.history', raising=False)
     for name in [name for name in sys.modules if name == 'pyarrow' or name.startswith('pyarrow.')]:
         monkeypatch.setitem(sys.modules, name, None)
@@ -153,6 +153,7 @@ def test_without_pyarrow_the_forecast_is_one_input_error_line(small_fleet, monke
 
 
 def test_a_crossing_never_estimated_shows_no_interval():
-    from prsm_lube_ros.fleet.forecast import Crossing, crossing_interval_text
+    from prsm_lube_ros.fleet.forecast import Crossing
+    from prsm_lube_ros.fleet.forecast_summary import crossing_interval_text
     assert crossing_interval_text(Crossing(0.85, None, 1.8e9, None)) == 'never'
     assert crossing_interval_text(Crossing(0.85, 1.8e9, 1.7e9, None)).endswith('.. never')

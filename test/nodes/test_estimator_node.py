@@ -849,7 +849,7 @@ def test_the_forecast_of_a_fleet_history_is_in_the_diagnostics(graph, tmp_path, 
 
     Actuators are found in the history by namespace (/A01) or by hardware id (/prsm as A02).
     """
-    from prsm_lube_ros.fleet.forecast import forecast_summary
+    from prsm_lube_ros.fleet.forecast_summary import forecast_summary
     graph.estimator(tmp_path, actuators=['/A01', '/prsm', '/nowhere'], hardware_ids=['', 'A02', ''],
                     history_dir=str(small_fleet['history']))
     diagnostics = graph.collect(DiagnosticArray, '/diagnostics')
