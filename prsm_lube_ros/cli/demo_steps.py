@@ -285,8 +285,7 @@ def fleet_step(out: Path, seed: int, say, *, actuators: int, days: int) -> StepR
 
 
 def _utc(seconds) -> str:
-    """'2026-01-09 14:05' (UTC) or 'never'."""
-    import datetime
-    if seconds is None or not math.isfinite(seconds):
-        return 'never'
-    return datetime.datetime.fromtimestamp(seconds, datetime.UTC).strftime('%Y-%m-%d %H:%M')
+    """'2026-01-09 14:05' (UTC, for reading) or 'never'."""
+    from ..validation import utc_or_none
+    stamp = utc_or_none(seconds)
+    return 'never' if stamp is None else stamp.strftime('%Y-%m-%d %H:%M')

@@ -163,10 +163,9 @@ def _forecast(args, options: TrendOptions, points, relubrications, odometers, od
 
 
 def _utc(seconds: float | None) -> str:
-    """ISO 8601 UTC to the minute, ``never`` for None."""
-    from ..validation import utc_or_none
-    stamp = utc_or_none(seconds)
-    return 'never' if stamp is None else stamp.isoformat(timespec='minutes')
+    """ISO 8601 UTC to the minute (the forecast's own format), ``never`` for None."""
+    from ..fleet.forecast import utc_minutes
+    return utc_minutes(seconds) or 'never'
 
 
 def _document(args, options: TrendOptions, forecasts, plans) -> dict:
