@@ -141,6 +141,35 @@ def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condit
     _record(path, storage, stream, 0, _blocks(end, rig), theta, latency_rng, None)
 
 
+def _draw_service(actuator_id: str, fleet: FleetPlan, usage_rng: np.random.Generator) -> tuple[ActuatorService, float]:
+    """An actuator's usage (revolutions a day and their daily scatter) and oil life, and its initial theta_Oil."""
+    rate = usage_rng.uniform(*fleet.revolutions_per_day)
+    days_to_reference = usage_rng.uniform(*fleet.days_to_reference) * fleet.days
+    depletion = rate * days_to_reference / math.log(1.0 / fleet.depletion_reference)
+    daily = rate * usage_rng.lognormal(-0.5 * fleet.usage_scatter ** 2, fleet.usage_scatter,
+                                       fleet.days + fleet.horizon_days)
+    initial_theta = usage_rng.uniform(*fleet.initial_theta)
+    service = ActuatorService(actuator_id, rate, depletion, daily,
+                              start_revolutions=depletion * math.log(1.0 / initial_theta))
+    return service, initial_theta
+
+
+def _true_crossings(service: ActuatorService, thresholds: Sequence[float], theta_r: float, cycle_start_revs: float,
+                    epoch: float, odometer_start: float) -> dict[str, dict[str, Any]]:
+    """When theta_Oil truly crosses each level after the last relubrication (to theta ``theta_r``), by level."""
+    crossings = {}
+    for level in thresholds:
+        revs = (cycle_start_revs + service.depletion_revolutions * math.log(theta_r / level) if level < theta_r
+                else -math.inf)
+        crossing = service.time_at(max(revs, 0.0)) if revs > 0 else 0.0
+        known = math.isfinite(crossing)
+        crossings[f'{level:g}'] = {'time': epoch + crossing if known else None,
+                                   'time_utc': _iso(epoch + crossing) if known else None,
+                                   'odometer': odometer_start + float(service.revolutions(crossing)) if known
+                                   else None}
+    return crossings
+
+
 def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: RigConfig | None = None,
                    plan: ExperimentPlan | None = None, seed: int = 0, storage: str = 'mcap',
                    thresholds: Sequence[float] = (0.85, 0.70),
@@ -170,14 +199,8 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
         actuator_id = f'A{number:02d}'
         usage_sequence, recording_sequence = sequence.spawn(2)
         usage_rng = np.random.default_rng(usage_sequence)
-        rate = usage_rng.uniform(*fleet.revolutions_per_day)
-        days_to_reference = usage_rng.uniform(*fleet.days_to_reference) * fleet.days
-        depletion = rate * days_to_reference / math.log(1.0 / fleet.depletion_reference)
-        daily = rate * usage_rng.lognormal(-0.5 * fleet.usage_scatter ** 2, fleet.usage_scatter,
-                                           fleet.days + fleet.horizon_days)
-        initial_theta = usage_rng.uniform(*fleet.initial_theta)
-        service = ActuatorService(actuator_id, rate, depletion, daily,
-                                  start_revolutions=depletion * math.log(1.0 / initial_theta))
+        service, initial_theta = _draw_service(actuator_id, fleet, usage_rng)
+        rate, depletion, daily = service.revolutions_per_day, service.depletion_revolutions, service.daily_revolutions
         theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
         recordings: list[dict[str, Any]]
         relubrications, recordings = [], []
@@ -206,16 +229,8 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
                 theta_r = usage_rng.uniform(*fleet.relubricated_theta)
                 relubrications.append({'time': epoch + cycle_start_time, 'time_utc': _iso(epoch + cycle_start_time),
                                        'theta_oil_after': theta_r})
-        crossings = {}
         odometer_start = round(rate * ODOMETER_DAYS)
-        for level in thresholds:
-            revs = cycle_start_revs + depletion * math.log(theta_r / level) if level < theta_r else -math.inf
-            crossing = service.time_at(max(revs, 0.0)) if revs > 0 else 0.0
-            known = math.isfinite(crossing)
-            crossings[f'{level:g}'] = {'time': epoch + crossing if known else None,
-                                       'time_utc': _iso(epoch + crossing) if known else None,
-                                       'odometer': odometer_start + float(service.revolutions(crossing)) if known
-                                       else None}
+        crossings = _true_crossings(service, thresholds, theta_r, cycle_start_revs, epoch, odometer_start)
         odometer_rows += [(actuator_id, r['start_utc'], odometer_start + float(service.revolutions(r['start'] - epoch)))
                           for r in recordings]
         truth_actuators.append({
