@@ -41,6 +41,56 @@ def condition_label(speed: float, load: float) -> str:
     return f'{5 * round(speed * RPM / 5):.0f} r/min {10 * round(load / 10):.0f} N'
 
 
+def _per_condition(stage_names: list[str], assessments) -> tuple[dict, dict, dict, dict[str, list[float]]]:
+    """RMS, theta and its sigma by (condition label, stage), and each stage's run thetas."""
+    rms, theta, theta_std = {}, {}, {}
+    per_stage = defaultdict(list)
+    for name, rec in zip(stage_names, assessments):
+        for run in rec.runs:
+            if run.reason:
+                continue
+            key = (condition_label(run.screw_speed, run.axial_load), name)
+            rms[key], theta[key], theta_std[key] = run.vibration_rms, run.theta_oil, run.theta_oil_std
+            per_stage[name].append(run.theta_oil)
+    return rms, theta, theta_std, per_stage
+
+
+def _stage_table(conditions: list[str], stage_names: list[str], stages: Sequence[float], rms: dict, theta: dict,
+                 theta_std: dict) -> list[str]:
+    """The table of RMS and theta per condition and stage, as printed."""
+    lines = [f'{"condition":<18}' + ''.join(f'{"RMS " + n:>16}{"theta " + n:>20}' for n in stage_names),
+             f'{"":<18}' + ''.join(f'{"m/s^2":>16}{"(true " + format(t, ".2f") + ")":>20}' for t in stages)]
+    for cond in conditions:
+        row = f'{cond:<18}'
+        for name in stage_names:
+            key = (cond, name)
+            row += f'{rms.get(key, math.nan):>16.4f}'
+            row += f'{theta.get(key, math.nan):>13.3f} +/-{theta_std.get(key, math.nan):.3f}'
+        lines.append(row)
+    return lines
+
+
+def _check_stages(stage_names: list[str], stages: Sequence[float], per_stage: dict[str, list[float]],
+                  condition_count: int, results: dict, say) -> bool:
+    """Each stage's thetas against the truth (the reference stage within a tighter tolerance); all passed?"""
+    ok = True
+    for name, truth in zip(stage_names, stages):
+        values = np.array(per_stage[name])
+        reference = name == stage_names[-1]
+        tolerance = REFERENCE_TOLERANCE if reference else STAGE_TOLERANCE
+        mean = float(values.mean()) if values.size else math.nan
+        spread = float(values.max() - values.min()) if values.size else math.nan
+        level_ok = bool(values.size == condition_count and np.all(np.abs(values - truth) <= tolerance))
+        mean_ok = abs(mean - truth) <= tolerance
+        ok &= bool(mean_ok and level_ok)
+        verdict = 'PASS' if mean_ok and level_ok else 'FAIL'
+        say(f'    {name}: mean theta_oil {mean:.3f} (true {truth:.2f}, tolerance +/-{tolerance:.2f}), '
+            f'range over {values.size} conditions {spread:.3f}: {verdict}')
+        results[name] = {'true_theta': truth, 'mean_theta': mean, 'min': float(values.min()),
+                         'max': float(values.max()), 'conditions': int(values.size), 'pass': verdict}
+    return ok
+
+
 def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83, 1.0), window: float = 1.0,
              storage: str = 'mcap', stream=sys.stdout) -> int:
     """Run the demonstration into ``out``; returns 0 when the paper's claims hold on the simulation."""
@@ -74,48 +124,16 @@ def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83,
                                                     allow_nan=False))
 
     stage_names = [f'stage {i + 1}' for i in range(len(bags))]
-    rms, theta, theta_std = {}, {}, {}
-    per_stage = defaultdict(list)
-    for name, rec in zip(stage_names, assessments):
-        for run in rec.runs:
-            if run.reason:
-                continue
-            key = (condition_label(run.screw_speed, run.axial_load), name)
-            rms[key], theta[key], theta_std[key] = run.vibration_rms, run.theta_oil, run.theta_oil_std
-            per_stage[name].append(run.theta_oil)
+    rms, theta, theta_std, per_stage = _per_condition(stage_names, assessments)
     conditions = sorted({k[0] for k in rms}, key=lambda s: (int(s.split()[2]), int(s.split()[0])))
-
     say()
-    header = f'{"condition":<18}' + ''.join(f'{"RMS " + n:>16}{"theta " + n:>20}' for n in stage_names)
-    say(header)
-    say(f'{"":<18}' + ''.join(f'{"m/s^2":>16}{"(true " + format(t, ".2f") + ")":>20}' for t in stages))
-    for cond in conditions:
-        row = f'{cond:<18}'
-        for name in stage_names:
-            key = (cond, name)
-            row += f'{rms.get(key, math.nan):>16.4f}'
-            row += f'{theta.get(key, math.nan):>13.3f} +/-{theta_std.get(key, math.nan):.3f}'
-        say(row)
-
+    for line in _stage_table(conditions, stage_names, stages, rms, theta, theta_std):
+        say(line)
     say()
     say('1d checks against the simulator\'s truth')
-    ok = True
     summary: dict[str, Any] = {'seed': seed, 'true_theta': list(stages), 'stages': {},
                                'calibration': {**c.by_name(), 'fit_rmse': calibration.fit_rmse}}
-    for name, truth in zip(stage_names, stages):
-        values = np.array(per_stage[name])
-        reference = name == stage_names[-1]
-        tolerance = REFERENCE_TOLERANCE if reference else STAGE_TOLERANCE
-        mean = float(values.mean()) if values.size else math.nan
-        spread = float(values.max() - values.min()) if values.size else math.nan
-        level_ok = bool(values.size == len(conditions) and np.all(np.abs(values - truth) <= tolerance))
-        mean_ok = abs(mean - truth) <= tolerance
-        ok &= bool(mean_ok and level_ok)
-        verdict = 'PASS' if mean_ok and level_ok else 'FAIL'
-        say(f'    {name}: mean theta_oil {mean:.3f} (true {truth:.2f}, tolerance +/-{tolerance:.2f}), '
-            f'range over {values.size} conditions {spread:.3f}: {verdict}')
-        summary['stages'][name] = {'true_theta': truth, 'mean_theta': mean, 'min': float(values.min()),
-                                   'max': float(values.max()), 'conditions': int(values.size), 'pass': verdict}
+    ok = _check_stages(stage_names, stages, per_stage, len(conditions), summary['stages'], say)
 
     from ..figures import grouped_bars
     figures = [
