@@ -44,9 +44,7 @@ def run(args) -> int:
     some recording was assessed; ``!`` marks a theta_oil outside its physical
     range, ``~`` a run outside the calibration's domain (extrapolated).
     """
-    import math
-    from pathlib import Path
-    from ..estimation.calibration_file import band_note, load_calibration
+    from ..estimation.calibration_file import load_calibration
     from ..estimation.pipeline import assessment_json
     from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import assess_bags, BagJob
@@ -84,15 +82,30 @@ def run(args) -> int:
     refused = [line for line in refused if line]
     for line in refused:
         print(f'prsm-lube assess: error: {line}', file=sys.stderr)
-    flagged, extrapolated = [], []
     if not results:
         return EXIT_USER_ERROR
+    _print_table(results, calibration, args.calibration)
+    if args.history and results:
+        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
+    if args.json and results:
+        document = assessment_json(results, calibration)
+        write_json(args.json, document)
+        print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
+    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _print_table(results, calibration, calibration_path) -> None:
+    """The calibration's band and flags, then one line per run; ``!`` and ``~`` runs explained below it."""
+    import math
+    from pathlib import Path
+    from ..estimation.calibration_file import band_note
     for flag in calibration.flags:
-        print(f'warning: calibration {args.calibration}: {flag}')
-    print(f'calibration {args.calibration}: {band_note(calibration)}'
+        print(f'warning: calibration {calibration_path}: {flag}')
+    print(f'calibration {calibration_path}: {band_note(calibration)}'
           + (f'; domain {calibration.domain.text}' if calibration.domain is not None else ''))
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '
           f'{"theta_oil":>9} {"+/-":>6}')
+    flagged, extrapolated = [], []
     for rec in results:
         for run_result in rec.runs:
             theta = (f'{run_result.theta_oil:9.3f} {run_result.theta_oil_std:6.3f}' if not run_result.reason
@@ -110,13 +123,6 @@ def run(args) -> int:
         print(f'! {name} run {run_index}: {flag}')
     for name, run_index, flag in extrapolated:
         print(f'~ {name} run {run_index}: {flag}')
-    if args.history and results:
-        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
-    if args.json and results:
-        document = assessment_json(results, calibration)
-        write_json(args.json, document)
-        print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
-    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
 
 
 def _actuator_id(args) -> str:
