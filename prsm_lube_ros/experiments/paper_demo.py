@@ -72,7 +72,7 @@ def _stage_table(conditions: list[str], stage_names: list[str], stages: Sequence
 
 def _check_stages(stage_names: list[str], stages: Sequence[float], per_stage: dict[str, list[float]],
                   condition_count: int, results: dict, say) -> bool:
-    """Each stage's thetas against the truth (the reference stage within a tighter tolerance); all passed?"""
+    """Check each stage's thetas against the truth (the reference stage within a tighter tolerance)."""
     ok = True
     for name, truth in zip(stage_names, stages):
         values = np.array(per_stage[name])
