@@ -367,15 +367,10 @@ class _RosbagsSource(_Source):
         try:
             with Reader(path) as reader:
                 encodings = {MessageDefinitionFormat.MSG: 'ros2msg', MessageDefinitionFormat.IDL: 'ros2idl'}
-                for connection in reader.connections:
-                    if connection.topic in self.topics:
-                        self.topics[connection.topic].message_count += connection.msgcount
-                        continue
-                    self.topics[connection.topic] = TopicInfo(connection.topic, connection.msgtype,
-                                                              connection.msgcount)
-                    self.definitions[connection.topic] = (      # rosbags' Reader gives CDR messages
-                        connection.msgtype, encodings.get(connection.msgdef.format, ''),
-                        connection.msgdef.data or '', 'cdr')
+                for connection in reader.connections:      # rosbags' Reader gives CDR messages
+                    self.list_topic(connection.topic, connection.msgtype, connection.msgcount,
+                                    (connection.msgtype, encodings.get(connection.msgdef.format, ''),
+                                     connection.msgdef.data or '', 'cdr'))
                 count = reader.message_count
                 self.start_time = reader.start_time if count else None
                 self.end_time = reader.end_time - 1 if count else None
