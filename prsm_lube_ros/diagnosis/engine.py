@@ -510,10 +510,15 @@ def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds,
     lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
     """
     pair = _best_pair(table, combos, reference, other, folds, location)
-    if pair is None or pair.delta_bic > -margin or pair.gain < MIN_GAIN:
-        return None
+    return pair if pair is not None and _earns_by_bic(pair, margin) else None
+
+
+def _earns_by_bic(pair: SecondEffect, margin: float) -> bool:
+    """The BIC rule: BIC lower by ``margin`` and held-out error by :data:`MIN_GAIN` than the first alone (basis set)."""
+    if not (pair.delta_bic <= -margin and pair.gain >= MIN_GAIN):     # a NaN score earns nothing
+        return False
     pair.basis = f'held-out error {100 * pair.gain:.0f} % lower than the first alone, BIC {pair.delta_bic:+.0f}'
-    return pair
+    return True
 
 
 def _best_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
@@ -552,8 +557,7 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location, left
     pair = _best_pair(table, combos, first.fit, other, folds, location)
     if pair is None:
         return None
-    if pair.delta_bic <= -SECOND_BIC_MARGIN and pair.gain >= MIN_GAIN:
-        pair.basis = f'held-out error {100 * pair.gain:.0f} % lower than the first alone, BIC {pair.delta_bic:+.0f}'
+    if _earns_by_bic(pair, SECOND_BIC_MARGIN):
         return pair
     if left.located == other.effect.covariate and pair.delta_bic < LOCATED_BIC_TOLERANCE and pair.gain >= MIN_GAIN:
         pair.route = 2
