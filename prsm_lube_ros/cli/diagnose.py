@@ -56,8 +56,6 @@ def run(args) -> int:
     print(f'verdict: {result.verdict}' + (f' (tied: {", ".join(result.tied)})' if result.tied else ''))
     for rank, (effect, form, params) in enumerate(result.named_effects()):
         print(f'{("effect", "second effect")[rank]}: {effect.id}, form: {form}')
-        if rank and result.second is not None and result.second.basis:
-            print(f'named with the first because {result.second.basis}')
         print(effect.describe(params))
     for note in result.notes:
         print(f'note: {note}')
