@@ -72,6 +72,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from typing import Any
+import weakref
 
 import numpy as np
 from scipy import stats
@@ -83,9 +84,10 @@ from .table import WindowTable
 
 __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_PROMINENCE',
            'Location', 'MIN_SEGMENT_RUNS', 'MODE_FLOOR_HALF_WIDTH', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS',
-           'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE',
-           'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape', 'covariate_tests',
-           'direction_pairs', 'locate', 'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
+           'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS',
+           'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
+           'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines',
+           'spectral_shape', 'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
@@ -115,6 +117,8 @@ MODE_MIN_SPEEDS = 3
 MODE_SHARE_SPREAD = 2.0
 #: ... and it carries at least this share of the mean square at the speed where it is strongest.
 MODE_MIN_SHARE = 0.02
+#: Bins a rotation order must move between the slowest and fastest speed a mode band is seen at.
+MODE_ORDER_SHIFT_BINS = 3
 
 COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
                    'speed': 'rad/s', 'load': 'N', 'direction': 'sign of the screw speed'}
@@ -542,33 +546,74 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     paper's model's mean square per speed, against which a mode band's power is
     compared; without it the recorded mean square is used.
     """
+    spectra = _speed_spectra(table)
+    if isinstance(spectra, str):
+        return SpectralLines(note=spectra)
+    edges, index, medians, floors, excess, widened, lowest = spectra
+    df = table.spectrum_resolution
+    freqs = np.arange(medians.shape[1]) * df
+    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
+    modelled = table.rms if residual is None else table.rms * np.exp(residual)
+    model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(edges))])
+    result = SpectralLines(testable=True)
+    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, np.argsort(edges)[:2], df)
+    _mode_bands(result, medians, freqs, model_square, edges, df)
+    result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
+    return result
+
+
+def _speed_spectra(table: WindowTable):
+    """Median spectra per speed level and what the line tests need, or why there are none (a str).
+
+    Returns ``(levels, level of each window, medians, floors, excess, widened,
+    lowest)``, ``lowest`` the frequency below which a rotation order moves by
+    less than 2 bins between neighbouring speeds (Hz).
+    """
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
-        return SpectralLines(note='no spectra (vibration samples not kept)')
+        return 'no spectra (vibration samples not kept)'
     levels = operating_levels(table.speed)
     if len(levels) < 2:
-        return SpectralLines(note='one screw speed only: fixed lines cannot be told from rotation orders')
+        return 'one screw speed only: fixed lines cannot be told from rotation orders'
     df = table.spectrum_resolution
     edges = np.array(levels)
-    order = np.argsort(edges)
-    # Below this frequency a rotation order moves by less than 2 bins between neighbouring speeds.
-    neighbours = edges[order][1:] / edges[order][:-1]
-    lowest = max(3 * df, 2 * df / (float(np.min(neighbours)) - 1))
+    ordered = np.sort(edges)
+    lowest = max(3 * df, 2 * df / (float(np.min(ordered[1:] / ordered[:-1])) - 1))
     index = np.argmin(np.abs(np.abs(table.speed)[:, None] - edges[None, :]), axis=1)
     valid = ~np.isnan(table.spectra).any(axis=1)
     if any(not np.any(valid & (index == i)) for i in range(len(levels))):
-        return SpectralLines(note='a screw speed without a window spectrum')
+        return 'a screw speed without a window spectrum'
     medians = np.array([np.median(table.spectra[valid & (index == i)], axis=0) for i in range(len(levels))])
     floors, excess, widened = _excess(medians, FLOOR_HALF_WIDTH)
-    freqs = np.arange(medians.shape[1]) * df
-    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(levels))])
-    modelled = table.rms if residual is None else table.rms * np.exp(residual)
-    model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(levels))])
-    result = SpectralLines(testable=True)
-    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, order[:2], df)
-    # A line's Hann main lobe spans +-2 bins: a band must sit where orders move by 4 bins between speeds.
-    _mode_bands(result, medians, freqs, 2 * lowest, model_square, edges, df)
-    result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
-    return result
+    return edges, index, medians, floors, excess, widened, lowest
+
+
+#: Tables whose fixed-line power is known: id -> (weak reference, power); see :func:`fixed_line_power`.
+_LINE_POWER: dict[int, tuple[Any, float]] = {}
+
+
+def fixed_line_power(table: WindowTable) -> float:
+    """Power in fixed-frequency lines of constant power, (m/s^2)^2 (0 without such lines); cached per table.
+
+    What :func:`spectral_lines` reports as ``total_power``: vibration from
+    elsewhere that the spectrum measures directly, whatever the amplitude fit.
+    """
+    cached = _LINE_POWER.get(id(table))
+    if cached is not None and cached[0]() is table:
+        return cached[1]
+    spectra = _speed_spectra(table)
+    power = 0.0
+    if not isinstance(spectra, str):
+        edges, index, medians, floors, excess, widened, lowest = spectra
+        df = table.spectrum_resolution
+        mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
+        result = SpectralLines(testable=True)
+        _fixed_lines(result, medians, floors, excess, widened, np.arange(medians.shape[1]) * df, lowest,
+                     mean_square, np.argsort(edges)[:2], df)
+        power = result.total_power
+    for key in [key for key, (ref, _) in _LINE_POWER.items() if ref() is None]:
+        del _LINE_POWER[key]
+    _LINE_POWER[id(table)] = (weakref.ref(table), power)
+    return power
 
 
 def _order_lines(medians, floors, excess, speeds, df) -> list:
@@ -723,17 +768,22 @@ def _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_s
         result.note = 'no fixed-frequency line with constant power'
 
 
-def _mode_bands(result, medians, freqs, lowest, mean_square, edges, df) -> None:
+def _mode_bands(result, medians, freqs, mean_square, edges, df) -> None:
     """Bands fixed in Hz at three speeds or more whose power and share of ``mean_square`` follow the speed.
 
     ``mean_square`` per speed level is the paper's model's: the contact's own
     response (a fixed mode it excites broadband) keeps its share of it even when a
-    background floor changes its share of the recorded power.
+    background floor changes its share of the recorded power.  A band counts
+    only where a rotation order at its peak would have moved by
+    :data:`MODE_ORDER_SHIFT_BINS` bins between the slowest and the fastest speed
+    it is seen at (``f (omega_max / omega_min - 1) >= 3 df``, more than the 2 bins
+    its peak may wander), so closely spaced speeds do not hide a mode the whole
+    band sweeps past, and an order that barely moves is not taken for one.
     """
     floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
     prominent = widened >= LINE_PROMINENCE
     # Two speeds can put two different orders on one bin; three seldom do.
-    candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= lowest)
+    candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= 3 * df)
     for group in _line_groups(candidate):
         if any(abs(freqs[group[0]] - f) <= 3 * df for f in result.frequencies):
             continue
@@ -745,6 +795,9 @@ def _mode_bands(result, medians, freqs, lowest, mean_square, edges, df) -> None:
             continue
         peaks = lo + np.argmax(medians[seen, lo:hi], axis=1)
         if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
+            continue
+        span = float(np.max(edges[seen]) / np.min(edges[seen]))
+        if freqs[int(np.median(peaks))] * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
             continue
         varies = power[seen].max() / power[seen].min() > LINE_CONSTANCY
         share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD
