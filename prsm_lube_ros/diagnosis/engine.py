@@ -77,8 +77,8 @@ from .adequacy import lack_of_fit, LackOfFit, REPEAT_ADVICE
 from .combined import CombinedEffect
 from .effects import Effect, registered
 from .empirical import causes, empirical_terms, EmpiricalTerm
-from .fitting import bic, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, predict_log, \
-    score_held_out
+from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, \
+    predict_log, score_held_out
 from .locate import locate, Location, SIGNIFICANCE
 from .table import WindowTable
 
@@ -381,13 +381,7 @@ def _constant_covariance(table, fit: ModelFit, effect):
     Returns (covariance, run scatter, residual std, how the covariance was computed).
     """
     scales = effect.scales(table) if effect is not None else {}
-    base = predict_log(table, fit.vector, effect, scales)
-    jac = np.empty((len(table), 3))
-    for i in range(3):
-        step = 1e-6 * max(abs(fit.vector[i]), 1e-3)
-        shifted = fit.vector.copy()
-        shifted[i] += step
-        jac[:, i] = (predict_log(table, shifted, effect, scales) - base) / step
+    jac = constants_jacobian(table, fit.vector, effect, scales)
     dof = max(len(table) - fit.n_params, 1)
     variance = float(fit.log_residual @ fit.log_residual) / dof
     try:
@@ -502,17 +496,6 @@ def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool
     return leader_adds, runner_adds
 
 
-def _fit_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location,
-              margin: float = BIC_MARGIN) -> SecondEffect | None:
-    """The best of ``combos`` (CombinedEffects, chosen by BIC) when it earns its parameters over ``reference``.
-
-    Earning: physical constants, BIC lower by ``margin`` and held-out error
-    lower by :data:`MIN_GAIN` than ``reference`` (the first effect alone).
-    """
-    pair = _best_pair(table, combos, reference, other, folds, location)
-    return pair if pair is not None and _earns_by_bic(pair, margin) else None
-
-
 def _earns_by_bic(pair: SecondEffect, margin: float) -> bool:
     """The BIC rule: BIC lower by ``margin`` and held-out error by :data:`MIN_GAIN` than the first alone (basis set)."""
     if not (pair.delta_bic <= -margin and pair.gain >= MIN_GAIN):     # a NaN score earns nothing
@@ -564,12 +547,22 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location, left
         pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
                       f'{100 * pair.gain:.0f} % lower, BIC {pair.delta_bic:+.1f}')
         return pair
+    return pair if _earns_by_evidence(table, pair, other, location) else None
+
+
+def _earns_by_evidence(table, pair: SecondEffect, other: Candidate, location) -> bool:
+    """The evidence rule: ``other`` shows outside the amplitude fit and costs little held-out (route, basis set).
+
+    ``other`` has evidence outside the amplitude fit, with the pair's
+    parameters, and the pair predicts held-out runs no worse than
+    :data:`EVIDENCE_TOLERANCE` than the first alone.
+    """
     evidence = other.evidence and pair.effect.independent_evidence(table, location, pair.params)
-    if evidence and pair.gain >= -EVIDENCE_TOLERANCE:
-        pair.route = 3
-        pair.basis = f'{evidence}; held-out error {100 * pair.gain:+.1f} % lower than the first alone'
-        return pair
-    return None
+    if not (evidence and pair.gain >= -EVIDENCE_TOLERANCE):
+        return False
+    pair.route = 3
+    pair.basis = f'{evidence}; held-out error {100 * pair.gain:+.1f} % lower than the first alone'
+    return True
 
 
 def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
@@ -580,8 +573,9 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
     paper's model by :data:`MIN_GAIN` (an effect drifting between replicate runs,
     depletion say, leaves no lack of fit in the condition means).
     Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
-    within :data:`BIC_MARGIN` of each other tie, and neither is named; one named
-    by a stronger rule of :func:`_add_second` goes before the others.
+    within :data:`BIC_MARGIN` of each other tie, and neither is named, unless
+    what the first leaves is located on the covariate of one of them only; one
+    named by a stronger rule of :func:`_add_second` goes before the others.
     """
     assert first.fit is not None  # the named candidate was fitted
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
@@ -600,7 +594,11 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
     earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
     if len(earning) > 1 and earning[1].route == earning[0].route == 1 \
             and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
-        return None, earning[:2]
+        located = [second for second in earning[:2] if second.candidate.effect.covariate == left.located]
+        if len(located) != 1:
+            return None, earning[:2]
+        located[0].basis += f'; what {first.effect.id} leaves follows {left.located}, as this effect does'
+        return located[0], []
     return (earning[0] if earning else None), []
 
 
@@ -611,11 +609,14 @@ PAIR_POOL = 3
 def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) -> tuple[Candidate, SecondEffect] | None:
     """Two effects that only together explain the mismatch: ``(first, second)`` or None.
 
-    Among the :data:`PAIR_POOL` candidates with the largest held-out gains
-    alone, each pair is fitted (the larger-gain one first); a pair counts when
-    it earns its parameters over the paper's model and over each effect alone.
+    Among the :data:`PAIR_POOL` candidates with evidence outside the amplitude
+    fit first, then the largest held-out gains alone, each pair is fitted (the
+    first of the pool first); a pair counts when the second adds to the first
+    by the BIC rule or the evidence rule of :func:`_add_second`, and the pair
+    earns its parameters over the paper's model and over the second alone.
     """
-    pool = sorted([c for c in ranked if c.fit is not None and math.isfinite(c.gain)], key=lambda c: -c.gain)
+    pool = sorted([c for c in ranked if c.fit is not None and math.isfinite(c.gain)],
+                  key=lambda c: (not c.evidence, -c.gain))
     pool = pool[:PAIR_POOL]
     best = None
     for i, first in enumerate(pool):
@@ -623,8 +624,9 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) ->
             combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
                       for a in first.family.variants()
                       for b in other.family.variants()]
-            second = _fit_pair(table, combos, first.fit, other, folds, location)
-            if second is None:
+            second = _best_pair(table, combos, first.fit, other, folds, location)
+            if second is None or not (_earns_by_bic(second, BIC_MARGIN)
+                                      or _earns_by_evidence(table, second, other, location)):
                 continue
             pair = second.fit
             earns = (_delta_bic(pair, baseline) <= -BIC_MARGIN and _delta_bic(pair, other.fit) <= -BIC_MARGIN

@@ -27,20 +27,23 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..estimation.calibration import operating_levels
+from ..estimation.calibration import operating_levels, run_level_covariance
 from ..physics.vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
 from .effects import Effect
 from .table import WindowTable
 
-__all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'bic', 'cv_folds', 'effective_sample_size',
-           'fit_model', 'fit_vector', 'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22',
-           'predict_log', 'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out']
+__all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'UNPHYSICAL_SIGMAS', 'bic', 'constants_jacobian',
+           'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector', 'held_out_log_residuals', 'identifiable',
+           'intraclass_correlation', 'ln_eq22', 'predict_log', 'relative_errors', 'relative_rmse', 'run_level_rmse',
+           'score_held_out']
 
 BASELINE = 'baseline'
 #: Starts of an effect's own grid that are optimised (those with the lowest initial cost).
 MAX_STARTS = 4
 #: Parameters of the paper's model.
 BASE_PARAMETERS = 3
+#: A fit's C_lambda is unphysical when it lies below 0 by more than this many standard errors.
+UNPHYSICAL_SIGMAS = 2.0
 
 
 def ln_eq22(table, vector, film_factor=1.0) -> np.ndarray:
@@ -229,6 +232,7 @@ class ModelFit:
     n_eff: float = math.nan
     cv_run_rmse: float = math.nan   # relative RMS error of held-out run amplitudes
     notes: list = field(default_factory=list)
+    c_lambda_std: float = math.nan  # standard error of C_lambda under the run-effect model (effect held)
 
     @property
     def constants(self) -> ModelConstants:
@@ -239,8 +243,10 @@ class ModelFit:
         """What about the constants no real actuator gives (empty when none)."""
         problems = []
         c = self.constants
-        if not c.c_lambda > 0:
-            problems.append(f'C_lambda = {c.c_lambda:.3g} <= 0 (the film would raise vibration)')
+        std = self.c_lambda_std if math.isfinite(self.c_lambda_std) else 0.0
+        if not c.c_lambda > -UNPHYSICAL_SIGMAS * std:
+            below = f' by {-c.c_lambda / std:.1f} standard errors' if std > 0 else ''
+            problems.append(f'C_lambda = {c.c_lambda:.3g} <= 0{below} (the film would raise vibration)')
         return problems
 
 
@@ -255,10 +261,27 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds=None, star
     folds = cv_folds(table) if folds is None else folds
     params = effect.to_params(vector[3:], scales) if effect is not None else {}
     n_params = BASE_PARAMETERS + (len(effect.parameter_names) if effect is not None else 0)
+    try:
+        covariance = run_level_covariance(constants_jacobian(table, vector, effect, scales), residual, table.run)[0]
+        c_lambda_std = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan
+    except np.linalg.LinAlgError:
+        c_lambda_std = math.nan
     return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
                     log_residual=residual, n_params=n_params, rmse=relative_rmse(residual),
-                    n_eff=effective_sample_size(residual, table.run),
+                    n_eff=effective_sample_size(residual, table.run), c_lambda_std=c_lambda_std,
                     **_held_out(table, effect, scales, vector, folds))
+
+
+def constants_jacobian(table, vector, effect: Effect | None, scales: dict) -> np.ndarray:
+    """d ln A / d (ln C_sys, C_F, C_lambda) per window (n x 3), the effect's parameters held (forward steps)."""
+    base = predict_log(table, vector, effect, scales)
+    jacobian = np.empty((len(table), BASE_PARAMETERS))
+    for i in range(BASE_PARAMETERS):
+        step = 1e-6 * max(abs(vector[i]), 1e-3)
+        shifted = np.array(vector, dtype=float)
+        shifted[i] += step
+        jacobian[:, i] = (predict_log(table, shifted, effect, scales) - base) / step
+    return jacobian
 
 
 def score_held_out(table: WindowTable, fit: ModelFit, effect: Effect | None, folds) -> ModelFit:

@@ -4,15 +4,17 @@
 
 ``A = sqrt(A_22^2 + B^2)``; B shows most at low speed.  Its forms differ in
 the spectrum only: lines at fixed frequencies, a broadband floor, or both
-(:meth:`BackgroundVibration.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2); internally B over the
-smallest RMS recorded.
+(:meth:`BackgroundVibration.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2), at least the RMS
+of the fixed lines the spectrum measures; internally the rest of B (added in power) over the smallest RMS recorded.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from ...physics.effects import background_vibration as law
-from ..locate import SHAPE_NOISE_FACTOR
+from ..locate import fixed_line_power, SHAPE_NOISE_FACTOR
 from .base import Effect, register
 
 __all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'SHAPE_CONTRARY_FACTOR',
@@ -49,11 +51,11 @@ class BackgroundVibration(Effect, law.Extension):
                    'on, and vibration spectra')
 
     def scales(self, table) -> dict:
-        """Smallest recorded RMS, m/s^2."""
-        return {'rms_scale': float(np.min(table.rms))}
+        """Smallest recorded RMS and the RMS of the fixed lines the spectrum measures, m/s^2."""
+        return {'rms_scale': float(np.min(table.rms)), 'line_rms': math.sqrt(fixed_line_power(table))}
 
     def bounds(self):
-        """B / min RMS in :data:`FRACTION_RANGE`."""
+        """The part of B beyond the fixed lines, over min RMS, in :data:`FRACTION_RANGE`."""
         return np.array([FRACTION_RANGE[0]]), np.array([FRACTION_RANGE[1]])
 
     def starts(self):
@@ -61,8 +63,15 @@ class BackgroundVibration(Effect, law.Extension):
         return [np.array([0.1]), np.array([0.3]), np.array([0.6])]
 
     def to_params(self, p, scales):
-        """background_rms B (m/s^2)."""
-        return {'background_rms': float(p[0] * scales['rms_scale']), **scales}
+        """background_rms B (m/s^2): the fixed lines' RMS and the fitted rest added in power.
+
+        Lines at fixed frequencies with constant power are vibration from
+        elsewhere measured directly, so B is never fitted below them (a fit
+        that would rather give their power to the contact law, with a negative
+        C_lambda say, cannot).
+        """
+        line_rms = scales.get('line_rms', 0.0)
+        return {'background_rms': float(math.hypot(line_rms, p[0] * scales['rms_scale'])), **scales}
 
     def independent_evidence(self, table, location, params=None) -> str:
         """Fixed lines with constant power (at least :data:`MIN_LINE_SHARE` of it), or a spectral shape that changes.
