@@ -202,3 +202,52 @@ def test_a_window_without_a_temperature_sample_takes_its_neighbours_in_time():
     assert filled[:3] == [30.0, 30.5, 31.0]
     # Before the last sample but more than TEMPERATURE_GAP from the one before: not invented.
     assert all(np.isnan(filled[3:6]))
+
+
+@pytest.mark.parametrize('c_lambda, std, unphysical', [
+    (-0.005, 0.008, False),     # below zero by less than 2 standard errors: consistent with a physical film
+    (-0.02, 0.008, True),       # 2.5 standard errors below zero
+    (-0.005, float('nan'), True),   # no standard error: the sign alone decides
+    (0.01, 0.008, False),
+])
+def test_c_lambda_is_unphysical_only_when_significantly_below_zero(c_lambda, std, unphysical):
+    from prsm_lube_ros.diagnosis.fitting import ModelFit
+    fit = ModelFit(effect='baseline', vector=np.array([0.0, 1e-4, c_lambda]), params={}, log_residual=np.zeros(3),
+                   cv_log_residual=np.zeros(3), n_params=3, c_lambda_std=std)
+    assert bool(fit.unphysical()) == unphysical
+
+
+def test_a_background_is_never_fitted_below_the_fixed_lines_the_spectrum_measures():
+    from prsm_lube_ros.diagnosis.effects import get_effect
+    background = get_effect('background_vibration')
+    scales = {'rms_scale': 2.0, 'line_rms': 0.3}
+    assert background.to_params(np.array([0.0]), scales)['background_rms'] == pytest.approx(0.3)
+    assert background.to_params(np.array([0.2]), scales)['background_rms'] == pytest.approx(0.5)     # hypot(0.3, 0.4)
+    assert background.to_params(np.array([0.2]), {'rms_scale': 2.0})['background_rms'] == pytest.approx(0.4)
+
+
+@pytest.mark.parametrize('located, named', [('position', 'position_dependent_stiffness'), ('none', None)])
+def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_located(
+        monkeypatch, located, named):
+    """Stiffness and resonance on top of thermal viscosity, BICs 4 apart: the location decides, or it is a tie."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.locate import Location
+
+    def second(effect_id, covariate, cv_rmse, delta_bic):
+        candidate = SimpleNamespace(effect=SimpleNamespace(id=effect_id, covariate=covariate), fit=object(), gain=0.1)
+        return SimpleNamespace(candidate=candidate, route=1, basis='BIC', delta_bic=delta_bic,
+                               fit=SimpleNamespace(cv_rmse=cv_rmse))
+    seconds = {'resonance': second('resonance', 'speed', 0.030, -12.0),
+               'position_dependent_stiffness': second('position_dependent_stiffness', 'position', 0.031, -8.0)}
+    monkeypatch.setattr(engine, 'lack_of_fit', lambda *args: SimpleNamespace(significant=True))
+    monkeypatch.setattr(engine, 'locate', lambda *args: Location([], None, located, ''))
+    monkeypatch.setattr(engine, '_add_second', lambda table, first, cand, *args: seconds[cand.effect.id])
+    first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'),
+                            fit=SimpleNamespace(log_residual=np.zeros(3), n_params=5))
+    candidates = [first] + [s.candidate for s in seconds.values()]
+    chosen, tied = engine._second_effect(None, first, candidates, None, None)
+    if named is None:
+        assert chosen is None and len(tied) == 2
+    else:
+        assert chosen.candidate.effect.id == named and tied == [] and 'follows position' in chosen.basis

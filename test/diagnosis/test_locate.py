@@ -100,34 +100,34 @@ def test_a_step_between_runs_is_a_shape_in_time():
     assert 'step' in binned.shape or 'rise' in binned.shape
 
 
-def spectra_table(mode_share=None, line_power=0.0, seed=0):
-    """Four speeds, orders 1 and 3.75 moving with speed over a flat floor; optional fixed band and fixed line.
+def spectra_table(mode_share=None, line_power=0.0, seed=0, levels=(10.0, 14.0, 19.0, 26.0), mode_hz=50.0):
+    """Speeds ``levels`` (rad/s), orders 1-15 moving with speed over a flat floor; optional fixed band and line.
 
-    ``mode_share`` per speed: the share of each window's mean square in a band fixed at 50 Hz (a mode
+    ``mode_share`` per speed: the share of each window's mean square in a band fixed at ``mode_hz`` (a mode
     ringing); ``line_power`` (m/s^2)^2: a line fixed at 120 Hz whose power does not follow the speed.
     """
     rng = np.random.default_rng(seed)
     df, bins, per_level = 0.5, 801, 30
     freqs = np.arange(bins) * df
-    speeds = np.repeat([10.0, 14.0, 19.0, 26.0], per_level)
+    speeds = np.repeat(levels, per_level)
     mean_square = (speeds / 10.0) ** 4
     spectra = np.empty((speeds.size, bins))
     for row, (speed, ms) in enumerate(zip(speeds, mean_square)):
-        level = int(np.searchsorted([10.0, 14.0, 19.0, 26.0], speed))
+        level = int(np.searchsorted(levels, speed))
         share = 0.0 if mode_share is None else mode_share[level]
         psd = np.full(bins, (1 - 0.2 - share) * ms / (bins * df))
         for order in (1.0, 3.75, 7.5, 15.0):
             psd[int(round(order * speed / (2 * np.pi) / df))] += 0.05 * ms / df
-        if share:
-            band = np.abs(freqs - 50.0) <= 2.0
-            psd[band] += share * ms / (band.sum() * df)
+        if share:       # a resonance peak: a triangle 4 Hz wide at its foot
+            weight = np.maximum(1.0 - np.abs(freqs - mode_hz) / 2.0, 0.0)
+            psd += share * ms * weight / (weight.sum() * df)
         psd[int(120 / df)] += line_power / df
         spectra[row] = psd * rng.gamma(20.0, 1 / 20.0, bins)
     rms = np.sqrt(mean_square + line_power)
     n = speeds.size
     return WindowTable(speed=speeds, load=np.full(n, 100.0), rms=rms, position=np.zeros(n),
                        revolutions=np.arange(n) * 1.0, time=np.arange(n) * 1.0, temperature=np.full(n, np.nan),
-                       run=np.repeat(np.arange(4), per_level), recording=np.zeros(n), spectra=spectra,
+                       run=np.repeat(np.arange(len(levels)), per_level), recording=np.zeros(n), spectra=spectra,
                        spectrum_resolution=df)
 
 
@@ -140,10 +140,27 @@ def test_a_band_fixed_in_hz_whose_share_follows_speed_is_a_mode_and_moving_order
     assert spectral_lines(spectra_table()).mode_frequencies == []       # orders alone: no mode
 
 
+def test_closely_spaced_speeds_do_not_hide_a_mode_the_whole_band_sweeps_past():
+    """Six speeds 9 % apart: neighbours move an order at 21 Hz by 1.9 Hz only, the band's ends by 11 Hz."""
+    levels = tuple(10.0 * 1.09 ** k for k in range(6))
+    lines = spectral_lines(spectra_table(mode_share=[0.05, 0.07, 0.1, 0.14, 0.2, 0.28], levels=levels,
+                                         mode_hz=21.0))
+    assert len(lines.mode_frequencies) == 1 and abs(lines.mode_frequencies[0] - 21.0) <= 2.5
+    assert spectral_lines(spectra_table(levels=levels)).mode_frequencies == []     # the orders alone
+
+
 def test_a_fixed_line_of_constant_power_is_background_not_a_mode():
     lines = spectral_lines(spectra_table(line_power=0.05))
     assert any(abs(f - 120.0) <= 1.0 for f in lines.frequencies)
     assert lines.mode_frequencies == []
+
+
+def test_fixed_line_power_is_what_the_spectral_test_reports_and_zero_without_lines():
+    from prsm_lube_ros.diagnosis.locate import fixed_line_power
+    table = spectra_table(line_power=0.05)
+    assert fixed_line_power(table) == pytest.approx(spectral_lines(table).total_power)
+    assert 0.02 < fixed_line_power(table) < 0.1
+    assert fixed_line_power(spectra_table()) == 0.0
 
 
 def test_a_fixed_band_with_a_constant_share_is_the_contact_response_not_a_mode():
