@@ -779,6 +779,9 @@ def _mode_bands(result, medians, freqs, mean_square, edges, df) -> None:
     it is seen at (``f (omega_max / omega_min - 1) >= 3 df``, more than the 2 bins
     its peak may wander), so closely spaced speeds do not hide a mode the whole
     band sweeps past, and an order that barely moves is not taken for one.
+    Nor is a peak that climbs a bin with each faster speed across the band's
+    window: at low frequencies and coarse resolution an order crossing the
+    window looks fixed within 2 bins.
     """
     floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
     prominent = widened >= LINE_PROMINENCE
@@ -796,6 +799,8 @@ def _mode_bands(result, medians, freqs, mean_square, edges, df) -> None:
         peaks = lo + np.argmax(medians[seen, lo:hi], axis=1)
         if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
             continue
+        if np.ptp(peaks) == 2 and np.all(np.diff(peaks[np.argsort(edges[seen])]) > 0):
+            continue                   # a peak climbing a bin per speed: an order crossing the window, no mode
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
         if freqs[int(np.median(peaks))] * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
             continue
