@@ -21,16 +21,22 @@ Scores:
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import least_squares
 
 from ..estimation.calibration import operating_levels, run_level_covariance
 from ..physics.vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
 from .effects import Effect
 from .table import WindowTable
+
+if TYPE_CHECKING:
+    from .table import Columns
 
 __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'UNPHYSICAL_SIGMAS', 'bic', 'constants_jacobian',
            'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector', 'held_out_log_residuals', 'identifiable',
@@ -46,7 +52,7 @@ BASE_PARAMETERS = 3
 UNPHYSICAL_SIGMAS = 2.0
 
 
-def ln_eq22(table, vector, film_factor=1.0) -> np.ndarray:
+def ln_eq22(table: Columns, vector: np.ndarray, film_factor: float | np.ndarray = 1.0) -> np.ndarray:
     """ln A_0 of Eq. 22 with theta_Oil scaled by ``film_factor``; vector = (ln C_sys, C_F, C_lambda)."""
     speed = np.abs(np.asarray(table.speed, dtype=float))
     load = np.abs(np.asarray(table.load, dtype=float))
@@ -54,7 +60,8 @@ def ln_eq22(table, vector, film_factor=1.0) -> np.ndarray:
             + vector[1] * load - vector[2] * table.theta * film_factor * table.film_term)
 
 
-def predict_log(table, vector, effect: Effect | None = None, scales: dict | None = None) -> np.ndarray:
+def predict_log(table: Columns, vector: np.ndarray, effect: Effect | None = None,
+                scales: dict[str, Any] | None = None) -> np.ndarray:
     """ln A of the model: Eq. 22 (``effect`` None) or Eq. 22 extended by ``effect``.
 
     ``vector`` holds (ln C_sys, C_F, C_lambda) followed by the effect's internal parameters.
@@ -66,7 +73,8 @@ def predict_log(table, vector, effect: Effect | None = None, scales: dict | None
     return base + effect.log_gain(params, table, base)
 
 
-def _ols_constants(table, film_factor=1.0, offset=0.0):
+def _ols_constants(table: Columns, film_factor: float | np.ndarray = 1.0,
+                   offset: float | np.ndarray = 0.0) -> np.ndarray:
     """(ln C_sys, C_F, C_lambda) by OLS with the film column scaled and ``offset`` removed from ln A."""
     load = np.abs(table.load)
     x = np.column_stack([np.ones(len(table)), load, -table.theta * film_factor * table.film_term])
@@ -80,20 +88,20 @@ def _ols_constants(table, film_factor=1.0, offset=0.0):
 class _CachedColumns:
     """The table's columns and derived arrays (film term, log RMS), each computed once for a fit's many calls."""
 
-    def __init__(self, table):
+    def __init__(self, table: WindowTable) -> None:
         self._table = table
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         value = getattr(self._table, name)
         setattr(self, name, value)
         return value
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self._table)
 
 
-def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict | None = None,
-               starts=None) -> np.ndarray:
+def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[str, Any] | None = None,
+               starts: Sequence[npt.ArrayLike] | None = None) -> np.ndarray:
     """Least-squares parameter vector of the baseline or of Eq. 22 extended by ``effect``.
 
     ``starts``: internal effect parameter vectors (or full vectors) to start from;
@@ -109,7 +117,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict | 
     y = table.log_rms
     columns = _CachedColumns(table)
 
-    def residual(vector):
+    def residual(vector: np.ndarray) -> np.ndarray:
         return predict_log(columns, vector, effect, scales) - y
 
     candidates: list[tuple[float, int, np.ndarray]] = []
@@ -137,19 +145,19 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict | 
     return best
 
 
-def relative_errors(log_residual) -> np.ndarray:
+def relative_errors(log_residual: npt.ArrayLike) -> np.ndarray:
     """Relative amplitude errors ``A_model / A - 1`` from log residuals ``ln A_model - ln A``."""
     return np.expm1(np.asarray(log_residual, dtype=float))
 
 
-def relative_rmse(log_residual) -> float:
+def relative_rmse(log_residual: npt.ArrayLike) -> float:
     """RMS of the relative errors over the finite entries."""
     errors = relative_errors(log_residual)
     errors = errors[np.isfinite(errors)]
     return float(np.sqrt(np.mean(errors ** 2))) if errors.size else math.nan
 
 
-def run_level_rmse(table: WindowTable, log_residual) -> float:
+def run_level_rmse(table: WindowTable, log_residual: np.ndarray) -> float:
     """Relative RMS error of run amplitudes (windows pooled in power per run) over runs with finite residuals.
 
     Window-to-window scatter averages out, so this measures the model's error, not the noise.
@@ -173,8 +181,8 @@ def cv_folds(table: WindowTable) -> list[int]:
     return [int(r) for r in table.runs if identifiable(table.subset(table.run != r))]
 
 
-def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: dict | None,
-                           full_vector: np.ndarray, folds) -> np.ndarray:
+def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: dict[str, Any] | None,
+                           full_vector: np.ndarray, folds: Iterable[int]) -> np.ndarray:
     """Leave-one-run-out log residuals (prediction minus measurement); NaN for runs not held out."""
     out = np.full(len(table), np.nan)
     for run in folds:
@@ -187,7 +195,7 @@ def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: di
     return out
 
 
-def intraclass_correlation(residual, groups) -> tuple[float, float]:
+def intraclass_correlation(residual: npt.ArrayLike, groups: npt.ArrayLike) -> tuple[float, float]:
     """One-way ANOVA ICC of ``residual`` between ``groups`` and the mean group size m0."""
     residual = np.asarray(residual, dtype=float)
     labels, inverse, sizes = np.unique(groups, return_inverse=True, return_counts=True)
@@ -204,13 +212,13 @@ def intraclass_correlation(residual, groups) -> tuple[float, float]:
     return float(np.clip(icc, 0.0, 1.0)), m0
 
 
-def effective_sample_size(residual, groups) -> float:
+def effective_sample_size(residual: np.ndarray, groups: npt.ArrayLike) -> float:
     """``n / (1 + (m0 - 1) ICC)``: windows counted as independent observations."""
     icc, m0 = intraclass_correlation(residual, groups)
     return float(len(residual) / (1.0 + max(m0 - 1.0, 0.0) * icc))
 
 
-def bic(log_residual, n_params: int, n_eff: float) -> float:
+def bic(log_residual: npt.ArrayLike, n_params: int, n_eff: float) -> float:
     """Gaussian BIC with ``n_eff`` observations: ``n_eff ln(SSR/n) + k ln(n_eff)``."""
     r = np.asarray(log_residual, dtype=float)
     ssr = float(np.mean(r ** 2))
@@ -250,7 +258,8 @@ class ModelFit:
         return problems
 
 
-def fit_model(table: WindowTable, effect: Effect | None = None, folds=None, starts=None) -> ModelFit:
+def fit_model(table: WindowTable, effect: Effect | None = None, folds: Sequence[int] | None = None,
+              starts: Sequence[npt.ArrayLike] | None = None) -> ModelFit:
     """Fit a model on all windows and score it on held-out runs (``folds``; default :func:`cv_folds`).
 
     ``starts``: as :func:`fit_vector`; ``folds=[]`` skips the held-out scores (NaN).
@@ -272,7 +281,8 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds=None, star
                     **_held_out(table, effect, scales, vector, folds))
 
 
-def constants_jacobian(table, vector, effect: Effect | None, scales: dict) -> np.ndarray:
+def constants_jacobian(table: Columns, vector: np.ndarray, effect: Effect | None,
+                       scales: dict[str, Any]) -> np.ndarray:
     """d ln A / d (ln C_sys, C_F, C_lambda) per window (n x 3), the effect's parameters held (forward steps)."""
     base = predict_log(table, vector, effect, scales)
     jacobian = np.empty((len(table), BASE_PARAMETERS))
@@ -284,13 +294,14 @@ def constants_jacobian(table, vector, effect: Effect | None, scales: dict) -> np
     return jacobian
 
 
-def score_held_out(table: WindowTable, fit: ModelFit, effect: Effect | None, folds) -> ModelFit:
+def score_held_out(table: WindowTable, fit: ModelFit, effect: Effect | None, folds: Iterable[int]) -> ModelFit:
     """``fit`` (made with ``folds=[]``) with its held-out scores on ``folds``, without fitting all windows again."""
     scales = effect.scales(table) if effect is not None else {}
     return replace(fit, **_held_out(table, effect, scales, fit.vector, folds))
 
 
-def _held_out(table: WindowTable, effect: Effect | None, scales: dict, vector: np.ndarray, folds) -> dict:
+def _held_out(table: WindowTable, effect: Effect | None, scales: dict[str, Any], vector: np.ndarray,
+              folds: Iterable[int]) -> dict[str, Any]:
     """ModelFit's held-out fields: each fold refitted from ``vector`` and scored on its runs."""
     cv = held_out_log_residuals(table, effect, scales, vector, folds)
     return {'cv_log_residual': cv, 'cv_rmse': relative_rmse(cv), 'cv_run_rmse': run_level_rmse(table, cv)}

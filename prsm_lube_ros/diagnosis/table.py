@@ -17,16 +17,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Any, cast
+from typing import Any, cast, Protocol, TYPE_CHECKING
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import InputError
 from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
-__all__ = ['COLUMNS', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'table_from_windows']
+if TYPE_CHECKING:
+    from ..estimation.windowing import Window
+
+__all__ = ['COLUMNS', 'Columns', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
@@ -35,6 +39,65 @@ COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperatu
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
+
+
+class Columns(Protocol):
+    """The columns of a :class:`WindowTable` that Eq. 22 and the effects' laws read.
+
+    The table itself has them, and so has a cache of its columns
+    (``fitting._CachedColumns``); read-only, units as in :class:`WindowTable`.
+    """
+
+    @property
+    def speed(self) -> np.ndarray:
+        """Screw speed, rad/s."""
+
+    @property
+    def load(self) -> np.ndarray:
+        """Axial load, N."""
+
+    @property
+    def position(self) -> np.ndarray:
+        """Nut place along the stroke, m."""
+
+    @property
+    def revolutions(self) -> np.ndarray:
+        """Revolutions since the start of the recording."""
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time since the start of the recording, s."""
+
+    @property
+    def temperature(self) -> np.ndarray:
+        """Temperature, degC (NaN when not recorded)."""
+
+    @property
+    def run(self) -> np.ndarray:
+        """Run number of each window."""
+
+    @property
+    def recording(self) -> np.ndarray:
+        """Recording index of each window."""
+
+    @property
+    def direction(self) -> np.ndarray | None:
+        """+1 on runs out, -1 on runs back."""
+
+    @property
+    def theta(self) -> float:
+        """Lubrication state theta_Oil the windows were recorded at."""
+
+    @property
+    def film_term(self) -> np.ndarray:
+        """``omega^0.68 F^-0.073`` (Eq. 19)."""
+
+    @property
+    def reduced(self) -> np.ndarray:
+        """``ln(A omega^-2 F^(1/3))`` (Eq. 22's left side)."""
+
+    def __len__(self) -> int:
+        """Number of windows."""
 
 
 @dataclass(frozen=True)
@@ -61,10 +124,10 @@ class WindowTable:
     theta: float = 1.0
     spectra: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan
-    sources: tuple = ()
+    sources: tuple[str, ...] = ()
     direction: np.ndarray | None = field(default=None, compare=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Coerce the columns to arrays of one length."""
         n = None
         for name in COLUMNS:
@@ -111,7 +174,7 @@ class WindowTable:
         """True when most windows carry a temperature."""
         return bool(np.isfinite(self.temperature).mean() >= 0.8) if len(self) else False
 
-    def subset(self, mask) -> WindowTable:
+    def subset(self, mask: npt.ArrayLike) -> WindowTable:
         """Rows where ``mask`` is true (a boolean array or indices)."""
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None
@@ -130,7 +193,7 @@ class WindowTable:
         return out
 
 
-def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: float = 1.0,
+def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, theta: float = 1.0,
                        min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = ()) -> WindowTable:
     """Build a :class:`WindowTable` from lists of windows (``estimation.windowing.Window``), one per recording.
 
@@ -179,7 +242,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence], *, theta: floa
                        **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
 
 
-def _temperatures(windows: Sequence, chosen: Sequence) -> list:
+def _temperatures(windows: Sequence[Window], chosen: Sequence[Window]) -> list[float]:
     """Mean temperature of each chosen window, degC; interpolated in time where no sample fell in it.
 
     Temperature changes slowly and is often published at 1 Hz, so a 1 s window

@@ -10,12 +10,17 @@ of the fixed lines the spectrum measures; internally the rest of B (added in pow
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...physics.effects import background_vibration as law
 from ..locate import fixed_line_power, SHAPE_NOISE_FACTOR
 from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..locate import Location
+    from ..table import WindowTable
 
 __all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'SHAPE_CONTRARY_FACTOR',
            'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE']
@@ -50,19 +55,19 @@ class BackgroundVibration(Effect, law.Extension):
     to_separate = ('lower screw speeds (the background dominates there), a record at standstill with the drive '
                    'on, and vibration spectra')
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, float]:
         """Smallest recorded RMS and the RMS of the fixed lines the spectrum measures, m/s^2."""
         return {'rms_scale': float(np.min(table.rms)), 'line_rms': math.sqrt(fixed_line_power(table))}
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The part of B beyond the fixed lines, over min RMS, in :data:`FRACTION_RANGE`."""
         return np.array([FRACTION_RANGE[0]]), np.array([FRACTION_RANGE[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Small to large backgrounds."""
         return [np.array([0.1]), np.array([0.3]), np.array([0.6])]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """background_rms B (m/s^2): the fixed lines' RMS and the fitted rest added in power.
 
         Lines at fixed frequencies with constant power are vibration from
@@ -73,7 +78,8 @@ class BackgroundVibration(Effect, law.Extension):
         line_rms = scales.get('line_rms', 0.0)
         return {'background_rms': float(math.hypot(line_rms, p[0] * scales['rms_scale'])), **scales}
 
-    def independent_evidence(self, table, location, params=None) -> str:
+    def independent_evidence(self, table: WindowTable, location: Location | None,
+                             params: dict[str, float] | None = None) -> str:
         """Fixed lines with constant power (at least :data:`MIN_LINE_SHARE` of it), or a spectral shape that changes.
 
         Power added from elsewhere with a spectrum of its own changes the
@@ -91,7 +97,8 @@ class BackgroundVibration(Effect, law.Extension):
             return 'spectrum: ' + shape.note
         return ''
 
-    def contrary_evidence(self, table, location, params=None) -> str:
+    def contrary_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, float] | None = None) -> str:
         """The spectral shape keeps although the fitted B's share of the power differs between the speeds.
 
         A background with a spectrum unlike the contact's (white, say) whose
@@ -122,7 +129,7 @@ class BackgroundVibration(Effect, law.Extension):
         return (f'spectrum: the fitted background would carry {100 * shares[0]:.0f} % of the power at the lowest '
                 f'speed and {100 * shares[1]:.0f} % at the highest, yet {shape.note}')
 
-    def form_name(self, params, table, location) -> str:
+    def form_name(self, params: dict[str, float], table: WindowTable, location: Location | None) -> str:
         """Lines, floor or both, from the spectrum: lines carrying less than :data:`LINE_SHARE` of B^2 leave a floor.
 
         Without spectra (or with one speed) the form cannot be told.  The absence of
@@ -137,7 +144,7 @@ class BackgroundVibration(Effect, law.Extension):
             return law.FORMS[0]
         return law.FORMS[2]
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """B and its share of the smallest RMS."""
         b = params['background_rms']
         return (f'Background of B = {b:.4g} m/s^2 RMS, {100 * b / params["rms_scale"]:.0f} % of the smallest '

@@ -23,10 +23,15 @@ attribute names (``speed``, ``load``, ``position``, ``revolutions``,
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from ...physics.effects import Extension
+
+if TYPE_CHECKING:
+    from ..locate import Location
+    from ..table import WindowTable
 
 
 __all__ = ['Effect', 'register', 'registered']
@@ -56,11 +61,11 @@ class Effect(Extension):
     #: Name of this physical form of the effect (each of :meth:`variants` has its own).
     form: str = ''
 
-    def applicable(self, table) -> str:
+    def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""
         return ''
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, Any]:
         """Data scales fixed once per diagnosis (reference values the parameters refer to)."""
         return {}
 
@@ -72,11 +77,11 @@ class Effect(Extension):
         """Initial internal parameter vectors for a multi-start fit."""
         return [np.zeros(0)]
 
-    def to_params(self, p: np.ndarray, scales: dict) -> dict:
+    def to_params(self, p: np.ndarray, scales: dict[str, Any]) -> dict[str, Any]:
         """Physical parameters (SI) from the internal vector and the data scales."""
         return dict(scales)
 
-    def describe(self, params: dict) -> str:
+    def describe(self, params: dict[str, Any]) -> str:
         """The fitted effect in words, with its size."""
         return self.physics
 
@@ -88,11 +93,12 @@ class Effect(Extension):
         """
         return [self]
 
-    def form_name(self, params: dict, table, location) -> str:
+    def form_name(self, params: dict[str, Any], table: WindowTable, location: Location | None) -> str:
         """The form the fitted parameters and the data show (default :attr:`form`)."""
         return self.form
 
-    def independent_evidence(self, table, location, params: dict | None = None) -> str:
+    def independent_evidence(self, table: WindowTable, location: Location | None,
+                             params: dict[str, Any] | None = None) -> str:
         """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none.
 
         ``params`` (the fitted parameters, when there is a fit) lets the evidence
@@ -100,15 +106,17 @@ class Effect(Extension):
         """
         return ''
 
-    def contrary_evidence(self, table, location, params: dict | None = None) -> str:
+    def contrary_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, Any] | None = None) -> str:
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
 
 
 _REGISTRY: dict[str, Effect] = {}
+_E = TypeVar('_E', bound=Effect)
 
 
-def register(effect_class):
+def register(effect_class: type[_E]) -> type[_E]:
     """Class decorator: add an :class:`Effect` subclass (instantiated) to the registry under its ``id``."""
     effect = effect_class()
     if not effect.id:

@@ -17,10 +17,15 @@ this extension corrects the constants, not theta: its assessment film factor is 
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ...physics.effects import lubricant_depletion as law
 from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..table import WindowTable
 
 __all__ = ['LINEAR_RATE_RANGE', 'LinearDepletion', 'LubricantDepletion', 'MIN_RESTS', 'RATE_RANGE', 'RECOVERY_RANGE',
            'RecoveringDepletion', 'RecoveringLinearDepletion']
@@ -52,7 +57,7 @@ class LubricantDepletion(Effect, law.Extension):
     linear = False
     recovers = False
 
-    def applicable(self, table) -> str:
+    def applicable(self, table: WindowTable) -> str:
         """Needs revolutions that grow through the recordings (and rests between runs to fit a recovery)."""
         finite = np.isfinite(table.revolutions)
         if finite.mean() < 0.8:
@@ -64,10 +69,10 @@ class LubricantDepletion(Effect, law.Extension):
         return ''
 
     @staticmethod
-    def _rests(table):
+    def _rests(table: WindowTable) -> np.ndarray:
         return law.rest_durations(table.revolutions, table.time, table.speed, table.recording)
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, float]:
         """Most revolutions in the recordings (and, for recovery, the median rest, s)."""
         out = {'revolution_scale': float(max(np.nanmax(table.revolutions), 1.0))}
         if self.recovers:
@@ -75,21 +80,21 @@ class LubricantDepletion(Effect, law.Extension):
             out['rest_scale'] = float(np.median(rests[rests > 0])) if np.any(rests > 0) else 1.0
         return out
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """N_max / N_d (and t_typ / tau_r) in their ranges."""
         rate = LINEAR_RATE_RANGE if self.linear else RATE_RANGE
         if self.recovers:
             return np.array([rate[0], RECOVERY_RANGE[0]]), np.array([rate[1], RECOVERY_RANGE[1]])
         return np.array([rate[0]]), np.array([rate[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Small, medium and large falls (each with slow and fast recovery)."""
         falls = (0.05, 0.2, 0.6) if not self.linear else (0.05, 0.2, 0.5)
         if self.recovers:
             return [np.array([f, r]) for f in falls for r in (0.3, 1.5)]
         return [np.array([f]) for f in falls]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """depletion_per_revolution (1/N_d), ``linear`` (1 or 0), recovery_rate (1/s) and the scales."""
         out = {'depletion_per_revolution': float(p[0] / scales['revolution_scale']),
                'linear': 1.0 if self.linear else 0.0, **scales}
@@ -97,11 +102,11 @@ class LubricantDepletion(Effect, law.Extension):
             out['recovery_rate'] = float(p[1] / scales['rest_scale'])
         return out
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Exponential and linear, each without and with recovery at rest."""
         return [self, LinearDepletion(), RecoveringDepletion(), RecoveringLinearDepletion()]
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """N_d, the fall of theta over the longest recording and the recovery."""
         rate = params['depletion_per_revolution']
         form = 'linear' if params.get('linear') else 'exponential'
@@ -124,7 +129,7 @@ class LinearDepletion(LubricantDepletion):
     equations = 'theta_eff = theta_Oil (1 - N_rev / N_d)'
     linear = True
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
@@ -137,7 +142,7 @@ class RecoveringDepletion(LubricantDepletion):
     parameter_names = ('depletion_fraction', 'recovery_fraction')
     recovers = True
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
@@ -151,6 +156,6 @@ class RecoveringLinearDepletion(LubricantDepletion):
     linear = True
     recovers = True
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]

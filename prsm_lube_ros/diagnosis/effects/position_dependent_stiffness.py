@@ -32,10 +32,15 @@ which is what a calibration stores.  The engine chooses the arrangement by BIC.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ...physics.effects import position_dependent_stiffness as law
 from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..table import WindowTable
 
 __all__ = ['FixedBeforeStartStiffness', 'FixedFixedStiffness', 'OFFSET_RANGE', 'PositionDependentStiffness',
            'SCALE_RANGE']
@@ -63,7 +68,7 @@ class PositionDependentStiffness(Effect, law.Extension):
     covariate = 'position'
     to_separate = 'full-stroke runs in both directions, so nut position is not tied to time or revolutions'
 
-    def applicable(self, table) -> str:
+    def applicable(self, table: WindowTable) -> str:
         """Needs nut positions that span part of the stroke inside runs."""
         finite = np.isfinite(table.position)
         if finite.mean() < 0.8:
@@ -73,27 +78,27 @@ class PositionDependentStiffness(Effect, law.Extension):
             return f'the nut moves {span * 1e3:.2f} mm at most in steady windows'
         return ''
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, float]:
         """Reference load (median) and stroke (largest steady position)."""
         finite = np.isfinite(table.position)
         return {'reference_load': float(np.median(table.load)),
                 'stroke': float(max(np.max(table.position[finite]), 1e-3))}
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """c s and the offset(s) in their ranges."""
         offsets = len(self.parameter_names) - 1
         return (np.r_[SCALE_RANGE[0], np.full(offsets, OFFSET_RANGE[0])],
                 np.r_[SCALE_RANGE[1], np.full(offsets, OFFSET_RANGE[1])])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Weak and strong compliance, bearings near and far."""
         return [np.array([c, o]) for c in (0.2, 1.0) for o in (0.1, 0.5)]
 
-    def _offsets(self, p) -> tuple[float, float]:
+    def _offsets(self, p: np.ndarray) -> tuple[float, float]:
         """(o_1 / s, o_2 / s) from the internal vector."""
         return 0.0, float(p[1])
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """The profile's ratios (what the law reads) and the physical parameters.
 
         contact_over_ea k_c / (E A) in 1/m, bearing_before / bearing_after in m
@@ -114,11 +119,11 @@ class PositionDependentStiffness(Effect, law.Extension):
             out['bearing_after'] = after * stroke
         return out
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Fixed bearing beyond the far end, before the start, and both ends fixed."""
         return [self, FixedBeforeStartStiffness(), FixedFixedStiffness()]
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """Arrangement, amplitude change along the stroke and where the bearing(s) would be."""
         a, b = params['ratio_at_start'], params['ratio_at_end']
         change = (1 + b) / (1 + a) - 1
@@ -141,10 +146,10 @@ class FixedBeforeStartStiffness(PositionDependentStiffness):
                  'length to the fixed bearing before the stroke start')
     parameter_names = ('contact_over_shaft', 'bearing_before_over_stroke')
 
-    def _offsets(self, p):
+    def _offsets(self, p: np.ndarray) -> tuple[float, float]:
         return float(p[1]), 0.0
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
@@ -158,18 +163,18 @@ class FixedFixedStiffness(PositionDependentStiffness):
                  'b = s + o_2 - x the free lengths either side of the nut')
     parameter_names = ('contact_over_shaft', 'bearing_before_over_stroke', 'bearing_after_over_stroke')
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Arches of several heights, symmetric and skewed."""
         return [np.array([c, o1, o2]) for c in (0.5, 2.0) for o1, o2 in ((0.1, 0.1), (0.05, 0.5), (0.5, 0.05))]
 
-    def _offsets(self, p):
+    def _offsets(self, p: np.ndarray) -> tuple[float, float]:
         return float(p[1]), float(p[2])
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """Amplitude mid-travel against the ends."""
         a, b, c = params['ratio_at_start'], params['ratio_at_end'], params['ratio_arch']
         mid = 0.5 * (a + b) + c

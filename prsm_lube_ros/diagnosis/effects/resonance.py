@@ -22,11 +22,16 @@ Each also fits the damping ratio zeta.  The engine chooses the form by BIC.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...physics.effects import resonance as law
 from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..locate import Location, SpectralLines
+    from ..table import WindowTable
 
 __all__ = ['BOTTOM_RATIO_RANGE', 'DAMPING_RANGE', 'REPORTED_ORDERS', 'Resonance', 'ResonanceBelowBand',
            'ResonanceInBand', 'TOP_RATIO_RANGE']
@@ -56,7 +61,7 @@ class Resonance(Effect, law.Extension):
     covariate = 'speed'
     to_separate = 'more screw speeds (at least 4, up to the highest the actuator runs) at each load'
 
-    def applicable(self, table) -> str:
+    def applicable(self, table: WindowTable) -> str:
         """Needs three speed levels at least (the shape of A against speed)."""
         from ...estimation.calibration import operating_levels
         levels = operating_levels(table.speed)
@@ -64,24 +69,25 @@ class Resonance(Effect, law.Extension):
             return f'{len(levels)} screw speed(s) recorded: a resonance needs 3 or more to show its shape'
         return ''
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, float]:
         """The highest and lowest recorded screw speeds, rad/s."""
         speed = np.abs(table.speed)
         return {'top_speed': float(np.max(speed)), 'bottom_speed': float(np.min(speed))}
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Frequency ratio at the top speed and damping ratio."""
         return (np.array([TOP_RATIO_RANGE[0], DAMPING_RANGE[0]]),
                 np.array([TOP_RATIO_RANGE[1], DAMPING_RANGE[1]]))
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """A grid of frequency ratios below resonance."""
         return [np.array([r, z]) for r in (0.4, 0.6, 0.75, 0.85, 0.93) for z in (0.03, 0.1)]
 
-    def _resonant_speed(self, p, scales) -> float:
+    def _resonant_speed(self, p: np.ndarray, scales: dict[str, float]) -> float:
         return scales['top_speed'] / p[0]
 
-    def independent_evidence(self, table, location, params=None) -> str:
+    def independent_evidence(self, table: WindowTable, location: Location | None,
+                             params: dict[str, float] | None = None) -> str:
         """Order lines whose powers follow one mode in Hz, or a band fixed in Hz whose power follows the speed.
 
         With fitted ``params`` the band must also follow the fitted transfer:
@@ -106,7 +112,7 @@ class Resonance(Effect, law.Extension):
                 f'natural frequency {lines.mode_frequencies[strongest]:.1f} Hz')
 
     @staticmethod
-    def _order_evidence(lines, params) -> str:
+    def _order_evidence(lines: SpectralLines, params: dict[str, float] | None) -> str:
         """Order-tracked line powers following one mode in Hz; with ``params``, at a tracked order's frequency.
 
         The fitted resonant speed omega_r and the spectrum's f_r must agree:
@@ -123,7 +129,7 @@ class Resonance(Effect, law.Extension):
         return 'spectrum: ' + found['note']
 
     @staticmethod
-    def _follows_transfer(lines, params) -> bool:
+    def _follows_transfer(lines: SpectralLines, params: dict[str, float]) -> bool:
         """Whether the strongest mode band's shares per speed follow the fitted magnification (see above)."""
         speeds = np.asarray(lines.mode_speeds, dtype=float)
         shares = np.asarray(max(lines.mode_shares, key=max), dtype=float)
@@ -133,15 +139,15 @@ class Resonance(Effect, law.Extension):
         strongest, expected = rank[int(np.argmax(shares))], rank[int(np.argmax(predicted))]
         return abs(int(strongest) - int(expected)) <= 1 and predicted.max() >= 0.25 * shares.max()
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """resonant_speed (rad/s), damping_ratio and the band's top and bottom speeds."""
         return {'resonant_speed': float(self._resonant_speed(p, scales)), 'damping_ratio': float(p[1]), **scales}
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Mode above, inside and below the speed band."""
         return [self, ResonanceInBand(), ResonanceBelowBand()]
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """Where the resonance lies, the natural frequency per order and the magnification at the band's ends."""
         speed = params['resonant_speed']
         top = params['top_speed'] / speed
@@ -161,18 +167,18 @@ class ResonanceInBand(Resonance):
     form = 'mode inside the speed band'
     parameter_names = ('band_position', 'damping_ratio')
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Position of omega_r in the band (log scale, 0..1) and damping ratio."""
         return np.array([0.0, DAMPING_RANGE[0]]), np.array([1.0, DAMPING_RANGE[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Across the band, light and moderate damping."""
         return [np.array([q, z]) for q in (0.15, 0.5, 0.85) for z in (0.03, 0.1)]
 
-    def _resonant_speed(self, p, scales):
+    def _resonant_speed(self, p: np.ndarray, scales: dict[str, float]) -> float:
         return scales['bottom_speed'] * (scales['top_speed'] / scales['bottom_speed']) ** float(p[0])
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
@@ -183,18 +189,18 @@ class ResonanceBelowBand(Resonance):
     form = 'mode below the speed band'
     parameter_names = ('bottom_ratio', 'damping_ratio')
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Frequency ratio at the lowest speed and damping ratio."""
         return (np.array([BOTTOM_RATIO_RANGE[0], DAMPING_RANGE[0]]),
                 np.array([BOTTOM_RATIO_RANGE[1], DAMPING_RANGE[1]]))
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Just past resonance to far past it."""
         return [np.array([r, z]) for r in (1.1, 1.5, 3.0) for z in (0.03, 0.1)]
 
-    def _resonant_speed(self, p, scales):
+    def _resonant_speed(self, p: np.ndarray, scales: dict[str, float]) -> float:
         return scales['bottom_speed'] / p[0]
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]

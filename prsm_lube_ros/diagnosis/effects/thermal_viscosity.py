@@ -14,10 +14,15 @@ margin.  Needs the contract's optional temperature topic.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ...physics.effects import thermal_viscosity as law
 from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..table import WindowTable
 
 __all__ = ['BETA_RANGE', 'LOG_VISCOSITY_RANGE', 'MIN_SPREAD', 'ThermalViscosity', 'VOGEL_DISTANCE_RANGE',
            'VogelViscosity', 'WaltherViscosity']
@@ -48,7 +53,7 @@ class ThermalViscosity(Effect, law.Extension):
     to_separate = ('temperature that does not rise with revolutions: cool down between runs, or run a warm '
                    'actuator after a rest, or record the oil temperature with runs in random order')
 
-    def applicable(self, table) -> str:
+    def applicable(self, table: WindowTable) -> str:
         """Needs a temperature in most windows that varies by :data:`MIN_SPREAD` K or more."""
         if not table.has_temperature:
             return 'no temperature recorded (/prsm/temperature is optional): cannot test'
@@ -57,30 +62,30 @@ class ThermalViscosity(Effect, law.Extension):
             return f'temperature varies by {spread:.2f} K only: cannot show a viscosity effect'
         return ''
 
-    def scales(self, table) -> dict:
+    def scales(self, table: WindowTable) -> dict[str, float]:
         """Reference temperature: the coldest recorded, degC."""
         return {'reference_temperature': float(np.nanmin(table.temperature))}
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """beta in :data:`BETA_RANGE`."""
         return np.array([BETA_RANGE[0]]), np.array([BETA_RANGE[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Typical oils."""
         return [np.array([0.01]), np.array([0.03]), np.array([0.07])]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """viscosity_temperature_coefficient (1/K) and reference_temperature (degC)."""
         return {'viscosity_temperature_coefficient': float(p[0]), **scales}
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """The exponential, Vogel and Walther laws."""
         return [self, VogelViscosity(), WaltherViscosity()]
 
-    def _law_words(self, params) -> str:
+    def _law_words(self, params: dict[str, float]) -> str:
         return 'exponential law (Reynolds)'
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """Viscosity law, its slope and the film factor 10 K above T_ref."""
         beta = params['viscosity_temperature_coefficient']
         reference = params['reference_temperature']
@@ -92,7 +97,7 @@ class ThermalViscosity(Effect, law.Extension):
 class _Temperature:
     """Covariates of one temperature (for :meth:`ThermalViscosity.describe`)."""
 
-    def __init__(self, temperature):
+    def __init__(self, temperature: float) -> None:
         self.temperature = float(temperature)
 
 
@@ -104,23 +109,23 @@ class VogelViscosity(ThermalViscosity):
                  'D = T_ref - T_V')
     parameter_names = ('viscosity_temperature_coefficient', 'vogel_distance')
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """beta and D in their ranges."""
         return np.array([BETA_RANGE[0], VOGEL_DISTANCE_RANGE[0]]), np.array([BETA_RANGE[1], VOGEL_DISTANCE_RANGE[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Typical oils, strongly and mildly curved."""
         return [np.array([b, d]) for b in (0.02, 0.05) for d in (60.0, 150.0)]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """beta (1/K), vogel_distance D (K), reference_temperature (degC)."""
         return {'viscosity_temperature_coefficient': float(p[0]), 'vogel_distance': float(p[1]), **scales}
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
-    def _law_words(self, params):
+    def _law_words(self, params: dict[str, float]) -> str:
         return (f'Vogel law, Vogel temperature T_V = {params["reference_temperature"] - params["vogel_distance"]:.0f} '
                 'degC')
 
@@ -132,24 +137,24 @@ class WaltherViscosity(ThermalViscosity):
     equations = ('theta_Oil C_lambda ... times (nu(T)/nu_ref)^0.68, log10 log10(nu + 0.7) = A - B log10 T_K')
     parameter_names = ('viscosity_temperature_coefficient', 'log_reference_viscosity')
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """beta and log10 nu_ref in their ranges."""
         return np.array([BETA_RANGE[0], LOG_VISCOSITY_RANGE[0]]), np.array([BETA_RANGE[1], LOG_VISCOSITY_RANGE[1]])
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Thin and thick oils."""
         return [np.array([b, v]) for b in (0.02, 0.05) for v in (1.0, 2.5)]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
         """beta (1/K), reference_viscosity nu_ref (mm^2/s), reference_temperature (degC)."""
         return {'viscosity_temperature_coefficient': float(p[0]), 'reference_viscosity': float(10.0 ** p[1]),
                 **scales}
 
-    def variants(self):
+    def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
 
-    def _law_words(self, params):
+    def _law_words(self, params: dict[str, float]) -> str:
         slope = law.walther_slope(params['viscosity_temperature_coefficient'], params['reference_temperature'],
                                   params['reference_viscosity'])
         return (f'Walther / ASTM D341 law, nu_ref = {params["reference_viscosity"]:.3g} mm^2/s at T_ref, '
