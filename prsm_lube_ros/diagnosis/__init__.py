@@ -19,17 +19,26 @@ law of :mod:`prsm_lube_ros.physics.effects`).  May import the base layer,
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 from ..estimation.windowing import MIN_AXIAL_LOAD
 from .effects import Effect, effect_ids, get_effect, register, registered
 from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
 from .table import table_from_windows, WindowTable
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from ..estimation.pipeline import RecordingWindows
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Effect', 'WindowTable',
            'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect', 'register', 'registered',
            'table_from_windows', 'write_report']
 
 
-def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = MIN_AXIAL_LOAD) -> Diagnosis:
+def diagnose_recordings(recordings: Sequence[RecordingWindows], theta: float = 1.0,
+                        min_axial_load: float = MIN_AXIAL_LOAD) -> Diagnosis:
     """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``.
 
     Recordings ``prsm-lube calibrate`` refuses are refused here with the same line: the calibration is fitted
@@ -44,7 +53,7 @@ def diagnose_recordings(recordings, theta: float = 1.0, min_axial_load: float = 
     return result
 
 
-def write_report(diagnosis: Diagnosis, folder):
+def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
     """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`)."""
     from .report import write_report as _write
     return _write(diagnosis, folder)

@@ -37,12 +37,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy import stats
 
 from ..estimation.calibration import condition_labels
 from ..validation import finite_or_none
+
+if TYPE_CHECKING:
+    from .table import WindowTable
 
 __all__ = ['LOF_P', 'LOF_TOLERANCE', 'LackOfFit', 'REPEAT_ADVICE', 'SETUP_SCATTER', 'lack_of_fit', 'run_conditions']
 
@@ -130,7 +135,7 @@ class LackOfFit:
                 'setup_scatter_limit': SETUP_SCATTER, 'significant': self.significant}
 
 
-def run_conditions(table) -> np.ndarray:
+def run_conditions(table: WindowTable) -> np.ndarray:
     """Condition index of each run (in :attr:`WindowTable.runs` order): its (speed level, load level) pair."""
     return condition_labels(table.run_means('speed'), table.run_means('load'))
 
@@ -138,7 +143,7 @@ def run_conditions(table) -> np.ndarray:
 REPEAT_ADVICE = 'record each (speed, load) condition in two runs or more'
 
 
-def lack_of_fit(table, log_residual, n_params: int) -> LackOfFit:
+def lack_of_fit(table: WindowTable, log_residual: npt.ArrayLike, n_params: int) -> LackOfFit:
     """The lack-of-fit test of a model with ``n_params`` fitted parameters (see module doc)."""
     residual = np.asarray(log_residual, dtype=float)
     n = residual.size

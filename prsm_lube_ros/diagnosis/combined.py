@@ -3,9 +3,15 @@
 """Two effects at once: to test whether each adds anything given the other, and to name both."""
 from __future__ import annotations
 
+from typing import Any, TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from .effects import Effect
+
+if TYPE_CHECKING:
+    from .table import Columns, WindowTable
 
 
 __all__ = ['CombinedEffect', 'GRID']
@@ -25,7 +31,8 @@ class CombinedEffect(Effect):
     both effects' starts.
     """
 
-    def __init__(self, first: Effect, second: Effect, first_start=None, second_start=None):
+    def __init__(self, first: Effect, second: Effect, first_start: npt.ArrayLike | None = None,
+                 second_start: npt.ArrayLike | None = None) -> None:
         """Combine ``first`` and ``second``; an amplitude-dependent gain (background) should come second."""
         self.added = second
         self._anchors = {id(first): first_start, id(second): second_start}
@@ -38,20 +45,20 @@ class CombinedEffect(Effect):
         self.parameter_names = first.parameter_names + second.parameter_names
         self._split = len(first.parameter_names)
 
-    def applicable(self, table):
+    def applicable(self, table: WindowTable) -> str:
         """Both must be testable."""
         return self.first.applicable(table) or self.second.applicable(table)
 
-    def scales(self, table):
+    def scales(self, table: WindowTable) -> dict[str, dict[str, Any]]:
         """Both effects' scales."""
         return {'first': self.first.scales(table), 'second': self.second.scales(table)}
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Both effects' bounds, concatenated."""
         (lo1, hi1), (lo2, hi2) = self.first.bounds(), self.second.bounds()
         return np.r_[lo1, lo2], np.r_[hi1, hi2]
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Both effects at their own fits where given, then a few of the grid of both effects' starts."""
         grid = [np.r_[a, b] for a in list(self.first.starts())[:GRID] for b in list(self.second.starts())[:GRID]]
         first = self._anchors[id(self.first)]
@@ -62,27 +69,28 @@ class CombinedEffect(Effect):
         seconds = [np.asarray(second, dtype=float)] if second is not None else list(self.second.starts())
         return [np.r_[a, b] for a in firsts for b in seconds] + grid[:GRID - 1]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: npt.ArrayLike, scales: dict[str, Any]) -> dict[str, dict[str, Any]]:
         """``{'first': params, 'second': params}``."""
         p = np.asarray(p, dtype=float)
         return {'first': self.first.to_params(p[:self._split], scales['first']),
                 'second': self.second.to_params(p[self._split:], scales['second'])}
 
-    def params_of(self, params: dict, effect: Effect) -> dict:
+    def params_of(self, params: dict[str, Any], effect: Effect) -> dict[str, Any]:
         """The parameters of ``effect`` (one of the two) in :meth:`to_params`' mapping."""
         return params['first' if effect is self.first else 'second']
 
-    def film_factor(self, params, covariates):
+    def film_factor(self, params: dict[str, Any], covariates: Columns) -> float | np.ndarray:
         """Product of both film factors."""
         return (self.first.film_factor(params['first'], covariates)
                 * self.second.film_factor(params['second'], covariates))
 
-    def log_gain(self, params, covariates, ln_a22):
+    def log_gain(self, params: dict[str, Any], covariates: Columns,
+                 ln_a22: float | np.ndarray) -> float | np.ndarray:
         """Sum of both gains."""
         gain = self.first.log_gain(params['first'], covariates, ln_a22)
         return gain + self.second.log_gain(params['second'], covariates, ln_a22 + gain)
 
-    def describe(self, params):
+    def describe(self, params: dict[str, Any]) -> str:
         """Both effects in words."""
         return (self.first.describe(params['first']) + ' Together with: '
                 + self.second.describe(params['second']))

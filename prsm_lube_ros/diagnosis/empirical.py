@@ -24,11 +24,16 @@ Each form comes with the physical causes that produce such a shape
 from __future__ import annotations
 
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from .effects import Effect
 from .locate import Location, time_segment
+
+if TYPE_CHECKING:
+    from .table import Columns, WindowTable
 
 __all__ = ['CAUSES', 'EmpiricalTerm', 'LOG_BOUND', 'causes', 'empirical_terms']
 
@@ -65,34 +70,35 @@ class EmpiricalTerm(Effect):
     physics = 'a term of the located shape fitted without a physical law'
     equations = 'ln A = ln A_22 + g(covariate)'
 
-    def __init__(self, covariate: str, form: str, *, runs=(), scale=(0.0, 1.0)):
+    def __init__(self, covariate: str, form: str, *, runs: npt.ArrayLike = (),
+                 scale: tuple[float, float] = (0.0, 1.0)) -> None:
         """``form`` 'step', 'stretch', 'direction' or 'smooth'; ``runs`` the run numbers the step/stretch covers."""
         self.covariate, self.form = covariate, form
         self.runs = np.asarray(runs, dtype=np.int64)
         self.scale = scale
         self.parameter_names = ('a', 'b') if form == 'smooth' else ('s',)
 
-    def _x(self, covariates):
+    def _x(self, covariates: Columns) -> np.ndarray:
         values = np.asarray(getattr(covariates, self.covariate), dtype=float)
         if self.covariate == 'speed':
             values = np.log(np.abs(values))
         return (values - self.scale[0]) / self.scale[1]
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Each coefficient within :data:`LOG_BOUND`."""
         k = len(self.parameter_names)
         return np.full(k, -LOG_BOUND), np.full(k, LOG_BOUND)
 
-    def starts(self):
+    def starts(self) -> list[np.ndarray]:
         """Zero and small terms either way."""
         k = len(self.parameter_names)
         return [np.zeros(k), np.full(k, 0.1), np.full(k, -0.1)]
 
-    def to_params(self, p, scales):
+    def to_params(self, p: np.ndarray, scales: dict[str, Any]) -> dict[str, float]:
         """The coefficients (dimensionless: changes of ln A)."""
         return {name: float(v) for name, v in zip(self.parameter_names, p)}
 
-    def log_gain(self, params, covariates, ln_a22):
+    def log_gain(self, params: dict[str, float], covariates: Columns, ln_a22: float | np.ndarray) -> np.ndarray:
         """g of the form (module doc)."""
         if self.form in ('step', 'stretch'):
             return params['s'] * np.isin(np.asarray(covariates.run), self.runs)
@@ -101,7 +107,7 @@ class EmpiricalTerm(Effect):
         z = np.nan_to_num(self._x(covariates))
         return params['a'] * z + params['b'] * (z * z - 1.0 / 3.0)
 
-    def describe(self, params):
+    def describe(self, params: dict[str, float]) -> str:
         """The fitted term in words."""
         if self.form in ('step', 'stretch'):
             where = 'after the step' if self.form == 'step' else 'in the stretch'
@@ -112,7 +118,8 @@ class EmpiricalTerm(Effect):
                 'scaled to [-1, 1]')
 
 
-def empirical_terms(table, residual, location: Location, significance: float) -> list[EmpiricalTerm]:
+def empirical_terms(table: WindowTable, residual: np.ndarray, location: Location,
+                    significance: float) -> list[EmpiricalTerm]:
     """The empirical terms of every shape the location found significant (time segment, direction, smooth)."""
     terms = []
     for test in location.tests:

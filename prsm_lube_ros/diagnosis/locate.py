@@ -69,6 +69,7 @@ the runs at one speed.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 import math
 from typing import Any
@@ -231,11 +232,12 @@ class Location:
                 'spectral_shape': self.shape.as_json()}
 
 
-def _finite(value):
+def _finite(value: float | None) -> Any:
     return float(value) if value is not None and math.isfinite(value) else None
 
 
-def _cluster_trend(residual, covariate, groups, name, kind) -> CovariateTest | None:
+def _cluster_trend(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray, name: str,
+                   kind: str) -> CovariateTest | None:
     """OLS slope of residual on covariate, cluster-robust SE by run, t test with G-1 dof."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
@@ -284,7 +286,8 @@ def _shape_words(name: str, amplitude: np.ndarray) -> str:
             f'{int(np.argmax(amplitude)) + 1} of {amplitude.size}')
 
 
-def _binned_run_means(residual, covariate, groups, name) -> CovariateTest | None:
+def _binned_run_means(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray,
+                      name: str) -> CovariateTest | None:
     """Any-shape test of a covariate that moves between runs: one-way ANOVA of run means over run bins."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
@@ -312,7 +315,8 @@ def _binned_run_means(residual, covariate, groups, name) -> CovariateTest | None
                          bin_centres=centres, bin_amplitudes=[float(v) for v in amplitude])
 
 
-def _binned_means(residual, covariate, groups, name, within_run: bool) -> CovariateTest | None:
+def _binned_means(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray, name: str,
+                  within_run: bool) -> CovariateTest | None:
     """Any-shape test: equal residual means over quantile bins, run-clustered Wald test (see module doc)."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
@@ -381,7 +385,7 @@ def _segment_statistics(cumulative: np.ndarray, starts: np.ndarray, stops: np.nd
     return sums ** 2 * total / (inside * (total - inside))
 
 
-def time_segment(table, residual) -> dict | None:
+def time_segment(table: WindowTable, residual: np.ndarray) -> dict[str, Any] | None:
     """The stretch of runs in recording order whose residual level differs most from the rest (see below).
 
     Returns None when there are too few runs, else a mapping: ``runs`` (run
@@ -418,7 +422,7 @@ def time_segment(table, residual) -> dict | None:
             'share': float(between[best] / total_ss)}
 
 
-def _segment_run_means(table, residual) -> CovariateTest | None:
+def _segment_run_means(table: WindowTable, residual: np.ndarray) -> CovariateTest | None:
     """A step or a segment in time: run levels in recording order, one stretch of runs against the rest.
 
     Runs are ordered by recording (as given) and time inside it.  For every
@@ -449,7 +453,7 @@ def _segment_run_means(table, residual) -> CovariateTest | None:
                          bin_amplitudes=[float(v) for v in amplitude - amplitude.mean()])
 
 
-def direction_pairs(table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def direction_pairs(table: WindowTable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Runs by direction of travel, paired by condition: (run's condition key, run is a return, run used).
 
     A return run has ``direction`` -1 (the nut comes back under load).  Runs
@@ -465,7 +469,7 @@ def direction_pairs(table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return key, back, both
 
 
-def _direction_test(table, residual) -> CovariateTest | None:
+def _direction_test(table: WindowTable, residual: np.ndarray) -> CovariateTest | None:
     """Out and back at the same speed and load: the run-level residual of returns minus outs, paired by condition.
 
     One difference per condition run both ways (mean over its return runs minus
@@ -495,7 +499,7 @@ def _direction_test(table, residual) -> CovariateTest | None:
                          bin_centres=[1.0, -1.0], bin_amplitudes=[-0.5 * log_ratio, 0.5 * log_ratio])
 
 
-def _level_means(residual, values, groups, name) -> CovariateTest | None:
+def _level_means(residual: np.ndarray, values: np.ndarray, groups: np.ndarray, name: str) -> CovariateTest | None:
     """F test of residual means per operating level, with the effective sample size."""
     levels = operating_levels(values)
     if len(levels) < 2:
@@ -562,7 +566,8 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     return result
 
 
-def _speed_spectra(table: WindowTable):
+def _speed_spectra(table: WindowTable) -> str | tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                                      np.ndarray, float]:
     """Median spectra per speed level and what the line tests need, or why there are none (a str).
 
     Returns ``(levels, level of each window, medians, floors, excess, widened,
@@ -616,7 +621,8 @@ def fixed_line_power(table: WindowTable) -> float:
     return power
 
 
-def _order_lines(medians, floors, excess, speeds, df) -> list:
+def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
+                 df: float) -> Sequence[tuple[float, dict[int, float]]]:
     """Rotation-order lines: peaks standing at the same order (f / f_S) at three speeds or more.
 
     Returns ``[(order, {level: power})]``, power (m/s^2)^2 of the line over its floor at each speed level.
@@ -651,7 +657,8 @@ def _order_lines(medians, floors, excess, speeds, df) -> list:
     return lines
 
 
-def order_tracked_mode(medians, floors, excess, speeds, df) -> dict:
+def order_tracked_mode(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
+                       df: float) -> dict[str, Any]:
     """A mode the rotation orders pass through, from the powers of order lines (module doc).
 
     Each line seen at the same order at three speeds or more gives its power
@@ -694,7 +701,8 @@ def order_tracked_mode(medians, floors, excess, speeds, df) -> dict:
                      f'p = {p_value:.2g}') if found else ''}
 
 
-def _mode_through_orders(design, log_power, frequency):
+def _mode_through_orders(design: np.ndarray, log_power: np.ndarray,
+                         frequency: np.ndarray) -> tuple[float, float, float, float, np.ndarray]:
     """(F, p, f_r, zeta, null residual) of ``ln P = design + ln |H(f / f_r)|^2`` against ``ln P = design``.
 
     f_r on a log grid from half the lowest to twice the highest line frequency,
@@ -703,7 +711,7 @@ def _mode_through_orders(design, log_power, frequency):
     """
     from ..physics.effects.resonance import magnification
 
-    def fit(target):
+    def fit(target: np.ndarray) -> tuple[float, np.ndarray]:
         coef, *_ = np.linalg.lstsq(design, target, rcond=None)
         residual = target - design @ coef
         return float(np.sum(residual ** 2)), residual
@@ -723,7 +731,7 @@ def _mode_through_orders(design, log_power, frequency):
     return statistic, p_value, best[1], best[2], null_residual
 
 
-def _excess(medians: np.ndarray, half_width: int):
+def _excess(medians: np.ndarray, half_width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(floors, excess, widened) of spectra per speed level (rows).
 
     Floors are running medians over ``2 half_width + 1`` bins, excess the
@@ -735,13 +743,15 @@ def _excess(medians: np.ndarray, half_width: int):
     return floors, excess, np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
 
 
-def _line_groups(candidate: np.ndarray) -> list:
+def _line_groups(candidate: np.ndarray) -> list[np.ndarray]:
     """Runs of candidate bins (gaps of up to two bins joined)."""
     bins = np.flatnonzero(candidate)
     return np.split(bins, np.flatnonzero(np.diff(bins) > 2) + 1) if bins.size else []
 
 
-def _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, slow, df) -> None:
+def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray, excess: np.ndarray,
+                 widened: np.ndarray, freqs: np.ndarray, lowest: float, mean_square: np.ndarray, slow: np.ndarray,
+                 df: float) -> None:
     """Lines prominent at the two lowest speeds whose power stays put while the total power moves."""
     candidate = np.all(widened[slow] >= LINE_PROMINENCE, axis=0) & (freqs >= lowest)
     candidate &= excess[slow].max(axis=0) >= LINE_PROMINENCE
@@ -768,7 +778,8 @@ def _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_s
         result.note = 'no fixed-frequency line with constant power'
 
 
-def _mode_bands(result, medians, freqs, mean_square, edges, df) -> None:
+def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, mean_square: np.ndarray,
+                edges: np.ndarray, df: float) -> None:
     """Bands fixed in Hz at three speeds or more whose power and share of ``mean_square`` follow the speed.
 
     ``mean_square`` per speed level is the paper's model's: the contact's own
@@ -839,7 +850,7 @@ def _shape(band_power: np.ndarray) -> np.ndarray:
     return mean / mean.sum()
 
 
-def spectral_shape(table: WindowTable, exclude=()) -> SpectralShape:
+def spectral_shape(table: WindowTable, exclude: Sequence[float] = ()) -> SpectralShape:
     """The third-octave spectral shape at the lowest against the highest speed (module doc).
 
     Bands within an octave of a frequency of ``exclude`` (Hz: a mode's band,
