@@ -65,7 +65,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import StrEnum
 import math
-from typing import Any, cast
+from typing import Any, cast, Collection, Sequence, TYPE_CHECKING, TypeVar
 
 import numpy as np
 
@@ -81,6 +81,12 @@ from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, f
     predict_log, score_held_out
 from .locate import locate, Location, SIGNIFICANCE
 from .table import WindowTable
+
+if TYPE_CHECKING:
+    from ..estimation.run_scatter import RunScatter
+
+#: An effect, or a combination of two (:func:`_choose_form` returns the kind it is given).
+_E = TypeVar('_E', bound=Effect)
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'BIC_MARGIN', 'CANNOT_TELL', 'COLLINEAR', 'CONFOUNDED', 'Candidate',
            'Confounding', 'Diagnosis', 'EVIDENCE_TOLERANCE', 'EmpiricalFit', 'FORM_MARGIN', 'FORM_TIE',
@@ -199,7 +205,7 @@ class EmpiricalFit:
         """It earns its parameters as a candidate would (BIC and held-out gain)."""
         return self.delta_bic <= -BIC_MARGIN and self.gain >= MIN_GAIN and not self.fit.unphysical()
 
-    def beats(self, named: ModelFit, covariates=()) -> bool:
+    def beats(self, named: ModelFit, covariates: Collection[str] = ()) -> bool:
         """True when it predicts held-out runs better than ``named`` (the catalogue model) does.
 
         A step, stretch or direction factor is a shape no catalogue law has: the
@@ -229,11 +235,12 @@ class EmpiricalFit:
     def as_json(self) -> dict:
         """The ``empirical`` block."""
         term = self.term
-        out = {'covariate': term.covariate, 'form': term.form, 'params': _clean(self.fit.params),
-               'explanation': term.describe(self.fit.params), 'gain': _num(self.gain),
-               'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'earns': self.earns,
-               'causes': causes(term), 'overrules': self.overrules or None,
-               'constants': self.fit.constants.by_name()}
+        out: dict[str, Any] = {
+            'covariate': term.covariate, 'form': term.form, 'params': _clean(self.fit.params),
+            'explanation': term.describe(self.fit.params), 'gain': _num(self.gain),
+            'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'earns': self.earns,
+            'causes': causes(term), 'overrules': self.overrules or None,
+            'constants': self.fit.constants.by_name()}
         if term.form in ('step', 'stretch'):
             out['runs'] = [int(r) for r in term.runs]
         return out
@@ -356,13 +363,13 @@ class Diagnosis:
                          'reference_theta': table.theta, 'sources': list(table.sources)}}
 
 
-def _num(value):
+def _num(value: float | None) -> float | None:
     return float(value) if value is not None and math.isfinite(value) else None
 
 
 def _clean(params: dict) -> dict:
     """JSON-safe copy: non-finite floats become None."""
-    out = {}
+    out: dict[str, Any] = {}
     for key, value in params.items():
         if isinstance(value, dict):
             out[key] = _clean(value)
@@ -373,7 +380,8 @@ def _clean(params: dict) -> dict:
     return out
 
 
-def _constant_covariance(table, fit: ModelFit, effect):
+def _constant_covariance(table: WindowTable, fit: ModelFit,
+                         effect: Effect | None) -> tuple[np.ndarray, RunScatter, float, str]:
     """Covariance of (ln C_sys, C_F, C_lambda) with the effect parameters held, under the run-effect model.
 
     The Jacobian J of the log prediction stands for the design matrix of
@@ -399,7 +407,8 @@ def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
     return own - bic(reference.log_residual, reference.n_params, n_eff)
 
 
-def _choose_form(table, forms: list, folds):
+def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
+        -> tuple[_E, ModelFit, list[tuple[str, float]], list[str], dict[str, np.ndarray]]:
     """Fit every form (Effects of one ID) on all windows; the chosen form's fit (with held-out scores) and all BICs.
 
     Forms are compared on one effective sample size: each fit's own would favour the form that leaves the
@@ -424,14 +433,15 @@ def _choose_form(table, forms: list, folds):
             ties, vectors)
 
 
-def _named_form(effect: Effect, params: dict, table, location, ties) -> str:
+def _named_form(effect: Effect, params: dict[str, Any], table: WindowTable, location: Location | None,
+                ties: Sequence[str]) -> str:
     """The form the fit shows, with the forms that fit as well (each named once)."""
     form = effect.form_name(params, table, location)
     others = [t for t in dict.fromkeys(ties) if t not in (form, effect.form)]
     return ' or '.join([form, *others]) + ' (the data fit these forms equally well)' if others else form
 
 
-def _too_few_conditions(table, effect: Effect, location: Location) -> str:
+def _too_few_conditions(table: WindowTable, effect: Effect, location: Location) -> str:
     """Why an effect that acts only through speed and load cannot be tested on this plan ('' if it can).
 
     Its law is a function of the (speed, load) condition, so it needs at least
@@ -448,7 +458,8 @@ def _too_few_conditions(table, effect: Effect, location: Location) -> str:
             f'speed and load cannot be tested on so few conditions (record {needed - conditions} more)')
 
 
-def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, folds) -> Candidate:
+def _evaluate(table: WindowTable, effect: Effect, baseline: ModelFit, location: Location,
+              folds: list[int]) -> Candidate:
     family = effect
     reason = effect.applicable(table) or _too_few_conditions(table, effect, location)
     if reason:
@@ -478,7 +489,7 @@ def _evaluate(table, effect: Effect, baseline: ModelFit, location: Location, fol
     return candidate
 
 
-def _pair_test(table, leader: Candidate, runner: Candidate, folds) -> tuple[bool, bool]:
+def _pair_test(table: WindowTable, leader: Candidate, runner: Candidate, folds: list[int]) -> tuple[bool, bool]:
     """Fit both effects together and say whether each adds to the other (BIC drop of BIC_MARGIN)."""
     assert leader.fit is not None and runner.fit is not None  # both earn, so both were fitted
     both = CombinedEffect(leader.effect, runner.effect)
@@ -504,7 +515,8 @@ def _earns_by_bic(pair: SecondEffect, margin: float) -> bool:
     return True
 
 
-def _best_pair(table, combos: list, reference: ModelFit, other: Candidate, folds, location) -> SecondEffect | None:
+def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: ModelFit, other: Candidate,
+               folds: list[int], location: Location) -> SecondEffect | None:
     """The best of ``combos`` by BIC with physical constants, as a :class:`SecondEffect` on ``reference``."""
     combos = [both for both in combos if not both.applicable(table)]
     if not combos or not reference.cv_rmse > 0:
@@ -521,7 +533,8 @@ def _best_pair(table, combos: list, reference: ModelFit, other: Candidate, folds
                         kept, first_params, kept.form_name(first_params, table, location), combined=both)
 
 
-def _add_second(table, first: Candidate, other: Candidate, folds, location, left: Location) -> SecondEffect | None:
+def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int], location: Location,
+                left: Location) -> SecondEffect | None:
     """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC.
 
     The pair names ``other`` when its constants are physical and, beside
@@ -550,7 +563,7 @@ def _add_second(table, first: Candidate, other: Candidate, folds, location, left
     return pair if _earns_by_evidence(table, pair, other, location) else None
 
 
-def _earns_by_evidence(table, pair: SecondEffect, other: Candidate, location) -> bool:
+def _earns_by_evidence(table: WindowTable, pair: SecondEffect, other: Candidate, location: Location) -> bool:
     """The evidence rule: ``other`` shows outside the amplitude fit and costs little held-out (route, basis set).
 
     ``other`` has evidence outside the amplitude fit, with the pair's
@@ -565,7 +578,8 @@ def _earns_by_evidence(table, pair: SecondEffect, other: Candidate, location) ->
     return True
 
 
-def _second_effect(table, first: Candidate, candidates, folds, location) -> tuple[SecondEffect | None, list]:
+def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candidate], folds: list[int],
+                   location: Location) -> tuple[SecondEffect | None, list[SecondEffect]]:
     """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
 
     Tried only when the first effect leaves a lack of fit or a located pattern,
@@ -606,7 +620,8 @@ def _second_effect(table, first: Candidate, candidates, folds, location) -> tupl
 PAIR_POOL = 3
 
 
-def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) -> tuple[Candidate, SecondEffect] | None:
+def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],
+                          location: Location) -> tuple[Candidate, SecondEffect] | None:
     """Two effects that only together explain the mismatch: ``(first, second)`` or None.
 
     Among the :data:`PAIR_POOL` candidates with evidence outside the amplitude
@@ -621,6 +636,9 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) ->
     best = None
     for i, first in enumerate(pool):
         for other in pool[i + 1:]:
+            # the pool holds fitted candidates only
+            assert first.family is not None and other.family is not None
+            assert first.fit is not None and other.fit is not None
             combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
                       for a in first.family.variants()
                       for b in other.family.variants()]
@@ -636,7 +654,8 @@ def _pair_when_none_earns(table, ranked, baseline: ModelFit, folds, location) ->
     return best
 
 
-def _spectral_tiebreak(table, location, first: Candidate, second: Candidate) -> Candidate | None:
+def _spectral_tiebreak(table: WindowTable, location: Location, first: Candidate,
+                       second: Candidate) -> Candidate | None:
     """The candidate to drop from a tie on evidence outside the amplitude fit, or None."""
     for cand in (first, second):
         # tied candidates both earn, so both were fitted
@@ -696,7 +715,7 @@ def confounding(table: WindowTable) -> list[Confounding]:
     return found
 
 
-def _empirical(table, baseline: ModelFit, location: Location, folds) -> EmpiricalFit | None:
+def _empirical(table: WindowTable, baseline: ModelFit, location: Location, folds: list[int]) -> EmpiricalFit | None:
     """The empirical term (of each significant located shape) that predicts held-out runs best, or None."""
     best = None
     for term in empirical_terms(table, baseline.log_residual, location, SIGNIFICANCE):
@@ -723,7 +742,8 @@ def drift_correlation(table: WindowTable, first: str = 'temperature', second: st
     return float(np.corrcoef(x[ok], y[ok])[0, 1])
 
 
-def _held_out_tiebreak(table, first: Candidate, second: Candidate, correlation: float) -> Candidate | None:
+def _held_out_tiebreak(table: WindowTable, first: Candidate, second: Candidate,
+                       correlation: float) -> Candidate | None:
     """The candidate to drop from a tie between laws of two drift covariates that the recording does not tie.
 
     When the two follow different recorded covariates (temperature and
@@ -827,7 +847,8 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
                      temperature_revolutions=correlation)
 
 
-def _plan_notes(table, baseline: ModelFit, folds, confounded_with, correlation: float) -> list[str]:
+def _plan_notes(table: WindowTable, baseline: ModelFit, folds: list[int], confounded_with: list[Confounding],
+                correlation: float) -> list[str]:
     """What the plan and the paper's model say before any candidate: unphysical constants, confounding, ..."""
     notes = []
     if baseline.unphysical():
@@ -843,7 +864,8 @@ def _plan_notes(table, baseline: ModelFit, folds, confounded_with, correlation: 
     return notes
 
 
-def _settle_earning(table, earning: list[Candidate], out: _Outcome, folds, location, correlation: float) -> None:
+def _settle_earning(table: WindowTable, earning: list[Candidate], out: _Outcome, folds: list[int], location: Location,
+                    correlation: float) -> None:
     """Among candidates that earn alone: the one named, or a tie (``ambiguous``), each runner-up with its reason."""
     best = earning[0]
     out.verdict = best.effect.id
@@ -891,8 +913,8 @@ def _settle_earning(table, earning: list[Candidate], out: _Outcome, folds, locat
     out.best = best
 
 
-def _when_none_earns(table, ranked: list[Candidate], baseline: ModelFit, baseline_test: LackOfFit, location,
-                     folds, conditions: int, out: _Outcome) -> None:
+def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, baseline_test: LackOfFit,
+                     location: Location, folds: list[int], conditions: int, out: _Outcome) -> None:
     """No candidate earns alone: two that only together explain a mismatch, ``unexplained``, or adequate."""
     pattern = location.located not in ('none', 'spectrum')
     mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
@@ -961,7 +983,8 @@ def _let_empirical_overrule(out: _Outcome, empirical: EmpiricalFit | None) -> No
         out.notes.append(empirical.note)
 
 
-def _name_second_and_test(table, out: _Outcome, candidates, folds, location) -> LackOfFit | None:
+def _name_second_and_test(table: WindowTable, out: _Outcome, candidates: list[Candidate], folds: list[int],
+                          location: Location) -> LackOfFit | None:
     """With one effect named: the second effect (forward selection) and the lack of fit of what is named."""
     best = out.best
     if best is None or out.verdict != best.effect.id:
