@@ -17,9 +17,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from typing import TYPE_CHECKING
 
 from ..errors import InputError
 from .common import EXIT_USER_ERROR
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 #: Command modules, in the order ``--help`` lists them.
 COMMAND_MODULES = ('simulate', 'calibrate', 'assess', 'trend', 'diagnose', 'demo', 'run')
@@ -38,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)

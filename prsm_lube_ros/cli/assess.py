@@ -4,14 +4,23 @@
 from __future__ import annotations
 
 import sys
+from typing import TYPE_CHECKING
 
 from .common import add_recording_options, EXIT_USER_ERROR
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Sequence
+
+    from ..estimation.calibration import Calibration
+    from ..estimation.pipeline import RecordingAssessment
+    from ..fleet.parallel import BagOutcome
 
 
 __all__ = ['add_command', 'run']
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``assess`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(
         'assess', help='theta_oil for every steady window and run',
@@ -34,7 +43,7 @@ def add_command(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """theta_Oil for every steady window and run; table on stdout, JSON and history if asked.
 
     A recording that cannot be assessed is one line on stderr; the others are
@@ -63,7 +72,7 @@ def run(args) -> int:
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
     refused = []
 
-    def done(outcome) -> None:
+    def done(outcome: BagOutcome) -> None:
         """Write each finished recording into the history at once (this process), so a killed run keeps it."""
         if to_history is not None:
             refused.append(to_history(outcome))
@@ -94,7 +103,7 @@ def run(args) -> int:
     return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
 
 
-def _print_table(results, calibration, calibration_path) -> None:
+def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:
     """The calibration's band and flags, then one line per run; ``!`` and ``~`` runs explained below it."""
     import math
     from pathlib import Path
@@ -125,7 +134,7 @@ def _print_table(results, calibration, calibration_path) -> None:
         print(f'~ {name} run {run_index}: {flag}')
 
 
-def _actuator_id(args) -> str:
+def _actuator_id(args: argparse.Namespace) -> str:
     """The history's actuator id: ``--actuator-id``, else the namespace when all recordings share one folder.
 
     Recordings from several folders under the default id would merge distinct

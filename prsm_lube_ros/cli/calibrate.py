@@ -3,13 +3,18 @@
 """``prsm-lube calibrate``: fit C_sys, C_F and C_lambda on reference recordings and write them."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from .common import add_band_option, add_recording_options
+
+if TYPE_CHECKING:
+    import argparse
 
 
 __all__ = ['add_command', 'run']
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``calibrate`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(
         'calibrate', help='fit C_sys, C_F, C_lambda from reference recordings',
@@ -24,7 +29,7 @@ def add_command(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Fit the constants on reference recordings and write the calibration file."""
     from ..estimation.calibration_file import save_calibration
     from ..estimation.pipeline import calibrate_recordings

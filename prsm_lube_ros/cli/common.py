@@ -9,9 +9,19 @@ from __future__ import annotations
 import json
 from pathlib import Path
 import sys
+from typing import TYPE_CHECKING
 
 from ..errors import ConfigError
 from ..validation import finite_or_none
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Callable, Iterable
+
+    from tqdm import tqdm
+
+    from ..estimation.pipeline import RecordingWindows
+    from ..physics.actuator import Actuator
 
 __all__ = ['EXIT_USER_ERROR', 'add_band_option', 'add_recording_options', 'percent_updater', 'progress_bar',
            'read_recordings', 'warn', 'write_json']
@@ -20,7 +30,7 @@ __all__ = ['EXIT_USER_ERROR', 'add_band_option', 'add_recording_options', 'perce
 EXIT_USER_ERROR = 2
 
 
-def add_recording_options(parser) -> None:
+def add_recording_options(parser: argparse.ArgumentParser) -> None:
     """``--namespace``, ``--window`` and ``--actuator``, for commands that read recordings."""
     parser.add_argument('--namespace', default='/prsm', help='topic namespace of the actuator (default /prsm)')
     parser.add_argument('--window', type=float, default=1.0, metavar='S',
@@ -29,7 +39,7 @@ def add_recording_options(parser) -> None:
                         help='actuator geometry (default: the contract\'s default actuator)')
 
 
-def progress_bar(total: int, description: str, unit: str = '%'):
+def progress_bar(total: int, description: str, unit: str = '%') -> tqdm:
     """A tqdm bar on stderr that hides itself when stderr is not a terminal; counts ``unit`` (default percent)."""
     from tqdm import tqdm
     if unit != '%':
@@ -38,11 +48,11 @@ def progress_bar(total: int, description: str, unit: str = '%'):
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 
 
-def percent_updater(bar):
+def percent_updater(bar: tqdm) -> Callable[[float], None]:
     """A ``progress(fraction)`` callback that advances ``bar`` in whole percent."""
     last = [0]
 
-    def progress(fraction):
+    def progress(fraction: float) -> None:
         step = int(100 * fraction)
         if step > last[0]:
             bar.update(step - last[0])
@@ -55,14 +65,15 @@ def warn(line: str) -> None:
     print(f'warning: {line}', file=sys.stderr)
 
 
-def add_band_option(parser) -> None:
+def add_band_option(parser: argparse.ArgumentParser) -> None:
     """``--band-high``: the analysis band's upper edge for a new calibration (default: from the first recording)."""
     parser.add_argument('--band-high', type=float, metavar='HZ', default=None,
                         help='upper edge of the analysis band, Hz (default 0.8 x the Nyquist frequency of the first '
                         'recording; 1600 lets one calibration serve every rate from 4 kHz up)')
 
 
-def read_recordings(paths, args, *, spectra: bool = False):
+def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
+                    spectra: bool = False) -> tuple[list[RecordingWindows], Actuator]:
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
     from dataclasses import replace
     from ..estimation.pipeline import analysis_settings, recording_windows, require_usable
@@ -86,7 +97,7 @@ def read_recordings(paths, args, *, spectra: bool = False):
     return recordings, actuator
 
 
-def write_json(path, document) -> None:
+def write_json(path: str | Path, document: object) -> None:
     """``document`` as indented JSON at ``path`` (folders made); NaN and infinities are never written.
 
     JSON has no NaN: a non-finite number that reached the document (the
@@ -103,7 +114,7 @@ def write_json(path, document) -> None:
         raise ConfigError(f'{path}: cannot write ({exc.strerror or exc})') from None
 
 
-def _finite_or_null(value):
+def _finite_or_null(value: object) -> object:
     """``value`` with every non-finite float (at any depth of dicts and lists) replaced by None."""
     if isinstance(value, float):
         return finite_or_none(value)

@@ -14,12 +14,20 @@ tables together; the exit status is 0 only when every step's check passes.
 from __future__ import annotations
 
 import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Callable
+    from pathlib import Path
+
+    from .demo_steps import StepResult
 
 
 __all__ = ['add_command', 'run']
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``demo`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(
         'demo', help='the whole product in four checked steps: paper, live graph, concealed physics, fleet',
@@ -47,18 +55,18 @@ def add_command(subparsers) -> None:
 class _Tee:
     """A stream that writes to stdout and keeps the lines (step 1's printout for the page)."""
 
-    def __init__(self):
-        self.text = []
+    def __init__(self) -> None:
+        self.text: list[str] = []
 
-    def write(self, text):
+    def write(self, text: str) -> None:
         self.text.append(text)
         sys.stdout.write(text)
 
-    def flush(self):
+    def flush(self) -> None:
         sys.stdout.flush()
 
 
-def _paper_step(out, args, say):
+def _paper_step(out: Path, args: argparse.Namespace, say: Callable[[str], None]) -> StepResult:
     """Step 1 as :func:`~prsm_lube_ros.experiments.paper_demo.run_demo` runs it, as a StepResult."""
     import json
     import shutil
@@ -92,13 +100,13 @@ def _paper_step(out, args, say):
     return step
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Run the steps, print what each shows and its checks, write index.html; 0 when every check passes."""
     from pathlib import Path
     from .demo_page import write_page
     from .demo_steps import diagnosis_step, fleet_step, live_step
 
-    def say(text=''):
+    def say(text: str = '') -> None:
         print(text, flush=True)
 
     out = Path(args.out)
@@ -106,7 +114,7 @@ def run(args) -> int:
     total = 1 if args.quick else 4
     steps = []
 
-    def header(number, title):
+    def header(number: int, title: str) -> None:
         say()
         say(f'=== Step {number}/{total}: {title} ===')
 

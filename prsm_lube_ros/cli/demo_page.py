@@ -30,7 +30,7 @@ def _verdict(passed: bool) -> str:
     return '<span class="pass">PASS</span>' if passed else '<span class="fail">FAIL</span>'
 
 
-def _relative(path, folder: Path) -> str:
+def _relative(path: str | Path, folder: Path) -> str:
     return html.escape(Path(os.path.relpath(Path(path).resolve(), folder.resolve())).as_posix(), quote=True)
 
 

@@ -4,12 +4,16 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import argparse
 
 
 __all__ = ['add_command', 'run']
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``diagnose`` to the ``prsm-lube`` subcommands."""
     from .common import add_band_option, add_recording_options
     parser = subparsers.add_parser(
@@ -28,7 +32,7 @@ def add_command(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Handler of ``prsm-lube diagnose``; returns the exit status."""
     from ..validation import reference_theta
     from .common import read_recordings, write_json

@@ -3,11 +3,18 @@
 """``prsm-lube simulate``: contract recordings of the paper's experiment from the rig simulator."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import argparse
+
+    from ..simulation.rig_config import ExperimentPlan, RigConfig
+
 
 __all__ = ['add_command', 'run']
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``simulate`` to the ``prsm-lube`` subcommands."""
     from ..physics.effects import effect_ids
     parser = subparsers.add_parser(
@@ -40,7 +47,7 @@ def add_command(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Write contract recordings of the paper's experiment (or one long endurance recording)."""
     from ..recording.writer import bag_path
     from ..simulation.recordings import draw_effects, simulate_endurance, simulate_experiment
@@ -54,7 +61,7 @@ def run(args) -> int:
     bar = progress_bar(100, 'simulating')
     done = [0]
 
-    def progress(done_s, total_s):
+    def progress(done_s: float, total_s: float) -> None:
         step = int(100 * done_s / total_s) if total_s > 0 else 100
         if step > done[0]:
             bar.update(step - done[0])
@@ -78,7 +85,7 @@ def run(args) -> int:
     return 0
 
 
-def _simulate_fleet(args, rig, plan) -> int:
+def _simulate_fleet(args: argparse.Namespace, rig: RigConfig, plan: ExperimentPlan) -> int:
     """``--fleet K --days D``: the fleet's recordings, truth.json and the reference recording."""
     from ..simulation.fleet import FleetPlan, simulate_fleet
     from ..validation import require

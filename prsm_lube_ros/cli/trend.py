@@ -16,8 +16,24 @@ actuator the history does not have are each one line on stderr (``file`` or
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast, TYPE_CHECKING
 
 from .common import EXIT_USER_ERROR
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Mapping, Sequence
+    from pathlib import Path
+
+    from ..fleet.forecast import ActuatorForecast, RecordingPoint
+    from ..fleet.planner import PlannedCrossing
+
+    #: Each actuator's recording points.
+    _Points = Mapping[str, Sequence[RecordingPoint]]
+    #: Relubrications per actuator, s since the epoch (None: found as jumps up).
+    _Relubrications = dict[str, list[float]] | None
+    #: Odometers per actuator: (times s since the epoch, cumulative revolutions).
+    _Odometers = dict[str, tuple[list[float], list[float]]] | None
 
 __all__ = ['BY_DAYS', 'TrendOptions', 'add_command', 'run']
 
@@ -25,7 +41,7 @@ __all__ = ['BY_DAYS', 'TrendOptions', 'add_command', 'run']
 BY_DAYS = 30.0
 
 
-def add_command(subparsers) -> None:
+def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``trend`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(
         'trend', help='theta_oil history per actuator and the forecast of the warn and error crossings',
@@ -69,7 +85,7 @@ class TrendOptions:
     by: float
 
 
-def _options(args) -> TrendOptions:
+def _options(args: argparse.Namespace) -> TrendOptions:
     """Check the levels, ``--level`` and the dates; one-line errors."""
     import datetime
     from ..errors import InputError
@@ -100,7 +116,7 @@ def _date(option: str, text: str) -> float:
     return stamp.timestamp()
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     """Forecast every actuator of the history; table on stdout, JSON, Markdown and one plot each."""
     from pathlib import Path
     from ..errors import ConfigError
@@ -122,7 +138,8 @@ def run(args) -> int:
     return EXIT_USER_ERROR if problems else 0
 
 
-def _service_logs(args, points, problems: list[str]):
+def _service_logs(args: argparse.Namespace, points: _Points,
+                  problems: list[str]) -> tuple[_Relubrications, _Odometers, dict[str, str]]:
     """Relubrications, odometers without the problem ones, and each problem actuator's reason."""
     from ..fleet.history import actuator_key
     from ..fleet.service_log import odometer_problems, odometer_readings, read_relubrications
@@ -138,7 +155,8 @@ def _service_logs(args, points, problems: list[str]):
                                        if actuator_key(name) in points}
 
 
-def _forecast(args, options: TrendOptions, points, relubrications, odometers, odometer_reasons, report) -> None:
+def _forecast(args: argparse.Namespace, options: TrendOptions, points: _Points, relubrications: _Relubrications,
+              odometers: _Odometers, odometer_reasons: dict[str, str], report: Path) -> None:
     """Forecast, plan, print the table and write trend.json, trend.md and the plots."""
     from ..fleet.forecast import forecast_points
     from ..fleet.planner import plan
@@ -168,7 +186,8 @@ def _utc(seconds: float | None) -> str:
     return utc_minutes(seconds) or 'never'
 
 
-def _document(args, options: TrendOptions, forecasts, plans) -> dict:
+def _document(args: argparse.Namespace, options: TrendOptions, forecasts: Sequence[ActuatorForecast],
+              plans: Mapping[str, list[PlannedCrossing]]) -> dict:
     """trend.json: options, and per actuator the forecast with its planner view."""
     actuators = []
     for forecast in forecasts:
@@ -181,7 +200,8 @@ def _document(args, options: TrendOptions, forecasts, plans) -> dict:
             'by': options.by, 'by_utc': _utc(options.by), 'actuators': actuators}
 
 
-def _table(forecasts, plans, options: TrendOptions, with_odometer: bool) -> str:
+def _table(forecasts: Sequence[ActuatorForecast], plans: Mapping[str, list[PlannedCrossing]], options: TrendOptions,
+           with_odometer: bool) -> str:
     """The Markdown table, one row per actuator, every row with as many cells as the header."""
     percent = f'{options.confidence:.0%}'
     by_day = _utc(options.by)[:10]
@@ -197,7 +217,7 @@ def _table(forecasts, plans, options: TrendOptions, with_odometer: bool) -> str:
     return '\n'.join(lines)
 
 
-def _row(forecast, planned, with_odometer: bool) -> list[str]:
+def _row(forecast: ActuatorForecast, planned: Sequence[PlannedCrossing], with_odometer: bool) -> list[str]:
     """The cells of one actuator's row."""
     from ..fleet.forecast_summary import crossing_interval_text
     from ..fleet.planner import planner_text
@@ -214,7 +234,7 @@ def _row(forecast, planned, with_odometer: bool) -> list[str]:
     return cells
 
 
-def _odometer_cells(forecast) -> list[str]:
+def _odometer_cells(forecast: ActuatorForecast) -> list[str]:
     """N_d and the odometer reading of the warn crossing, or why there are none."""
     import math
     if forecast.revolutions_reason:
@@ -229,7 +249,7 @@ def _odometer_cells(forecast) -> list[str]:
     return [f'{forecast.depletion_revolutions:.3g}', where]
 
 
-def _plot(report, forecast, options: TrendOptions) -> None:
+def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> None:
     """One dated plot: recordings, band to the by-date, levels, crossings with intervals, as-of line."""
     import numpy as np
     from ..figures import history_with_forecast
@@ -237,9 +257,11 @@ def _plot(report, forecast, options: TrendOptions) -> None:
     end = max(options.by, forecast.last_recording + 7 * 86400.0) if not forecast.reason else 0.0
     future = np.linspace(forecast.last_recording, end, 200) if not forecast.reason else np.array([])
     names = ('warn', 'error')
+    # The cast: history_with_forecast takes any array-like band (np.asarray of each) but is annotated Sequence only.
     history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
                           [p.theta_oil for p in points], [p.theta_oil_std for p in points], future,
-                          forecast.band(future) if len(future) else ([], [], []),
+                          cast('tuple[Sequence[float], Sequence[float], Sequence[float]]',
+                               forecast.band(future) if len(future) else ([], [], [])),
                           {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
                           forecast.relubrications, f'{forecast.actuator}: theta_Oil and forecast',
                           crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
@@ -247,7 +269,8 @@ def _plot(report, forecast, options: TrendOptions) -> None:
                           as_of=options.as_of, confidence=options.confidence)
 
 
-def _backtest(args, options: TrendOptions, points, relubrications, report) -> None:
+def _backtest(args: argparse.Namespace, options: TrendOptions, points: _Points, relubrications: _Relubrications,
+              report: Path) -> None:
     """Forecast from the history cut ``--backtest`` days earlier; print and write its scores."""
     from ..errors import InputError
     from ..fleet.backtest import backtest

@@ -33,10 +33,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any
-from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
+from collections.abc import Iterable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
@@ -44,6 +45,9 @@ from .conditioning import AnalysisBand
 from .domain import CalibrationDomain
 from .run_scatter import estimate_run_scatter, ols_covariance, RunScatter
 from .windowing import MIN_AXIAL_LOAD, usable_windows
+
+if TYPE_CHECKING:
+    from .windowing import Window
 
 __all__ = ['CONSTANTS', 'C_LAMBDA_IDENTIFIED', 'Calibration', 'LEVEL_TOLERANCE', 'MIN_SPARE_CONDITIONS',
            'MIN_WINDOWS', 'SETPOINT_TOLERANCE', 'calibration_flags', 'check_identifiable', 'condition_labels',
@@ -151,7 +155,8 @@ def operating_levels(values: Sequence[float] | np.ndarray, tolerance: float = LE
     return [float(np.mean(group)) for group in levels]
 
 
-def check_identifiable(speeds, loads) -> tuple[list[float], list[float]]:
+def check_identifiable(speeds: Sequence[float] | np.ndarray,
+                       loads: Sequence[float] | np.ndarray) -> tuple[list[float], list[float]]:
     """Raise :class:`InputError` saying what to record unless the data can identify all three constants.
 
     Returns the speed and load levels found.
@@ -178,7 +183,7 @@ def check_identifiable(speeds, loads) -> tuple[list[float], list[float]]:
     return speed_levels, load_levels
 
 
-def _second_level(what: str, plural: str, values, levels, unit: str) -> str:
+def _second_level(what: str, plural: str, values: npt.ArrayLike, levels: Sequence[float], unit: str) -> str:
     """What to record when all windows sit at one level: a second one, naming set-points that merged."""
     merged = merged_setpoints(values, unit=unit, name=plural)
     if merged:
@@ -187,17 +192,18 @@ def _second_level(what: str, plural: str, values, levels, unit: str) -> str:
     return f'a second {what} (all windows at {_levels(levels, unit)})'
 
 
-def _more_conditions(speeds, loads, speed_levels, load_levels) -> str:
+def _more_conditions(speeds: npt.ArrayLike, loads: npt.ArrayLike, speed_levels: Sequence[float],
+                     load_levels: Sequence[float]) -> str:
     """What to record when there are two speeds and two loads but fewer (speed, load) pairs than constants."""
-    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
-    pairs = sorted(set(zip(_nearest_level(speeds, speed_levels).tolist(), _nearest_level(loads, load_levels).tolist())))
+    speed, load = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
+    pairs = sorted(set(zip(_nearest_level(speed, speed_levels).tolist(), _nearest_level(load, load_levels).tolist())))
     named = ', '.join(f'{speed_levels[i]:.4g} rad/s at {load_levels[j]:.4g} N' for i, j in pairs)
     return (f'a third operating condition: the windows hold {len(pairs)} distinct (speed, load) pairs ({named}) '
             f'for {CONSTANTS} constants, each speed at one load only; a speed at a second load would do '
             '(3 speeds x 2 loads as in the paper)')
 
 
-def _levels(levels, unit):
+def _levels(levels: Iterable[float], unit: str) -> str:
     return ', '.join(f'{v:.4g} {unit}' for v in levels) or 'none'
 
 
@@ -206,17 +212,18 @@ def _nearest_level(values: np.ndarray, levels: Sequence[float] | np.ndarray) -> 
     return np.argmin(np.abs(np.abs(values)[:, None] - levels[None, :]), axis=1)
 
 
-def _cluster_means(values: np.ndarray, clusters: np.ndarray | None) -> np.ndarray:
+def _cluster_means(values: np.ndarray, clusters: npt.ArrayLike | None) -> np.ndarray:
     if clusters is None:
         return values
     _, index = np.unique(clusters, return_inverse=True)
     return np.bincount(index, weights=values) / np.bincount(index)
 
 
-def merged_setpoints(values, clusters=None, unit: str = '', name: str = 'values') -> list[str]:
+def merged_setpoints(values: npt.ArrayLike, clusters: npt.ArrayLike | None = None, unit: str = '',
+                     name: str = 'values') -> list[str]:
     """Set-points (run means, or values without ``clusters``) that differ yet merge into one level, in words."""
-    values = np.abs(np.asarray(values, dtype=float))
-    setpoints = operating_levels(_cluster_means(values, clusters), SETPOINT_TOLERANCE)
+    magnitudes = np.abs(np.asarray(values, dtype=float))
+    setpoints = operating_levels(_cluster_means(magnitudes, clusters), SETPOINT_TOLERANCE)
     levels = operating_levels(setpoints)
     nearest = _nearest_level(np.asarray(setpoints), levels)
     words = []
@@ -227,18 +234,18 @@ def merged_setpoints(values, clusters=None, unit: str = '', name: str = 'values'
     return words
 
 
-def condition_labels(speeds, loads) -> np.ndarray:
+def condition_labels(speeds: npt.ArrayLike, loads: npt.ArrayLike) -> np.ndarray:
     """Index of each (speed, load)'s condition: its pair of operating levels (:func:`operating_levels`)."""
-    speeds, loads = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
-    if speeds.size == 0:
+    speed, load = np.abs(np.asarray(speeds, float)), np.abs(np.asarray(loads, float))
+    if speed.size == 0:
         return np.zeros(0, dtype=int)
-    pairs = np.column_stack([_nearest_level(speeds, operating_levels(speeds)),
-                             _nearest_level(loads, operating_levels(loads))])
+    pairs = np.column_stack([_nearest_level(speed, operating_levels(speed)),
+                             _nearest_level(load, operating_levels(load))])
     _, labels = np.unique(pairs, axis=0, return_inverse=True)
     return np.asarray(labels).reshape(-1)
 
 
-def operating_conditions(speeds, loads) -> int:
+def operating_conditions(speeds: npt.ArrayLike, loads: npt.ArrayLike) -> int:
     """Distinct (speed level, load level) pairs among the windows."""
     return int(np.unique(condition_labels(speeds, loads)).size)
 
@@ -269,7 +276,8 @@ def form_flag(conditions: int) -> str:
     return f'form weakly tested: {advice}; {conditions} conditions leave one beyond the {CONSTANTS} constants'
 
 
-def run_level_covariance(x: np.ndarray, residual: np.ndarray, clusters=None) -> tuple[np.ndarray, RunScatter, str]:
+def run_level_covariance(x: np.ndarray, residual: np.ndarray,
+                         clusters: npt.ArrayLike | None = None) -> tuple[np.ndarray, RunScatter, str]:
     """Covariance of least-squares parameters under the run-effect model (see module doc).
 
     ``x`` the design (or an extended model's Jacobian), ``residual`` its ln
@@ -297,7 +305,7 @@ def scatter_flags(scatter: RunScatter, replicated: bool) -> list[str]:
     return []
 
 
-def sign_flags(constants) -> list[str]:
+def sign_flags(constants: ModelConstants) -> list[str]:
     """Constants with a sign Eq. 18-22 do not allow, in words (flagged like an unphysical theta_Oil)."""
     flags = []
     if constants.c_f < 0:
@@ -314,7 +322,7 @@ def sign_flags(constants) -> list[str]:
 C_LAMBDA_IDENTIFIED = 0.3
 
 
-def scale_flag(constants, covariance) -> str:
+def scale_flag(constants: ModelConstants, covariance: np.ndarray) -> str:
     """When C_lambda, the scale of theta_Oil - 1 (Eq. 23), is not identified by the fit ('' when it is)."""
     spread = math.sqrt(max(float(covariance[2, 2]), 0.0))
     relative = spread / abs(constants.c_lambda) if constants.c_lambda else math.inf
@@ -325,7 +333,8 @@ def scale_flag(constants, covariance) -> str:
             'that vary independently (3 speeds x 2 loads)')
 
 
-def replicated_conditions(speeds, loads, clusters) -> bool:
+def replicated_conditions(speeds: Sequence[float] | np.ndarray, loads: Sequence[float] | np.ndarray,
+                          clusters: npt.ArrayLike | None) -> bool:
     """Whether some (speed, load) condition was recorded in two runs or more."""
     if clusters is None or len(speeds) == 0:
         return False
@@ -335,27 +344,27 @@ def replicated_conditions(speeds, loads, clusters) -> bool:
     return any(len(runs) > 1 for runs in runs_of.values())
 
 
-def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Sequence[str] = (),
-                  clusters=None) -> Calibration:
+def fit_constants(speeds: npt.ArrayLike, loads: npt.ArrayLike, amplitudes: npt.ArrayLike, theta: float = 1.0, *,
+                  sources: Sequence[str] = (), clusters: npt.ArrayLike | None = None) -> Calibration:
     """Fit Eq. 22 by least squares on windows at lubrication state ``theta``.
 
     speeds in rad/s, loads in N, amplitudes (window RMS) in m/s^2, theta
     dimensionless (the reference state, 1 = fully lubricated); ``clusters``
     one run label per window (the runs of the run-level variance model).
     """
-    speeds = np.abs(np.asarray(speeds, dtype=float))
-    loads = np.abs(np.asarray(loads, dtype=float))
-    amplitudes = np.asarray(amplitudes, dtype=float)
+    speed = np.abs(np.asarray(speeds, dtype=float))
+    load = np.abs(np.asarray(loads, dtype=float))
+    amplitude = np.asarray(amplitudes, dtype=float)
     if not (math.isfinite(theta) and theta > 0):
         raise InputError(f'calibration: reference theta {theta!r} must be a positive number')
-    usable = (np.isfinite(speeds) & np.isfinite(loads) & np.isfinite(amplitudes)
-              & (speeds > 0) & (loads > 0) & (amplitudes > 0))
-    speeds, loads, amplitudes = speeds[usable], loads[usable], amplitudes[usable]
+    usable = (np.isfinite(speed) & np.isfinite(load) & np.isfinite(amplitude)
+              & (speed > 0) & (load > 0) & (amplitude > 0))
+    speed, load, amplitude = speed[usable], load[usable], amplitude[usable]
     if clusters is not None:
         clusters = np.asarray(clusters)[usable]
-    speed_levels, load_levels = check_identifiable(speeds, loads)
-    x = design_matrix(speeds, loads, theta)
-    y = reduced_log_amplitude(amplitudes, speeds, loads)
+    speed_levels, load_levels = check_identifiable(speed, load)
+    x = design_matrix(speed, load, theta)
+    y = reduced_log_amplitude(amplitude, speed, load)
     # Scale columns so the conditioning test means something whatever the units.
     scale = np.linalg.norm(x, axis=0)
     xs = x / scale
@@ -371,12 +380,12 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
     residual_var = float(residual @ residual) / dof
     covariance, scatter, method = run_level_covariance(x, residual, clusters)
     constants = ModelConstants.from_vector(params)
-    fitted = acceleration_amplitude(speeds, loads, theta, constants)
-    fit_rmse = float(np.sqrt(np.mean((fitted / amplitudes - 1.0) ** 2)))
-    conditions = operating_conditions(speeds, loads)
-    merged = (merged_setpoints(speeds, clusters, 'rad/s', 'speeds')
-              + merged_setpoints(loads, clusters, 'N', 'loads'))
-    flags = calibration_flags(conditions, scatter, replicated_conditions(speeds, loads, clusters), constants,
+    fitted = acceleration_amplitude(speed, load, theta, constants)
+    fit_rmse = float(np.sqrt(np.mean((fitted / amplitude - 1.0) ** 2)))
+    conditions = operating_conditions(speed, load)
+    merged = (merged_setpoints(speed, clusters, 'rad/s', 'speeds')
+              + merged_setpoints(load, clusters, 'N', 'loads'))
+    flags = calibration_flags(conditions, scatter, replicated_conditions(speed, load, clusters), constants,
                               covariance)
     return Calibration(constants=constants, covariance=covariance, fit_rmse=fit_rmse,
                        residual_std=math.sqrt(residual_var), windows_used=int(len(y)),
@@ -386,15 +395,15 @@ def fit_constants(speeds, loads, amplitudes, theta: float = 1.0, *, sources: Seq
                        standard_errors=method, merged=tuple(merged), flags=flags, scatter=scatter)
 
 
-def calibration_flags(conditions: int, scatter: RunScatter, replicated: bool, constants,
-                      covariance) -> tuple[str, ...]:
+def calibration_flags(conditions: int, scatter: RunScatter, replicated: bool, constants: ModelConstants,
+                      covariance: np.ndarray) -> tuple[str, ...]:
     """Every flag of a fit: untested form, run scatter it cannot estimate, unphysical signs, theta's scale."""
     flags = [form_flag(conditions)] + scatter_flags(scatter, replicated) + sign_flags(constants)
     return tuple(flag for flag in flags + [scale_flag(constants, covariance)] if flag)
 
 
-def fit_windows(windows, theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD, sources=(),
-                recordings=None) -> Calibration:
+def fit_windows(windows: Iterable[Window], theta: float = 1.0, *, min_axial_load: float = MIN_AXIAL_LOAD,
+                sources: Sequence[str] = (), recordings: Iterable[object] | None = None) -> Calibration:
     """Fit on the steady windows (see :mod:`.windowing`) whose load is at least ``min_axial_load``.
 
     Runs of the variance model are ``(recording, run_index)``, with

@@ -28,14 +28,18 @@ Imports numpy, the physics and the plausibility bounds only.
 from __future__ import annotations
 
 import math
-from typing import NoReturn
-from collections.abc import Callable
+from typing import NoReturn, TYPE_CHECKING
+from collections.abc import Callable, Iterator
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ConfigError
 from ..physics.vibration_model import acceleration_amplitude
 from ..recording.plausibility import MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED
+
+if TYPE_CHECKING:
+    from .calibration import Calibration
 
 __all__ = ['MIN_PLAUSIBLE_RMS', 'OPTIONAL_FIGURES', 'check_calibration', 'check_document']
 
@@ -46,10 +50,10 @@ MIN_PLAUSIBLE_RMS = 1e-4
 OPTIONAL_FIGURES = ('fit_rmse', 'residual_std')
 
 
-def _numbers(data, path: str = ''):
+def _numbers(data: object, path: str = '') -> Iterator[tuple[str, float]]:
     """``(where, value)`` of every float in a parsed YAML document, each shared (aliased) node visited once."""
-    stack = [(path, data)]
-    seen = set()
+    stack: list[tuple[str, object]] = [(path, data)]
+    seen: set[int] = set()
     while stack:
         where, node = stack.pop()
         if isinstance(node, (dict, list, tuple)):
@@ -71,7 +75,7 @@ def check_document(data: dict, origin: str) -> None:
             raise ConfigError(f'{origin}: {where} is {value} (a calibration holds finite numbers)')
 
 
-def check_calibration(calibration, origin: str) -> None:
+def check_calibration(calibration: Calibration, origin: str) -> None:
     """Raise one :class:`ConfigError` line naming ``origin`` when ``calibration`` breaks a rule above."""
     def refuse(what: str) -> NoReturn:
         raise ConfigError(f'{origin}: {what}')
@@ -124,7 +128,7 @@ def _check_covariance(covariance: np.ndarray, refuse: Callable[[str], NoReturn])
         refuse('covariance_ln_csys_cf_clambda is not positive definite (correlations beyond +-1)')
 
 
-def _levels(levels, name: str, limit: float, refuse: Callable[[str], NoReturn]) -> np.ndarray:
+def _levels(levels: npt.ArrayLike, name: str, limit: float, refuse: Callable[[str], NoReturn]) -> np.ndarray:
     """A level list as an array; each level finite, > 0 and at most ``limit``."""
     try:
         array = np.asarray(levels, dtype=float).reshape(-1)

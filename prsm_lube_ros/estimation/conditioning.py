@@ -92,7 +92,7 @@ class AnalysisBand:
     high: float = math.nan
     margin: float = ANTI_ALIAS_MARGIN
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject bands that hold nothing."""
         if not (math.isfinite(self.low) and self.low > 0):
             raise InputError(f'analysis band: lower edge {self.low!r} Hz must be a number > 0')

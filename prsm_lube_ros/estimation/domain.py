@@ -18,8 +18,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import TYPE_CHECKING
+from collections.abc import Iterable
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from .windowing import Window
 
 __all__ = ['CalibrationDomain', 'SPEED_LOAD_MARGIN', 'TEMPERATURE_MARGIN', 'domain_flag']
 
@@ -29,11 +35,11 @@ SPEED_LOAD_MARGIN = 0.05
 TEMPERATURE_MARGIN = 2.0
 
 
-def _span(values) -> tuple[float, float] | None:
+def _span(values: npt.ArrayLike) -> tuple[float, float] | None:
     """(min, max) of the finite values, None when there are none."""
-    values = np.asarray(values, dtype=float)
-    values = values[np.isfinite(values)]
-    return (float(values.min()), float(values.max())) if values.size else None
+    array = np.asarray(values, dtype=float)
+    finite = array[np.isfinite(array)]
+    return (float(finite.min()), float(finite.max())) if finite.size else None
 
 
 @dataclass(frozen=True)
@@ -46,7 +52,7 @@ class CalibrationDomain:
     sample_rate: tuple[float, float] | None = None    # Hz
 
     @classmethod
-    def of_windows(cls, windows) -> CalibrationDomain:
+    def of_windows(cls, windows: Iterable[Window]) -> CalibrationDomain:
         """The ranges of the windows a fit used (speed and load magnitudes)."""
         windows = list(windows)
         return cls(speed=_span([abs(w.screw_speed) for w in windows]),
@@ -55,14 +61,14 @@ class CalibrationDomain:
                    sample_rate=_span([getattr(w, 'sample_rate', math.nan) for w in windows]))
 
     @classmethod
-    def of_levels(cls, speed_levels, load_levels) -> CalibrationDomain | None:
+    def of_levels(cls, speed_levels: npt.ArrayLike, load_levels: npt.ArrayLike) -> CalibrationDomain | None:
         """The domain an old calibration file implies: its speed and load levels (None without them)."""
         speed, load = _span(speed_levels), _span(load_levels)
         return cls(speed=speed, load=load) if speed and load else None
 
     def as_dict(self) -> dict:
         """Mapping for the calibration file's ``domain:`` (null where unknown)."""
-        def pair(span):
+        def pair(span: tuple[float, float] | None) -> list[float] | None:
             return [float(span[0]), float(span[1])] if span else None
         return {'speed_rad_s': pair(self.speed), 'load_n': pair(self.load),
                 'temperature_degc': pair(self.temperature), 'sample_rate_hz': pair(self.sample_rate)}
@@ -70,7 +76,7 @@ class CalibrationDomain:
     @classmethod
     def from_dict(cls, data: dict) -> CalibrationDomain:
         """Inverse of :meth:`as_dict`."""
-        def pair(key):
+        def pair(key: str) -> tuple[float, float] | None:
             value = data.get(key)
             return (float(value[0]), float(value[1])) if value else None
         return cls(speed=pair('speed_rad_s'), load=pair('load_n'), temperature=pair('temperature_degc'),
@@ -89,7 +95,7 @@ class CalibrationDomain:
         return ', '.join(parts) or 'unknown'
 
 
-def _relative_outside(name: str, value: float, span, unit: str) -> str:
+def _relative_outside(name: str, value: float, span: tuple[float, float], unit: str) -> str:
     low, high = span
     if value < low * (1 - SPEED_LOAD_MARGIN):
         return f'{name} {100 * (1 - value / low):.0f} % below the calibrated {low:.4g}-{high:.4g} {unit}'

@@ -16,6 +16,7 @@ from types import SimpleNamespace
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ConfigError
 from ..physics.effects import extension as effect_extension
@@ -59,7 +60,7 @@ def _parts(extension: dict) -> list[tuple]:
     return parts
 
 
-def eq22_inputs(extension: dict, windows: Sequence, rms) -> tuple[np.ndarray, np.ndarray]:
+def eq22_inputs(extension: dict, windows: Sequence, rms: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """``(amplitude for Eq. 23, film factor)`` per window under ``extension``; identity when it is empty.
 
     ``extension`` holds one effect (``effect``, ``params``) or, as two named

@@ -79,7 +79,7 @@ class HealthThresholds:
     max_unassessed_windows: int = 30   # 0: never raise for windows that cannot be assessed
     level_smoothing: int = 8           # assessed windows whose mean theta_Oil sets the level
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject thresholds that cannot order the levels."""
         numbers = {'warn_below': self.warn_below, 'error_below': self.error_below,
                    'hysteresis': self.hysteresis, 'stale_timeout': self.stale_timeout}
@@ -260,7 +260,7 @@ def outside_domain(status: HealthStatus, flag: str) -> HealthStatus:
     return replace(status, level=WARN, message=f'theta_oil {flag}')
 
 
-def format_value(value) -> str:
+def format_value(value: object) -> str:
     """A diagnostic KeyValue string: numbers with 6 significant digits, NaN as 'nan'."""
     if isinstance(value, float):
         return f'{value:.6g}'

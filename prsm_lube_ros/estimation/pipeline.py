@@ -99,7 +99,7 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
     """
     problems: list[str] = []
 
-    def report(line: str):
+    def report(line: str) -> None:
         line = f'{path}: {line}'
         problems.append(line)
         if on_problem:
@@ -157,7 +157,7 @@ def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 
                                 usable_windows(windows, min_axial_load))
 
 
-def with_band_and_domain(calibration: Calibration, band: AnalysisBand | None, windows) -> Calibration:
+def with_band_and_domain(calibration: Calibration, band: AnalysisBand | None, windows: Iterable[Window]) -> Calibration:
     """``calibration`` with the band its RMS was computed in and the domain of the ``windows`` it was fitted on."""
     return replace(calibration, band=band, domain=CalibrationDomain.of_windows(windows))
 

@@ -46,6 +46,7 @@ from functools import cached_property
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ['ASSUMED_RUN_STD', 'MAX_PREDICTIVE_FACTOR', 'MAX_VARIANCE_RATIO', 'ONE_SIGMA_QUANTILE', 'RunScatter',
            'estimate_run_scatter', 'ols_covariance']
@@ -101,7 +102,8 @@ class RunScatter:
                 f'window scatter {100 * self.window_std:.2f} %')
 
 
-def _group_sums(x: np.ndarray, y: np.ndarray, index: np.ndarray, groups: int):
+def _group_sums(x: np.ndarray, y: np.ndarray, index: np.ndarray,
+                groups: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per-run sizes, column sums X_g^T 1 and sums of y."""
     sizes = np.bincount(index, minlength=groups).astype(float)
     column_sums = np.zeros((groups, x.shape[1]))
@@ -110,7 +112,8 @@ def _group_sums(x: np.ndarray, y: np.ndarray, index: np.ndarray, groups: int):
     return sizes, column_sums, y_sums
 
 
-def _restricted_fit(ratio: float, xtx, xty, yty, sizes, column_sums, y_sums, n: int, p: int):
+def _restricted_fit(ratio: float, xtx: np.ndarray, xty: np.ndarray, yty: float, sizes: np.ndarray,
+                    column_sums: np.ndarray, y_sums: np.ndarray, n: int, p: int) -> tuple[float, float]:
     """-2 restricted log likelihood (profiled in sigma_w^2, constants dropped) and sigma_w^2 at ``ratio``."""
     shrink = ratio / (1.0 + sizes * ratio)
     a = xtx - (column_sums * shrink[:, None]).T @ column_sums
@@ -128,7 +131,7 @@ def _restricted_fit(ratio: float, xtx, xty, yty, sizes, column_sums, y_sums, n: 
     return (n - p) * math.log(sigma2) + float(np.sum(np.log1p(sizes * ratio))) + logdet, sigma2
 
 
-def estimate_run_scatter(x, residual, runs) -> RunScatter:
+def estimate_run_scatter(x: npt.ArrayLike, residual: npt.ArrayLike, runs: npt.ArrayLike) -> RunScatter:
     """REML run and window scatter of ``residual`` (ln units) with fixed design ``x`` (n x p), runs ``runs``.
 
     ``residual`` may be the OLS residual or ln A itself: REML sees only what
@@ -154,7 +157,7 @@ def estimate_run_scatter(x, residual, runs) -> RunScatter:
 
     from scipy.optimize import minimize_scalar    # here: assess never fits, and must start without scipy.optimize
 
-    def objective(log_ratio):
+    def objective(log_ratio: float) -> float:
         return _restricted_fit(math.exp(log_ratio), xtx, xty, yty, sizes, column_sums, y_sums, n, p)[0]
 
     result = minimize_scalar(objective, bounds=(math.log(1e-8), math.log(MAX_VARIANCE_RATIO)), method='bounded',
@@ -172,7 +175,7 @@ def _within_run_variance(y: np.ndarray, index: np.ndarray, groups: int) -> float
     return float(np.sum((y - means[index]) ** 2) / max(y.size - groups, 1))
 
 
-def ols_covariance(x, runs, scatter: RunScatter) -> np.ndarray:
+def ols_covariance(x: npt.ArrayLike, runs: npt.ArrayLike, scatter: RunScatter) -> np.ndarray:
     """Covariance of the OLS estimates of ``x``'s parameters under the run-effect model, predictive factor in.
 
     ``(X^T X)^-1 X^T V X (X^T X)^-1`` with ``V`` block-diagonal per run:

@@ -50,14 +50,17 @@ from typing import cast, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from ..diagnosis.fitting import ModelFit
+    from ..diagnosis.table import WindowTable
 
 __all__ = ['NONE', 'confusion', 'main', 'run_case', 'write_outputs']
 
 NONE = 'none'
 
 
-def _simulate_rig(effect: str, seed: int, order: str, sessions: int):
+def _simulate_rig(effect: str, seed: int, order: str, sessions: int) -> tuple[WindowTable, dict | None]:
     from ..estimation.pipeline import recording_windows
     from ..simulation.recordings import draw_effects, simulate_experiment
     from ..simulation.rig_config import ExperimentPlan
@@ -76,7 +79,7 @@ def _simulate_rig(effect: str, seed: int, order: str, sessions: int):
     return table_from_windows(windows, sources=[p.name for p in paths]), effects.as_dict().get(effect)
 
 
-def _simulate_synthetic(effect: str, seed: int, order: str, sessions: int):
+def _simulate_synthetic(effect: str, seed: int, order: str, sessions: int) -> tuple[WindowTable, dict]:
     from .synthetic_tables import SyntheticPlan, synthetic_table
     rng = np.random.default_rng(10_000 + seed)
     plan = SyntheticPlan(repeats=1, sessions=sessions, random_order=order == 'random', spectrum_bins=128)
@@ -164,7 +167,7 @@ def _safe_random_case(case: tuple) -> dict:
                 'named': [], 'right': False, 'seconds': 0.0}
 
 
-def _run_random(args, effects: list[str], command: str) -> int:
+def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> int:
     """Cases seed-major (a stopped run is a balanced subset), results rewritten every ``--save-every`` cases."""
     from concurrent.futures import as_completed
     from .random_study import NONE, OUTSIDE_KINDS, THERMAL_FREE, TWO, write_random_outputs
@@ -196,7 +199,7 @@ def _run_random(args, effects: list[str], command: str) -> int:
     return 0
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Command line of the study."""
     from ..diagnosis.effects import effect_ids
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.diagnose_study',

@@ -18,8 +18,8 @@ import json
 import math
 from pathlib import Path
 import sys
-from typing import Any
-from collections.abc import Sequence
+from typing import Any, TYPE_CHECKING
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -27,6 +27,20 @@ from ..estimation.calibration_file import save_calibration
 from ..estimation.pipeline import assess_recording, assessment_json, calibrate_recordings, recording_windows
 from ..estimation.windowing import WindowSettings
 from ..physics.actuator import Actuator
+
+if TYPE_CHECKING:
+    from typing import Protocol
+
+    from ..estimation.pipeline import RecordingAssessment
+
+    class _TextStream(Protocol):
+        """Where the demo prints: what ``print(..., file=stream, flush=True)`` needs."""
+
+        def write(self, text: str, /) -> object:
+            """Write ``text``."""
+
+        def flush(self) -> object:
+            """Flush what was written."""
 
 __all__ = ['REFERENCE_TOLERANCE', 'RPM', 'STAGE_TOLERANCE', 'condition_label', 'run_demo']
 
@@ -41,7 +55,8 @@ def condition_label(speed: float, load: float) -> str:
     return f'{5 * round(speed * RPM / 5):.0f} r/min {10 * round(load / 10):.0f} N'
 
 
-def _per_condition(stage_names: list[str], assessments) -> tuple[dict, dict, dict, dict[str, list[float]]]:
+def _per_condition(stage_names: list[str],
+                   assessments: Sequence[RecordingAssessment]) -> tuple[dict, dict, dict, dict[str, list[float]]]:
     """RMS, theta and its sigma by (condition label, stage), and each stage's run thetas."""
     rms, theta, theta_std = {}, {}, {}
     per_stage = defaultdict(list)
@@ -71,7 +86,7 @@ def _stage_table(conditions: list[str], stage_names: list[str], stages: Sequence
 
 
 def _check_stages(stage_names: list[str], stages: Sequence[float], per_stage: dict[str, list[float]],
-                  condition_count: int, results: dict, say) -> bool:
+                  condition_count: int, results: dict, say: Callable[[str], None]) -> bool:
     """Check each stage's thetas against the truth (the reference stage within a tighter tolerance)."""
     ok = True
     for name, truth in zip(stage_names, stages):
@@ -92,11 +107,11 @@ def _check_stages(stage_names: list[str], stages: Sequence[float], per_stage: di
 
 
 def run_demo(out: Path, *, seed: int = 7, stages: Sequence[float] = (0.72, 0.83, 1.0), window: float = 1.0,
-             storage: str = 'mcap', stream=sys.stdout) -> int:
+             storage: str = 'mcap', stream: _TextStream = sys.stdout) -> int:
     """Run the demonstration into ``out``; returns 0 when the paper's claims hold on the simulation."""
     from ..simulation.recordings import simulate_experiment
 
-    def say(text=''):
+    def say(text: str = '') -> None:
         print(text, file=stream, flush=True)
 
     out = Path(out)

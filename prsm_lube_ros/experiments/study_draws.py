@@ -94,7 +94,8 @@ def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
     return float(math.exp(rng.uniform(math.log(low), math.log(high))))
 
 
-def _levels(rng: np.random.Generator, count_range, lowest_range, span_range) -> tuple[float, ...]:
+def _levels(rng: np.random.Generator, count_range: tuple[int, int], lowest_range: tuple[float, float],
+            span_range: tuple[float, float]) -> tuple[float, ...]:
     count = int(rng.integers(count_range[0], count_range[1] + 1))
     lowest = rng.uniform(*lowest_range)
     top = lowest * rng.uniform(*span_range)

@@ -135,7 +135,8 @@ def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = N
     return k, k_variance, q, max(data.steps.size - 1, 1)
 
 
-def depletion_state(days, y, sigma, cycles, q) -> tuple[np.ndarray, np.ndarray, int]:
+def depletion_state(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray,
+                    q: float) -> tuple[np.ndarray, np.ndarray, int]:
     """Kalman filter of (ln theta, k): level falls by k dt with diffusion q dt, reset at relubrications.
 
     Returns the state at the last recording, its covariance (scaled by the

@@ -9,16 +9,21 @@ for one.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from collections.abc import Sequence
 
 from ..errors import InputError
 from ..estimation.health import HealthThresholds
 from .forecast import ActuatorForecast, Crossing, fit_one, fleet_walk, history_readers, recording_points, utc_minutes
 
+if TYPE_CHECKING:
+    from pathlib import Path
+
 __all__ = ['crossing_interval_text', 'forecast_summaries', 'forecast_summary']
 
 
-def forecast_summaries(history, actuator_ids: Sequence[str], *, warn_below: float = HealthThresholds.warn_below,
+def forecast_summaries(history: str | Path, actuator_ids: Sequence[str], *,
+                       warn_below: float = HealthThresholds.warn_below,
                        error_below: float = HealthThresholds.error_below) -> dict[str, dict[str, str]]:
     """The forecast of each of ``actuator_ids`` as short key/value strings (diagnostics KeyValue lists).
 
@@ -35,7 +40,7 @@ def forecast_summaries(history, actuator_ids: Sequence[str], *, warn_below: floa
             for name, found in _summaries(history, actuator_ids, (warn_below, error_below)).items()}
 
 
-def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
+def forecast_summary(history: str | Path, actuator_id: str, *, warn_below: float = HealthThresholds.warn_below,
                      error_below: float = HealthThresholds.error_below) -> dict[str, str]:
     """The forecast of one actuator as :func:`forecast_summaries` gives it.
 
@@ -47,7 +52,8 @@ def forecast_summary(history, actuator_id: str, *, warn_below: float = HealthThr
     return found
 
 
-def _summaries(history, actuator_ids, levels) -> dict[str, dict[str, str] | InputError]:
+def _summaries(history: str | Path, actuator_ids: Sequence[str],
+               levels: tuple[float, float]) -> dict[str, dict[str, str] | InputError]:
     """Summary of each id, or the :class:`InputError` saying why there is none."""
     actuator_key, read_table = history_readers()
     points = recording_points(read_table(history, 'runs'))

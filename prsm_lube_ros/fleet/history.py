@@ -60,7 +60,8 @@ from pathlib import Path
 import re
 import shutil
 import tempfile
-from collections.abc import Callable
+from typing import TYPE_CHECKING
+from collections.abc import Callable, Iterable, Sequence
 
 import pyarrow as pa
 import pyarrow.dataset as ds
@@ -69,6 +70,13 @@ import pyarrow.parquet as pq
 from ..atomic_file import remove_stale, temporary_prefix, write_atomically
 from ..errors import ConfigError, InputError, RecordingError
 from ..validation import finite_or_none as _finite, utc_or_none as _utc
+
+if TYPE_CHECKING:
+    from ..estimation.assessment import RunAssessment
+    from ..estimation.calibration import Calibration
+    from ..estimation.pipeline import RecordingAssessment
+    from .identity import Span
+    from .parallel import BagOutcome
 
 __all__ = ['CALIBRATIONS', 'LAYOUT_VERSION', 'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS',
            'UTC_TIME', 'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
@@ -92,7 +100,7 @@ _WINDOW_ONLY = [('steady', pa.bool_()), ('nut_position', pa.float64())]
 _DATE = [('date', pa.date32())]
 
 
-def _schema(columns) -> pa.Schema:
+def _schema(columns: Iterable[tuple[str, pa.DataType]]) -> pa.Schema:
     return pa.schema([pa.field(name, kind, metadata={'unit': UNITS[name]} if name in UNITS else None)
                       for name, kind in columns])
 
@@ -146,7 +154,7 @@ def register_calibration(history: str | Path, path: str | Path) -> str:
     return identifier
 
 
-def history_calibration(history: str | Path, identifier: str):
+def history_calibration(history: str | Path, identifier: str) -> Calibration:
     """The :class:`~prsm_lube_ros.estimation.calibration.Calibration` a ``calibration_id`` of the history names."""
     from ..estimation.calibration_file import load_calibration
     path = Path(history) / CALIBRATIONS / f'{identifier}.yaml'
@@ -163,8 +171,8 @@ def actuator_key(actuator_id: str) -> str:
     return key
 
 
-def assessment_tables(assessment, *, content: str, calibration: str, namespace: str = '/prsm',
-                      assessed_at: datetime.datetime | None = None, fit=None,
+def assessment_tables(assessment: RecordingAssessment, *, content: str, calibration: str, namespace: str = '/prsm',
+                      assessed_at: datetime.datetime | None = None, fit: Calibration | None = None,
                       actuator_id: str = '') -> dict[str, pa.Table]:
     """The ``runs`` and ``windows`` rows of one ``RecordingAssessment`` as pyarrow tables.
 
@@ -206,7 +214,7 @@ def _described(table: str, actuator_id: str) -> pa.Schema:
                                          'prsm_lube_ros.units': json.dumps(UNITS)})
 
 
-def _calibration_std(fit, runs) -> list[float | None]:
+def _calibration_std(fit: Calibration | None, runs: Sequence[RunAssessment]) -> list[float | None]:
     """Per run, the one-sigma of theta_Oil from the calibration's covariance alone (Eq. 23 propagation)."""
     if fit is None:
         return [None] * len(runs)
@@ -221,8 +229,8 @@ def _first_start(rows: list[dict], fallback: datetime.datetime) -> datetime.date
     return min(starts) if starts else fallback
 
 
-def history_writer(history: str | Path, calibration_path: str | Path, fit, *, actuator_id: str,
-                   namespace: str = '/prsm') -> Callable:
+def history_writer(history: str | Path, calibration_path: str | Path, fit: Calibration | None, *, actuator_id: str,
+                   namespace: str = '/prsm') -> Callable[[BagOutcome], str]:
     """``on_done`` for :func:`~.parallel.assess_bags`: each assessed recording into the history as it finishes.
 
     ``actuator_id`` ``folder`` names each recording's actuator by the folder it
@@ -237,7 +245,7 @@ def history_writer(history: str | Path, calibration_path: str | Path, fit, *, ac
     remove_stale(Path(history) / STAGING)
     timeline = Timeline(lambda key: _existing_spans(history, key, table_spans))
 
-    def write(outcome) -> str:
+    def write(outcome: BagOutcome) -> str:
         """Add the outcome's recording; '' when added or failed, else the line saying why it was refused."""
         if outcome.assessment is None:
             return ''
@@ -255,16 +263,16 @@ def history_writer(history: str | Path, calibration_path: str | Path, fit, *, ac
     return write
 
 
-def _existing_spans(history: str | Path, key: str, spans) -> list:
+def _existing_spans(history: str | Path, key: str, spans: Callable[[pa.Table], list[Span]]) -> list[Span]:
     """Spans of one actuator's recordings already in the history (none for a new history)."""
     if not (Path(history) / RECORDINGS).is_dir():
         return []
     return spans(read_table(history, 'runs', actuator=key, on_problem=lambda line: None))
 
 
-def add_assessment(history: str | Path, assessment, *, actuator_id: str, content: str, calibration: str,
-                   namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
-                   before_commit: Callable[[Path], None] | None = None, fit=None) -> Path:
+def add_assessment(history: str | Path, assessment: RecordingAssessment, *, actuator_id: str, content: str,
+                   calibration: str, namespace: str = '/prsm', assessed_at: datetime.datetime | None = None,
+                   before_commit: Callable[[Path], None] | None = None, fit: Calibration | None = None) -> Path:
     """Write one recording's runs and windows into the history, replacing its earlier ones; returns its folder.
 
     ``content`` is the recording's :func:`content_hash`, ``calibration`` the
@@ -380,7 +388,7 @@ def read_table(history: str | Path, table: str = 'runs', actuator: str | None = 
         return _read_each(files, schema, root, report)
 
 
-def _dataset(files: list[str], schema: pa.Schema, root: Path):
+def _dataset(files: list[str], schema: pa.Schema, root: Path) -> ds.Dataset:
     return ds.dataset(files, format='parquet', schema=schema, partitioning=PARTITIONING, partition_base_dir=str(root))
 
 

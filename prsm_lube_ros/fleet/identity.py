@@ -13,7 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import datetime
+from typing import TYPE_CHECKING
 from collections.abc import Callable
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+    from ..estimation.pipeline import RecordingAssessment
 
 __all__ = ['SAME_RECORDING', 'Span', 'Timeline', 'assessment_span', 'clash_line', 'table_spans']
 
@@ -39,7 +45,7 @@ class Span:
         return self.start < other.end and other.start < self.end
 
 
-def assessment_span(assessment, content: str) -> Span | None:
+def assessment_span(assessment: RecordingAssessment, content: str) -> Span | None:
     """The span of an assessed recording's runs, None without runs."""
     runs = assessment.runs
     if not runs:
@@ -47,7 +53,7 @@ def assessment_span(assessment, content: str) -> Span | None:
     return Span(min(r.start for r in runs), max(r.end for r in runs), content, str(assessment.path))
 
 
-def table_spans(runs) -> list[Span]:
+def table_spans(runs: pa.Table) -> list[Span]:
     """One span per content hash of a history ``runs`` table."""
     found: dict[str, tuple] = {}
     for content, path, start, end in zip(*(runs.column(name).to_pylist() for name in

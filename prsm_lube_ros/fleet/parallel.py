@@ -19,6 +19,7 @@ from __future__ import annotations
 from concurrent.futures import as_completed, ProcessPoolExecutor
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 from collections.abc import Callable, Sequence
 
 from ..errors import InputError
@@ -26,6 +27,11 @@ from ..estimation.calibration import Calibration
 from ..estimation.pipeline import assess_recording, recording_windows, RecordingAssessment, require_usable
 from ..estimation.windowing import WindowSettings
 
+if TYPE_CHECKING:
+    from concurrent.futures import Future
+
+    from _typeshed import DataclassInstance
+    import distributed
 
 __all__ = ['BagJob', 'BagOutcome', 'TASKS_PER_WORKER', 'assess_bag', 'assess_bags', 'assess_batch', 'batches',
            'outcomes_fingerprint']
@@ -69,7 +75,7 @@ def assess_bag(path: str, job: BagJob) -> BagOutcome:
 
 
 def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
-                on_done: Callable[[BagOutcome], None] | None = None) -> list[BagOutcome]:
+                on_done: Callable[[BagOutcome], object] | None = None) -> list[BagOutcome]:
     """:func:`assess_bag` for every path; outcomes in the order of ``paths``.
 
     ``jobs`` > 1 runs that many local processes; ``scheduler`` (an address or
@@ -92,7 +98,8 @@ def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int
     return [outcomes[path] for path in paths]
 
 
-def _in_processes(paths, job, jobs, on_done) -> dict[str, BagOutcome]:
+def _in_processes(paths: list[str], job: BagJob, jobs: int,
+                  on_done: Callable[[BagOutcome], object] | None) -> dict[str, BagOutcome]:
     outcomes = {}
     with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
         futures = {pool.submit(assess_bag, path, job): path for path in dict.fromkeys(paths)}
@@ -103,7 +110,7 @@ def _in_processes(paths, job, jobs, on_done) -> dict[str, BagOutcome]:
     return outcomes
 
 
-def _outcome(path, future) -> BagOutcome:
+def _outcome(path: str, future: Future[BagOutcome]) -> BagOutcome:
     """The future's outcome, or an error line when its worker was lost."""
     try:
         return future.result()
@@ -127,7 +134,8 @@ def batches(paths: Sequence[str], workers: int) -> list[list[str]]:
     return [list(paths[start:start + size]) for start in range(0, len(paths), size)]
 
 
-def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
+def _on_dask(paths: list[str], job: BagJob, scheduler: str, jobs: int,
+             on_done: Callable[[BagOutcome], object] | None) -> dict[str, BagOutcome]:
     """Each recording on Dask, sent as its absolute path (remote workers do not share our working folder).
 
     The outcomes carry the paths as given, so they equal the serial ones.
@@ -150,7 +158,7 @@ def _on_dask(paths, job, scheduler, jobs, on_done) -> dict[str, BagOutcome]:
         return outcomes
 
 
-def _batch_outcomes(paths: Sequence[str], future) -> list[BagOutcome]:
+def _batch_outcomes(paths: Sequence[str], future: distributed.Future) -> list[BagOutcome]:
     """The batch's outcomes, or an error line for each of its recordings when its worker was lost."""
     try:
         return future.result()
@@ -166,7 +174,7 @@ def _as_given(outcome: BagOutcome, path: str) -> BagOutcome:
     return replace(outcome, path=path, assessment=assessment)
 
 
-def _compared(item) -> tuple:
+def _compared(item: DataclassInstance) -> tuple:
     """Every compared field of a dataclass instance, in declaration order (a window's spectrum is left out)."""
     return tuple(getattr(item, f.name) for f in fields(item) if f.compare)
 

@@ -16,14 +16,19 @@ import csv
 from dataclasses import dataclass
 import datetime
 import math
+from typing import Any, TYPE_CHECKING
+from collections.abc import Callable, Iterator
 
 from ..errors import ConfigError
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 __all__ = ['OdometerReading', 'odometer_problems', 'odometer_readings', 'read_odometer', 'read_relubrications']
 
 
-def read_relubrications(path) -> dict[str, list[float]]:
+def read_relubrications(path: str | Path) -> dict[str, list[float]]:
     """``{actuator: [s since the epoch]}`` from a CSV of ``actuator,time`` lines (a header line is allowed)."""
     result: dict[str, list[float]] = {}
     for _, (actuator, seconds) in _csv_rows(path, ('actuator', 'time')):
@@ -40,7 +45,7 @@ class OdometerReading:
     revolutions: float
 
 
-def odometer_readings(path) -> dict[str, list[OdometerReading]]:
+def odometer_readings(path: str | Path) -> dict[str, list[OdometerReading]]:
     """``{actuator: [readings in time order]}`` from a CSV of ``actuator,time,revolutions`` lines."""
     result: dict[str, list[OdometerReading]] = {}
     for number, (actuator, seconds, revolutions) in _csv_rows(path, ('actuator', 'time', 'revolutions')):
@@ -48,14 +53,14 @@ def odometer_readings(path) -> dict[str, list[OdometerReading]]:
     return {actuator: sorted(items, key=lambda r: r.time) for actuator, items in result.items()}
 
 
-def read_odometer(path) -> dict[str, tuple[list[float], list[float]]]:
+def read_odometer(path: str | Path) -> dict[str, tuple[list[float], list[float]]]:
     """``{actuator: (times, revolutions)}`` from a CSV of ``actuator,time,revolutions`` lines."""
     return {actuator: ([r.time for r in items], [r.revolutions for r in items])
             for actuator, items in odometer_readings(path).items()}
 
 
-def odometer_problems(path, readings: dict[str, list[OdometerReading]], known: set[str],
-                      key=lambda actuator: actuator) -> dict[str, str]:
+def odometer_problems(path: str | Path, readings: dict[str, list[OdometerReading]], known: set[str],
+                      key: Callable[[str], str] = lambda actuator: actuator) -> dict[str, str]:
     """``{actuator: "file:line: what is wrong"}``: readings that go backwards in time, ids not in ``known``.
 
     ``key`` maps an id of the file to the form ``known`` holds (the history's
@@ -75,7 +80,7 @@ def odometer_problems(path, readings: dict[str, list[OdometerReading]], known: s
     return problems
 
 
-def _csv_rows(path, columns):
+def _csv_rows(path: str | Path, columns: tuple[str, ...]) -> Iterator[tuple[int, tuple[Any, ...]]]:
     """Rows of ``columns`` (an id, a time as ISO 8601 or s since the epoch, then numbers); one-line errors."""
     try:
         with open(path, newline='', encoding='utf-8') as stream:
