@@ -4,14 +4,14 @@
 from __future__ import annotations
 
 from pathlib import Path
-from collections.abc import Callable, Mapping, Sequence
-from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping, Sequence
     import datetime
+    from types import ModuleType
 
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure

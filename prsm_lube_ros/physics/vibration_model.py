@@ -13,7 +13,6 @@ only its load scaling (Eq. 20) enters.  All functions accept numpy arrays.
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 import math
 from typing import overload, TYPE_CHECKING
@@ -21,6 +20,8 @@ from typing import overload, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import numpy.typing as npt
 
 __all__ = ['FREQUENCY_EXPONENT', 'LOAD_EXPONENT', 'ModelConstants', 'STIFFNESS_EXPONENT', 'VELOCITY_EXPONENT',

@@ -15,16 +15,17 @@ file here.  Imports only numpy, :mod:`..vibration_model` and the base layer.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from functools import lru_cache
 import importlib
 import pkgutil
-from types import ModuleType
 from typing import Any, TYPE_CHECKING
 
 from ...errors import ConfigError
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from types import ModuleType
+
     from _typeshed import DataclassInstance
     import numpy as np
     import numpy.typing as npt

@@ -23,7 +23,6 @@ The RMS law is the same for every form.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, TYPE_CHECKING
 
@@ -33,6 +32,8 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy.typing as npt
 
 __all__ = ['BackgroundVibration', 'Extension', 'FORMS', 'Law', 'contact_amplitude', 'log_gain', 'total_amplitude']

@@ -19,7 +19,6 @@ recovery).  Between rests ``N_eff`` grows by the revolutions run.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 from typing import Any, TYPE_CHECKING
@@ -30,6 +29,8 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy.typing as npt
 
 __all__ = ['Extension', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'effective_revolutions',

@@ -35,7 +35,6 @@ All profiles are quadratics in ``u = x / s``:
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 from typing import Any, TYPE_CHECKING
@@ -47,6 +46,8 @@ from ...validation import require, require_all_positive
 from ..vibration_model import STIFFNESS_EXPONENT
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy.typing as npt
 
 __all__ = ['ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law', 'MIN_FREE_LENGTH', 'PositionDependentStiffness',

@@ -22,7 +22,6 @@ amplitude only sees the screw speed at which the excitation meets the mode,
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 from typing import Any, TYPE_CHECKING
@@ -34,6 +33,8 @@ from ...validation import require, require_all_positive
 from ..vibration_model import forced_response_amplitude
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy.typing as npt
 
 

@@ -32,7 +32,6 @@ the screw turns and towards the ambient T0 at standstill.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 from typing import Any, TYPE_CHECKING
@@ -44,6 +43,8 @@ from ...validation import require, require_all_positive
 from ..vibration_model import VELOCITY_EXPONENT
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     import numpy.typing as npt
 
 __all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'ThermalViscosity', 'WALTHER_OFFSET', 'film_factor',
