@@ -122,7 +122,9 @@ def _crossing_marks(ax: Axes, crossings: Sequence[tuple], dates: Callable[[npt.A
                     confidence: float) -> None:
     """A diamond at each crossing estimate and a bar over its interval (open ends drawn to the plot's edge)."""
     # The ignores below: matplotlib's stubs type plot()'s data as numbers and text, leaving out the datetimes
-    # its unit converters take (date axes, as everywhere in this module).
+    # its unit converters take (date axes, as everywhere in this module).  The first also covers a known bug,
+    # left as it is here (issue 21 is annotations only): with ``high`` None, ``right`` is the axis limit as a
+    # float date number beside a datetime, which matplotlib's date converter rejects (ConversionError).
     for i, (label, level, estimate, low, high) in enumerate(crossings):
         color = 'C3' if i else 'C8'
         if low is not None:
