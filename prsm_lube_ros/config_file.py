@@ -12,11 +12,14 @@ from __future__ import annotations
 
 from dataclasses import fields, MISSING
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, cast, TYPE_CHECKING, TypeVar
 from collections.abc import Callable, Iterable
 
 from .errors import ConfigError, InputError
 from .validation import as_number
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 
 __all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'read_section', 'read_yaml']
@@ -27,8 +30,10 @@ __all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nest
 MAX_YAML_BYTES = 8 << 20
 MAX_YAML_NESTING = 32
 
+_T = TypeVar('_T')
 
-def read_yaml(path: str | Path, what: str):
+
+def read_yaml(path: str | Path, what: str) -> Any:
     """The parsed document of ``path``; :class:`ConfigError` naming the file (``what`` says which kind).
 
     A missing file, an unreadable one, invalid YAML, text that is not UTF-8, a
@@ -59,7 +64,7 @@ def read_yaml(path: str | Path, what: str):
     return document
 
 
-def nesting_depth(document) -> int:
+def nesting_depth(document: object) -> int:
     """Levels of mappings and lists in a parsed YAML document (a scalar: 0), without recursion.
 
     Shared (aliased) nodes are measured once, so a small file of aliases that
@@ -103,7 +108,8 @@ def read_section(path: str | Path, keys: Iterable[str], what: str) -> dict:
     return node
 
 
-def coerce_fields(path: str | Path, kind, values: dict, skip: Iterable[str] = (), label: str = '') -> dict:
+def coerce_fields(path: str | Path, kind: type[DataclassInstance], values: dict, skip: Iterable[str] = (),
+                  label: str = '') -> dict[str, Any]:
     """Keyword arguments of dataclass ``kind`` from a YAML mapping, each typed like its field's default.
 
     Unknown keys, a list where a number belongs, text where a number belongs,
@@ -143,7 +149,7 @@ def coerce_fields(path: str | Path, kind, values: dict, skip: Iterable[str] = ()
     return result
 
 
-def build(path: str | Path, kind, values: dict, **extra):
+def build(path: str | Path, kind: Callable[..., _T], values: dict, **extra: Any) -> _T:
     """``kind(**values, **extra)``; a validation error of the dataclass is prefixed with the file."""
     try:
         return kind(**values, **extra)

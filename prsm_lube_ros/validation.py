@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime
 import math
+from typing import Any
 
 from .errors import ConfigError, InputError
 
@@ -18,14 +19,18 @@ from .errors import ConfigError, InputError
 __all__ = ['as_number', 'finite_or_none', 'is_positive_number', 'reference_theta', 'require', 'require_all_positive',
            'require_positive', 'utc_or_none']
 
+# The values checked here come from YAML, JSON, messages and callers alike, so the checks take any object;
+# the two that hand it to ``float()`` take ``Any`` (``float`` accepts more than one protocol, and whatever it
+# rejects is caught and reported).
 
-def is_positive_number(value) -> bool:
+
+def is_positive_number(value: object) -> bool:
     """True for a real number (not a bool) that is finite and > 0."""
     return (isinstance(value, (int, float)) and not isinstance(value, bool)
             and math.isfinite(value) and value > 0)
 
 
-def finite_or_none(value) -> float | None:
+def finite_or_none(value: Any) -> float | None:
     """``float(value)`` when it is a finite number, else ``None`` (JSON has no NaN)."""
     if value is None:
         return None
@@ -36,13 +41,13 @@ def finite_or_none(value) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def utc_or_none(seconds) -> datetime.datetime | None:
+def utc_or_none(seconds: object) -> datetime.datetime | None:
     """The UTC time of ``seconds`` since the epoch when it is a finite number, else ``None``."""
     seconds = finite_or_none(seconds)
     return None if seconds is None else datetime.datetime.fromtimestamp(seconds, datetime.UTC)
 
 
-def _real(name: str, value, error: type[InputError], what: str) -> float:
+def _real(name: str, value: Any, error: type[InputError], what: str) -> float:
     """``value`` as a float, or ``error`` saying ``name must be <what>`` for bools and text."""
     if isinstance(value, bool):
         raise error(f'{name} must be {what}, got {value!r}')
@@ -52,7 +57,7 @@ def _real(name: str, value, error: type[InputError], what: str) -> float:
         raise error(f'{name} must be {what}, got {value!r}') from None
 
 
-def as_number(name: str, value, error: type[InputError] = ConfigError) -> float:
+def as_number(name: str, value: object, error: type[InputError] = ConfigError) -> float:
     """``value`` as a finite float; ``error`` naming ``name`` for bools, text, NaN and infinities."""
     number = _real(name, value, error, 'a number')
     if not math.isfinite(number):
@@ -60,7 +65,7 @@ def as_number(name: str, value, error: type[InputError] = ConfigError) -> float:
     return number
 
 
-def require_positive(name: str, value, error: type[InputError] = ConfigError) -> float:
+def require_positive(name: str, value: object, error: type[InputError] = ConfigError) -> float:
     """``value`` as a float when it is a finite number > 0; else ``error`` naming ``name``."""
     number = _real(name, value, error, 'a positive number')
     if not (math.isfinite(number) and number > 0):
@@ -68,13 +73,13 @@ def require_positive(name: str, value, error: type[InputError] = ConfigError) ->
     return number
 
 
-def require_all_positive(owner: str, **values) -> None:
+def require_all_positive(owner: str, **values: object) -> None:
     """:func:`require_positive` for each keyword, named ``<owner> <keyword>``."""
     for name, value in values.items():
         require_positive(f'{owner} {name}', value)
 
 
-def reference_theta(value, name: str = 'reference theta') -> float:
+def reference_theta(value: object, name: str = 'reference theta') -> float:
     """The contract's rule for a reference theta_Oil: 0 means 1.0; else it must be finite and > 0.
 
     Used by ``prsm-lube calibrate`` / ``diagnose --theta`` and the calibrate
@@ -85,7 +90,7 @@ def reference_theta(value, name: str = 'reference theta') -> float:
     return require_positive(name, value)
 
 
-def require(condition, message: str, error: type[InputError] = ConfigError) -> None:
+def require(condition: object, message: str, error: type[InputError] = ConfigError) -> None:
     """Raise ``error(message)`` unless ``condition`` holds."""
     if not condition:
         raise error(message)

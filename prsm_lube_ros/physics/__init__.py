@@ -10,4 +10,12 @@ module per physical effect (``effects/``), shared by the simulator, the
 diagnosis and assessment.  SI units throughout; each equation is named by its
 number in a docstring.  May import only the base layer (``errors``,
 ``validation``, ``config_file``, ``contract``) and numpy/scipy; no ROS.
+
+Types: the laws take scalars or numpy arrays and broadcast.  An argument the
+law turns into an array first is annotated ``npt.ArrayLike``; one it computes
+with as given is ``np.ndarray | float``.  What comes back is a float for
+scalar arguments and an array otherwise, annotated ``np.ndarray | float``
+(numpy hands back a numpy scalar, a float, for 0-d results).  The Eq. 22/23
+functions that the estimation and diagnosis call with arrays carry overloads
+saying so.
 """

@@ -12,10 +12,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 import math
 from pathlib import Path
+from typing import Any, TYPE_CHECKING
 
 from ..config_file import build, coerce_fields, read_section
 from ..errors import InputError
 from ..validation import require_all_positive
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 __all__ = ['Actuator', 'load_actuator']
@@ -43,7 +47,7 @@ class Actuator:
     shaft_root_diameter: float = 0.0215
     shaft_fixed_end_offset: float = 0.03
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject geometry that no roller screw has."""
         positive = ('screw_mean_diameter', 'roller_mean_diameter', 'lead',
                     'roller_count', 'threads_per_roller', 'nut_travel',
@@ -64,18 +68,19 @@ class Actuator:
         """Lead angle of the screw alpha_S in rad: tan(alpha_S) = lead / (pi d_S)."""
         return math.atan(self.lead / (math.pi * self.screw_mean_diameter))
 
-    def nut_travel_from_angle(self, angle, angle_at_motion_start):
+    def nut_travel_from_angle(self, angle: np.ndarray | float,
+                              angle_at_motion_start: np.ndarray | float) -> np.ndarray | float:
         """Nut travel in m from screw angles in rad (CONTRACT.md).
 
         ``lead * (angle - angle_at_motion_start) / (2 pi)``; works on arrays.
         """
         return self.lead * (angle - angle_at_motion_start) / (2.0 * math.pi)
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """Plain mapping, as written under ``actuator:`` in YAML."""
         return asdict(self)
 
-    def with_changes(self, **changes) -> Actuator:
+    def with_changes(self, **changes: Any) -> Actuator:
         """Copy with some fields replaced (validated again)."""
         return replace(self, **changes)
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
@@ -40,6 +41,9 @@ from scipy.special import ellipe, ellipk
 from ..errors import InputError
 from ..validation import require_all_positive
 from .actuator import Actuator
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ['MAX_ELLIPTICITY', 'PrincipalCurvatures', 'ThreadContact', 'contact_deformation', 'contact_normal_force',
            'contact_stiffness', 'curvature_difference', 'curvature_difference_of_ellipticity', 'curvature_sum',
@@ -172,7 +176,7 @@ def reduced_compliance(youngs_modulus_1: float, poisson_ratio_1: float,
             + (1.0 - poisson_ratio_2 ** 2) / youngs_modulus_2)
 
 
-def _forces(normal_force) -> np.ndarray:
+def _forces(normal_force: npt.ArrayLike) -> np.ndarray:
     """Return normal forces as a float array; InputError unless finite and >= 0."""
     force = np.asarray(normal_force, dtype=float)
     if not np.all(np.isfinite(force) & (force >= 0)):
@@ -180,8 +184,8 @@ def _forces(normal_force) -> np.ndarray:
     return force
 
 
-def _scalar_or_array(values: np.ndarray):
-    """Return a float for 0-d results, else the array."""
+def _scalar_or_array(values: np.ndarray | np.float64) -> np.ndarray | float:
+    """Return a float for 0-d results (numpy gives a 0-d array or a numpy scalar), else the array."""
     return float(values) if values.ndim == 0 else values
 
 
@@ -204,8 +208,8 @@ def deformation_per_force(curvature_sum_value: float, curvature_difference_value
             * curvature_sum_value / 2.0)
 
 
-def normal_deformation(normal_force, curvature_sum_value: float, curvature_difference_value: float,
-                       compliance: float):
+def normal_deformation(normal_force: npt.ArrayLike, curvature_sum_value: float, curvature_difference_value: float,
+                       compliance: float) -> np.ndarray | float:
     """Eq. 16: normal contact deformation delta in m.
 
     ``delta = 2 K(e) / (pi m) (3 F_n E' / (2 sum rho))^(2/3) sum rho / 2``,
@@ -227,8 +231,8 @@ def stiffness_coefficient(curvature_sum_value: float, curvature_difference_value
     return 1.5 / deformation_per_force(curvature_sum_value, curvature_difference_value, compliance)
 
 
-def normal_stiffness(normal_force, curvature_sum_value: float, curvature_difference_value: float,
-                     compliance: float):
+def normal_stiffness(normal_force: npt.ArrayLike, curvature_sum_value: float, curvature_difference_value: float,
+                     compliance: float) -> np.ndarray | float:
     """Eq. 17: normal contact stiffness ``K_n = dF_n/d delta = k_delta F_n^(1/3)`` in N/m.
 
     normal_force F_n in N (>= 0), other arguments as :func:`normal_deformation`.
@@ -249,7 +253,7 @@ def load_sharing_factor(actuator: Actuator) -> float:
             * math.cos(actuator.flank_angle) * math.cos(actuator.lead_angle))
 
 
-def contact_normal_force(actuator: Actuator, axial_load):
+def contact_normal_force(actuator: Actuator, axial_load: npt.ArrayLike) -> np.ndarray | float:
     """Per-contact normal force in N from the axial load F_a in N (uniform sharing, paper's assumption).
 
     ``F_n = |F_a| / (roller_count threads_per_roller cos(beta) cos(alpha_S))``;
@@ -291,11 +295,11 @@ class ThreadContact:
         """
         return self.ellipticity if self.transverse_radius >= self.rolling_radius else 1.0 / self.ellipticity
 
-    def deformation(self, normal_force):
+    def deformation(self, normal_force: npt.ArrayLike) -> np.ndarray | float:
         """Eq. 16 for this contact: delta in m from F_n in N."""
         return _scalar_or_array(1.5 / self.stiffness_coefficient * _forces(normal_force) ** (2.0 / 3.0))
 
-    def stiffness(self, normal_force):
+    def stiffness(self, normal_force: npt.ArrayLike) -> np.ndarray | float:
         """Eq. 17 for this contact: K_n in N/m from F_n in N."""
         return _scalar_or_array(self.stiffness_coefficient * _forces(normal_force) ** (1.0 / 3.0))
 
@@ -316,11 +320,11 @@ def thread_contact(actuator: Actuator) -> ThreadContact:
                          rolling_radius=rolling_radius, transverse_radius=transverse_radius)
 
 
-def contact_deformation(actuator: Actuator, axial_load):
+def contact_deformation(actuator: Actuator, axial_load: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 16 for an actuator: thread-contact deformation delta in m from the axial load F_a in N."""
     return thread_contact(actuator).deformation(contact_normal_force(actuator, axial_load))
 
 
-def contact_stiffness(actuator: Actuator, axial_load):
+def contact_stiffness(actuator: Actuator, axial_load: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 17 for an actuator: thread-contact stiffness K_n in N/m from the axial load F_a in N."""
     return thread_contact(actuator).stiffness(contact_normal_force(actuator, axial_load))

@@ -21,6 +21,7 @@ Choices where the paper is silent:
 from __future__ import annotations
 
 import math
+from typing import cast, TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from .actuator import Actuator
 from .contact import contact_deformation, contact_normal_force, load_sharing_factor, reduced_compliance, thread_contact
 from .kinematics import sliding_velocity_coefficient
 from .vibration_model import LOAD_EXPONENT, VELOCITY_EXPONENT
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ['DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT', 'ELLIPTICITY_EXPONENT', 'HAMROCK_DOWSON_FACTOR',
            'MATERIALS_EXPONENT', 'dimensionless_minimum_film', 'effective_modulus', 'film_constant', 'film_ratio',
@@ -46,7 +50,7 @@ ELLIPTICITY_EXPONENT = -0.68
 DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT = 0.03
 
 
-def _array(name: str, value, *, positive: bool = False, non_negative: bool = False) -> np.ndarray:
+def _array(name: str, value: npt.ArrayLike, *, positive: bool = False, non_negative: bool = False) -> np.ndarray:
     """Float array of ``value``; InputError naming ``name`` unless finite (and > 0 / >= 0)."""
     array = np.asarray(value, dtype=float)
     ok = np.isfinite(array)
@@ -60,8 +64,8 @@ def _array(name: str, value, *, positive: bool = False, non_negative: bool = Fal
     return array
 
 
-def _out(values: np.ndarray):
-    """Return a float for 0-d results, else the array."""
+def _out(values: np.ndarray | np.float64) -> np.ndarray | float:
+    """Return a float for 0-d results (numpy gives a 0-d array or a numpy scalar), else the array."""
     return float(values) if np.ndim(values) == 0 else values
 
 
@@ -74,7 +78,8 @@ def effective_modulus(youngs_modulus_1: float, poisson_ratio_1: float,
     return 2.0 / reduced_compliance(youngs_modulus_1, poisson_ratio_1, youngs_modulus_2, poisson_ratio_2)
 
 
-def speed_parameter(viscosity, speed, modulus: float, rolling_radius: float):
+def speed_parameter(viscosity: npt.ArrayLike, speed: npt.ArrayLike, modulus: float,
+                    rolling_radius: float) -> np.ndarray | float:
     """Dimensionless speed parameter of Eq. 8: ``U = eta_0 u / (E' R_x)``.
 
     viscosity eta_0 in Pa s, speed u in m/s (magnitude used), modulus E' in Pa,
@@ -89,12 +94,13 @@ def materials_parameter(pressure_viscosity_coefficient: float, modulus: float) -
     return pressure_viscosity_coefficient * modulus
 
 
-def load_parameter(normal_force, modulus: float, rolling_radius: float):
+def load_parameter(normal_force: npt.ArrayLike, modulus: float, rolling_radius: float) -> np.ndarray | float:
     """Dimensionless load parameter of Eq. 8: ``W = F / (E' R_x^2)``; F in N, E' in Pa, R_x in m."""
     return _out(_array('normal_force', normal_force, positive=True) / (modulus * rolling_radius ** 2))
 
 
-def dimensionless_minimum_film(speed_param, materials_param, load_param, film_ellipticity: float):
+def dimensionless_minimum_film(speed_param: npt.ArrayLike, materials_param: float, load_param: npt.ArrayLike,
+                               film_ellipticity: float) -> np.ndarray | float:
     """Eq. 8 (Hamrock-Dowson): ``H_min = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k))``.
 
     k = a/b is the ellipticity with a transverse to the rolling direction.
@@ -105,13 +111,14 @@ def dimensionless_minimum_film(speed_param, materials_param, load_param, film_el
                 * (1.0 - math.exp(ELLIPTICITY_EXPONENT * film_ellipticity)))
 
 
-def film_thickness_from_dimensionless(dimensionless_film, rolling_radius: float):
+def film_thickness_from_dimensionless(dimensionless_film: npt.ArrayLike, rolling_radius: float) -> np.ndarray | float:
     """Dimensional film ``h = H R_x`` in m from the dimensionless H of Eq. 8 and R_x in m."""
     return _out(np.asarray(dimensionless_film, dtype=float) * rolling_radius)
 
 
-def hamrock_dowson_film_thickness(viscosity, speed, normal_force, pressure_viscosity_coefficient: float,
-                                  modulus: float, rolling_radius: float, film_ellipticity: float):
+def hamrock_dowson_film_thickness(viscosity: npt.ArrayLike, speed: npt.ArrayLike, normal_force: npt.ArrayLike,
+                                  pressure_viscosity_coefficient: float, modulus: float, rolling_radius: float,
+                                  film_ellipticity: float) -> np.ndarray | float:
     """Eq. 8 in metres: minimum film ``h = R_x H_min(U, G, W, k)`` of a point contact.
 
     viscosity in Pa s, speed in m/s, normal_force in N, pressure-viscosity
@@ -125,8 +132,8 @@ def hamrock_dowson_film_thickness(viscosity, speed, normal_force, pressure_visco
     return film_thickness_from_dimensionless(dimensionless, rolling_radius)
 
 
-def viscosity_at_temperature(temperature, reference_viscosity: float, reference_temperature: float,
-                             coefficient: float = DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT):
+def viscosity_at_temperature(temperature: npt.ArrayLike, reference_viscosity: float, reference_temperature: float,
+                             coefficient: float = DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT) -> np.ndarray | float:
     """Reynolds (exponential) viscosity law ``eta(T) = eta_ref exp(-beta (T - T_ref))`` in Pa s.
 
     temperature and reference_temperature in degC (or K, consistently),
@@ -137,8 +144,8 @@ def viscosity_at_temperature(temperature, reference_viscosity: float, reference_
     return _out(reference_viscosity * np.exp(-coefficient * (temperature - reference_temperature)))
 
 
-def oil_viscosity(actuator: Actuator, temperature=None,
-                  coefficient: float = DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT):
+def oil_viscosity(actuator: Actuator, temperature: npt.ArrayLike | None = None,
+                  coefficient: float = DEFAULT_VISCOSITY_TEMPERATURE_COEFFICIENT) -> np.ndarray | float:
     """Dynamic viscosity of the actuator's oil in Pa s at ``temperature`` degC (None: reference)."""
     if temperature is None:
         return actuator.oil_viscosity
@@ -156,12 +163,13 @@ def film_constant(actuator: Actuator, viscosity: float | None = None) -> float:
     viscosity = actuator.oil_viscosity if viscosity is None else viscosity
     contact = thread_contact(actuator)
     modulus = effective_modulus(actuator.youngs_modulus, actuator.poisson_ratio)
-    # Eq. 8 at unit speed (1 m/s) and unit load (1 N) is exactly C_h.
-    return hamrock_dowson_film_thickness(viscosity, 1.0, 1.0, actuator.pressure_viscosity_coefficient,
-                                         modulus, contact.rolling_radius, contact.film_ellipticity)
+    # Eq. 8 at unit speed (1 m/s) and unit load (1 N) is exactly C_h (a float: every input is a scalar).
+    return cast(float, hamrock_dowson_film_thickness(viscosity, 1.0, 1.0, actuator.pressure_viscosity_coefficient,
+                                                     modulus, contact.rolling_radius, contact.film_ellipticity))
 
 
-def fully_lubricated_film_thickness(actuator: Actuator, screw_speed, axial_load, viscosity=None):
+def fully_lubricated_film_thickness(actuator: Actuator, screw_speed: npt.ArrayLike, axial_load: npt.ArrayLike,
+                                    viscosity: npt.ArrayLike | None = None) -> np.ndarray | float:
     """Eq. 9: minimum film of one screw-roller contact under full lubrication, m.
 
     ``h = C_h |v_SR|^0.68 F_n^-0.073`` with ``|v_SR| = |k_v(delta)| |omega_S|``
@@ -182,18 +190,18 @@ def fully_lubricated_film_thickness(actuator: Actuator, screw_speed, axial_load,
                 * speed ** VELOCITY_EXPONENT * normal_force ** LOAD_EXPONENT)
 
 
-def starved_film_thickness(full_film, theta_oil):
+def starved_film_thickness(full_film: npt.ArrayLike, theta_oil: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 10: ``H_actual = theta_Oil H_min``; film in m, theta_Oil dimensionless (1: fully lubricated)."""
     return _out(_array('theta_oil', theta_oil, non_negative=True) * np.asarray(full_film, dtype=float))
 
 
-def film_ratio(film, composite_roughness: float):
+def film_ratio(film: npt.ArrayLike, composite_roughness: float) -> np.ndarray | float:
     """Eq. 11: film thickness ratio ``lambda = H_actual / sigma``; film and sigma in m."""
     composite_roughness = require_positive('composite_roughness (m)', composite_roughness)
     return _out(np.asarray(film, dtype=float) / composite_roughness)
 
 
-def oil_excitation_from_film_ratio(film_ratio_value):
+def oil_excitation_from_film_ratio(film_ratio_value: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 12: oil excitation factor ``Phi_Oil = exp(-lambda)``, dimensionless."""
     return _out(np.exp(-np.asarray(film_ratio_value, dtype=float)))
 

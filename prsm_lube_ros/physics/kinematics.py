@@ -15,10 +15,15 @@ uses :func:`sliding_speed`, the magnitude ``|v_SR|``.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..validation import require_positive
 from .actuator import Actuator
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 
 __all__ = ['actuator_sliding_velocity', 'roller_contact_velocity', 'roller_revolution_speed',
@@ -27,7 +32,8 @@ __all__ = ['actuator_sliding_velocity', 'roller_contact_velocity', 'roller_revol
            'sliding_velocity_from_contact_velocities']
 
 
-def roller_revolution_speed(screw_speed, screw_diameter: float, roller_diameter: float):
+def roller_revolution_speed(screw_speed: npt.ArrayLike, screw_diameter: float,
+                            roller_diameter: float) -> np.ndarray | float:
     """Eq. 1: roller revolution (carrier) speed ``omega_P = d_S / (2 (d_S + d_R)) omega_S``.
 
     screw_speed omega_S in rad/s, screw_diameter d_S and roller_diameter d_R
@@ -38,7 +44,8 @@ def roller_revolution_speed(screw_speed, screw_diameter: float, roller_diameter:
     return d_s / (2.0 * (d_s + d_r)) * np.asarray(screw_speed, dtype=float)
 
 
-def roller_rotation_speed(screw_speed, screw_diameter: float, roller_diameter: float):
+def roller_rotation_speed(screw_speed: npt.ArrayLike, screw_diameter: float,
+                          roller_diameter: float) -> np.ndarray | float:
     """Eq. 2: roller rotation speed ``omega_R = d_S (d_S + 2 d_R) / (2 d_R (d_S + d_R)) omega_S``.
 
     screw_speed omega_S in rad/s, diameters d_S, d_R in m; returns rad/s.
@@ -48,8 +55,8 @@ def roller_rotation_speed(screw_speed, screw_diameter: float, roller_diameter: f
     return d_s * (d_s + 2.0 * d_r) / (2.0 * d_r * (d_s + d_r)) * np.asarray(screw_speed, dtype=float)
 
 
-def screw_contact_velocity(screw_speed, screw_diameter: float, contact_deformation,
-                           flank_angle: float, lead_angle: float):
+def screw_contact_velocity(screw_speed: npt.ArrayLike, screw_diameter: float, contact_deformation: npt.ArrayLike,
+                           flank_angle: float, lead_angle: float) -> np.ndarray | float:
     """Eq. 4: screw-side contact velocity ``v_S = (d_S/2 - delta cos(beta)) omega_S cos(alpha_S)``.
 
     screw_speed omega_S in rad/s, screw_diameter d_S in m, contact_deformation
@@ -60,8 +67,9 @@ def screw_contact_velocity(screw_speed, screw_diameter: float, contact_deformati
             * screw_speed * np.cos(lead_angle))
 
 
-def roller_contact_velocity(screw_speed, roller_speed, screw_diameter: float, roller_diameter: float,
-                            contact_deformation, flank_angle: float, lead_angle: float):
+def roller_contact_velocity(screw_speed: npt.ArrayLike, roller_speed: npt.ArrayLike, screw_diameter: float,
+                            roller_diameter: float, contact_deformation: npt.ArrayLike, flank_angle: float,
+                            lead_angle: float) -> np.ndarray | float:
     """Eq. 5: roller-side contact velocity in m/s.
 
     ``v_R = [omega_R (-d_R - 2 delta cos(beta)) - d_S omega_S tan^2(alpha_S) / 2] cos(alpha_S)``
@@ -76,13 +84,15 @@ def roller_contact_velocity(screw_speed, roller_speed, screw_diameter: float, ro
              - screw_diameter * screw_speed * np.tan(lead_angle) ** 2 / 2.0) * np.cos(lead_angle))
 
 
-def sliding_velocity_from_contact_velocities(roller_velocity, screw_velocity):
+def sliding_velocity_from_contact_velocities(roller_velocity: npt.ArrayLike,
+                                             screw_velocity: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 3: sliding velocity ``v_SR = v_R - v_S`` in m/s (signed, as printed)."""
     return np.asarray(roller_velocity, dtype=float) - np.asarray(screw_velocity, dtype=float)
 
 
-def sliding_velocity(screw_speed, roller_speed, screw_diameter: float, roller_diameter: float,
-                     contact_deformation, flank_angle: float, lead_angle: float):
+def sliding_velocity(screw_speed: npt.ArrayLike, roller_speed: npt.ArrayLike, screw_diameter: float,
+                     roller_diameter: float, contact_deformation: npt.ArrayLike, flank_angle: float,
+                     lead_angle: float) -> np.ndarray | float:
     """Eq. 6: sliding velocity of one screw-roller thread contact in m/s (signed, as printed).
 
     ``v_SR = [(omega_S - 2 omega_R) delta cos(beta) - d_S omega_S (1 + tan^2(alpha_S)) / 2
@@ -100,8 +110,8 @@ def sliding_velocity(screw_speed, roller_speed, screw_diameter: float, roller_di
 
 
 def sliding_velocity_coefficient_from_geometry(screw_diameter: float, roller_diameter: float,
-                                               contact_deformation, flank_angle: float,
-                                               lead_angle: float):
+                                               contact_deformation: npt.ArrayLike, flank_angle: float,
+                                               lead_angle: float) -> np.ndarray | float:
     """Eq. 7: ``k_v = v_SR / omega_S`` in m (per rad), signed as Eq. 6 (negative).
 
     Eq. 6 with omega_R from Eq. 2 is proportional to omega_S, so
@@ -113,7 +123,7 @@ def sliding_velocity_coefficient_from_geometry(screw_diameter: float, roller_dia
                             flank_angle, lead_angle)
 
 
-def sliding_velocity_coefficient(actuator: Actuator, contact_deformation=0.0):
+def sliding_velocity_coefficient(actuator: Actuator, contact_deformation: npt.ArrayLike = 0.0) -> np.ndarray | float:
     """Eq. 7 for an actuator: ``k_v = v_SR / omega_S`` in m (per rad), signed (negative).
 
     contact_deformation delta_SR in m (see
@@ -125,7 +135,8 @@ def sliding_velocity_coefficient(actuator: Actuator, contact_deformation=0.0):
         actuator.flank_angle, actuator.lead_angle)
 
 
-def actuator_sliding_velocity(actuator: Actuator, screw_speed, contact_deformation=0.0):
+def actuator_sliding_velocity(actuator: Actuator, screw_speed: npt.ArrayLike,
+                              contact_deformation: npt.ArrayLike = 0.0) -> np.ndarray | float:
     """Eq. 6/7 for an actuator: signed sliding velocity ``v_SR = k_v omega_S`` in m/s.
 
     screw_speed omega_S in rad/s, contact_deformation delta_SR in m.
@@ -134,7 +145,8 @@ def actuator_sliding_velocity(actuator: Actuator, screw_speed, contact_deformati
             * np.asarray(screw_speed, dtype=float))
 
 
-def sliding_speed(actuator: Actuator, screw_speed, contact_deformation=0.0):
+def sliding_speed(actuator: Actuator, screw_speed: npt.ArrayLike,
+                  contact_deformation: npt.ArrayLike = 0.0) -> np.ndarray | float:
     """Magnitude ``|v_SR| = |k_v omega_S|`` in m/s: the speed the film model (Eq. 9) uses.
 
     screw_speed omega_S in rad/s (either sign), contact_deformation delta_SR in m.

@@ -15,8 +15,14 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 import math
+from typing import overload, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import numpy.typing as npt
 
 __all__ = ['FREQUENCY_EXPONENT', 'LOAD_EXPONENT', 'ModelConstants', 'STIFFNESS_EXPONENT', 'VELOCITY_EXPONENT',
            'acceleration_amplitude', 'acceleration_from_displacement', 'design_matrix', 'excitation_scale',
@@ -55,13 +61,15 @@ class ModelConstants:
         return asdict(self)
 
     @classmethod
-    def from_vector(cls, vector) -> ModelConstants:
+    def from_vector(cls, vector: Sequence[float] | np.ndarray) -> ModelConstants:
         """Inverse of :meth:`as_vector`."""
         return cls(c_sys=float(np.exp(vector[0])), c_f=float(vector[1]),
                    c_lambda=float(vector[2]))
 
 
-def forced_response_amplitude(force_amplitude, stiffness, mass, damping, frequency):
+def forced_response_amplitude(force_amplitude: np.ndarray | float, stiffness: np.ndarray | float,
+                              mass: np.ndarray | float, damping: np.ndarray | float,
+                              frequency: npt.ArrayLike) -> np.ndarray | float:
     """Steady-state displacement amplitude of Eq. 13 under harmonic forcing, m.
 
     Eq. 13, ``m x'' + c x' + k x = F_0 sin(w t)``, has the steady amplitude
@@ -73,17 +81,30 @@ def forced_response_amplitude(force_amplitude, stiffness, mass, damping, frequen
     return force_amplitude / np.hypot(stiffness - mass * frequency ** 2, damping * frequency)
 
 
-def quasi_static_amplitude(force_amplitude, stiffness):
+def quasi_static_amplitude(force_amplitude: npt.ArrayLike, stiffness: np.ndarray | float) -> np.ndarray | float:
     """Eq. 14: far from resonance, ``X_0 = F_0 / K_0``; N and N/m give m."""
     return np.asarray(force_amplitude, dtype=float) / stiffness
 
 
-def acceleration_from_displacement(displacement_amplitude, frequency):
+def acceleration_from_displacement(displacement_amplitude: np.ndarray | float,
+                                   frequency: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 15: ``A_0 = w^2 X_0``; m and rad/s give m/s^2."""
     return np.asarray(frequency, dtype=float) ** FREQUENCY_EXPONENT * displacement_amplitude
 
 
-def film_speed_load_term(screw_speed, axial_load):
+@overload
+def film_speed_load_term(screw_speed: float, axial_load: float) -> float: ...
+
+
+@overload
+def film_speed_load_term(screw_speed: np.ndarray, axial_load: np.ndarray | float) -> np.ndarray: ...
+
+
+@overload
+def film_speed_load_term(screw_speed: np.ndarray | float, axial_load: np.ndarray) -> np.ndarray: ...
+
+
+def film_speed_load_term(screw_speed: np.ndarray | float, axial_load: np.ndarray | float) -> np.ndarray | float:
     """``omega_S^0.68 F_a^-0.073``, the speed and load part of the film (Eq. 9, 19).
 
     screw_speed in rad/s (its magnitude is used), axial_load in N (magnitude).
@@ -94,28 +115,50 @@ def film_speed_load_term(screw_speed, axial_load):
         return screw_speed ** VELOCITY_EXPONENT * axial_load ** LOAD_EXPONENT
 
 
-def oil_excitation_factor(theta_oil, c_lambda, screw_speed, axial_load):
+def oil_excitation_factor(theta_oil: npt.ArrayLike, c_lambda: float, screw_speed: np.ndarray | float,
+                          axial_load: np.ndarray | float) -> np.ndarray | float:
     """Eq. 19: ``Phi_Oil = exp(-theta_Oil C_lambda omega_S^0.68 F_a^-0.073)``, dimensionless."""
     return np.exp(-np.asarray(theta_oil, dtype=float) * c_lambda
                   * film_speed_load_term(screw_speed, axial_load))
 
 
-def load_excitation_factor(axial_load, c_f):
+def load_excitation_factor(axial_load: npt.ArrayLike, c_f: float) -> np.ndarray | float:
     """Eq. 18: ``Phi_F = exp(C_F F_a)``, dimensionless; F_a in N, C_F in 1/N."""
     return np.exp(c_f * np.abs(np.asarray(axial_load, dtype=float)))
 
 
-def stiffness_load_scale(axial_load):
+def stiffness_load_scale(axial_load: npt.ArrayLike) -> np.ndarray | float:
     """Eq. 20: ``K_0 ~ F_a^(1/3)`` (Hertzian stiffening, Eq. 17); N^(1/3)."""
     return np.abs(np.asarray(axial_load, dtype=float)) ** STIFFNESS_EXPONENT
 
 
-def excitation_scale(oil_factor, load_factor):
+def excitation_scale(oil_factor: npt.ArrayLike, load_factor: np.ndarray | float) -> np.ndarray | float:
     """Eq. 21: ``F_0 ~ Phi_Oil Phi_F``, dimensionless."""
     return np.asarray(oil_factor, dtype=float) * load_factor
 
 
-def acceleration_amplitude(screw_speed, axial_load, theta_oil, constants: ModelConstants):
+@overload
+def acceleration_amplitude(screw_speed: float, axial_load: float, theta_oil: float,
+                           constants: ModelConstants) -> float: ...
+
+
+@overload
+def acceleration_amplitude(screw_speed: np.ndarray, axial_load: np.ndarray | float, theta_oil: npt.ArrayLike,
+                           constants: ModelConstants) -> np.ndarray: ...
+
+
+@overload
+def acceleration_amplitude(screw_speed: np.ndarray | float, axial_load: np.ndarray, theta_oil: npt.ArrayLike,
+                           constants: ModelConstants) -> np.ndarray: ...
+
+
+@overload
+def acceleration_amplitude(screw_speed: np.ndarray | float, axial_load: np.ndarray | float, theta_oil: npt.ArrayLike,
+                           constants: ModelConstants) -> np.ndarray | float: ...
+
+
+def acceleration_amplitude(screw_speed: np.ndarray | float, axial_load: np.ndarray | float, theta_oil: npt.ArrayLike,
+                           constants: ModelConstants) -> np.ndarray | float:
     """Eq. 22: acceleration amplitude A_0 in m/s^2.
 
     ``A_0 = C_sys omega_S^2 F_a^(-1/3) exp(C_F F_a - theta_Oil C_lambda omega_S^0.68 F_a^-0.073)``
@@ -131,7 +174,32 @@ def acceleration_amplitude(screw_speed, axial_load, theta_oil, constants: ModelC
                 * force / stiffness_load_scale(axial_load))
 
 
-def reduced_log_amplitude(amplitude, screw_speed, axial_load):
+@overload
+def reduced_log_amplitude(amplitude: float, screw_speed: float, axial_load: float) -> float: ...
+
+
+@overload
+def reduced_log_amplitude(amplitude: np.ndarray, screw_speed: np.ndarray | float,
+                          axial_load: np.ndarray | float) -> np.ndarray: ...
+
+
+@overload
+def reduced_log_amplitude(amplitude: npt.ArrayLike, screw_speed: np.ndarray,
+                          axial_load: np.ndarray | float) -> np.ndarray: ...
+
+
+@overload
+def reduced_log_amplitude(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float,
+                          axial_load: np.ndarray) -> np.ndarray: ...
+
+
+@overload
+def reduced_log_amplitude(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float,
+                          axial_load: np.ndarray | float) -> np.ndarray | float: ...
+
+
+def reduced_log_amplitude(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float,
+                          axial_load: np.ndarray | float) -> np.ndarray | float:
     """``ln(A_0 omega_S^-2 F_a^(1/3))``: the log amplitude with the known factors removed.
 
     By Eq. 22 this equals ``ln C_sys + C_F F_a - theta_Oil C_lambda omega_S^0.68 F_a^-0.073``,
@@ -145,7 +213,7 @@ def reduced_log_amplitude(amplitude, screw_speed, axial_load):
                 + STIFFNESS_EXPONENT * np.log(axial_load))
 
 
-def design_matrix(screw_speed, axial_load, theta_oil):
+def design_matrix(screw_speed: npt.ArrayLike, axial_load: np.ndarray | float, theta_oil: npt.ArrayLike) -> np.ndarray:
     """Rows ``[1, F_a, -theta_Oil omega_S^0.68 F_a^-0.073]`` of the linear form of Eq. 22.
 
     ``reduced_log_amplitude = design_matrix @ (ln C_sys, C_F, C_lambda)``.
@@ -157,7 +225,32 @@ def design_matrix(screw_speed, axial_load, theta_oil):
                             -theta_oil * film_speed_load_term(screw_speed, axial_load)])
 
 
-def lubrication_index(amplitude, screw_speed, axial_load, constants: ModelConstants):
+@overload
+def lubrication_index(amplitude: float, screw_speed: float, axial_load: float, constants: ModelConstants) -> float: ...
+
+
+@overload
+def lubrication_index(amplitude: np.ndarray, screw_speed: np.ndarray | float, axial_load: np.ndarray | float,
+                      constants: ModelConstants) -> np.ndarray: ...
+
+
+@overload
+def lubrication_index(amplitude: npt.ArrayLike, screw_speed: np.ndarray, axial_load: np.ndarray | float,
+                      constants: ModelConstants) -> np.ndarray: ...
+
+
+@overload
+def lubrication_index(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float, axial_load: np.ndarray,
+                      constants: ModelConstants) -> np.ndarray: ...
+
+
+@overload
+def lubrication_index(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float, axial_load: np.ndarray | float,
+                      constants: ModelConstants) -> np.ndarray | float: ...
+
+
+def lubrication_index(amplitude: npt.ArrayLike, screw_speed: np.ndarray | float, axial_load: np.ndarray | float,
+                      constants: ModelConstants) -> np.ndarray | float:
     """Eq. 23: theta_Oil from the acceleration amplitude, dimensionless.
 
     ``theta_Oil = (C_F F_a - ln(C_sys^-1 A_0 omega_S^-2 F_a^(1/3))) / (C_lambda omega_S^0.68 F_a^-0.073)``

@@ -12,6 +12,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 import sys
+from typing import Any
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -44,8 +45,13 @@ def message_definition(name: str) -> str:
 
 
 @lru_cache(maxsize=None)
-def contract_typestore(store: Stores = Stores.ROS2_JAZZY):
-    """A rosbags typestore with the standard ROS 2 types and the contract's messages."""
+def contract_typestore(store: Stores = Stores.ROS2_JAZZY) -> Any:
+    """A rosbags typestore with the standard ROS 2 types and the contract's messages.
+
+    A ``rosbags.typesys.store.Typestore``, annotated ``Any``: its ``deserialize_cdr``
+    types messages as ``object``, and the readers use their fields (a writer
+    that wants the precise type annotates its own variable).
+    """
     typestore = get_typestore(store)
     types = {}
     for name in ('VibrationBlock', 'LubricationState'):

@@ -21,7 +21,7 @@ from __future__ import annotations
 import bisect
 from pathlib import Path
 import shutil
-from typing import Literal
+from typing import Literal, TYPE_CHECKING
 
 import numpy as np
 from rosbags.interfaces import Connection
@@ -32,6 +32,13 @@ from ..contract import (AXIAL_LOAD_TOPIC, JOINT_STATE, JOINT_STATES_TOPIC, SCREW
                         topic_name, VIBRATION_BLOCK, VIBRATION_TOPIC, WRENCH_STAMPED)
 from ..errors import InputError
 from .typestore import contract_typestore
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+    from types import TracebackType
+
+    import numpy.typing as npt
+    from rosbags.typesys.store import MsgType, Typestore
 
 __all__ = ['ContractBagWriter', 'STORAGE_FORMATS', 'bag_path', 'check_storage']
 
@@ -81,7 +88,7 @@ class ContractBagWriter:
             self._bag_dir = self.path
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.namespace = namespace
-        self.typestore = contract_typestore()
+        self.typestore: Typestore = contract_typestore()
         plugin = StoragePlugin.SQLITE3 if storage == 'sqlite3' else StoragePlugin.MCAP
         self._writer: Writer | None = Writer(self._bag_dir, version=Writer.VERSION_LATEST, storage_plugin=plugin)
         if compression is not None:
@@ -91,7 +98,7 @@ class ContractBagWriter:
             self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self._writer.open()
         self._connections: dict[str, Connection] = {}
-        self._pending: list[tuple[int, int, Connection, bytes]] = []
+        self._pending: list[tuple[int, int, Connection, memoryview]] = []
         self._sequence = 0
         self.message_counts: dict[str, int] = {}
         types = self.typestore.types
@@ -105,7 +112,7 @@ class ContractBagWriter:
         self._temperature = types[TEMPERATURE]
 
     # -- plumbing -------------------------------------------------------------------------------
-    def _connection(self, topic: str, msgtype: str):
+    def _connection(self, topic: str, msgtype: str) -> Connection:
         name = topic_name(self.namespace or '/', topic)
         if name not in self._connections:
             assert self._writer is not None, 'the bag is closed'
@@ -113,11 +120,12 @@ class ContractBagWriter:
             self.message_counts[name] = 0
         return self._connections[name]
 
-    def _stamp(self, stamp_ns: int, frame_id: str):
+    def _stamp(self, stamp_ns: int, frame_id: str) -> MsgType:
         seconds, nanoseconds = divmod(int(stamp_ns), 1_000_000_000)
         return self._header(stamp=self._time(sec=seconds, nanosec=nanoseconds), frame_id=frame_id)
 
-    def _queue(self, connection, log_times, messages, msgtype: str) -> None:
+    def _queue(self, connection: Connection, log_times: np.ndarray | Sequence[int], messages: Iterable[MsgType],
+               msgtype: str) -> None:
         serialize = self.typestore.serialize_cdr
         for log_time, message in zip(np.asarray(log_times, dtype=np.int64).tolist(), messages):
             self._pending.append((log_time, self._sequence, connection, serialize(message, msgtype)))
@@ -125,8 +133,8 @@ class ContractBagWriter:
         self.message_counts[connection.topic] += len(log_times)
 
     # -- topics ---------------------------------------------------------------------------------
-    def add_vibration(self, stamps_ns, log_times_ns, sample_rate: float, samples,
-                      frame_id: str = '') -> None:
+    def add_vibration(self, stamps_ns: npt.ArrayLike, log_times_ns: np.ndarray | Sequence[int], sample_rate: float,
+                      samples: npt.ArrayLike, frame_id: str = '') -> None:
         """``VibrationBlock`` messages: row k of ``samples`` (m/s^2) acquired from ``stamps_ns[k]``."""
         samples = np.asarray(samples, dtype=np.float32)
         connection = self._connection(VIBRATION_TOPIC, VIBRATION_BLOCK)
@@ -135,7 +143,8 @@ class ContractBagWriter:
                     for stamp, row in zip(np.asarray(stamps_ns).tolist(), samples))
         self._queue(connection, log_times_ns, messages, VIBRATION_BLOCK)
 
-    def add_joint_states(self, stamps_ns, log_times_ns, angles, speeds) -> None:
+    def add_joint_states(self, stamps_ns: npt.ArrayLike, log_times_ns: np.ndarray | Sequence[int],
+                         angles: npt.ArrayLike, speeds: npt.ArrayLike) -> None:
         """``JointState`` messages with one entry ``screw``: angle in rad, speed in rad/s."""
         connection = self._connection(JOINT_STATES_TOPIC, JOINT_STATE)
         empty = np.zeros(0, dtype=np.float64)
@@ -147,7 +156,8 @@ class ContractBagWriter:
                                                    np.asarray(speeds, dtype=float).tolist()))
         self._queue(connection, log_times_ns, messages, JOINT_STATE)
 
-    def add_axial_loads(self, stamps_ns, log_times_ns, forces, frame_id: str = '') -> None:
+    def add_axial_loads(self, stamps_ns: npt.ArrayLike, log_times_ns: np.ndarray | Sequence[int], forces: npt.ArrayLike,
+                        frame_id: str = '') -> None:
         """``WrenchStamped`` messages with ``wrench.force.z`` = axial load in N."""
         connection = self._connection(AXIAL_LOAD_TOPIC, WRENCH_STAMPED)
         zero = self._vector(x=0.0, y=0.0, z=0.0)
@@ -158,8 +168,8 @@ class ContractBagWriter:
                                             np.asarray(forces, dtype=float).tolist()))
         self._queue(connection, log_times_ns, messages, WRENCH_STAMPED)
 
-    def add_temperatures(self, stamps_ns, log_times_ns, temperatures, variance: float = 0.0,
-                         frame_id: str = '') -> None:
+    def add_temperatures(self, stamps_ns: npt.ArrayLike, log_times_ns: np.ndarray | Sequence[int],
+                         temperatures: npt.ArrayLike, variance: float = 0.0, frame_id: str = '') -> None:
         """``Temperature`` messages in degC with the sensor's variance in K^2."""
         connection = self._connection(TEMPERATURE_TOPIC, TEMPERATURE)
         messages = (self._temperature(header=self._stamp(stamp, frame_id), temperature=value,
@@ -205,7 +215,8 @@ class ContractBagWriter:
         """Context manager entry."""
         return self
 
-    def __exit__(self, exc_type, exc, traceback) -> Literal[False]:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 traceback: TracebackType | None) -> Literal[False]:
         """Finish the bag, or drop it when the body raised."""
         if exc_type is None:
             self.close()

@@ -6,11 +6,15 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..validation import require
 from .rig_config import ExperimentPlan, RigConfig
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 
 __all__ = ['DriveProgram', 'Stroke', 'append_stroke', 'schedule_session']
@@ -34,13 +38,14 @@ class DriveProgram:
         self._arrays: tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]] | None = None
         self.traverse_starts: list[float] = []                  # s, start of every stroke appended
 
-    def _tables(self):
+    def _tables(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+        """The phase tables as arrays (motion, load), made again after each change."""
         if self._arrays is None:
             self._arrays = (tuple(np.array(column) for column in self._motion),
                             tuple(np.array(column) for column in self._load))
         return self._arrays
 
-    def motion(self, times) -> tuple[np.ndarray, np.ndarray]:
+    def motion(self, times: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Screw angle in rad and speed in rad/s at ``times`` (s)."""
         (start, angle, speed, accel), _ = self._tables()
         times = np.asarray(times, dtype=float)
@@ -49,7 +54,7 @@ class DriveProgram:
         return (angle[index] + speed[index] * dt + 0.5 * accel[index] * dt * dt,
                 speed[index] + accel[index] * dt)
 
-    def load(self, times) -> np.ndarray:
+    def load(self, times: npt.ArrayLike) -> np.ndarray:
         """Applied axial load in N at ``times`` (s)."""
         _, (start, load, rate) = self._tables()
         times = np.asarray(times, dtype=float)
@@ -73,7 +78,7 @@ class DriveProgram:
         for column, value in zip(self._load, (start, current if load is None else load, rate)):
             column.append(float(value))
 
-    def _truncate(self, table, start: float) -> None:
+    def _truncate(self, table: list[list[float]], start: float) -> None:
         """Drop phases that begin at or after ``start`` (later commands replace planned ones)."""
         keep = sum(1 for begin in table[0] if begin < start) or 1
         if keep < len(table[0]):

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, fields
 import math
-from typing import Any, TypeVar
+from typing import Any, TYPE_CHECKING, TypeVar
 from collections.abc import Sequence
 
 import numpy as np
@@ -28,6 +28,9 @@ from ..physics.effects.lubricant_depletion import FORMS as DEPLETION_FORMS, Lubr
 from ..physics.effects.position_dependent_stiffness import PositionDependentStiffness
 from ..physics.effects.resonance import Resonance
 from ..physics.effects.thermal_viscosity import LAWS as VISCOSITY_LAWS, ThermalViscosity
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 __all__ = ['BACKGROUND_FRACTION_RANGE', 'DEPLETION_FALL_RANGE', 'DRAWN_ARRANGEMENTS', 'Effects',
            'REFERENCE_VISCOSITY_RANGE', 'RESONANCE_BANDS', 'RESONANCE_BELOW_RATIO_RANGE', 'RESONANCE_DAMPING_RANGE',
@@ -76,10 +79,10 @@ class Effects:
     ``None``.  The IDs and law types come from :mod:`prsm_lube_ros.physics.effects`.
     """
 
-    def __init__(self, **laws):
+    def __init__(self, **laws: object) -> None:
         """Keep the laws that are not None, each checked against its effect's law type."""
         known = effect_ids()
-        self._laws = {}
+        self._laws: dict[str, DataclassInstance] = {}
         for name, law in laws.items():
             if name not in known:
                 raise ConfigError(f'effects: unknown effect {name!r}; known: {", ".join(known)}')
@@ -89,19 +92,19 @@ class Effects:
                 raise ConfigError(f'effects: {name} must be a {law_type(name).__name__}, got {law!r}')
             self._laws[name] = law
 
-    def __getattr__(self, name):
-        """The law of effect ``name`` or None when it is off."""
+    def __getattr__(self, name: str) -> Any:
+        """The law of effect ``name`` or None when it is off (``Any``: its type depends on ``name``)."""
         if name.startswith('_'):
             raise AttributeError(name)
         if name in effect_ids():
             return self._laws.get(name)
         raise AttributeError(f'no effect {name!r}')
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         """Same effects with equal laws."""
         return isinstance(other, Effects) and self._laws == other._laws
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         """``Effects(name=law, ...)``."""
         return 'Effects(' + ', '.join(f'{k}={v!r}' for k, v in self._laws.items()) + ')'
 
@@ -186,7 +189,7 @@ def draw_position_dependent_stiffness(rng: np.random.Generator, *, youngs_modulu
 
 
 def draw_resonance(rng: np.random.Generator, *, order: float, top_speed: float, bottom_speed: float | None = None,
-                   orders=None, band: str | None = None) -> Resonance:
+                   orders: Sequence[float] | None = None, band: str | None = None) -> Resonance:
     """Random resonance excited by rotation ``order`` (or one of ``orders`` at random), zeta in its range.
 
     ``band`` (default: drawn when bottom_speed is given, else ``above``): the

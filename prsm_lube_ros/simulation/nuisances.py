@@ -37,7 +37,7 @@ class RecordingNuisances:
     repeated_stamp_fraction: float = 0.0
     lost_block_fraction: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Check the ranges."""
         require(self.stamp_jitter >= 0, f'nuisances stamp_jitter must be >= 0 s, got {self.stamp_jitter!r}')
         for name in ('repeated_stamp_fraction', 'lost_block_fraction'):

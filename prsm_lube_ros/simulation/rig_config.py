@@ -78,7 +78,7 @@ class RigConfig:
     return_factor: float = 1.0
     initial_temperature_offset: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Check every field; raise :class:`InputError` naming the first bad one."""
         object.__setattr__(self, 'harmonic_orders', tuple(
             order if order == ROLLER_PASS else as_number('rig harmonic_orders', order)
@@ -194,7 +194,7 @@ class ExperimentPlan:
     cool_down_pause: float = 0.0
     cool_down_every: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Check every field; raise :class:`InputError` naming the first bad one."""
         for name in ('speeds', 'loads', 'stage_thetas'):
             values = tuple(as_number(f'plan {name}', value) for value in getattr(self, name))

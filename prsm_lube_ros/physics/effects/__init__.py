@@ -18,8 +18,17 @@ from __future__ import annotations
 from functools import lru_cache
 import importlib
 import pkgutil
+from typing import Any, TYPE_CHECKING
 
 from ...errors import ConfigError
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from types import ModuleType
+
+    from _typeshed import DataclassInstance
+    import numpy as np
+    import numpy.typing as npt
 
 #: The order the contract lists the effects in (others follow alphabetically).
 CONTRACT_ORDER = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
@@ -33,14 +42,14 @@ def effect_ids() -> tuple[str, ...]:
     return tuple(n for n in CONTRACT_ORDER if n in names) + tuple(sorted(names - set(CONTRACT_ORDER)))
 
 
-def effect_module(effect_id: str):
+def effect_module(effect_id: str) -> ModuleType:
     """The module of effect ``effect_id``; :class:`ConfigError` naming the known ones otherwise."""
     if effect_id not in effect_ids():
         raise ConfigError(f'unknown effect {effect_id!r}; known: {", ".join(effect_ids())}')
     return importlib.import_module(f'{__name__}.{effect_id}')
 
 
-def law_type(effect_id: str):
+def law_type(effect_id: str) -> type[DataclassInstance]:
     """The parameter dataclass of effect ``effect_id`` (its module's ``Law``)."""
     return effect_module(effect_id).Law
 
@@ -56,20 +65,27 @@ class Extension:
     ``load``, ``position``, ``revolutions``, ``temperature``, ``time``).
     Each effect module subclasses this as ``Extension``; the diagnosis adds
     how to fit it.
+
+    Types: ``params`` maps names to floats (a combination of effects in the
+    diagnosis nests one such mapping per effect, hence ``Any`` values);
+    ``covariates`` is ``Any`` because it is duck-typed (a window table, a
+    namespace of arrays, or an object with just the attribute one effect
+    reads); the laws broadcast, so factors and gains are arrays, or floats for
+    scalar covariates.
     """
 
     #: Effect ID (the module name).
     id: str = ''
 
-    def film_factor(self, params: dict, covariates):
+    def film_factor(self, params: Mapping[str, Any], covariates: Any) -> np.ndarray | float:
         """Factor on theta_Oil in Eq. 22's film term (1 = none)."""
         return 1.0
 
-    def log_gain(self, params: dict, covariates, ln_a22):
+    def log_gain(self, params: Mapping[str, Any], covariates: Any, ln_a22: np.ndarray | float) -> np.ndarray | float:
         """Term added to ln A_0 (0 = none); ``ln_a22`` is Eq. 22's ln amplitude."""
         return 0.0
 
-    def eq22_amplitude(self, params: dict, covariates, rms):
+    def eq22_amplitude(self, params: Mapping[str, Any], covariates: Any, rms: npt.ArrayLike) -> np.ndarray | float:
         """The measured RMS mapped back to the amplitude Eq. 22 describes, m/s^2.
 
         Default: remove a multiplicative gain that does not depend on the amplitude itself.
@@ -78,7 +94,7 @@ class Extension:
         rms = np.asarray(rms, dtype=float)
         return rms * np.exp(-np.asarray(self.log_gain(params, covariates, np.log(rms)), dtype=float))
 
-    def assessment_film_factor(self, params: dict, covariates):
+    def assessment_film_factor(self, params: Mapping[str, Any], covariates: Any) -> np.ndarray | float:
         """Factor dividing Eq. 23's theta_Oil so it reports the oil supply (default: :meth:`film_factor`)."""
         return self.film_factor(params, covariates)
 

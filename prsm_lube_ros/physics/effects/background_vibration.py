@@ -24,12 +24,17 @@ The RMS law is the same for every form.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import numpy.typing as npt
 
 __all__ = ['BackgroundVibration', 'Extension', 'FORMS', 'Law', 'contact_amplitude', 'log_gain', 'total_amplitude']
 
@@ -37,12 +42,12 @@ __all__ = ['BackgroundVibration', 'Extension', 'FORMS', 'Law', 'contact_amplitud
 FORMS = ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')
 
 
-def total_amplitude(contact_amplitude, background_rms):
+def total_amplitude(contact_amplitude: npt.ArrayLike, background_rms: npt.ArrayLike) -> np.ndarray | float:
     """``sqrt(A_22^2 + B^2)``, m/s^2."""
     return np.hypot(np.asarray(contact_amplitude, dtype=float), background_rms)
 
 
-def log_gain(ln_contact_amplitude, background_rms: float):
+def log_gain(ln_contact_amplitude: npt.ArrayLike, background_rms: float) -> np.ndarray | float:
     """``ln A - ln A_22 = 0.5 ln(1 + B^2 / A_22^2)``, computed from ln A_22 without overflow."""
     ln_contact_amplitude = np.asarray(ln_contact_amplitude, dtype=float)
     if background_rms <= 0:
@@ -51,7 +56,7 @@ def log_gain(ln_contact_amplitude, background_rms: float):
         return 0.5 * np.log1p(np.exp(2.0 * (np.log(background_rms) - ln_contact_amplitude)))
 
 
-def contact_amplitude(total_rms, background_rms: float):
+def contact_amplitude(total_rms: npt.ArrayLike, background_rms: float) -> np.ndarray:
     """``sqrt(A^2 - B^2)``: the thread-contact part of a measured RMS; NaN where A does not exceed B."""
     total_rms = np.asarray(total_rms, dtype=float)
     power = total_rms ** 2 - background_rms ** 2
@@ -72,7 +77,7 @@ class BackgroundVibration:
     tone_shares: tuple[float, ...] = (0.4, 0.3)            # power shares of the tones
     broadband_share: float = 0.3                           # power share of the white part
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject non-physical parameters; the shares must add up to 1."""
         require_all_positive('background_vibration', rms=self.rms)
         object.__setattr__(self, 'tone_frequencies', tuple(float(f) for f in self.tone_frequencies))
@@ -101,10 +106,10 @@ class Extension(EffectExtension):
 
     id = 'background_vibration'
 
-    def log_gain(self, params, covariates, ln_a22):
+    def log_gain(self, params: Mapping[str, float], covariates: Any, ln_a22: np.ndarray | float) -> np.ndarray | float:
         """``0.5 ln(1 + B^2 / A_22^2)``."""
         return log_gain(ln_a22, params['background_rms'])
 
-    def eq22_amplitude(self, params, covariates, rms):
+    def eq22_amplitude(self, params: Mapping[str, float], covariates: Any, rms: npt.ArrayLike) -> np.ndarray:
         """``sqrt(A^2 - B^2)``; NaN where the RMS does not exceed the background."""
         return contact_amplitude(rms, params['background_rms'])

@@ -21,11 +21,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import numpy.typing as npt
 
 __all__ = ['Extension', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'effective_revolutions',
            'rest_durations', 'theta_factor']
@@ -38,7 +44,8 @@ MIN_SUPPLY = 0.05
 REST_SLACK = 1.5
 
 
-def theta_factor(revolutions, depletion_per_revolution, form: str = 'exponential'):
+def theta_factor(revolutions: npt.ArrayLike, depletion_per_revolution: npt.ArrayLike,
+                 form: str = 'exponential') -> np.ndarray | float:
     """Supply factor for (effective) revolutions N at rate 1/N_d per revolution: ``exp(-N/N_d)`` or linear."""
     loss = np.asarray(depletion_per_revolution, dtype=float) * np.asarray(revolutions, dtype=float)
     if form == 'linear':
@@ -48,7 +55,8 @@ def theta_factor(revolutions, depletion_per_revolution, form: str = 'exponential
     return np.exp(-loss)
 
 
-def rest_durations(revolutions, time, speed, recording=None) -> np.ndarray:
+def rest_durations(revolutions: np.ndarray, time: npt.ArrayLike, speed: np.ndarray,
+                   recording: npt.ArrayLike | None = None) -> np.ndarray:
     """Standstill before each window, s: the time gap not explained by turning at the window's speed.
 
     Windows are taken in time order within each recording (the first of a
@@ -69,7 +77,8 @@ def rest_durations(revolutions, time, speed, recording=None) -> np.ndarray:
     return rest
 
 
-def effective_revolutions(revolutions, rest, recovery_rate: float, recording=None, time=None) -> np.ndarray:
+def effective_revolutions(revolutions: np.ndarray, rest: npt.ArrayLike, recovery_rate: float,
+                          recording: npt.ArrayLike | None = None, time: npt.ArrayLike | None = None) -> np.ndarray:
     """``N_eff``: revolutions since lubrication with the loss recovering at rest, ``exp(-t_rest / tau_r)``.
 
     rest in s before each window (:func:`rest_durations`), recovery_rate 1/tau_r in 1/s (0: none).
@@ -107,7 +116,7 @@ class LubricantDepletion:
     form: str = 'exponential'
     recovery_time: float | None = None   # s, tau_r (None: no recovery)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject non-physical parameters."""
         require_all_positive('lubricant_depletion', depletion_revolutions=self.depletion_revolutions)
         if self.recovery_time is not None:
@@ -115,7 +124,7 @@ class LubricantDepletion:
         require(self.form in FORMS, f'lubricant_depletion form must be one of {", ".join(FORMS)}, '
                                     f'got {self.form!r}')
 
-    def theta_factor(self, revolutions):
+    def theta_factor(self, revolutions: npt.ArrayLike) -> np.ndarray | float:
         """Supply factor for (effective) revolutions N_rev since the last lubrication."""
         return theta_factor(revolutions, 1.0 / self.depletion_revolutions, self.form)
 
@@ -131,7 +140,7 @@ class Extension(EffectExtension):
 
     id = 'lubricant_depletion'
 
-    def film_factor(self, params, covariates):
+    def film_factor(self, params: Mapping[str, float], covariates: Any) -> np.ndarray | float:
         """``exp(-N_eff / N_d)`` or ``1 - N_eff / N_d``."""
         revolutions = np.nan_to_num(np.asarray(covariates.revolutions, dtype=float))
         rate = params.get('recovery_rate', 0.0)
@@ -142,6 +151,6 @@ class Extension(EffectExtension):
         form = 'linear' if params.get('linear', 0.0) else 'exponential'
         return theta_factor(revolutions, params['depletion_per_revolution'], form)
 
-    def assessment_film_factor(self, params, covariates):
+    def assessment_film_factor(self, params: Mapping[str, float], covariates: Any) -> np.ndarray:
         """1: depletion is a real fall of theta_Oil, which assessment must report."""
         return np.ones_like(np.asarray(covariates.speed, dtype=float))

@@ -37,12 +37,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 from ..vibration_model import STIFFNESS_EXPONENT
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import numpy.typing as npt
 
 __all__ = ['ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law', 'MIN_FREE_LENGTH', 'PositionDependentStiffness',
            'arrangement_ratios', 'compliance_ratio_profile', 'contact_stiffness_at', 'fixed_fixed_shaft_stiffness',
@@ -52,7 +58,8 @@ __all__ = ['ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law', 'MIN_FREE_L
 MIN_FREE_LENGTH = 1e-3
 
 
-def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float, free_length):
+def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float,
+                          free_length: npt.ArrayLike) -> np.ndarray | float:
     """Axial stiffness of the screw shaft between nut and fixed bearing, ``k_s = E A / L`` in N/m.
 
     youngs_modulus E in Pa, root_diameter in m (A = pi d^2 / 4), free_length L in m.
@@ -61,7 +68,8 @@ def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float, free_leng
     return youngs_modulus * area / np.asarray(free_length, dtype=float)
 
 
-def fixed_fixed_shaft_stiffness(youngs_modulus: float, root_diameter: float, length_before, length_after):
+def fixed_fixed_shaft_stiffness(youngs_modulus: float, root_diameter: float, length_before: npt.ArrayLike,
+                                length_after: npt.ArrayLike) -> np.ndarray | float:
     """Axial stiffness of a shaft held axially at both ends, ``k_s = E A (1/a + 1/b)`` in N/m.
 
     length_before a and length_after b, m, are the free lengths between the nut
@@ -80,8 +88,8 @@ ARRANGEMENTS = ('fixed-free', 'free-fixed', 'fixed-supported', 'supported-fixed'
 FIXED_BEFORE_START = ('free-fixed', 'supported-fixed')
 
 
-def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: float, nut_position,
-                        stroke: float, bearing_before: float, bearing_after: float):
+def shaft_stiffness_for(arrangement: str, youngs_modulus: float, root_diameter: float, nut_position: npt.ArrayLike,
+                        stroke: float, bearing_before: float, bearing_after: float) -> np.ndarray | float:
     """Shaft stiffness k_s(x), N/m, for a bearing arrangement (one of :data:`ARRANGEMENTS`).
 
     Bearings sit ``bearing_before`` m before the stroke start and ``bearing_after``
@@ -115,7 +123,8 @@ def arrangement_ratios(arrangement: str, contact_over_ea: float, stroke: float, 
     return contact_over_ea * (stroke + bearing_after), contact_over_ea * bearing_after, 0.0
 
 
-def compliance_ratio_profile(u, ratio_at_start: float, ratio_at_end: float, ratio_arch: float = 0.0):
+def compliance_ratio_profile(u: npt.ArrayLike, ratio_at_start: float, ratio_at_end: float,
+                             ratio_arch: float = 0.0) -> np.ndarray | float:
     """``rho(u) = rho_0 (1 - u) + rho_1 u + 4 rho_arch u (1 - u)``, k_c/k_s along the stroke (u = x / stroke).
 
     Exact for every arrangement: ``ratio_arch = 0`` fixed-free or fixed-supported, ``> 0`` fixed-fixed.
@@ -124,12 +133,13 @@ def compliance_ratio_profile(u, ratio_at_start: float, ratio_at_end: float, rati
     return ratio_at_start * (1 - u) + ratio_at_end * u + 4.0 * ratio_arch * u * (1 - u)
 
 
-def series_stiffness_amplification(contact_stiffness, shaft_stiffness):
+def series_stiffness_amplification(contact_stiffness: npt.ArrayLike,
+                                   shaft_stiffness: npt.ArrayLike) -> np.ndarray | float:
     """``K_hertz / K_series = 1 + k_c / k_s``: how much a compliant shaft in series raises X0 = F0/K."""
     return 1.0 + np.asarray(contact_stiffness, dtype=float) / np.asarray(shaft_stiffness, dtype=float)
 
 
-def contact_stiffness_at(load, contact_stiffness: float, reference_load: float):
+def contact_stiffness_at(load: npt.ArrayLike, contact_stiffness: float, reference_load: float) -> np.ndarray | float:
     """``k_c(F) = k_c(F_ref) (|F| / F_ref)^(1/3)`` (Eq. 17, 20), N/m."""
     return contact_stiffness * (np.abs(np.asarray(load, dtype=float)) / reference_load) ** STIFFNESS_EXPONENT
 
@@ -155,7 +165,7 @@ class PositionDependentStiffness:
     arrangement: str = 'fixed-free'
     near_length_at_start: float = 0.05   # m, nut to the bearing before the stroke start at travel 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject non-physical parameters."""
         require_all_positive('position_dependent_stiffness', contact_stiffness=self.contact_stiffness,
                              reference_load=self.reference_load, youngs_modulus=self.youngs_modulus,
@@ -169,13 +179,13 @@ class PositionDependentStiffness:
         """``k_c / k_s`` at travel 0 and the reference load, dimensionless."""
         return float(self.contact_stiffness / self.shaft_stiffness(0.0))
 
-    def shaft_stiffness(self, nut_position):
+    def shaft_stiffness(self, nut_position: npt.ArrayLike) -> np.ndarray | float:
         """``k_s(x)`` of the arrangement, N/m, for nut_position x in m from the stroke start."""
         # The far bearing lies free_length_at_start beyond travel 0: stroke + bearing_after in shaft_stiffness_for.
         return shaft_stiffness_for(self.arrangement, self.youngs_modulus, self.root_diameter, nut_position,
                                    self.free_length_at_start, self.near_length_at_start, 0.0)
 
-    def amplitude_factor(self, nut_position, axial_load):
+    def amplitude_factor(self, nut_position: npt.ArrayLike, axial_load: npt.ArrayLike) -> np.ndarray | float:
         """``1 + k_c(F) / k_s(x)`` for nut_position x in m and axial_load F in N."""
         return series_stiffness_amplification(
             contact_stiffness_at(axial_load, self.contact_stiffness, self.reference_load),
@@ -193,7 +203,7 @@ class Extension(EffectExtension):
 
     id = 'position_dependent_stiffness'
 
-    def log_gain(self, params, covariates, ln_a22):
+    def log_gain(self, params: Mapping[str, float], covariates: Any, ln_a22: np.ndarray | float) -> np.ndarray | float:
         """``ln(1 + rho(x) (F/F_ref)^(1/3))``."""
         x = np.nan_to_num(np.asarray(covariates.position, dtype=float)) / params['stroke']
         ratio = compliance_ratio_profile(x, params['ratio_at_start'], params['ratio_at_end'],

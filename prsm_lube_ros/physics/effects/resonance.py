@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
@@ -31,11 +32,16 @@ from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 from ..vibration_model import forced_response_amplitude
 
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import numpy.typing as npt
+
 
 __all__ = ['BAND_POSITIONS', 'Extension', 'Law', 'Resonance', 'band_position', 'magnification', 'natural_frequency']
 
 
-def magnification(frequency_ratio, damping_ratio):
+def magnification(frequency_ratio: npt.ArrayLike, damping_ratio: npt.ArrayLike) -> np.ndarray | float:
     """``|H(r)| = 1 / sqrt((1 - r^2)^2 + (2 zeta r)^2)``: Eq. 13's forced response over Eq. 14's X0 = F0/K.
 
     frequency_ratio r = excitation / natural frequency, damping_ratio zeta (dimensionless).
@@ -76,16 +82,16 @@ class Resonance:
     natural_frequency: float  # Hz, f_r
     damping_ratio: float      # zeta
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject non-physical parameters."""
         require_all_positive('resonance', **self.__dict__)
         require(self.damping_ratio < 1.0, f'resonance damping_ratio must be below 1, got {self.damping_ratio!r}')
 
-    def frequency_ratio(self, screw_speed):
+    def frequency_ratio(self, screw_speed: npt.ArrayLike) -> np.ndarray | float:
         """``r = order |omega_S| / (2 pi f_r)`` for screw_speed in rad/s."""
         return self.order * np.abs(np.asarray(screw_speed, dtype=float)) / (2.0 * math.pi * self.natural_frequency)
 
-    def amplitude_factor(self, screw_speed):
+    def amplitude_factor(self, screw_speed: npt.ArrayLike) -> np.ndarray | float:
         """``|H(r)|`` at screw_speed in rad/s."""
         return magnification(self.frequency_ratio(screw_speed), self.damping_ratio)
 
@@ -98,7 +104,7 @@ class Extension(EffectExtension):
 
     id = 'resonance'
 
-    def log_gain(self, params, covariates, ln_a22):
+    def log_gain(self, params: Mapping[str, float], covariates: Any, ln_a22: np.ndarray | float) -> np.ndarray | float:
         """``ln |H(omega_S / omega_r)|``."""
         ratio = np.abs(np.asarray(covariates.speed, dtype=float)) / params['resonant_speed']
         return np.log(magnification(ratio, params['damping_ratio']))

@@ -34,12 +34,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from . import Extension as EffectExtension
 from ...validation import require, require_all_positive
 from ..vibration_model import VELOCITY_EXPONENT
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import numpy.typing as npt
 
 __all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'ThermalViscosity', 'WALTHER_OFFSET', 'film_factor',
            'law_viscosity_ratio', 'viscosity_ratio', 'vogel_viscosity_ratio', 'walther_slope',
@@ -53,7 +59,8 @@ KELVIN = 273.15
 WALTHER_OFFSET = 0.7
 
 
-def viscosity_ratio(temperature, reference_temperature: float, viscosity_temperature_coefficient):
+def viscosity_ratio(temperature: npt.ArrayLike, reference_temperature: float,
+                    viscosity_temperature_coefficient: npt.ArrayLike) -> np.ndarray | float:
     """``eta(T) / eta_ref = exp(-beta (T - T_ref))`` (Reynolds' exponential law), dimensionless.
 
     temperature T and reference_temperature T_ref in degC, beta in 1/K.
@@ -62,8 +69,8 @@ def viscosity_ratio(temperature, reference_temperature: float, viscosity_tempera
                   * (np.asarray(temperature, dtype=float) - reference_temperature))
 
 
-def vogel_viscosity_ratio(temperature, reference_temperature: float, viscosity_temperature_coefficient: float,
-                          vogel_distance: float):
+def vogel_viscosity_ratio(temperature: npt.ArrayLike, reference_temperature: float,
+                          viscosity_temperature_coefficient: float, vogel_distance: float) -> np.ndarray | float:
     """Vogel: ``eta / eta_ref = exp(beta D^2 (1 / (T - T_V) - 1 / D))``, ``T_V = T_ref - D``, dimensionless.
 
     T, T_ref in degC, beta (slope of ln eta at T_ref) in 1/K, vogel_distance D = T_ref - T_V in K.
@@ -82,8 +89,8 @@ def walther_slope(viscosity_temperature_coefficient: float, reference_temperatur
             / (shifted * math.log(shifted)))
 
 
-def walther_viscosity_ratio(temperature, reference_temperature: float, viscosity_temperature_coefficient: float,
-                            reference_viscosity: float):
+def walther_viscosity_ratio(temperature: npt.ArrayLike, reference_temperature: float,
+                            viscosity_temperature_coefficient: float, reference_viscosity: float) -> np.ndarray | float:
     """Walther / ASTM D341: ``nu(T) / nu_ref`` with ``log10 log10(nu + 0.7) = A - B log10 T_K``, dimensionless.
 
     T, T_ref in degC, beta (slope of ln nu at T_ref) in 1/K, reference_viscosity nu_ref in mm^2/s.
@@ -95,8 +102,8 @@ def walther_viscosity_ratio(temperature, reference_temperature: float, viscosity
     return (10.0 ** (10.0 ** z) - WALTHER_OFFSET) / reference_viscosity
 
 
-def law_viscosity_ratio(law: str, temperature, reference_temperature: float, viscosity_temperature_coefficient,
-                        shape: float = math.nan):
+def law_viscosity_ratio(law: str, temperature: npt.ArrayLike, reference_temperature: float,
+                        viscosity_temperature_coefficient: float, shape: float = math.nan) -> np.ndarray | float:
     """``eta(T) / eta_ref`` by one of :data:`LAWS`; ``shape`` is D (K) for vogel, nu_ref (mm^2/s) for walther."""
     if law == 'vogel':
         return vogel_viscosity_ratio(temperature, reference_temperature, viscosity_temperature_coefficient, shape)
@@ -108,8 +115,8 @@ def law_viscosity_ratio(law: str, temperature, reference_temperature: float, vis
     return viscosity_ratio(temperature, reference_temperature, viscosity_temperature_coefficient)
 
 
-def film_factor(temperature, reference_temperature: float, viscosity_temperature_coefficient,
-                law: str = 'exponential', shape: float = math.nan):
+def film_factor(temperature: npt.ArrayLike, reference_temperature: float, viscosity_temperature_coefficient: float,
+                law: str = 'exponential', shape: float = math.nan) -> np.ndarray | float:
     """``(eta(T) / eta_ref)^0.68``: the factor on theta_Oil C_lambda in the exponent of Eq. 22 (Eq. 8)."""
     return law_viscosity_ratio(law, temperature, reference_temperature, viscosity_temperature_coefficient,
                                shape) ** VELOCITY_EXPONENT
@@ -133,7 +140,7 @@ class ThermalViscosity:
     vogel_distance: float = 120.0              # K, T0 - T_V (vogel)
     reference_viscosity: float = 100.0         # mm^2/s at T0 (walther)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject non-physical parameters."""
         require_all_positive('thermal_viscosity', temperature_rise=self.temperature_rise,
                              time_constant=self.time_constant,
@@ -147,7 +154,7 @@ class ThermalViscosity:
         """The law's shape parameter: D for vogel, nu_ref for walther, NaN for exponential."""
         return {'vogel': self.vogel_distance, 'walther': self.reference_viscosity}.get(self.viscosity_law, math.nan)
 
-    def film_factor(self, temperature, ambient_temperature: float):
+    def film_factor(self, temperature: npt.ArrayLike, ambient_temperature: float) -> np.ndarray | float:
         """``(eta(T) / eta_ref)^0.68``, the factor on theta_Oil C_lambda in Eq. 22."""
         return film_factor(temperature, ambient_temperature, self.viscosity_temperature_coefficient,
                            self.viscosity_law, self.shape)
@@ -156,7 +163,7 @@ class ThermalViscosity:
 Law = ThermalViscosity
 
 
-def _params_law(params: dict) -> tuple[str, float]:
+def _params_law(params: Mapping[str, float]) -> tuple[str, float]:
     """The law and its shape parameter from fitted parameters (exponential when neither shape is given)."""
     if 'vogel_distance' in params:
         return 'vogel', params['vogel_distance']
@@ -173,7 +180,7 @@ class Extension(EffectExtension):
 
     id = 'thermal_viscosity'
 
-    def film_factor(self, params, covariates):
+    def film_factor(self, params: Mapping[str, float], covariates: Any) -> np.ndarray | float:
         """``(eta(T)/eta_ref)^0.68``; windows without a temperature count as at T_ref."""
         temperature = np.asarray(covariates.temperature, dtype=float)
         reference = params['reference_temperature']
@@ -181,7 +188,7 @@ class Extension(EffectExtension):
         return film_factor(np.where(np.isfinite(temperature), temperature, reference), reference,
                            params['viscosity_temperature_coefficient'], law, shape)
 
-    def assessment_film_factor(self, params, covariates):
+    def assessment_film_factor(self, params: Mapping[str, float], covariates: Any) -> np.ndarray:
         """As :meth:`film_factor`, but NaN (not assessable) without a temperature."""
         temperature = np.asarray(covariates.temperature, dtype=float)
         return np.where(np.isfinite(temperature), self.film_factor(params, covariates), np.nan)
