@@ -3,7 +3,7 @@
 """Two effects at once: to test whether each adds anything given the other, and to name both."""
 from __future__ import annotations
 
-from typing import Any, TYPE_CHECKING
+from typing import Any, Mapping, TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -79,12 +79,12 @@ class CombinedEffect(Effect):
         """The parameters of ``effect`` (one of the two) in :meth:`to_params`' mapping."""
         return params['first' if effect is self.first else 'second']
 
-    def film_factor(self, params: dict[str, Any], covariates: Columns) -> float | np.ndarray:
+    def film_factor(self, params: Mapping[str, Any], covariates: Columns) -> float | np.ndarray:
         """Product of both film factors."""
         return (self.first.film_factor(params['first'], covariates)
                 * self.second.film_factor(params['second'], covariates))
 
-    def log_gain(self, params: dict[str, Any], covariates: Columns,
+    def log_gain(self, params: Mapping[str, Any], covariates: Columns,
                  ln_a22: float | np.ndarray) -> float | np.ndarray:
         """Sum of both gains."""
         gain = self.first.log_gain(params['first'], covariates, ln_a22)

@@ -24,7 +24,7 @@ Each form comes with the physical causes that produce such a shape
 from __future__ import annotations
 
 import math
-from typing import Any, TYPE_CHECKING
+from typing import Any, Mapping, TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -98,7 +98,7 @@ class EmpiricalTerm(Effect):
         """The coefficients (dimensionless: changes of ln A)."""
         return {name: float(v) for name, v in zip(self.parameter_names, p)}
 
-    def log_gain(self, params: dict[str, float], covariates: Columns, ln_a22: float | np.ndarray) -> np.ndarray:
+    def log_gain(self, params: Mapping[str, float], covariates: Columns, ln_a22: float | np.ndarray) -> np.ndarray:
         """g of the form (module doc)."""
         if self.form in ('step', 'stretch'):
             return params['s'] * np.isin(np.asarray(covariates.run), self.runs)

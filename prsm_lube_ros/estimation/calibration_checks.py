@@ -103,7 +103,7 @@ def check_calibration(calibration: Calibration, origin: str) -> None:
     if speeds.size and loads.size:
         speed, load = np.meshgrid(speeds, loads)
         with np.errstate(all='ignore'):
-            predicted = acceleration_amplitude(speed, load, calibration.reference_theta, c)
+            predicted = np.asarray(acceleration_amplitude(speed, load, calibration.reference_theta, c))
         if not (np.all(np.isfinite(predicted)) and predicted.min() >= MIN_PLAUSIBLE_RMS
                 and predicted.max() <= MAX_ACCELERATION):
             low, high = float(np.nanmin(predicted)), float(np.nanmax(predicted))
