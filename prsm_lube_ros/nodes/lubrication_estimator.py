@@ -67,6 +67,7 @@ import sys
 import threading
 import time
 import traceback
+from typing import TYPE_CHECKING
 from collections.abc import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -101,6 +102,9 @@ from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
+
+if TYPE_CHECKING:
+    from rclpy.service import Service
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
            'HEALTH_PARAMETERS', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME', 'PARAMETERS', 'STATE_QOS',
@@ -358,8 +362,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         hardware_ids = list(values['hardware_ids'])
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
-        self._calibrate_services = []
-        self._calibrate_actions = []
+        self._calibrate_services: list[Service] = []
+        self._calibrate_actions: list[ActionServer] = []
         for i, name in enumerate(actuators):
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
             self._add_actuator(name, hw, values, qos, first=i == 0)
