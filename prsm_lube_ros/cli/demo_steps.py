@@ -34,6 +34,8 @@ import math
 from pathlib import Path
 import shutil
 import time
+from collections.abc import Callable, Sequence
+
 import numpy as np
 
 __all__ = ['LIVE_TOLERANCE', 'StepResult', 'URGENT', 'concealed_effect', 'diagnosis_step', 'fleet_step', 'live_step',
@@ -81,31 +83,24 @@ def run_command(argv: list, log: Path) -> tuple[int, str]:
     return status, text
 
 
-def _check(step: StepResult, say, text: str, passed: bool) -> None:
+def _check(step: StepResult, say: Callable[[str], None], text: str, passed: bool) -> None:
+    """Record one check of ``step`` and print its outcome."""
     step.checks.append((text, bool(passed)))
     say(f'    check: {text}: {"PASS" if passed else "FAIL"}')
 
 
 # -- step 2 ----------------------------------------------------------------------------------------
-def live_step(out: Path, bags_dir: Path, stages, *, playback_rate: float, windows: int, say,
-              window: float = 1.0, storage: str = 'mcap', timeout: float = 120.0) -> StepResult:
-    """Both nodes live on stage 1's recording; calibrate service on stage 3; theta before and after."""
+def _live_inputs(out: Path, bags_dir: Path, stages: Sequence[float], *, playback_rate: float, window: float,
+                 storage: str) -> tuple[Path, Path, Path, Path, Path]:
+    """The live step's folder (emptied), its bags (played, wrongly calibrated on, reference), its parameter file.
+
+    The estimator's calibration file is made on stage 2 taken for theta_Oil = 1.
+    """
     from ..estimation.calibration_file import save_calibration
     from ..estimation.pipeline import calibrate_recordings, recording_windows
-    from ..figures import live_theta
+    from ..nodes.live_demo import write_parameters
     from ..physics.actuator import Actuator
     from ..recording.writer import bag_path
-    step = StepResult(2, 'Live graph: bridge, estimator, calibrate service',
-                      'the sensor bridge replays stage 1 on /prsm/*, the estimator publishes theta_Oil and '
-                      '/diagnostics; the estimator starts from a calibration made on stage 2 taken for '
-                      'theta_Oil = 1, then /prsm/calibrate is called on stage 3 (the true reference)')
-    started = time.perf_counter()
-    try:
-        from ..nodes.live_demo import run_live_graph, write_parameters
-    except ImportError as exc:           # prsm-lube installed with pip, without ROS 2
-        _check(step, say, f'ROS 2 and the package\'s interfaces importable ({exc}; source the workspace, e.g. '
-               '.env-jazzy.sh, or run tools/demo)', False)
-        return step
     folder = out / 'live'
     if folder.exists():
         shutil.rmtree(folder)
@@ -116,6 +111,27 @@ def live_step(out: Path, bags_dir: Path, stages, *, playback_rate: float, window
     parameters = write_parameters(folder / 'parameters.yaml', bag=played, playback_rate=playback_rate,
                                   calibration_pattern=folder / 'calibration_{actuator}.yaml',
                                   recordings_dir=bags_dir, window_length=window)
+    return folder, played, wrong, reference, parameters
+
+
+def live_step(out: Path, bags_dir: Path, stages: Sequence[float], *, playback_rate: float, windows: int,
+              say: Callable[[str], None], window: float = 1.0, storage: str = 'mcap',
+              timeout: float = 120.0) -> StepResult:
+    """Both nodes live on stage 1's recording; calibrate service on stage 3; theta before and after."""
+    from ..figures import live_theta
+    step = StepResult(2, 'Live graph: bridge, estimator, calibrate service',
+                      'the sensor bridge replays stage 1 on /prsm/*, the estimator publishes theta_Oil and '
+                      '/diagnostics; the estimator starts from a calibration made on stage 2 taken for '
+                      'theta_Oil = 1, then /prsm/calibrate is called on stage 3 (the true reference)')
+    started = time.perf_counter()
+    try:
+        from ..nodes.live_demo import run_live_graph
+    except ImportError as exc:           # prsm-lube installed with pip, without ROS 2
+        _check(step, say, f'ROS 2 and the package\'s interfaces importable ({exc}; source the workspace, e.g. '
+               '.env-jazzy.sh, or run tools/demo)', False)
+        return step
+    folder, played, wrong, reference, parameters = _live_inputs(out, bags_dir, stages, playback_rate=playback_rate,
+                                                                window=window, storage=storage)
     truth = float(stages[0])
     say(f'    bridge: playback of {played.name} (true theta_Oil {truth:.2f}) at {playback_rate:g} x real time; '
         f'estimator calibration: {wrong.name} taken for theta_Oil = 1 (wrong: true {stages[1]:.2f})')
@@ -166,7 +182,7 @@ def concealed_effect(seed: int) -> str:
     return ids[int(np.random.default_rng([seed, 3]).integers(len(ids)))]
 
 
-def diagnosis_step(out: Path, seed: int, say) -> StepResult:
+def diagnosis_step(out: Path, seed: int, say: Callable[[str], None]) -> StepResult:
     """Hide an effect drawn from ``seed`` in a simulated recording; ``prsm-lube diagnose`` must name it."""
     from ..simulation.recordings import draw_effects, simulate_experiment
     from ..simulation.rig_config import ExperimentPlan
@@ -212,7 +228,42 @@ def diagnosis_step(out: Path, seed: int, say) -> StepResult:
 
 
 # -- step 4 ----------------------------------------------------------------------------------------
-def fleet_step(out: Path, seed: int, say, *, actuators: int, days: int) -> StepResult:
+def _fleet_commands(folder: Path, recordings: Path, seed: int, actuators: int,
+                    days: int) -> list[tuple[list | None, str]]:
+    """The fleet step's command lines (None: assess, its recordings known once simulated), each as shown."""
+    commands = [
+        ['simulate', recordings, '--fleet', actuators, '--days', days, '--seed', seed],
+        ['calibrate', recordings / 'reference', '--theta', '1', '--out', folder / 'calibration.yaml'],
+        None,                                       # assess: the recordings simulate wrote
+        ['trend', folder / 'history', '--report', folder / 'trend'],
+    ]
+    shown = [f'simulate recordings --fleet {actuators} --days {days} --seed {seed}',
+             'calibrate recordings/reference --theta 1 --out calibration.yaml',
+             'assess recordings/A*/* --calibration calibration.yaml --history history --actuator-id folder',
+             'trend history --report trend']
+    return list(zip(commands, shown))
+
+
+def _run_fleet_commands(step: StepResult, say: Callable[[str], None], folder: Path, recordings: Path,
+                        commands: list[tuple[list | None, str]], log: Path) -> str | None:
+    """Run the commands in order, output to ``log``: the last one's output, or None (a failed check) if one fails."""
+    text = ''
+    for argv, line in commands:
+        if argv is None:
+            paths = sorted(p for p in recordings.glob('A*/*') if p.name != 'metadata.yaml')
+            argv = ['assess', *paths, '--calibration', folder / 'calibration.yaml', '--history',
+                    folder / 'history', '--actuator-id', 'folder']
+            line = line.replace('recordings/A*/*', f'recordings/A*/* ({len(paths)} recordings)')
+        say(f'    $ prsm-lube {line}')
+        status, text = run_command(argv, log)
+        if status != 0:
+            say(f'    | {text.strip().splitlines()[-1] if text.strip() else ""}')
+            _check(step, say, f'prsm-lube {argv[0]} succeeded (see {log})', False)
+            return None
+    return text
+
+
+def fleet_step(out: Path, seed: int, say: Callable[[str], None], *, actuators: int, days: int) -> StepResult:
     """A small simulated fleet: history, trend, the most urgent actuators against their true crossing."""
     from ..experiments.fleet_study import compare_with_truth
     step = StepResult(4, 'Fleet: history, trend, forecast',
@@ -224,30 +275,11 @@ def fleet_step(out: Path, seed: int, say, *, actuators: int, days: int) -> StepR
         shutil.rmtree(folder)
     recordings = folder / 'recordings'
     log = folder / 'commands.log'
-    commands = [
-        ['simulate', recordings, '--fleet', actuators, '--days', days, '--seed', seed],
-        ['calibrate', recordings / 'reference', '--theta', '1', '--out', folder / 'calibration.yaml'],
-        None,                                       # assess: the recordings simulate wrote
-        ['trend', folder / 'history', '--report', folder / 'trend'],
-    ]
-    shown = [f'simulate recordings --fleet {actuators} --days {days} --seed {seed}',
-             'calibrate recordings/reference --theta 1 --out calibration.yaml',
-             'assess recordings/A*/* --calibration calibration.yaml --history history --actuator-id folder',
-             'trend history --report trend']
-    text = ''
-    for argv, line in zip(commands, shown):
-        if argv is None:
-            paths = sorted(p for p in recordings.glob('A*/*') if p.name != 'metadata.yaml')
-            argv = ['assess', *paths, '--calibration', folder / 'calibration.yaml', '--history',
-                    folder / 'history', '--actuator-id', 'folder']
-            line = line.replace('recordings/A*/*', f'recordings/A*/* ({len(paths)} recordings)')
-        say(f'    $ prsm-lube {line}')
-        status, text = run_command(argv, log)
-        if status != 0:
-            say(f'    | {text.strip().splitlines()[-1] if text.strip() else ""}')
-            _check(step, say, f'prsm-lube {argv[0]} succeeded (see {log})', False)
-            step.seconds = time.perf_counter() - started
-            return step
+    text = _run_fleet_commands(step, say, folder, recordings,
+                               _fleet_commands(folder, recordings, seed, actuators, days), log)
+    if text is None:
+        step.seconds = time.perf_counter() - started
+        return step
     trend = json.loads((folder / 'trend' / 'trend.json').read_text())
     table = [line for line in text.splitlines() if line.startswith('|')]
     for line in table[:2 + URGENT]:
@@ -284,7 +316,7 @@ def fleet_step(out: Path, seed: int, say, *, actuators: int, days: int) -> StepR
     return step
 
 
-def _utc(seconds) -> str:
+def _utc(seconds: float | None) -> str:
     """'2026-01-09 14:05' (UTC, for reading) or 'never'."""
     from ..validation import utc_or_none
     stamp = utc_or_none(seconds)

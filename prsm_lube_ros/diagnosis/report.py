@@ -16,7 +16,7 @@ from __future__ import annotations
 import html
 import math
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +24,11 @@ from ..errors import InputError
 from .empirical import causes
 from .engine import Diagnosis, Status
 from .fitting import ModelFit, predict_log
+
+if TYPE_CHECKING:
+    from types import ModuleType
+
+    from .table import WindowTable
 
 __all__ = ['LABELS', 'write_report']
 
@@ -33,7 +38,8 @@ LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revol
           'direction': 'direction of travel (+1 out, -1 back)'}
 
 
-def _pyplot():
+def _pyplot() -> ModuleType:
+    """matplotlib's pyplot, drawing without a display."""
     import matplotlib
     matplotlib.use('Agg', force=False)
     import matplotlib.pyplot as plt
@@ -41,6 +47,7 @@ def _pyplot():
 
 
 def _covariate(diagnosis: Diagnosis) -> str:
+    """The covariate the residual figure is drawn against: the located one, else the chosen effect's."""
     located = diagnosis.location.located
     if located in LABELS:
         return located
@@ -48,12 +55,14 @@ def _covariate(diagnosis: Diagnosis) -> str:
     return chosen.effect.covariate if chosen is not None and chosen.effect.covariate in LABELS else 'speed'
 
 
-def _values(table, name):
+def _values(table: WindowTable, name: str) -> np.ndarray:
+    """A column of ``table`` in the units of :data:`LABELS` (positions in mm)."""
     values = np.asarray(getattr(table, name), dtype=float)
     return values * 1e3 if name == 'position' else values
 
 
-def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
+def _residual_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
+    """Model error against the covariate of the mismatch: the paper's model beside the chosen one(s)."""
     table = diagnosis.table
     assert table is not None  # diagnose_table always sets it
     name = _covariate(diagnosis)
@@ -78,7 +87,7 @@ def _residual_figure(diagnosis: Diagnosis, path: Path, plt):
     plt.close(fig)
 
 
-def _empirical_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
+def _empirical_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> bool:
     """Run amplitudes over the paper's model against the located covariate, with the empirical term."""
     empirical = diagnosis.empirical
     if empirical is None:
@@ -114,7 +123,8 @@ def _empirical_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     return True
 
 
-def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
+def _runs_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
+    """Measured RMS against the paper's and the chosen model, run by run."""
     table = diagnosis.table
     assert table is not None  # diagnose_table always sets it
     measured = table.run_means(table.rms)
@@ -140,7 +150,8 @@ def _runs_figure(diagnosis: Diagnosis, path: Path, plt):
     plt.close(fig)
 
 
-def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
+def _candidates_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
+    """Held-out error of every fitted candidate against the paper's model."""
     fitted = sorted([c for c in diagnosis.candidates if c.fit is not None],
                     key=lambda c: -cast(ModelFit, c.fit).cv_rmse)
     fig, ax = plt.subplots(figsize=(7.0, 0.5 * len(fitted) + 1.4), dpi=110)
@@ -159,7 +170,8 @@ def _candidates_figure(diagnosis: Diagnosis, path: Path, plt):
     plt.close(fig)
 
 
-def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
+def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> bool:
+    """Median spectrum per screw speed with the fixed lines and modes marked; False without spectra."""
     table = diagnosis.table
     assert table is not None  # diagnose_table always sets it
     if table.spectra is None or not math.isfinite(table.spectrum_resolution):
@@ -187,9 +199,10 @@ def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt) -> bool:
     return True
 
 
-def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
+def _verdict_lines(diagnosis: Diagnosis) -> list[str]:
+    """The page's verdict: the chosen effect(s) with their forms and models, or why none was chosen."""
     base = diagnosis.baseline
-    lines = ['# prsm-lube diagnose', '']
+    lines = []
     if diagnosis.chosen is not None:
         cand = diagnosis.chosen
         assert cand.fit is not None  # the chosen candidate was fitted
@@ -213,6 +226,14 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
     else:
         tied = f' — tied: {", ".join(diagnosis.tied)}' if diagnosis.tied else ''
         lines += [f'**Verdict: `{diagnosis.verdict}`**{tied}']
+    return lines
+
+
+def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
+    """The report page in Markdown: verdict, findings, the candidates' and the covariate tests' tables, figures."""
+    base = diagnosis.baseline
+    lines = ['# prsm-lube diagnose', '']
+    lines += _verdict_lines(diagnosis)
     if diagnosis.empirical is not None:
         empirical = diagnosis.empirical
         lines += ['', f'**Physics outside the catalogue:** an empirical {empirical.term.form} in '
@@ -286,7 +307,7 @@ def _html(markdown: str) -> str:
             '<body style="font-family: sans-serif; max-width: 1100px">' + '\n'.join(body) + '</body></html>')
 
 
-def write_report(diagnosis: Diagnosis, folder) -> Path:
+def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
     """Write the figures, ``index.md`` and ``index.html`` into ``folder``; returns the HTML page's path."""
     folder = Path(folder)
     try:

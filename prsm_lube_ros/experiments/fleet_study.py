@@ -27,7 +27,11 @@ import math
 from pathlib import Path
 import sys
 import time
+from typing import TYPE_CHECKING
+from collections.abc import Iterable
 
+if TYPE_CHECKING:
+    from ..fleet.forecast import ActuatorForecast
 
 __all__ = ['backtest_history', 'backtest_summary', 'compare_with_truth', 'coverage_rows', 'coverage_table', 'main',
            'simulate_and_assess', 'synthetic_points']
@@ -80,7 +84,8 @@ def compare_with_truth(history: Path, truth_path: Path, level: float | None = No
     return rows
 
 
-def _days(value, origin):
+def _days(value: float | None, origin: float) -> str:
+    """Days of ``value`` (s since the epoch) since ``origin``, or 'never'."""
     return f'{(value - origin) / 86400.0:7.2f}' if value is not None else '  never'
 
 
@@ -96,7 +101,25 @@ def coverage_table(rows: list[dict], origin: float) -> str:
     return '\n'.join(lines)
 
 
-def main(argv=None) -> int:
+def _study_fleet(folder: Path, seed: int, args: argparse.Namespace) -> tuple[dict, list[dict], dict, str]:
+    """One fleet of the study in ``folder``: its run (timings, counts), rows, backtest and Markdown section."""
+    run = simulate_and_assess(folder, actuators=args.actuators, days=args.days, seed=seed, jobs=args.jobs,
+                              scheduler=args.scheduler)
+    truth = json.loads((folder / 'fleet' / 'truth.json').read_text())
+    rows = compare_with_truth(folder / 'history', folder / 'fleet' / 'truth.json')
+    for row in rows:
+        row['seed'] = seed
+    backtest = dict(backtest_history(folder / 'history', args.backtest), seed=seed)
+    inside, ahead = sum(row['inside'] for row in rows), [row for row in rows if row['ahead']]
+    section = (f'## Fleet seed {seed}: {inside}/{len(rows)} inside; ahead of the data '
+               f'{sum(row["inside"] for row in ahead)}/{len(ahead)}\n\n'
+               f'{run["recordings"]} recordings, {len(run["failed"])} failed; days since '
+               f'{truth["actuators"][0]["recordings"][0]["start_utc"][:10]} 00:00 UTC.\n\n'
+               + coverage_table(rows, truth['epoch']))
+    return dict(run, seed=seed), rows, backtest, section
+
+
+def main(argv: list[str] | None = None) -> int:
     """Command line of the study."""
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.fleet_study',
                                      description=__doc__.split('\n')[0])
@@ -113,24 +136,16 @@ def main(argv=None) -> int:
     results = Path(args.results) if args.results else out
     arguments = sys.argv[1:] if argv is None else argv
     command = 'python -m prsm_lube_ros.experiments.fleet_study ' + ' '.join(arguments)
-    sections, runs, all_rows, backtests = [], [], [], []
+    sections: list[str] = []
+    runs: list[dict] = []
+    all_rows: list[dict] = []
+    backtests: list[dict] = []
     for seed in args.seeds:
-        folder = out / f'seed_{seed}'
-        run = simulate_and_assess(folder, actuators=args.actuators, days=args.days, seed=seed, jobs=args.jobs,
-                                  scheduler=args.scheduler)
-        truth = json.loads((folder / 'fleet' / 'truth.json').read_text())
-        rows = compare_with_truth(folder / 'history', folder / 'fleet' / 'truth.json')
-        for row in rows:
-            row['seed'] = seed
-        backtests.append(dict(backtest_history(folder / 'history', args.backtest), seed=seed))
-        inside, ahead = sum(row['inside'] for row in rows), [row for row in rows if row['ahead']]
-        runs.append(dict(run, seed=seed))
+        run, rows, backtest, section = _study_fleet(out / f'seed_{seed}', seed, args)
+        backtests.append(backtest)
+        runs.append(run)
         all_rows += rows
-        sections.append(f'## Fleet seed {seed}: {inside}/{len(rows)} inside; ahead of the data '
-                        f'{sum(row["inside"] for row in ahead)}/{len(ahead)}\n\n'
-                        f'{run["recordings"]} recordings, {len(run["failed"])} failed; days since '
-                        f'{truth["actuators"][0]["recordings"][0]["start_utc"][:10]} 00:00 UTC.\n\n'
-                        + coverage_table(rows, truth['epoch']))
+        sections.append(section)
         print(sections[-1].split('\n')[0], file=sys.stderr, flush=True)
     inside = sum(row['inside'] for row in all_rows)
     ahead = [row for row in all_rows if row['ahead']]
@@ -194,7 +209,7 @@ def synthetic_points(truth: dict, *, noise: float = 0.0045, seed: int = 0) -> di
             for actuator in truth['actuators']}
 
 
-def coverage_rows(forecasts, truth: dict, level: float) -> list[dict]:
+def coverage_rows(forecasts: Iterable[ActuatorForecast], truth: dict, level: float) -> list[dict]:
     """Per actuator of the truth: the forecast crossing of ``level`` against the true one."""
     by_name = {f.actuator: f for f in forecasts}
     rows = []

@@ -27,6 +27,7 @@ import tempfile
 import time
 from typing import cast, TYPE_CHECKING
 import zlib
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -34,6 +35,8 @@ from ..physics.effects.resonance import band_position
 
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
+    from ..simulation.effects import Effects
+    from .study_draws import CaseSetup
 
 __all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
            'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_rng', 'confusion_markdown', 'run_random_case',
@@ -70,7 +73,7 @@ def _forms(params: dict | None) -> str:
     return ','.join(str(v) for k, v in sorted(params.items()) if isinstance(v, str))
 
 
-def truth_form(name: str, params: dict | None, speeds) -> str:
+def truth_form(name: str, params: dict | None, speeds: Sequence[float]) -> str:
     """The physical form of a drawn law, in words, for the per-form rows.
 
     Text-valued parameters (bearing arrangement, viscosity law, depletion form)
@@ -109,12 +112,14 @@ def _chosen_form(document: dict) -> str:
     return str(form) if form else _forms(best.get('params') or {})
 
 
-def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False, folder: Path):
+def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False,
+                  folder: Path) -> tuple[list[Path], CaseSetup, list[str], dict[str, dict | None]]:
     """Bags of one case in ``folder``; returns (paths, setup, effect names, truth of each effect)."""
     from ..simulation.recordings import draw_effects, simulate_experiment
     from .study_draws import draw_setup
     rng = case_rng(kind, seed)
     setup = draw_setup(rng, quick=quick)
+    names: list[str]
     if kind == NONE or kind in OUTSIDE_KINDS:
         names = []
     elif kind == TWO:
@@ -131,7 +136,7 @@ def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool =
     return paths, setup, names, {name: truth.get(name) for name in names}
 
 
-def _outside_catalogue(kind: str, rng: np.random.Generator, setup, effects):
+def _outside_catalogue(kind: str, rng: np.random.Generator, setup: CaseSetup, effects: Effects) -> CaseSetup:
     """The set-up of the kinds that are not one catalogue effect (drawn after everything else of the case)."""
     from dataclasses import replace
     from .study_draws import CaseSetup
@@ -242,9 +247,10 @@ def _cell(record: dict) -> str:
     return record['verdict']
 
 
-def _pct(values, fmt='{:.0f} %') -> str:
-    values = [v for v in values if v is not None and math.isfinite(v)]
-    return fmt.format(100 * float(np.median(values))) if values else '-'
+def _pct(values: Iterable[float | None], fmt: str = '{:.0f} %') -> str:
+    """Median of the finite ``values`` in per cent, formatted; '-' without any."""
+    finite = [v for v in values if v is not None and math.isfinite(v)]
+    return fmt.format(100 * float(np.median(finite))) if finite else '-'
 
 
 def summarise(records: list[dict]) -> dict:
@@ -269,9 +275,8 @@ def summarise(records: list[dict]) -> dict:
             'seconds_total_cpu': round(sum(r.get('seconds', 0) for r in records), 1)}
 
 
-def confusion_markdown(records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
-    """The study's Markdown: summary, confusion per form, misses listed."""
-    summary = summarise(records)
+def _confusion(records: list[dict]) -> tuple[dict[str, dict[str, int]], list[str]]:
+    """Counts per row (concealed effect and form) and column (what diagnose said), and the columns in order."""
     rows: dict[str, dict[str, int]] = {}
     columns: list[str] = []
     for record in sorted(records, key=lambda r: (r['kind'] == NONE, r['kind'] == TWO, _row_key(r))):
@@ -281,6 +286,43 @@ def confusion_markdown(records: list[dict], command: str, wall_seconds: float, j
         if cell not in columns:
             columns.append(cell)
     columns.sort(key=lambda c: (c in OTHER_VERDICTS, c in ('both named', 'one named'), c))
+    return rows, columns
+
+
+def _outside_lines(outside: list[dict]) -> list[str]:
+    """Table rows of the cases outside the catalogue or with thermal not following the revolutions."""
+    lines = []
+    for r in outside:
+        s = r.get('setup', {})
+        truth = {'step_in_time': f'step x{1 + s.get("mount_step", 0.0):.3f}',
+                 'direction_factor': f'return x{s.get("return_factor", 1.0):.3f}'}.get(r['kind'], 'thermal')
+        empirical = r.get('empirical') or {}
+        where = ('factor by direction' if empirical.get('form') == 'direction'
+                 else f'{empirical.get("form")} in {empirical.get("covariate")}')
+        term = (f'{where}: {empirical["explanation"]} '
+                f'({100 * empirical["gain"]:.0f} %)' if empirical.get('gain') is not None else '-')
+        rho = r.get('temperature_revolutions_correlation')
+        lines.append(f'| {r["kind"]} | {r["seed"]} | {truth} | {r["verdict"]} | {r.get("located", "-")} | '
+                     f'{term} | {"-" if rho is None else f"{rho:+.2f}"} |')
+    return lines
+
+
+def _miss_lines(misses: list[dict]) -> list[str]:
+    """Table rows of the cases diagnose got wrong."""
+    lines = []
+    for r in misses:
+        s = r.get('setup', {})
+        plan = f'{len(s.get("speeds_rpm", []))} x {len(s.get("loads_n", []))}'
+        gain = f'{100 * r["gain"]:.0f} %' if r.get('gain') is not None else '-'
+        lines.append(f'| {_row_key(r)} | {r["seed"]} | {r["verdict"]} | {", ".join(r.get("named", [])) or "-"} '
+                     f'| {s.get("sample_rate", 0) / 1000:g} | {1000 * s.get("block", 0):g} | {plan} | {gain} |')
+    return lines
+
+
+def confusion_markdown(records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
+    """The study's Markdown: summary, confusion per form, misses listed."""
+    summary = summarise(records)
+    rows, columns = _confusion(records)
     lines = ['# Diagnose study, random cases', '', f'Command: `{command}`', '',
              f'{summary["cases"]} cases in {wall_seconds / 60:.1f} min wall time with {jobs} process(es) '
              f'({summary["seconds_total_cpu"] / 60:.1f} min of case time). Plans, recording set-up, nuisances '
@@ -306,29 +348,13 @@ def confusion_markdown(records: list[dict], command: str, wall_seconds: float, j
         lines += ['', '## Outside the catalogue and thermal with temperature not following revolutions', '',
                   '| kind | seed | truth | verdict | located | empirical term (held-out gain) | r(temperature, '
                   'revolutions) |', '|---|---|---|---|---|---|---|']
-        for r in outside:
-            s = r.get('setup', {})
-            truth = {'step_in_time': f'step x{1 + s.get("mount_step", 0.0):.3f}',
-                     'direction_factor': f'return x{s.get("return_factor", 1.0):.3f}'}.get(r['kind'], 'thermal')
-            empirical = r.get('empirical') or {}
-            where = ('factor by direction' if empirical.get('form') == 'direction'
-                     else f'{empirical.get("form")} in {empirical.get("covariate")}')
-            term = (f'{where}: {empirical["explanation"]} '
-                    f'({100 * empirical["gain"]:.0f} %)' if empirical.get('gain') is not None else '-')
-            rho = r.get('temperature_revolutions_correlation')
-            lines.append(f'| {r["kind"]} | {r["seed"]} | {truth} | {r["verdict"]} | {r.get("located", "-")} | '
-                         f'{term} | {"-" if rho is None else f"{rho:+.2f}"} |')
+        lines += _outside_lines(outside)
     misses = [r for r in records if not r['right']]
     lines += ['', f'## Misses ({len(misses)})', '']
     if misses:
         lines += ['| concealed | seed | verdict | named | rate kHz | block ms | speeds x loads | held-out gain |',
                   '|---|---|---|---|---|---|---|---|']
-        for r in misses:
-            s = r.get('setup', {})
-            plan = f'{len(s.get("speeds_rpm", []))} x {len(s.get("loads_n", []))}'
-            gain = f'{100 * r["gain"]:.0f} %' if r.get('gain') is not None else '-'
-            lines.append(f'| {_row_key(r)} | {r["seed"]} | {r["verdict"]} | {", ".join(r.get("named", [])) or "-"} '
-                         f'| {s.get("sample_rate", 0) / 1000:g} | {1000 * s.get("block", 0):g} | {plan} | {gain} |')
+        lines += _miss_lines(misses)
     else:
         lines.append('none')
     lines += ['', '"held-out gain": 1 - cv_rmse(chosen) / cv_rmse(paper\'s model), leave-one-run-out relative RMS '

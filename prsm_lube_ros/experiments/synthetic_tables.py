@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from collections.abc import Sequence
 from typing import Any, cast
 
 import numpy as np
@@ -117,8 +118,115 @@ BACKGROUND_SHARES = {'': (0.35, 0.3), background_vibration.FORMS[0]: (0.5, 0.0),
                      background_vibration.FORMS[1]: (0.0, 1.0), background_vibration.FORMS[2]: (0.1, 0.8)}
 
 
-def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan | None = None,
-                    params: dict | None = None, order=None) -> tuple[WindowTable, dict]:
+def _given_laws(rng: np.random.Generator, effect: str | tuple[str, ...] | None, plan: SyntheticPlan,
+                params: dict | None) -> dict[str, dict]:
+    """Each hidden effect's parameters: those given in ``params``, the others drawn (see :func:`synthetic_table`)."""
+    if effect is None or isinstance(effect, str):
+        given = {effect: params} if effect else {}
+    else:
+        given = {name: (params or {}).get(name) for name in effect}
+    return {name: dict(p) if p is not None else _draw_effect(name, rng, plan) for name, p in given.items()}
+
+
+class _Synthesis:
+    """The synthetic actuator walked through the plan: its state and the table's columns so far."""
+
+    def __init__(self, plan: SyntheticPlan, laws: dict[str, dict], rng: np.random.Generator,
+                 total_revs: float) -> None:
+        """At the start: time and revolutions 0, the nut ``plan.warm_start`` K above ambient, no columns yet."""
+        self.plan, self.laws, self.rng, self.total_revs = plan, laws, rng, total_revs
+        self.heat, self.loss, self.noise_floor = (laws.get('thermal_viscosity'), laws.get('lubricant_depletion'),
+                                                  laws.get('background_vibration'))
+        self.rows: dict[str, list] = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time',
+                                                      'temperature', 'run', 'recording')}
+        self.theta_eff: list[float] = []
+        self.spectra: list[np.ndarray] = []
+        self.a22_list: list[float] = []
+        self.directions: list[float] = []
+        self.clock, self.revs, self.temp = 0.0, 0.0, plan.ambient + plan.warm_start
+        self.depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
+
+    def pause(self, number: int, way: int, per_session: int) -> None:
+        """Before run ``number`` (out: ``way`` > 0): a relubrication between sessions or a cool-down pause."""
+        plan, heat = self.plan, self.heat
+        if way > 0 and number and number % per_session == 0:
+            self.revs, self.clock, self.depleted = 0.0, 0.0, 0.0   # relubricated; a new recording starts
+            if heat:
+                self.temp = plan.ambient + (self.temp - plan.ambient) * math.exp(-plan.session_pause / heat['tau'])
+        elif way > 0 and number and plan.cool_down_every and number % plan.cool_down_every == 0:
+            self.clock += plan.cool_down_pause
+            if heat:
+                self.temp = plan.ambient + (self.temp - plan.ambient) * math.exp(-plan.cool_down_pause / heat['tau'])
+
+    def run(self, run: int, session: int, way: int, factor: float, speed: float, load: float) -> None:
+        """The windows of one run at ``speed`` rad/s and ``load`` N, out or back (``way``), set-up ``factor``."""
+        plan, rng = self.plan, self.rng
+        nut_speed = plan.lead * speed / (2 * math.pi)
+        n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
+        run_gain = rng.normal(0.0, plan.run_noise)
+        for k in range(n_win):
+            self.clock += plan.window
+            self.revs += speed * plan.window / (2 * math.pi)
+            self.depleted += speed * plan.window / (2 * math.pi)
+            if self.heat:
+                target = plan.ambient + self.heat['rise']
+                self.temp = target + (self.temp - target) * math.exp(-plan.window / self.heat['tau'])
+            position = (k + 0.5) * plan.window * nut_speed
+            position = position if way > 0 else plan.stroke - position
+            self._window(run, session, way, speed, load, position, factor, run_gain)
+
+    def _window(self, run: int, session: int, way: int, speed: float, load: float, position: float,
+                factor: float, run_gain: float) -> None:
+        """One window's row (with scatter: the run's ``run_gain``, its own, the set-up ``factor``) and truth."""
+        plan, rng, noise_floor, rows = self.plan, self.rng, self.noise_floor, self.rows
+        theta, film, a22, amplitude = _window_amplitude(plan, self.laws, speed, load, position, self.depleted,
+                                                        self.total_revs, self.temp)
+        noise = factor * math.exp(run_gain + rng.normal(0.0, plan.window_noise))
+        amplitude *= noise
+        background = 0.0
+        if noise_floor:
+            slow = min(plan.speeds_rpm) * math.pi / 30
+            reference = float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants))
+            background = noise_floor['fraction'] * reference
+            amplitude = float(background_vibration.total_amplitude(amplitude, background))
+        rows['speed'].append(speed * (1 + rng.normal(0, 0.002)))
+        rows['load'].append(load * (1 + rng.normal(0, 0.005)))
+        rows['rms'].append(amplitude)
+        rows['position'].append(position)
+        rows['revolutions'].append(self.revs)
+        rows['time'].append(self.clock)
+        rows['temperature'].append(self.temp + rng.normal(0, 0.05) if plan.record_temperature else math.nan)
+        rows['run'].append(run)
+        rows['recording'].append(session)
+        self.directions.append(float(way))
+        self.theta_eff.append(theta * film)
+        self.a22_list.append(a22)
+        if plan.spectrum_bins:
+            self.spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
+                                          (noise_floor or {}).get('tones', ()), rng,
+                                          (noise_floor or {}).get('form', '')))
+
+    def rest(self) -> None:
+        """The rest after a run: the clock runs on, oil creeps back (with recovery), the nut cools."""
+        plan = self.plan
+        self.clock += plan.rest
+        if self.loss and self.loss.get('recovery_time'):
+            self.depleted *= math.exp(-plan.rest / self.loss['recovery_time'])
+        if self.heat:
+            self.temp = plan.ambient + (self.temp - plan.ambient) * math.exp(-plan.rest / self.heat['tau'])
+
+    def table(self) -> WindowTable:
+        """The window table of the windows so far."""
+        plan = self.plan
+        resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
+        return WindowTable(theta=plan.theta, direction=cast(Any, self.directions),  # __post_init__ makes arrays
+                           spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
+                           **cast(dict[str, Any], self.rows))
+
+
+def synthetic_table(rng: np.random.Generator, effect: str | tuple[str, ...] | None = None,
+                    plan: SyntheticPlan | None = None, params: dict | None = None,
+                    order: Sequence[int] | np.ndarray | None = None) -> tuple[WindowTable, dict]:
     """A window table of ``plan.sessions`` sessions with ``effect`` hidden (None: none) and its truth.
 
     ``effect`` is one effect ID or a tuple of IDs (several effects at once;
@@ -133,93 +241,33 @@ def synthetic_table(rng: np.random.Generator, effect=None, plan: SyntheticPlan |
     (r at the top speed: the mode above, inside or below the band).
     """
     plan = plan or SyntheticPlan()
-    if effect is None or isinstance(effect, str):
-        given = {effect: params} if effect else {}
-    else:
-        given = {name: (params or {}).get(name) for name in effect}
-    laws = {name: dict(p) if p is not None else _draw_effect(name, rng, plan) for name, p in given.items()}
-    heat, loss, noise_floor = (laws.get('thermal_viscosity'), laws.get('lubricant_depletion'),
-                               laws.get('background_vibration'))
+    laws = _given_laws(rng, effect, plan, params)
     conditions = [(s * math.pi / 30, f) for _ in range(plan.repeats) for s in plan.speeds_rpm for f in plan.loads]
     if order is None:
         order = np.concatenate([rng.permutation(len(conditions)) if plan.random_order
                                 else np.arange(len(conditions)) for _ in range(plan.sessions)])
-    rows: dict[str, list] = {k: [] for k in ('speed', 'load', 'rms', 'position', 'revolutions', 'time',
-                                             'temperature', 'run', 'recording')}
-    theta_eff, spectra, a22_list, directions = [], [], [], []
-    clock, revs, temp = 0.0, 0.0, plan.ambient + plan.warm_start
-    depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
-    total_revs = sum(plan.stroke / plan.lead for _ in conditions)
+    synthesis = _Synthesis(plan, laws, rng, sum(plan.stroke / plan.lead for _ in conditions))
     per_session = max(len(order) // plan.sessions, 1)
     legs = [(number, index, way) for number, index in enumerate(order) for way in ((1, -1) if plan.out_and_back
                                                                                    else (1,))]
     for run, (number, index, way) in enumerate(legs):
         session = number // per_session
-        if way > 0 and number and number % per_session == 0:
-            revs, clock, depleted = 0.0, 0.0, 0.0   # relubricated; a new recording starts
-            if heat:
-                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.session_pause / heat['tau'])
-        elif way > 0 and number and plan.cool_down_every and number % plan.cool_down_every == 0:
-            clock += plan.cool_down_pause
-            if heat:
-                temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.cool_down_pause / heat['tau'])
+        synthesis.pause(number, way, per_session)
         factor = ((plan.return_factor if way < 0 else 1.0)
                   * (plan.step_factor if run >= plan.step_at * len(legs) else 1.0))
-        speed, load = conditions[index]
-        nut_speed = plan.lead * speed / (2 * math.pi)
-        n_win = max(int(plan.stroke / nut_speed / plan.window), 3)
-        run_gain = rng.normal(0.0, plan.run_noise)
-        for k in range(n_win):
-            clock += plan.window
-            revs += speed * plan.window / (2 * math.pi)
-            depleted += speed * plan.window / (2 * math.pi)
-            if heat:
-                target = plan.ambient + heat['rise']
-                temp = target + (temp - target) * math.exp(-plan.window / heat['tau'])
-            position = (k + 0.5) * plan.window * nut_speed
-            position = position if way > 0 else plan.stroke - position
-            theta, film, a22, amplitude = _window_amplitude(plan, laws, speed, load, position, depleted,
-                                                            total_revs, temp)
-            noise = factor * math.exp(run_gain + rng.normal(0.0, plan.window_noise))
-            amplitude *= noise
-            background = 0.0
-            if noise_floor:
-                slow = min(plan.speeds_rpm) * math.pi / 30
-                reference = float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants))
-                background = noise_floor['fraction'] * reference
-                amplitude = float(background_vibration.total_amplitude(amplitude, background))
-            rows['speed'].append(speed * (1 + rng.normal(0, 0.002)))
-            rows['load'].append(load * (1 + rng.normal(0, 0.005)))
-            rows['rms'].append(amplitude)
-            rows['position'].append(position)
-            rows['revolutions'].append(revs)
-            rows['time'].append(clock)
-            rows['temperature'].append(temp + rng.normal(0, 0.05) if plan.record_temperature else math.nan)
-            rows['run'].append(run)
-            rows['recording'].append(session)
-            directions.append(float(way))
-            theta_eff.append(theta * film)
-            a22_list.append(a22)
-            if plan.spectrum_bins:
-                spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
-                                         (noise_floor or {}).get('tones', ()), rng,
-                                         (noise_floor or {}).get('form', '')))
-        clock += plan.rest
-        if loss and loss.get('recovery_time'):
-            depleted *= math.exp(-plan.rest / loss['recovery_time'])
-        if heat:
-            temp = plan.ambient + (temp - plan.ambient) * math.exp(-plan.rest / heat['tau'])
-    resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-    table = WindowTable(theta=plan.theta, direction=cast(Any, directions),   # __post_init__ makes arrays of the lists
-                        spectra=np.array(spectra) if spectra else None, spectrum_resolution=resolution,
-                        **cast(dict[str, Any], rows))
-    single = effect is None or isinstance(effect, str)
-    truth = {'effect': effect, 'params': laws.get(effect, {}) if single else laws,
-             'theta_effective': np.array(theta_eff), 'amplitude_eq22': np.array(a22_list)}
+        synthesis.run(run, session, way, factor, *conditions[index])
+        synthesis.rest()
+    table = synthesis.table()
+    if effect is None or isinstance(effect, str):
+        drawn = laws.get(effect, {}) if effect else {}       # no effect: no laws
+    else:
+        drawn = laws
+    truth = {'effect': effect, 'params': drawn,
+             'theta_effective': np.array(synthesis.theta_eff), 'amplitude_eq22': np.array(synthesis.a22_list)}
     return table, truth
 
 
-def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, background: float, tones,
+def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, background: float, tones: Sequence[float],
               rng: np.random.Generator, form: str = '') -> np.ndarray:
     """PSD ((m/s^2)^2/Hz) of one window: order lines + broadband of the contacts, fixed tones + white background."""
     bins = plan.spectrum_bins
@@ -228,7 +276,8 @@ def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, backgroun
     psd = np.zeros(bins)
     rotation = speed / (2 * math.pi)
 
-    def line(freq, power):
+    def line(freq: float, power: float) -> None:
+        """Add a line of ``power`` ((m/s^2)^2) at ``freq`` Hz, a narrow Gaussian in frequency."""
         if 0 < freq < 2000.0 - df:
             width = max(0.4 * df, 0.005 * freq)
             shape = np.exp(-0.5 * ((freqs - freq) / width) ** 2)

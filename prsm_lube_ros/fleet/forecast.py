@@ -48,8 +48,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from statistics import NormalDist
-from typing import Any
-from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TYPE_CHECKING
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -57,6 +58,9 @@ from ..errors import InputError
 from ..estimation.health import HealthThresholds
 from ..validation import finite_or_none as _finite, utc_or_none
 from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 __all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'INTERVAL', 'KILO', 'ODOMETER_REACH', 'RecordingPoint',
            'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk', 'forecast_history',
@@ -188,13 +192,13 @@ class ActuatorForecast:
                             'recording_path': p.recording_path} for p in self.points]}
 
 
-def utc_minutes(seconds) -> str | None:
+def utc_minutes(seconds: float | None) -> str | None:
     """ISO 8601 UTC to the minute of ``seconds`` since the epoch, None when not finite."""
     stamp = utc_or_none(seconds)
     return None if stamp is None else stamp.isoformat(timespec='minutes')
 
 
-def recording_points(runs) -> dict[str, list[RecordingPoint]]:
+def recording_points(runs: pa.Table) -> dict[str, list[RecordingPoint]]:
     """One point per recording and actuator from a history ``runs`` table, in time order.
 
     A recording's value is the inverse-variance mean of its assessed runs,
@@ -287,13 +291,42 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     pair = np.array([last, used.size])
     block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
     draws = _posterior_draws(np.array([last_level, rate]), block, dof if scaled else 0, rng)
+    _walk_state(result, (times, y, sigma, cycles), usage_scatter, shared)
+    _level_crossings(result, levels, (times, y, sigma, cycles), draws, (origin, last_level, rate), rng, seed)
+    if odometer is not None:
+        fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
+    return result
+
+
+def _walk_state(result: ActuatorForecast, series: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+                usage_scatter: float | None, shared: float) -> None:
+    """The random walk's state at the last recording and its diffusion, when the recordings give the walk.
+
+    ``series``: (times s, ln theta, its sigma, lubrication cycle) of the
+    recordings; ``shared``: the calibration's relative one-sigma, added to
+    the level's variance.
+    """
+    times, y, sigma, cycles = series
     walk = drift_and_diffusion(increments(times / DAY, y, sigma, cycles), usage_scatter)
     if walk is not None:
         result.diffusion = walk[2]
         result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
                                                                                   walk[2])
         result.state_covariance[0, 0] += shared ** 2
-    tail = (1.0 - confidence) / 2.0
+
+
+def _level_crossings(result: ActuatorForecast, levels: Sequence[float],
+                     series: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], draws: np.ndarray,
+                     law: tuple[float, float, float], rng: np.random.Generator, seed: int) -> None:
+    """Each level's crossing: the walk's first passage from the last recording, else seen or where the law puts it.
+
+    ``series`` as for :func:`_walk_state`; ``draws``: posterior draws of (ln
+    a, rate) of the last cycle; ``law``: (origin s, ln a of the last cycle
+    at the origin, rate 1/day) of the least-squares fit.
+    """
+    times, y, sigma, cycles = series
+    origin, last_level, rate = law
+    tail = (1.0 - result.confidence) / 2.0
     for level in levels:
         if y[-1] > math.log(level) and result.state is not None:
             estimate, low, high, result.passage_days[level] = _first_passage(result, math.log(level), rng, tail)
@@ -304,9 +337,6 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
             result.passage_days[level] = _passage_draws(result, math.log(level), np.random.default_rng(seed + 1))
         result.crossings.append(_crossing_seen_or_fitted(level, draws, tail, origin, last_level, rate,
                                                          (times, y, sigma, cycles)))
-    if odometer is not None:
-        fit_revolutions(result, odometer, y, sigma, cycles, shared, levels, rng)
-    return result
 
 
 #: revolutions per unit of the filter's axis against revolutions (keeps its numbers near those in days)
@@ -357,7 +387,7 @@ def _crossing_seen_or_fitted(level: float, draws: np.ndarray, tail: float, origi
 
 
 def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarray, sigma: np.ndarray,
-                    cycles: np.ndarray, shared: float, levels: Sequence[float], rng) -> None:
+                    cycles: np.ndarray, shared: float, levels: Sequence[float], rng: np.random.Generator) -> None:
     """The law against revolutions: ln theta = ln a_c - N / N_d (``lubricant_depletion``), N from an odometer.
 
     The Kalman filter of :func:`depletion_state` on the odometer axis, without
@@ -389,7 +419,8 @@ def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarra
             float(odometer[-1] + v * KILO) if math.isfinite(v) else None for v in (estimate, low, high))))
 
 
-def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0):
+def _crossed_between(times: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray, level: float,
+                     sigmas: float = 2.0) -> tuple[float, float, float] | None:
     """A crossing of ``level`` already seen in the last cycle: interpolated time and bracketing interval.
 
     The interval runs from the last recording clearly above the level
@@ -415,7 +446,7 @@ def _crossed_between(times, y, sigma, cycles, level: float, sigmas: float = 2.0)
     return float(estimate), float(min(low, estimate)), float(max(high, estimate))
 
 
-def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng) -> np.ndarray:
+def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng: np.random.Generator) -> np.ndarray:
     """:data:`DRAWS` draws of a 2-vector: normal around ``mean``, Student-t with ``dof`` degrees of freedom if > 0."""
     normal = rng.standard_normal((DRAWS, 2)) @ np.linalg.cholesky(covariance + 1e-18 * np.eye(2)).T
     if dof:
@@ -423,7 +454,7 @@ def _posterior_draws(mean: np.ndarray, covariance: np.ndarray, dof: int, rng) ->
     return mean + normal
 
 
-def _passage_draws(forecast: ActuatorForecast, level: float, rng) -> np.ndarray:
+def _passage_draws(forecast: ActuatorForecast, level: float, rng: np.random.Generator) -> np.ndarray:
     """:data:`DRAWS` draws of the days from the last recording until ln theta first falls to ``level``.
 
     From a state (x, k) the first passage of the walk to ``level`` is inverse
@@ -444,7 +475,8 @@ def _passage_draws(forecast: ActuatorForecast, level: float, rng) -> np.ndarray:
     return days
 
 
-def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
+def _first_passage(forecast: ActuatorForecast, level: float, rng: np.random.Generator,
+                   tail: float) -> tuple[float, float, float, np.ndarray]:
     """Days from the last recording until ln theta first falls to ``level``: estimate, interval and the draws."""
     days = _passage_draws(forecast, level, rng)
     with np.errstate(invalid='ignore'):               # inf - inf between never-crossing draws: still inf
@@ -454,16 +486,16 @@ def _first_passage(forecast: ActuatorForecast, level: float, rng, tail: float):
     return ((x - level) / k if k > 0 else math.inf), low, high, days
 
 
-def urgency_key(forecast: ActuatorForecast):
+def urgency_key(forecast: ActuatorForecast) -> tuple[bool, float, float, str]:
     """Sort key: earliest warn crossing first, then error crossing; no forecast last."""
     times = [c.time if c.time is not None else math.inf for c in forecast.crossings] or [math.inf]
     return (bool(forecast.reason), times[0], times[-1], forecast.actuator)
 
 
-def forecast_history(history, *, actuator: str | None = None, relubrications: dict | None = None,
+def forecast_history(history: str | Path, *, actuator: str | None = None, relubrications: dict | None = None,
                      levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
                      odometers: dict | None = None, confidence: float = INTERVAL, as_of: float | None = None,
-                     on_problem=None) -> list[ActuatorForecast]:
+                     on_problem: Callable[[str], None] | None = None) -> list[ActuatorForecast]:
     """Forecasts of every actuator (or one) in a history folder, most urgent first.
 
     ``relubrications`` maps an actuator id to its relubrication times (s since
@@ -478,7 +510,8 @@ def forecast_history(history, *, actuator: str | None = None, relubrications: di
                            only=actuator, odometers=odometers)
 
 
-def history_points(history, *, on_problem=None, actuator: str | None = None) -> dict[str, list[RecordingPoint]]:
+def history_points(history: str | Path, *, on_problem: Callable[[str], None] | None = None,
+                   actuator: str | None = None) -> dict[str, list[RecordingPoint]]:
     """Each actuator's recording points from a history folder; :class:`InputError` when it has none."""
     actuator_key, read_table = history_readers()
     points = recording_points(read_table(history, 'runs', on_problem=on_problem))
@@ -522,7 +555,9 @@ def fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> t
     return found, fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
 
 
-def fit_one(name, points, relubrications, levels, scatter, odometer, confidence=INTERVAL) -> ActuatorForecast:
+def fit_one(name: str, points: Sequence[RecordingPoint], relubrications: Sequence[float], levels: Sequence[float],
+            scatter: float | None, odometer: tuple[Sequence[float], Sequence[float]] | None,
+            confidence: float = INTERVAL) -> ActuatorForecast:
     """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's."""
     try:
         return fit_depletion(name, points, relubrications=relubrications, levels=levels, usage_scatter=scatter,
@@ -537,7 +572,8 @@ def fit_one(name, points, relubrications, levels, scatter, odometer, confidence=
 ODOMETER_REACH = 3600.0
 
 
-def _odometer_at(points: Sequence[RecordingPoint], odometer) -> list[float] | None:
+def _odometer_at(points: Sequence[RecordingPoint],
+                 odometer: tuple[Sequence[float], Sequence[float]] | None) -> list[float] | None:
     """Odometer readings interpolated at the points' times, NaN beyond :data:`ODOMETER_REACH`, or None."""
     if odometer is None:
         return None
@@ -555,13 +591,14 @@ def _odometer_at(points: Sequence[RecordingPoint], odometer) -> list[float] | No
 
 
 def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float]) -> Increments | None:
+    """The day-to-day increments of ln theta_Oil within each lubrication cycle of one actuator."""
     times = np.array([p.time for p in points])
     cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
     return increments(times / DAY, np.log([p.theta_oil for p in points]),
                       np.array([p.independent_std / p.theta_oil for p in points]), cycles)
 
 
-def history_readers():
+def history_readers() -> tuple[Callable[[str], str], Callable[..., pa.Table]]:
     """``actuator_key`` and ``read_table`` of :mod:`.history`; an :class:`InputError` line without pyarrow."""
     try:
         from .history import actuator_key, read_table

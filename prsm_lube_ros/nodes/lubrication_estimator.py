@@ -67,6 +67,7 @@ import sys
 import threading
 import time
 import traceback
+from typing import TYPE_CHECKING
 from collections.abc import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -101,6 +102,9 @@ from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
+
+if TYPE_CHECKING:
+    from rclpy.service import Service
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
            'HEALTH_PARAMETERS', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME', 'PARAMETERS', 'STATE_QOS',
@@ -358,32 +362,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         hardware_ids = list(values['hardware_ids'])
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
-        self._calibrate_services = []
-        self._calibrate_actions = []
+        self._calibrate_services: list[Service] = []
+        self._calibrate_actions: list[ActionServer] = []
         for i, name in enumerate(actuators):
-            prefix = '' if name == self.get_namespace() else name      # the node's own: relative names
             hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
-            channel = ActuatorChannel(name=name, hardware_id=hw, prefix=prefix,
-                                      builder=WindowBuilder(self._settings, lead=self._lead),
-                                      monitor=HealthMonitor(self._thresholds),
-                                      calibration_file=calibration_path(values['calibration_file'], name),
-                                      node_name=self.get_name())
-            self._load_initial_calibration(channel)
-            channel.publisher = self.create_publisher(
-                LubricationState, topic_name(prefix, values['state_topic']), STATE_QOS)
-            self._subscribe(channel, values, qos)
-            self.channels.append(channel)
-            service_names = [topic_name(prefix, 'calibrate')]
-            extra = values['calibrate_service']
-            if i == 0 and extra and extra != self.resolve_service_name(service_names[0]):
-                service_names.insert(0, extra)
-            for service_name in service_names:
-                self._calibrate_services.append(self.create_service(
-                    Calibrate, service_name, self._calibrate_handler(channel),
-                    callback_group=self._service_group))
-                self._calibrate_actions.append(ActionServer(
-                    self, CalibrateAction, service_name, execute_callback=self._calibrate_action(channel),
-                    cancel_callback=self._cancel_calibration, callback_group=self._service_group))
+            self._add_actuator(name, hw, values, qos, first=i == 0)
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
         self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
                                         callback_group=self._input_group)
@@ -402,6 +385,34 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             f'WARN below {self._thresholds.warn_below:g}, ERROR below {self._thresholds.error_below:g}')
 
     # -- set-up ------------------------------------------------------------------------------------
+    def _add_actuator(self, name: str, hardware_id: str, values: dict, qos: QoSProfile, *, first: bool) -> None:
+        """One actuator's channel: calibration, state publisher, subscriptions, calibrate services and actions.
+
+        The first actuator also answers on the ``calibrate_service`` parameter's name.
+        """
+        prefix = '' if name == self.get_namespace() else name      # the node's own: relative names
+        channel = ActuatorChannel(name=name, hardware_id=hardware_id, prefix=prefix,
+                                  builder=WindowBuilder(self._settings, lead=self._lead),
+                                  monitor=HealthMonitor(self._thresholds),
+                                  calibration_file=calibration_path(values['calibration_file'], name),
+                                  node_name=self.get_name())
+        self._load_initial_calibration(channel)
+        channel.publisher = self.create_publisher(
+            LubricationState, topic_name(prefix, values['state_topic']), STATE_QOS)
+        self._subscribe(channel, values, qos)
+        self.channels.append(channel)
+        service_names = [topic_name(prefix, 'calibrate')]
+        extra = values['calibrate_service']
+        if first and extra and extra != self.resolve_service_name(service_names[0]):
+            service_names.insert(0, extra)
+        for service_name in service_names:
+            self._calibrate_services.append(self.create_service(
+                Calibrate, service_name, self._calibrate_handler(channel),
+                callback_group=self._service_group))
+            self._calibrate_actions.append(ActionServer(
+                self, CalibrateAction, service_name, execute_callback=self._calibrate_action(channel),
+                cancel_callback=self._cancel_calibration, callback_group=self._service_group))
+
     def _values(self) -> dict:
         return {name: self.get_parameter(name).value for name in PARAMETERS}
 

@@ -28,7 +28,7 @@ actuators are of the rig's type).
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 import datetime
 import json
 import math
@@ -82,7 +82,7 @@ class FleetPlan:
     #: days the usage is continued past the last recording to find the true threshold crossings
     horizon_days: int = 200
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject plans that cannot be simulated."""
         require(int(self.actuators) >= 1, f'fleet actuators must be >= 1, got {self.actuators!r}')
         require(int(self.days) >= 1, f'fleet days must be >= 1, got {self.days!r}')
@@ -104,7 +104,7 @@ class ActuatorService:
     daily_revolutions: np.ndarray    # rev on each day from day 0 to the horizon
     start_revolutions: float         # rev since the last lubrication at t = 0
 
-    def revolutions(self, t):
+    def revolutions(self, t: float) -> float:
         """Cumulative revolutions since t = 0 at ``t`` s after the fleet epoch."""
         edges = np.concatenate(([0.0], np.cumsum(self.daily_revolutions)))
         days = np.arange(edges.size) * DAY
@@ -131,8 +131,8 @@ def _reference(out_dir: Path, rig: RigConfig, plan: ExperimentPlan, seed: int, s
     (out_dir / 'reference_session').rmdir()
 
 
-def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condition, theta: float,
-                     start_seconds: float, seed, storage: str) -> None:
+def _short_recording(path: Path, *, rig: RigConfig, plan: ExperimentPlan, condition: tuple[float, float],
+                     theta: float, start_seconds: float, seed: int, storage: str) -> None:
     """One forward run at ``condition`` and its rewind, recorded from ``start_seconds`` (epoch s)."""
     rig_seed, latency_rng, *_ = _streams(seed)
     program = DriveProgram()
@@ -170,6 +170,79 @@ def _true_crossings(service: ActuatorService, thresholds: Sequence[float], theta
     return crossings
 
 
+@dataclass
+class _FleetRecorder:
+    """Names (and with ``write`` writes) the fleet's daily recordings, in order; counts them for ``progress``."""
+
+    out_dir: Path
+    fleet: FleetPlan
+    rig: RigConfig
+    plan: ExperimentPlan
+    storage: str
+    epoch: float                 # s since the Unix epoch of the fleet's t = 0
+    write: bool
+    progress: Callable[[int, int], None] | None
+    paths: list[Path] = field(default_factory=list)
+
+    def record(self, actuator_id: str, t: float, theta: float, seed: int) -> Path:
+        """The recording of ``actuator_id`` at ``t`` s after the epoch, true theta_Oil ``theta``: its path."""
+        path = bag_path(self.out_dir / actuator_id, datetime.datetime.fromtimestamp(
+            self.epoch + t, datetime.UTC).strftime('%Y%m%dT%H%M%S'), self.storage)
+        if self.write:
+            require(not path.exists(), f'{path}: exists already, not overwriting')
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _short_recording(path, rig=self.rig, plan=self.plan, condition=self.fleet.condition, theta=theta,
+                             start_seconds=self.epoch + t, seed=seed, storage=self.storage)
+        self.paths.append(path)
+        return path
+
+    def count(self) -> None:
+        """Report the recordings made so far to ``progress``."""
+        if self.progress is not None:
+            self.progress(len(self.paths), self.fleet.actuators * self.fleet.days)
+
+
+def _simulate_actuator(recorder: _FleetRecorder, actuator_id: str, sequence: np.random.SeedSequence,
+                       thresholds: Sequence[float]) -> tuple[dict[str, Any], list[tuple[str, str, float]]]:
+    """One actuator in service: its law, daily recordings and relubrications; its truth and odometer rows."""
+    fleet, epoch, out_dir = recorder.fleet, recorder.epoch, recorder.out_dir
+    usage_sequence, recording_sequence = sequence.spawn(2)
+    usage_rng = np.random.default_rng(usage_sequence)
+    service, initial_theta = _draw_service(actuator_id, fleet, usage_rng)
+    rate, depletion, daily = service.revolutions_per_day, service.depletion_revolutions, service.daily_revolutions
+    theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
+    recordings: list[dict[str, Any]]
+    relubrications: list[dict[str, Any]]
+    relubrications, recordings = [], []
+    seeds = recording_sequence.generate_state(fleet.days)
+    for day in range(fleet.days):
+        hour = usage_rng.uniform(*fleet.recording_hours)
+        t = day * DAY + hour * 3600.0
+        theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
+        path = recorder.record(actuator_id, t, theta, int(seeds[day]))
+        recordings.append({'path': str(path.relative_to(out_dir)), 'start': epoch + t,
+                           'start_utc': _iso(epoch + t), 'theta_oil': theta,
+                           'revolutions_since_lubrication': float(service.revolutions(t) - cycle_start_revs)})
+        recorder.count()
+        if theta < fleet.relubricate_below and day < fleet.days - 1:
+            cycle_start_time = t + fleet.relubrication_delay
+            cycle_start_revs = float(service.revolutions(cycle_start_time))
+            theta_r = usage_rng.uniform(*fleet.relubricated_theta)
+            relubrications.append({'time': epoch + cycle_start_time, 'time_utc': _iso(epoch + cycle_start_time),
+                                   'theta_oil_after': theta_r})
+    odometer_start = round(rate * ODOMETER_DAYS)
+    crossings = _true_crossings(service, thresholds, theta_r, cycle_start_revs, epoch, odometer_start)
+    odometer_rows = [(actuator_id, r['start_utc'], odometer_start + float(service.revolutions(r['start'] - epoch)))
+                     for r in recordings]
+    truth = {
+        'actuator_id': actuator_id, 'revolutions_per_day': rate, 'depletion_revolutions': depletion,
+        'initial_theta': initial_theta, 'last_relubrication_theta': theta_r,
+        'last_relubrication': None if cycle_start_time is None else epoch + cycle_start_time,
+        'relubrications': relubrications, 'recordings': recordings, 'crossings': crossings,
+        'daily_revolutions': [float(v) for v in daily[:fleet.days]]}
+    return truth, odometer_rows
+
+
 def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: RigConfig | None = None,
                    plan: ExperimentPlan | None = None, seed: int = 0, storage: str = 'mcap',
                    thresholds: Sequence[float] = (0.85, 0.70),
@@ -190,55 +263,15 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
     require(not (out_dir / 'truth.json').exists(), f'{out_dir / "truth.json"}: exists already, not overwriting')
     epoch = rig.epoch_ns * 1e-9
     sequences = np.random.SeedSequence(seed).spawn(fleet.actuators + 1)
-    total = fleet.actuators * fleet.days
-    done = 0
-    truth_actuators, paths, odometer_rows = [], [], []
+    recorder = _FleetRecorder(out_dir, fleet, rig, plan, storage, epoch, write_recordings, progress)
+    truth_actuators: list[dict[str, Any]] = []
+    odometer_rows: list[tuple[str, str, float]] = []
     if write_recordings:
         _reference(out_dir, rig, plan, int(sequences[-1].generate_state(1)[0]), storage)
     for number, sequence in enumerate(sequences[:-1], start=1):
-        actuator_id = f'A{number:02d}'
-        usage_sequence, recording_sequence = sequence.spawn(2)
-        usage_rng = np.random.default_rng(usage_sequence)
-        service, initial_theta = _draw_service(actuator_id, fleet, usage_rng)
-        rate, depletion, daily = service.revolutions_per_day, service.depletion_revolutions, service.daily_revolutions
-        theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
-        recordings: list[dict[str, Any]]
-        relubrications, recordings = [], []
-        seeds = recording_sequence.generate_state(fleet.days)
-        for day in range(fleet.days):
-            hour = usage_rng.uniform(*fleet.recording_hours)
-            t = day * DAY + hour * 3600.0
-            theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
-            path = bag_path(out_dir / actuator_id, datetime.datetime.fromtimestamp(
-                epoch + t, datetime.UTC).strftime('%Y%m%dT%H%M%S'), storage)
-            if write_recordings:
-                require(not path.exists(), f'{path}: exists already, not overwriting')
-                path.parent.mkdir(parents=True, exist_ok=True)
-                _short_recording(path, rig=rig, plan=plan, condition=fleet.condition, theta=theta,
-                                 start_seconds=epoch + t, seed=int(seeds[day]), storage=storage)
-            paths.append(path)
-            recordings.append({'path': str(path.relative_to(out_dir)), 'start': epoch + t,
-                               'start_utc': _iso(epoch + t), 'theta_oil': theta,
-                               'revolutions_since_lubrication': float(service.revolutions(t) - cycle_start_revs)})
-            done += 1
-            if progress is not None:
-                progress(done, total)
-            if theta < fleet.relubricate_below and day < fleet.days - 1:
-                cycle_start_time = t + fleet.relubrication_delay
-                cycle_start_revs = float(service.revolutions(cycle_start_time))
-                theta_r = usage_rng.uniform(*fleet.relubricated_theta)
-                relubrications.append({'time': epoch + cycle_start_time, 'time_utc': _iso(epoch + cycle_start_time),
-                                       'theta_oil_after': theta_r})
-        odometer_start = round(rate * ODOMETER_DAYS)
-        crossings = _true_crossings(service, thresholds, theta_r, cycle_start_revs, epoch, odometer_start)
-        odometer_rows += [(actuator_id, r['start_utc'], odometer_start + float(service.revolutions(r['start'] - epoch)))
-                          for r in recordings]
-        truth_actuators.append({
-            'actuator_id': actuator_id, 'revolutions_per_day': rate, 'depletion_revolutions': depletion,
-            'initial_theta': initial_theta, 'last_relubrication_theta': theta_r,
-            'last_relubrication': None if cycle_start_time is None else epoch + cycle_start_time,
-            'relubrications': relubrications, 'recordings': recordings, 'crossings': crossings,
-            'daily_revolutions': [float(v) for v in daily[:fleet.days]]})
+        truth, rows = _simulate_actuator(recorder, f'A{number:02d}', sequence, thresholds)
+        odometer_rows += rows
+        truth_actuators.append(truth)
     document = {'generator': 'prsm_lube_ros.simulation.fleet', 'seed': seed, 'storage': storage,
                 'epoch': epoch, 'law': 'theta_oil = theta_r exp(-N_rev / N_d), N_rev since the last lubrication',
                 'fleet': {**asdict(fleet)},
@@ -249,4 +282,4 @@ def simulate_fleet(out_dir: str | Path, *, fleet: FleetPlan | None = None, rig: 
     (out_dir / 'truth.json').write_text(json.dumps(document, indent=1))
     (out_dir / 'odometer.csv').write_text('actuator,time,revolutions\n' + ''.join(
         f'{name},{time},{revolutions:.1f}\n' for name, time, revolutions in odometer_rows))
-    return paths
+    return recorder.paths

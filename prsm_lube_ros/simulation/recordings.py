@@ -45,7 +45,8 @@ def _record(path: Path, storage: str, stream: RigStream, first_block: int, stop_
     step = max(1, int(round(CHUNK_DURATION / rig.vibration_block)))
     block_ns = int(round(rig.vibration_block * 1e9))
 
-    def stamped(true_ns, rate, repeats=False):
+    def stamped(true_ns: np.ndarray, rate: float, repeats: bool = False) -> np.ndarray:
+        """Header stamps of messages taken at ``true_ns``: jittered, with repeats if ``repeats``."""
         stamps = nuisances.jitter(nuisance_rng, true_ns, 1.0 / rate)
         return nuisances.repeat(nuisance_rng, stamps) if repeats else stamps
 
@@ -137,6 +138,27 @@ def _origin_seconds(stream: RigStream) -> float:
     return stream.origin_ns * 1e-9
 
 
+#: One lubrication stage of an experiment: bag name, true theta_Oil, first and stop block, its strokes.
+_Stage = tuple[str, float, int, int, list[Stroke]]
+
+
+def _stage_schedule(plan: ExperimentPlan, rig: RigConfig,
+                    order_rng: np.random.Generator) -> tuple[DriveProgram, list[_Stage]]:
+    """The drive program of all stages (each starting on a whole block, ``plan.stage_pause`` apart) and the stages."""
+    program = DriveProgram()
+    schedule, now = [], 0.0
+    for number, theta in enumerate(plan.stage_thetas, start=1):
+        conditions = plan.conditions
+        if plan.run_order == 'random':
+            conditions = [conditions[k] for k in order_rng.permutation(len(conditions))]
+        first_block = _blocks(now, rig)
+        strokes, end = schedule_session(program, first_block * rig.vibration_block, conditions, plan, rig)
+        stop_block = _blocks(end, rig)
+        schedule.append((f'stage_{number}', theta, first_block, stop_block, strokes))
+        now = stop_block * rig.vibration_block + plan.stage_pause
+    return program, schedule
+
+
 def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = None,
                         rig: RigConfig | None = None, seed: int = 0, effects: Effects | None = None,
                         storage: str = 'mcap', run_order: str | None = None,
@@ -164,17 +186,7 @@ def simulate_experiment(out_dir: str | Path, *, plan: ExperimentPlan | None = No
     out_dir = Path(out_dir)
     rig_seed, latency_rng, order_rng, nuisance_rng = _streams(seed)
 
-    program = DriveProgram()
-    schedule, now = [], 0.0
-    for number, theta in enumerate(plan.stage_thetas, start=1):
-        conditions = plan.conditions
-        if plan.run_order == 'random':
-            conditions = [conditions[k] for k in order_rng.permutation(len(conditions))]
-        first_block = _blocks(now, rig)
-        strokes, end = schedule_session(program, first_block * rig.vibration_block, conditions, plan, rig)
-        stop_block = _blocks(end, rig)
-        schedule.append((f'stage_{number}', theta, first_block, stop_block, strokes))
-        now = stop_block * rig.vibration_block + plan.stage_pause
+    program, schedule = _stage_schedule(plan, rig, order_rng)
     paths = [bag_path(out_dir, name, storage) for name, *_ in schedule]
     for path in paths + [out_dir / 'truth.json']:
         require(not path.exists(), f'{path}: exists already, not overwriting')

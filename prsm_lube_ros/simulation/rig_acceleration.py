@@ -6,8 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy.signal import iirpeak, lfilter
 
 from ..physics.vibration_model import acceleration_amplitude
@@ -24,14 +26,15 @@ __all__ = ['RigBlock', 'RigChunk', 'RigSignalGenerator', 'RigStream', 'WANDER_TE
 # ---------------------------------------------------------------------------------------------
 # Truth: the amplitude the signal is scaled to
 # ---------------------------------------------------------------------------------------------
-def effective_load(applied_load, rig: RigConfig):
+def effective_load(applied_load: npt.ArrayLike, rig: RigConfig) -> np.ndarray:
     """Load the thread contacts carry, N: the applied load, but at least the nut preload."""
     return np.maximum(np.abs(np.asarray(applied_load, dtype=float)), rig.nut_preload)
 
 
-def thread_contact_amplitude(screw_speed, applied_load, theta_oil, rig: RigConfig,
-                             effects: Effects | None = None, *, nut_position=0.0, temperature=None,
-                             revolutions=0.0):
+def thread_contact_amplitude(screw_speed: npt.ArrayLike, applied_load: npt.ArrayLike, theta_oil: npt.ArrayLike,
+                             rig: RigConfig, effects: Effects | None = None, *, nut_position: npt.ArrayLike = 0.0,
+                             temperature: npt.ArrayLike | None = None,
+                             revolutions: npt.ArrayLike = 0.0) -> np.ndarray:
     """True RMS of the thread-contact vibration, m/s^2: Eq. 22 changed by the active effects.
 
     screw_speed in rad/s, applied_load in N (preload as floor), theta_oil the
@@ -55,8 +58,8 @@ def thread_contact_amplitude(screw_speed, applied_load, theta_oil, rig: RigConfi
     return amplitude
 
 
-def expected_rms(screw_speed, applied_load, theta_oil, rig: RigConfig, effects: Effects | None = None,
-                 **state):
+def expected_rms(screw_speed: npt.ArrayLike, applied_load: npt.ArrayLike, theta_oil: npt.ArrayLike,
+                 rig: RigConfig, effects: Effects | None = None, **state: Any) -> np.ndarray:
     """RMS the recording should show in steady running, m/s^2: contact, background and sensor noise in power."""
     effects = effects or Effects()
     background = effects.background_vibration.rms if effects.background_vibration is not None else 0.0
@@ -148,7 +151,7 @@ class RigStream:
         self.temperature = rig.ambient_temperature + rig.initial_temperature_offset
         self.revolutions = 0.0
 
-    def _structural_mode(self, sequence: np.random.SeedSequence):
+    def _structural_mode(self, sequence: np.random.SeedSequence) -> list[Any] | None:
         """The resonance's mode as a resonator ringing at f_r: (b, a, gain, state, rng), or None.
 
         None without a resonance, or when f_r is not below 0.45 times the sample
@@ -177,6 +180,7 @@ class RigStream:
         past resonance) the whole signal is attenuated.  Returns the signal to be
         multiplied by that amplitude (unit mean square where mix has it).
         """
+        assert self.effects.resonance is not None and self._mode is not None  # only called with the mode
         gain = self.effects.resonance.amplitude_factor(speeds)
         b, a, energy, state, rng = self._mode
         ring, self._mode[3] = lfilter(b, a, rng.standard_normal(mix.size), zi=state)
@@ -237,33 +241,24 @@ class RigStream:
             log_factor += rig.run_wander * math.sqrt(2.0 / WANDER_TERMS) * np.sin(phases).sum(axis=1)
         return np.exp(log_factor)
 
-    def advance(self, first_block: int, stop_block: int, theta_oil: float) -> RigChunk:
-        """Sensor data for blocks ``[first_block, stop_block)`` at lubrication ``theta_oil``.
-
-        Blocks must come in increasing order; a gap (e.g. between stages) is
-        standstill as far as the temperature is concerned.
-        """
-        rig, fs, size = self.rig, self.rig.vibration_rate, self.rig.block_size
-        first, count = first_block * size, (stop_block - first_block) * size
-        if self._next_index is not None:
-            require(first >= self._next_index, 'rig stream: blocks must advance in time')
-            self._relax_temperature((first - self._next_index) / fs)
-        self._next_index = first + count
-        indices = np.arange(first, first + count, dtype=np.int64)
-        times = indices / fs
-        angles, speeds = self.program.motion(times)
-        applied = self.program.load(times)
-
+    def _true_amplitude(self, angles: np.ndarray, speeds: np.ndarray, applied: np.ndarray,
+                        theta_oil: float) -> tuple[np.ndarray, np.ndarray]:
+        """True nut temperatures and thread-contact amplitude per sample; advances revolutions and angle."""
         steps = np.abs(np.diff(angles, prepend=self._last_angle)) / (2.0 * math.pi)
         revolutions = self.revolutions + np.cumsum(steps)
         self.revolutions = float(revolutions[-1])
         self._last_angle = float(angles[-1])
         temperatures = self._temperatures(speeds)
         nut_positions = self.rig.actuator.nut_travel_from_angle(angles, 0.0)
-        amplitude = thread_contact_amplitude(speeds, applied, theta_oil, rig, self.effects,
+        amplitude = thread_contact_amplitude(speeds, applied, theta_oil, self.rig, self.effects,
                                              nut_position=nut_positions, temperature=temperatures,
                                              revolutions=revolutions)
+        return temperatures, amplitude
 
+    def _signal(self, times: np.ndarray, angles: np.ndarray, speeds: np.ndarray,
+                amplitude: np.ndarray) -> np.ndarray:
+        """The recorded acceleration per sample: thread contacts (through the mode), background, set-up, noise."""
+        rig, count = self.rig, times.size
         contact, self._contact_state = lfilter(self._b, self._a, self._contact_rng.standard_normal(count),
                                                zi=self._contact_state)
         mix = math.sqrt(rig.contact_share) / self._contact_gain * contact
@@ -284,6 +279,27 @@ class RigStream:
         if rig.run_scatter or rig.run_wander or rig.mount_step or rig.return_factor != 1.0:
             signal *= self._set_up_factor(times, speeds)
         signal += rig.sensor_noise * self._sensor_rng.standard_normal(count)
+        return signal
+
+    def advance(self, first_block: int, stop_block: int, theta_oil: float) -> RigChunk:
+        """Sensor data for blocks ``[first_block, stop_block)`` at lubrication ``theta_oil``.
+
+        Blocks must come in increasing order; a gap (e.g. between stages) is
+        standstill as far as the temperature is concerned.
+        """
+        rig, fs, size = self.rig, self.rig.vibration_rate, self.rig.block_size
+        first, count = first_block * size, (stop_block - first_block) * size
+        if self._next_index is not None:
+            require(first >= self._next_index, 'rig stream: blocks must advance in time')
+            self._relax_temperature((first - self._next_index) / fs)
+        self._next_index = first + count
+        indices = np.arange(first, first + count, dtype=np.int64)
+        times = indices / fs
+        angles, speeds = self.program.motion(times)
+        applied = self.program.load(times)
+
+        temperatures, amplitude = self._true_amplitude(angles, speeds, applied, theta_oil)
+        signal = self._signal(times, angles, speeds, amplitude)
 
         start, stop = first / fs, (first + count) / fs
         joint_index = _index_range(start, stop, rig.joint_state_rate)
@@ -309,7 +325,7 @@ class RigStream:
             block_loads=applied[heads], block_temperatures=temperatures[heads])
 
 
-def resonator_energy(b, a, tolerance: float = 1e-14) -> float:
+def resonator_energy(b: npt.ArrayLike, a: npt.ArrayLike, tolerance: float = 1e-14) -> float:
     """Energy sum(h[n]^2) of a stable IIR filter's impulse response: its output variance for unit white input."""
     length = 1024
     while True:
