@@ -50,7 +50,7 @@ def thread_contact_amplitude(screw_speed: npt.ArrayLike, applied_load: npt.Array
         theta = theta * effects.lubricant_depletion.theta_factor(revolutions)
     if effects.thermal_viscosity is not None and temperature is not None:
         theta = theta * effects.thermal_viscosity.film_factor(temperature, rig.ambient_temperature)
-    amplitude = acceleration_amplitude(screw_speed, load, theta, rig.constants)
+    amplitude = acceleration_amplitude(np.asarray(screw_speed, dtype=float), load, theta, rig.constants)
     if effects.position_dependent_stiffness is not None:
         amplitude = amplitude * effects.position_dependent_stiffness.amplitude_factor(nut_position, load)
     if effects.resonance is not None:
