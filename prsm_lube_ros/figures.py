@@ -71,7 +71,7 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
 
 def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[float], errors: Sequence[float],
                           band_times: Sequence[float] | np.ndarray,
-                          band: tuple[Sequence[float], Sequence[float], Sequence[float]],
+                          band: tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
                           levels: Mapping[str, float], events: Sequence[float], title: str,
                           ylabel: str = 'theta_Oil', *, crossings: Sequence[tuple] = (),
                           as_of: float | None = None, confidence: float = 0.95) -> Path:
@@ -122,14 +122,13 @@ def _crossing_marks(ax: Axes, crossings: Sequence[tuple], dates: Callable[[npt.A
                     confidence: float) -> None:
     """A diamond at each crossing estimate and a bar over its interval (open ends drawn to the plot's edge)."""
     # The ignores below: matplotlib's stubs type plot()'s data as numbers and text, leaving out the datetimes
-    # its unit converters take (date axes, as everywhere in this module).  The first also covers a known bug,
-    # left as it is here (issue 21 is annotations only): with ``high`` None, ``right`` is the axis limit as a
-    # float date number beside a datetime, which matplotlib's date converter rejects (ConversionError).
+    # its unit converters take (date axes, as everywhere in this module).
+    from matplotlib.dates import num2date
     for i, (label, level, estimate, low, high) in enumerate(crossings):
         color = 'C3' if i else 'C8'
         if low is not None:
-            right = high if high is not None else ax.get_xlim()[1]
-            right = dates(right)[0] if high is not None else right
+            # An open end runs to the plot's right edge, a date number that must be a datetime beside ``low``.
+            right = dates(high)[0] if high is not None else num2date(ax.get_xlim()[1])
             ax.plot([dates(low)[0], right], [level, level],  # type: ignore[arg-type]
                     color=color, linewidth=4, alpha=0.5, label=f'{label}: {confidence:.0%} interval')
         if estimate is not None:

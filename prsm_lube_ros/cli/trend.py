@@ -16,7 +16,7 @@ actuator the history does not have are each one line on stderr (``file`` or
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import cast, TYPE_CHECKING
+from typing import TYPE_CHECKING
 
 from .common import EXIT_USER_ERROR
 
@@ -24,6 +24,8 @@ if TYPE_CHECKING:
     import argparse
     from collections.abc import Mapping, Sequence
     from pathlib import Path
+
+    import numpy.typing as npt
 
     from ..fleet.forecast import ActuatorForecast, RecordingPoint
     from ..fleet.planner import PlannedCrossing
@@ -257,11 +259,11 @@ def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> No
     end = max(options.by, forecast.last_recording + 7 * 86400.0) if not forecast.reason else 0.0
     future = np.linspace(forecast.last_recording, end, 200) if not forecast.reason else np.array([])
     names = ('warn', 'error')
-    # The cast: history_with_forecast takes any array-like band (np.asarray of each) but is annotated Sequence only.
+    band: tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike] = ([], [], [])
+    if len(future):
+        band = forecast.band(future)
     history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
-                          [p.theta_oil for p in points], [p.theta_oil_std for p in points], future,
-                          cast('tuple[Sequence[float], Sequence[float], Sequence[float]]',
-                               forecast.band(future) if len(future) else ([], [], [])),
+                          [p.theta_oil for p in points], [p.theta_oil_std for p in points], future, band,
                           {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
                           forecast.relubrications, f'{forecast.actuator}: theta_Oil and forecast',
                           crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
