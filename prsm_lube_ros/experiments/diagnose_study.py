@@ -199,6 +199,25 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
     return 0
 
 
+def _explain_misses(out: Path, jobs: int, command: str) -> int:
+    """``--explain-misses``: the size of what each missed case concealed, to ``out``/misses.md."""
+    from .random_study import explain_miss, misses_markdown
+    try:
+        document = json.loads((out / 'results.json').read_text())
+    except (OSError, ValueError) as exc:
+        print(f'diagnose_study: cannot read {out / "results.json"}: {exc}', file=sys.stderr)
+        return 2
+    records = document['cases']
+    pool_effects = tuple(e for e in effect_ids() if e != NONE)
+    cases = [(r['kind'], r['seed'], pool_effects, False) for r in records if not r.get('right')]
+    with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
+        sizes = list(pool.map(explain_miss, cases))
+    text = misses_markdown(records, sizes, command)
+    (out / 'misses.md').write_text(text)
+    print(text)
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Command line of the study."""
     from ..diagnosis.effects import effect_ids
@@ -219,12 +238,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--first-seed', type=int, default=0, help='random design: seeds from this one on')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
+    parser.add_argument('--explain-misses', action='store_true',
+                        help='random design: simulate the missed cases of --out/results.json again and write '
+                             'misses.md with the size of what was concealed against the scatter')
     args = parser.parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
     effects = list(args.effects) if args.effects else list(effect_ids())
     command = ('python -m prsm_lube_ros.experiments.diagnose_study '
                + ' '.join(argv if argv is not None else sys.argv[1:]))
+    if args.design == 'random' and args.explain_misses:
+        return _explain_misses(Path(args.out), args.jobs, command)
     if args.design == 'random':
         return _run_random(args, [e for e in effects if e != NONE], command)
     classes = [e for e in effects if e != NONE] + [NONE]

@@ -35,12 +35,14 @@ from ..physics.effects.resonance import band_position
 
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
+    from ..estimation.pipeline import RecordingWindows
     from ..simulation.effects import Effects
     from .study_draws import CaseSetup
 
 __all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
-           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_rng', 'confusion_markdown', 'run_random_case',
-           'simulate_case', 'summarise', 'truth_form', 'write_random_outputs']
+           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_recordings', 'case_rng', 'confusion_markdown',
+           'explain_miss', 'misses_markdown', 'run_random_case', 'simulate_case', 'summarise', 'truth_form',
+           'write_random_outputs']
 
 NONE, TWO = 'none', 'two'
 #: Kinds with physics outside the diagnosis catalogue, and the covariate diagnose must locate for each: a step of
@@ -158,12 +160,46 @@ def _outside_catalogue(kind: str, rng: np.random.Generator, setup: CaseSetup, ef
     return setup
 
 
+def case_recordings(paths: Sequence[Path], setup: CaseSetup) -> list[RecordingWindows]:
+    """What ``prsm-lube diagnose`` reads of a case's bags: the analysis band, spectra resolving the lowest orders."""
+    from ..estimation.pipeline import analysis_settings, recording_windows
+    return [recording_windows(p, lead=setup.rig.actuator.lead, settings=analysis_settings(spectra=True))
+            for p in paths]
+
+
+def explain_miss(case: tuple) -> dict:
+    """The concealed effects' size against the scatter (:mod:`.effect_size`) for one (kind, seed, pool, quick) case.
+
+    The case is simulated again from its seed, exactly as the study drew it.
+    Returns ``{'kind', 'seed', 'size'}`` (``size`` None without a concealed
+    catalogue effect or without a usable window).
+    """
+    kind, seed, effect_pool, quick = case
+    from ..diagnosis.table import table_from_windows
+    from ..errors import InputError
+    from ..simulation.effects import Effects
+    from .effect_size import effect_size
+    folder = Path(tempfile.mkdtemp(prefix='prsm_study_'))
+    try:
+        paths, setup, names, truth = simulate_case(kind, seed, list(effect_pool), quick=quick, folder=folder)
+        recordings = case_recordings(paths, setup)
+        try:
+            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths])
+        except InputError:
+            return {'kind': kind, 'seed': seed, 'size': None}
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    if not names:
+        return {'kind': kind, 'seed': seed, 'size': None}
+    size = effect_size(table, setup.rig, Effects.from_dict(truth))
+    return {'kind': kind, 'seed': seed, 'size': size.as_json()}
+
+
 def run_random_case(case: tuple) -> dict:
     """Simulate, read and diagnose one (kind, seed, effect pool, quick) case; the case's record."""
     kind, seed, effect_pool, quick = case
     from ..diagnosis.engine import diagnose_table
     from ..diagnosis.table import table_from_windows
-    from ..estimation.pipeline import analysis_settings, recording_windows
     from ..errors import InputError
     start = time.time()
     folder = Path(tempfile.mkdtemp(prefix='prsm_study_'))
@@ -173,9 +209,7 @@ def run_random_case(case: tuple) -> dict:
         record.update({'effects': names, 'truth': truth,
                        'forms': {n: truth_form(n, truth[n], setup.plan.speeds) for n in names},
                        'setup': setup.as_dict()})
-        # What ``prsm-lube diagnose`` reads: the analysis band, spectra resolving the lowest orders.
-        recordings = [recording_windows(p, lead=setup.rig.actuator.lead, settings=analysis_settings(spectra=True))
-                      for p in paths]
+        recordings = case_recordings(paths, setup)
         record['problems'] = sum(len(r.problems) for r in recordings)
         try:
             table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths])
@@ -372,3 +406,25 @@ def write_random_outputs(out: Path, records: list[dict], command: str, wall_seco
                 'summary': summarise(records), 'cases': records}
     (out / 'results.json').write_text(json.dumps(document, indent=1, default=float))
     return text
+
+
+def misses_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str) -> str:
+    """The missed cases with the size of what was concealed (:func:`explain_miss`), as Markdown."""
+    size_of = {(item['kind'], item['seed']): item['size'] for item in sizes}
+    lines = ['# Missed cases and the size of what was concealed', '', f'Command: `{command}`', '',
+             'Size: the concealed effects\' change of ln A per run beyond what the paper\'s constants absorb '
+             '(RMS over runs), against the rig\'s run-to-run scatter, and about the run means (see '
+             '`prsm_lube_ros/experiments/effect_size.py`). A ratio well below 1 leaves nothing for any method to '
+             'name.', '',
+             '| kind | seed | effects | verdict | between runs | run scatter | ratio | within runs |',
+             '|---|---|---|---|---|---|---|---|']
+    for record in records:
+        if record.get('right'):
+            continue
+        size = size_of.get((record['kind'], record['seed']))
+        cells = (['-'] * 4 if size is None else
+                 [f'{100 * size["between_runs"]:.1f} %', f'{100 * size["run_scatter"]:.1f} %',
+                  f'{size["ratio"]:.2f}', f'{100 * size["within_runs"]:.1f} %'])
+        lines.append(f'| {record["kind"]} | {record["seed"]} | {", ".join(record.get("effects", [])) or "-"} | '
+                     f'{record.get("verdict")} | ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines) + '\n'
