@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -62,6 +62,12 @@ from ..validation import finite_or_none
 from .calibration import Calibration
 from .domain import domain_flag
 from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
+
+if TYPE_CHECKING:
+    from typing import TypeAlias
+
+    #: One run pooled over its windows: ``(rms, amplitude, factor, speed, load, temperature, ln_var, reason)``.
+    _PooledRun: TypeAlias = tuple[float, float, float, float, float, float, float, str]
 
 __all__ = ['Assessor', 'RunAssessment', 'THETA_PLAUSIBLE_MAX', 'WindowAssessment', 'theta_range_flag']
 
@@ -232,6 +238,34 @@ class Assessor:
         """:meth:`assess_run` for each run: pooled per run, Eq. 23 for all runs at once."""
         if not runs:
             return []
+        pooled = self._pooled(runs)
+        rms, amplitude, factor, speed, load, temperature, ln_var, reasons = (list(c) for c in zip(*pooled))
+        theta, std = self.thetas(np.array(amplitude), np.array(speed), np.array(load), np.array(ln_var))
+        with np.errstate(divide='ignore', invalid='ignore'):
+            theta, std = theta / np.array(factor), std / np.abs(factor)
+        results = []
+        for i, windows in enumerate(runs):
+            reason = reasons[i]
+            theta_i, std_i = (math.nan, math.nan) if reason else (float(theta[i]), float(std[i]))
+            if not reason and not math.isfinite(theta_i):
+                reason = 'Eq. 23 has no finite value for this run'
+            results.append(RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
+                                         end=windows[-1].end, screw_speed=speed[i], axial_load=load[i],
+                                         vibration_rms=rms[i], theta_oil=theta_i, theta_oil_std=std_i,
+                                         windows=len(windows), temperature=temperature[i], reason=reason,
+                                         domain_flag='' if reason else domain_flag(
+                                             self.calibration.domain, speed[i], load[i], temperature[i])))
+        return results
+
+    def _pooled(self, runs: Sequence[Sequence[Window]]) -> list[_PooledRun]:
+        """Per run ``(rms, amplitude, factor, speed, load, temperature, ln_var, reason)`` from its windows.
+
+        The RMS, Eq. 22's amplitude and the extension's film factor, speed and
+        load pooled over the run's windows (weighted by their sample counts),
+        its mean known temperature, the variance of its ln(RMS) as a new run
+        (:meth:`.run_scatter.RunScatter.new_run_variance`) and why Eq. 23
+        cannot be evaluated for it ('' when it can).
+        """
         everything = [w for windows in runs for w in windows]
         amplitudes, factors = self._through_extension(everything)
         # The same numpy reductions as np.average, np.nanmean and np.var per run, on slices of one array each.
@@ -250,14 +284,6 @@ class Assessor:
         scatter = self.calibration.run_scatter
         pooled = []
         first = 0
-        # a run's value in the loop, then the list over runs
-        rms: Any
-        amplitude: Any
-        factor: Any
-        speed: Any
-        load: Any
-        temperature: Any
-        ln_var: Any
         for windows in runs:
             n = len(windows)
             last = first + n
@@ -279,20 +305,4 @@ class Assessor:
             pooled.append((rms, amplitude, factor, speed, load, temperature, ln_var,
                            not_assessable_reason(speed, load, rms, self.min_axial_load)))
             first = last
-        rms, amplitude, factor, speed, load, temperature, ln_var, reasons = (list(c) for c in zip(*pooled))
-        theta, std = self.thetas(np.array(amplitude), np.array(speed), np.array(load), np.array(ln_var))
-        with np.errstate(divide='ignore', invalid='ignore'):
-            theta, std = theta / np.array(factor), std / np.abs(factor)
-        results = []
-        for i, windows in enumerate(runs):
-            reason = reasons[i]
-            theta_i, std_i = (math.nan, math.nan) if reason else (float(theta[i]), float(std[i]))
-            if not reason and not math.isfinite(theta_i):
-                reason = 'Eq. 23 has no finite value for this run'
-            results.append(RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
-                                         end=windows[-1].end, screw_speed=speed[i], axial_load=load[i],
-                                         vibration_rms=rms[i], theta_oil=theta_i, theta_oil_std=std_i,
-                                         windows=len(windows), temperature=temperature[i], reason=reason,
-                                         domain_flag='' if reason else domain_flag(
-                                             self.calibration.domain, speed[i], load[i], temperature[i])))
-        return results
+        return pooled

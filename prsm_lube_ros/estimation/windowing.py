@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
@@ -41,6 +41,13 @@ from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_ref
 from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED,
                                       plausible_durations, plausible_magnitudes, plausible_rates,
                                       plausible_temperatures, rate_problem, TEMPERATURE_RANGE)
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    import numpy.typing as npt
+
+    from ..recording.batches import InputBatch
 
 __all__ = ['AT_REST', 'BLOCKS_LOST', 'GATING_STREAMS', 'MIN_AXIAL_LOAD', 'NO_LOAD', 'NO_SPEED', 'NO_VIBRATION',
            'SPANS_RUNS', 'SPEED_CHANGING', 'UNSTEADY_KINDS', 'Window', 'WindowBuilder', 'WindowSettings',
@@ -68,7 +75,7 @@ class WindowSettings:
     #: :func:`.conditioning.spectrum_segment` (overrides ``spectrum_segment``'s length).
     spectrum_lowest_frequency: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject settings that cannot cut windows."""
         if self.band is not None and not isinstance(self.band, AnalysisBand):
             raise InputError(f'window setting band={self.band!r} is not an analysis band')
@@ -98,7 +105,8 @@ UNSTEADY_KINDS = (NO_VIBRATION, BLOCKS_LOST, NO_SPEED, AT_REST, SPEED_CHANGING, 
 MIN_AXIAL_LOAD = 5.0
 
 
-def assessable(speed, load, rms, min_axial_load: float = MIN_AXIAL_LOAD) -> np.ndarray:
+def assessable(speed: npt.ArrayLike, load: npt.ArrayLike, rms: npt.ArrayLike,
+               min_axial_load: float = MIN_AXIAL_LOAD) -> np.ndarray:
     """Where Eq. 23 can be evaluated: finite RMS > 0, speed > 0 and load >= ``min_axial_load`` (arrays, vectorised).
 
     The one definition of "assessable", used by assessment, calibration and the diagnosis's window table.
@@ -120,7 +128,7 @@ def not_assessable_reason(speed: float, load: float, rms: float, min_axial_load:
     return ''
 
 
-def usable_windows(windows, min_axial_load: float = MIN_AXIAL_LOAD) -> list:
+def usable_windows(windows: Iterable[Window], min_axial_load: float = MIN_AXIAL_LOAD) -> list[Window]:
     """The steady and assessable windows, in order: what calibration and diagnosis fit."""
     windows = [w for w in windows if w.steady]
     if not windows:
@@ -180,7 +188,7 @@ class _OpenWindows:
 
     __slots__ = ('keys', 'table')
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.keys = np.zeros(0, np.int64)
         self.table = np.zeros((0, _EMPTY_ROW.size))
 
@@ -209,7 +217,7 @@ class _OpenWindows:
         return keys, table
 
 
-def _grouped(keys: np.ndarray):
+def _grouped(keys: np.ndarray) -> tuple[slice | np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Sort order, unique keys, segment starts and segment sizes for reduceat over ``keys``.
 
     The order is ``slice(None)`` when ``keys`` is sorted already (the usual case).
@@ -226,6 +234,40 @@ def _grouped(keys: np.ndarray):
     return order, sorted_keys[starts], starts, np.diff(np.append(starts, keys.size))
 
 
+@dataclass
+class _BlockPieces:
+    """Vibration blocks cut at window edges: per block, and per piece of a block that lies in one window."""
+
+    stamps: np.ndarray      # per block: stamp of its first sample, s
+    rates: np.ndarray       # per block: sample rate, Hz
+    offsets: np.ndarray     # per block: index of its first sample in the batch's samples
+    ends: np.ndarray        # per block: stamp of its last sample, s
+    keys: np.ndarray        # per piece: key of its window
+    blocks: np.ndarray      # per piece: its block (index into the per-block arrays)
+    lo: np.ndarray          # per piece: its first sample, index into the batch's samples
+    hi: np.ndarray          # per piece: the end of its samples (exclusive)
+
+    @classmethod
+    def cut(cls, stamps: np.ndarray, rates: np.ndarray, counts: np.ndarray, offsets: np.ndarray, good: np.ndarray,
+            length: float) -> _BlockPieces:
+        """The ``good`` blocks of a batch (stamps, rates, sample counts, offsets) cut at windows of ``length`` s."""
+        idx = np.flatnonzero(good)
+        b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
+        b_off = offsets[idx]
+        b_end = b_stamp + (b_count - 1) / b_rate
+        k_first = np.floor(b_stamp / length).astype(np.int64)
+        k_last = np.floor(b_end / length).astype(np.int64)
+        spans = k_last - k_first + 1
+        seg_block = np.repeat(np.arange(idx.size), spans)
+        seg_k = k_first[seg_block] + (np.arange(seg_block.size)
+                                      - np.repeat(np.cumsum(spans) - spans, spans))
+        lo = np.ceil((seg_k * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
+        hi = np.ceil(((seg_k + 1) * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
+        lo = np.clip(lo, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
+        hi = np.clip(hi, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
+        return cls(b_stamp, b_rate, b_off, b_end, seg_k, seg_block, lo, hi)
+
+
 class WindowBuilder:
     """Turns input batches into closed :class:`Window` objects, in time order.
 
@@ -235,11 +277,12 @@ class WindowBuilder:
     accumulate in :attr:`problems` (drain it with :meth:`take_problems`).
     """
 
-    def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005):
+    def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005) -> None:
         self.settings = settings or WindowSettings()
         self.lead = float(lead)
         self._open = _OpenWindows()
-        self._chunks: dict[int, list] = {}   # (time s, samples) per open window key, for the band and spectra
+        #: (time s, samples) per open window key, for the band and spectra
+        self._chunks: dict[int, list[tuple[float, np.ndarray]]] = {}
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -256,7 +299,7 @@ class WindowBuilder:
         self.band_refusal = ''             # why blocks were refused for the band (a sample rate too low), if any
 
     # -- problem reports -------------------------------------------------
-    def _report(self, kind: str, line: str, count: int = 1):
+    def _report(self, kind: str, line: str, count: int = 1) -> None:
         """Record a problem; the first of each kind is reported in words, later ones counted."""
         seen = self._problem_counts.get(kind, 0)
         self._problem_counts[kind] = seen + count
@@ -273,7 +316,7 @@ class WindowBuilder:
         return dict(self._problem_counts)
 
     # -- input -----------------------------------------------------------
-    def add(self, batch) -> None:
+    def add(self, batch: InputBatch) -> None:
         """Take one input batch of any kind (see :mod:`prsm_lube_ros.recording.batches`)."""
         if len(batch) == 0:
             return
@@ -333,7 +376,7 @@ class WindowBuilder:
                          '(stamps going backwards or arriving late) left out', late)
         return usable
 
-    def _restart_time(self):
+    def _restart_time(self) -> None:
         """Close everything open and forget time progress (after a clock reset)."""
         self._close(math.inf)
         self._progress = {name: -math.inf for name in GATING_STREAMS}
@@ -341,24 +384,17 @@ class WindowBuilder:
         self._moving = False
         self._last_angle = math.nan
 
-    def _advance(self, stream: str, stamp: float):
+    def _advance(self, stream: str, stamp: float) -> None:
         if stamp > self._progress.get(stream, -math.inf):
             self._progress[stream] = stamp
 
-    def _add_vibration(self, batch: VibrationBatch):
+    def _add_vibration(self, batch: VibrationBatch) -> None:
+        """Add the usable blocks of a vibration batch to the open windows (sums, and samples where kept)."""
         rates = np.asarray(batch.sample_rates, float)
         stamps = np.asarray(batch.stamps, float)
         offsets = np.asarray(batch.offsets, np.int64)
         counts = np.diff(offsets)
-        good = self._check_time(stamps, 'vibration')
-        good &= self._plausible_blocks(rates, counts, good)
-        empty = counts == 0
-        if (empty & good).any():
-            n = int((empty & good).sum())
-            self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
-        good &= ~empty
-        if self.band is not None and good.any():
-            good &= self._band_covered(rates, good)
+        good = self._usable_blocks(stamps, rates, counts)
         if not good.any():
             return
         samples = np.asarray(batch.samples).reshape(-1)
@@ -376,22 +412,38 @@ class WindowBuilder:
         good &= self._first_sight(stamps, good)
         if not good.any():
             return
-        idx = np.flatnonzero(good)
-        b_stamp, b_rate, b_count = stamps[idx], rates[idx], counts[idx]
-        b_off = offsets[idx]
-        b_end = b_stamp + (b_count - 1) / b_rate
-        k_first = np.floor(b_stamp / length).astype(np.int64)
-        k_last = np.floor(b_end / length).astype(np.int64)
-        spans = k_last - k_first + 1
-        seg_block = np.repeat(np.arange(idx.size), spans)
-        seg_k = k_first[seg_block] + (np.arange(seg_block.size)
-                                      - np.repeat(np.cumsum(spans) - spans, spans))
-        lo = np.ceil((seg_k * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
-        hi = np.ceil(((seg_k + 1) * length - b_stamp[seg_block]) * b_rate[seg_block] - 1e-9)
-        lo = np.clip(lo, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
-        hi = np.clip(hi, 0, b_count[seg_block]).astype(np.int64) + b_off[seg_block]
+        pieces = _BlockPieces.cut(stamps, rates, counts, offsets, good, length)
+        self._add_pieces(pieces, values, None if all_finite else finite, keep_samples)
+
+    def _usable_blocks(self, stamps: np.ndarray, rates: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """Mask of the blocks of a batch that can go into windows; the others are reported.
+
+        Their stamps must be usable (:meth:`_check_time`), their header
+        plausible, they must hold samples and their rate must cover the band.
+        """
+        good = self._check_time(stamps, 'vibration')
+        good &= self._plausible_blocks(rates, counts, good)
+        empty = counts == 0
+        if (empty & good).any():
+            n = int((empty & good).sum())
+            self._report('vibration-empty', f'vibration: {n} empty block(s) (no samples) left out', n)
+        good &= ~empty
+        if self.band is not None and good.any():
+            good &= self._band_covered(rates, good)
+        return good
+
+    def _add_pieces(self, pieces: _BlockPieces, values: np.ndarray, finite: np.ndarray | None,
+                    keep_samples: bool) -> None:
+        """Add block pieces to their windows' sums: squares of ``values`` and counts of finite samples.
+
+        ``values``: the batch's samples in float64 (non-finite ones 0) or, when
+        all are finite and none is kept, as they came; ``finite``: which are
+        finite (None: all).  With ``keep_samples`` each piece's samples are kept
+        for its window, with the time of its first sample.
+        """
+        lo, hi, seg_k, seg_block, b_rate = pieces.lo, pieces.hi, pieces.keys, pieces.blocks, pieces.rates
         seg_sumsq = _segment_sums(self._squares(values), lo, hi)
-        if all_finite:
+        if finite is None:
             seg_count = hi - lo
         else:
             seg_count = _segment_sums(finite.astype(np.int64), lo, hi)
@@ -408,10 +460,11 @@ class WindowBuilder:
         table[rows, _COUNT] += count
         table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
         if keep_samples:   # copies (a view would hold the whole batch), with the time of their first sample
+            b_stamp, b_off = pieces.stamps, pieces.offsets
             seg_time = b_stamp[seg_block] + (lo - b_off[seg_block]) / b_rate[seg_block]
             for k, first, last, time in zip(seg_k.tolist(), lo.tolist(), hi.tolist(), seg_time.tolist()):
                 self._chunks.setdefault(k, []).append((time, values[first:last].copy()))
-        self._advance('vibration', float(b_end.max()))
+        self._advance('vibration', float(pieces.ends.max()))
 
     def _keeps_samples(self) -> bool:
         """Whether open windows keep their samples (for the band's RMS or for spectra)."""
@@ -450,7 +503,7 @@ class WindowBuilder:
         return rate_ok & ~long
 
     def _report_bad_values(self, values: np.ndarray, ok: np.ndarray, stream: str, topic: str, what: str,
-                           bound: str):
+                           bound: str) -> None:
         """Report the entries of ``values`` failing ``ok``: non-finite ones, and finite ones beyond ``bound``."""
         finite = np.isfinite(values)
         nonfinite = int(values.size - np.count_nonzero(finite))
@@ -469,7 +522,22 @@ class WindowBuilder:
         np.square(values, out=squares, dtype=np.float64)
         return squares
 
-    def _add_screw(self, batch: ScrewStateBatch):
+    def _add_screw(self, batch: ScrewStateBatch) -> None:
+        """Add the usable screw states of a batch to the open windows: speed, run, nut travel, revolutions."""
+        usable = self._usable_screw_states(batch)
+        if usable is None:
+            return
+        stamps, speeds, angles = usable
+        run, travel, revolutions = self._follow_runs(speeds, angles)
+        self._add_screw_rows(stamps, speeds, run, travel, revolutions)
+        self._advance('screw', float(stamps[-1]))
+
+    def _usable_screw_states(self, batch: ScrewStateBatch) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Stamps, speed magnitudes and angles of the usable screw states, in stamp order (None: none usable).
+
+        States with an unusable stamp (:meth:`_check_time`) or a non-finite or
+        implausible speed are left out and reported.
+        """
         stamps = np.asarray(batch.stamps, float)
         good = self._check_time(stamps, 'screw')
         speeds = np.abs(np.asarray(batch.speeds, float))
@@ -484,12 +552,20 @@ class WindowBuilder:
                                     'screw speed(s)', f'beyond {MAX_SCREW_SPEED:g} rad/s')
         good &= ~wild
         if not good.any():
-            return
+            return None
         if not good.all():
             stamps, speeds, angles = stamps[good], speeds[good], angles[good]
         if stamps.size > 1 and not (stamps[1:] >= stamps[:-1]).all():
             order = np.argsort(stamps, kind='stable')
             stamps, speeds, angles = stamps[order], speeds[order], angles[order]
+        return stamps, speeds, angles
+
+    def _follow_runs(self, speeds: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Run index, nut travel and revolutions at each screw state (in stamp order), carrying them on.
+
+        The builder's run state (moving, run index, angle at motion start, last
+        angle, revolutions) goes from the batch before to the batch after.
+        """
         # Runs: a new run starts where the speed rises to min_speed after standstill.
         moving = speeds >= self.settings.min_speed
         previous = np.concatenate(([self._moving], moving[:-1]))
@@ -511,7 +587,11 @@ class WindowBuilder:
         if finite_angles.size:
             self._last_angle = float(finite_angles[-1])
         self._revolutions = float(revolutions[-1])
+        return run, travel, revolutions
 
+    def _add_screw_rows(self, stamps: np.ndarray, speeds: np.ndarray, run: np.ndarray, travel: np.ndarray,
+                        revolutions: np.ndarray) -> None:
+        """Add screw states to their windows' rows: speed count, sum, min, max; travel; runs; last revolutions."""
         keys = np.floor(stamps / self.settings.window_length).astype(np.int64)
         order, unique, seg, n = _grouped(keys)
         sp = speeds[order]
@@ -537,9 +617,8 @@ class WindowBuilder:
         table[rows, _RUN_MIN] = np.minimum(table[rows, _RUN_MIN], rmin)
         table[rows, _RUN_MAX] = np.maximum(table[rows, _RUN_MAX], rmax)
         table[rows, _REVOLUTIONS] = rev_last
-        self._advance('screw', float(stamps[-1]))
 
-    def _add_scalar(self, stamps, values, stream: str):
+    def _add_scalar(self, stamps: npt.ArrayLike, values: np.ndarray, stream: str) -> None:
         stamps = np.asarray(stamps, float)
         good = self._check_time(stamps, stream)
         bad = good & ~np.isfinite(values)
@@ -572,7 +651,7 @@ class WindowBuilder:
             self._advance(stream, float(stamps[good].max()))
 
     # -- closing ---------------------------------------------------------
-    def _close_ready(self):
+    def _close_ready(self) -> None:
         """Close windows every live stream has passed by ``completion_delay``."""
         known = [p for p in self._progress.values() if math.isfinite(p)]
         if not known:
@@ -582,7 +661,7 @@ class WindowBuilder:
         horizon = min(live) - self.settings.completion_delay
         self._close(horizon)
 
-    def _close(self, horizon: float):
+    def _close(self, horizon: float) -> None:
         length = self.settings.window_length
         keys = self._open.keys
         ready = int(np.count_nonzero((keys + 1) * length <= horizon)) if keys.size else 0
@@ -630,7 +709,7 @@ class WindowBuilder:
                         & ~(spread > s.max_speed_spread) & (table[:, _RUN_MIN] == table[:, _RUN_MAX])
                         & (table[:, _LOAD_N] > 0))
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
-        spectra = [(None, math.nan)] * keys.size
+        spectra: list[tuple[np.ndarray | None, float]] = [(None, math.nan)] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
         row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
@@ -716,7 +795,7 @@ def _forward_fill(values: np.ndarray) -> np.ndarray:
     return filled
 
 
-def _power_spectrum(samples: np.ndarray, rate: float, segment: int):
+def _power_spectrum(samples: np.ndarray, rate: float, segment: int) -> tuple[np.ndarray | None, float]:
     """Welch power spectral density, (m/s^2)^2/Hz, and its bin width in Hz.
 
     A window shorter than ``segment`` (lost blocks) is zero-padded to it, so

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import re
 import struct
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from rosbags.typesys import get_types_from_idl, get_types_from_msg
@@ -30,6 +31,14 @@ from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, JOINT_STATE, JOINT_STATE
                         VIBRATION_TOPIC as VIBRATION, WRENCH_STAMPED)
 from .batches import stamp_seconds
 from .typestore import contract_typestore
+
+if TYPE_CHECKING:
+    from typing import TypeAlias
+
+    from rosbags.interfaces.typing import Typesdict
+    #: Messages decoded together: ``(message indices, columns, samples)``; samples one array for a group
+    #: decoded in bulk, one array per message for messages decoded one at a time, None for no samples.
+    _Part: TypeAlias = tuple[np.ndarray, dict[str, np.ndarray], np.ndarray | list[np.ndarray] | None]
 
 __all__ = ['COLUMNS', 'Decoded', 'KINDS', 'MAX_TEMPLATES', 'NotPlain', 'check_layout', 'decode_messages',
            'embedded_types', 'layout_signature', 'ragged_take', 'rows_at']
@@ -48,7 +57,7 @@ _F8 = struct.Struct('<d')
 
 # -- layouts ----------------------------------------------------------------------------------------
 
-def _describe(desc, typs, depth: int = 0):
+def _describe(desc: tuple[Nodetype, Any], typs: Typesdict | None, depth: int = 0) -> object:
     nodetype, payload = desc
     if nodetype == Nodetype.BASE:
         return payload[0]
@@ -60,7 +69,7 @@ def _describe(desc, typs, depth: int = 0):
     return ('sequence', _describe(inner, typs, depth))
 
 
-def layout_signature(typename: str, typs: dict | None = None, depth: int = 0) -> tuple:
+def layout_signature(typename: str, typs: Typesdict | None = None, depth: int = 0) -> tuple:
     """Field names and types of ``typename``, nested types expanded, type names left out.
 
     ``typs`` are the definitions embedded in a recording; types they do not
@@ -82,7 +91,7 @@ _IDL_NAME = re.compile(r'\A[ \t\r\n]*IDL: [^\n]*\n')
 _PREPROCESSOR = re.compile(r'^[ \t]*#[^\n]*$', re.MULTILINE)
 
 
-def embedded_types(msgtype: str, encoding: str, text: str) -> dict:
+def embedded_types(msgtype: str, encoding: str, text: str) -> Typesdict:
     """Type definitions from a schema embedded in a recording (``ros2msg`` or ``ros2idl``).
 
     A ``ros2idl`` schema is the root type's IDL followed by each dependency's,
@@ -93,7 +102,7 @@ def embedded_types(msgtype: str, encoding: str, text: str) -> dict:
     if encoding == 'ros2msg':
         return get_types_from_msg(text, msgtype)
     if encoding == 'ros2idl':
-        types = {}
+        types: Typesdict = {}
         for part in _IDL_SEPARATOR.split(text):
             body = _PREPROCESSOR.sub('', _IDL_NAME.sub('', part, count=1))
             if body.strip():
@@ -102,12 +111,12 @@ def embedded_types(msgtype: str, encoding: str, text: str) -> dict:
     raise ValueError(f'unknown schema encoding {encoding!r}')
 
 
-def _fields_text(typename: str, typs: dict | None) -> str:
+def _fields_text(typename: str, typs: Typesdict | None) -> str:
     definition = (typs or {}).get(typename) or contract_typestore().fielddefs.get(typename)
     if definition is None:
         return '?'
 
-    def name_of(desc):
+    def name_of(desc: tuple[Nodetype, Any]) -> str:
         nodetype, payload = desc
         if nodetype == Nodetype.BASE:
             return payload[0]
@@ -171,14 +180,14 @@ class NotPlain(Exception):
 class _Walker:
     """Walks a little-endian CDR message, noting which bytes are structure (not values)."""
 
-    def __init__(self, data: bytes):
+    def __init__(self, data: bytes) -> None:
         if len(data) < 16 or data[0:2] != b'\x00\x01':
             raise NotPlain
         self.data = data
         self.pos = 4
         self.structure: list[tuple[int, int]] = [(0, 2)]
 
-    def align(self, size: int):
+    def align(self, size: int) -> None:
         self.pos = 4 + -(-(self.pos - 4) // size) * size
 
     def count(self) -> int:
@@ -208,7 +217,7 @@ class _Walker:
             raise NotPlain
         return start
 
-    def header(self):
+    def header(self) -> None:
         self.pos = 12
         self.string()
 
@@ -284,7 +293,7 @@ class _StructureCheck:
     structure bytes, OR-ed over those words; the last ``width % 8`` bytes one by one.
     """
 
-    def __init__(self, template: np.ndarray, structure: list[tuple[int, int]]):
+    def __init__(self, template: np.ndarray, structure: list[tuple[int, int]]) -> None:
         width = template.size
         mask = np.zeros(width, np.uint8)
         for begin, end in structure:
@@ -307,7 +316,7 @@ class _StructureCheck:
 
 
 def _decode_rows(kind: str, rows: np.ndarray, layout: _Layout, buffer: np.ndarray,
-                 offsets: np.ndarray) -> tuple[dict, np.ndarray | None]:
+                 offsets: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
     values = layout.values
     columns = {'stamps': stamp_seconds(_column(rows, *values['sec']).astype(np.float64),
                                        _column(rows, *values['nanosec']))}
@@ -321,8 +330,11 @@ def _decode_rows(kind: str, rows: np.ndarray, layout: _Layout, buffer: np.ndarra
     return columns, samples
 
 
-def _decode_one(kind: str, data: bytes) -> tuple | None:
-    """Values of one message through the rosbags deserializer; None if it has no screw entry."""
+def _decode_one(kind: str, data: bytes) -> tuple[Any, ...] | None:
+    """Values of one message through the rosbags deserializer; None if it has no screw entry.
+
+    One value per :data:`COLUMNS` entry of the kind (floats) and, for vibration, the samples last (an array).
+    """
     message = contract_typestore().deserialize_cdr(data, KINDS[kind])
     stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
     if kind == VIBRATION:
@@ -332,7 +344,7 @@ def _decode_one(kind: str, data: bytes) -> tuple | None:
             return None
         index = list(message.name).index(SCREW_JOINT)
 
-        def pick(array):
+        def pick(array: np.ndarray) -> float:
             return float(array[index]) if index < len(array) else np.nan
         return stamp, pick(message.position), pick(message.velocity)
     if kind == AXIAL_LOAD:
@@ -344,74 +356,99 @@ def decode_messages(kind: str, buffer: np.ndarray, data_offsets: np.ndarray, dat
                     log_times: np.ndarray, vectorised: bool = True) -> Decoded:
     """Decode the messages of one topic from one chunk's buffer (see module docstring)."""
     n = data_offsets.size
-    parts: list[tuple[np.ndarray, dict[str, np.ndarray], np.ndarray | list | None]] = []
-    # (message indices, columns, samples)
+    parts: list[_Part] = []
     slow: list[int] = []
     without_screw = 0
     if vectorised and n:
         sizes = [int(data_lengths[0])] if data_lengths.min() == data_lengths.max() else np.unique(data_lengths)
         for size in sizes:
             todo = np.arange(n) if len(sizes) == 1 else np.nonzero(data_lengths == size)[0]
-            layout = _LAYOUTS.get((kind, int(size)))
-            for _ in range(MAX_TEMPLATES + 1):
-                if not todo.size:
-                    break
-                if layout is None:
-                    start = int(data_offsets[todo[0]])
-                    try:
-                        layout = _probe(kind, buffer[start:start + int(size)].tobytes())
-                    except NotPlain:
-                        slow.append(int(todo[0]))
-                        todo = todo[1:]
-                        continue
-                    if len(_LAYOUTS) > 256:
-                        _LAYOUTS.clear()
-                    _LAYOUTS[kind, int(size)] = layout
-                offsets = data_offsets[todo]
-                rows = rows_at(buffer, offsets, layout.head)
-                assert layout.check is not None  # _probe sets it
-                same = layout.check(rows)
-                if not same.all():
-                    rows, offsets = rows[same], offsets[same]
-                if layout.has_screw:
-                    if rows.shape[0]:
-                        columns, samples = _decode_rows(kind, rows, layout, buffer, offsets)
-                        parts.append((todo[same], columns, samples))
-                else:
-                    without_screw += int(same.sum())
-                todo = todo[~same]
-                layout = None
-            slow.extend(todo.tolist())
+            without_screw += _decode_size_group(kind, int(size), todo, buffer, data_offsets, parts, slow)
     else:
         slow = list(range(n))
     undecodable = 0
     if slow:
-        rows_slow, kept = [], []
-        for index in sorted(slow):
-            start = int(data_offsets[index])
-            try:
-                values = _decode_one(kind, buffer[start:start + int(data_lengths[index])].tobytes())
-            except Exception:  # rosbags raises assorted errors on malformed CDR
-                undecodable += 1
-                continue
-            if values is None:
-                without_screw += 1
-                continue
-            rows_slow.append(values)
-            kept.append(index)
-        if kept:
-            names = COLUMNS[kind]
-            if kind == VIBRATION:
-                columns = {'stamps': np.array([r[0] for r in rows_slow], np.float64),
-                           'sample_rates': np.array([r[1] for r in rows_slow], np.float64)}
-                parts.append((np.array(kept), columns, [r[2] for r in rows_slow]))
-            else:
-                table = np.array(rows_slow, np.float64).reshape(len(kept), len(names))
-                parts.append((np.array(kept), {name: table[:, i] for i, name in enumerate(names)}, None))
+        undecodable, slow_without_screw = _decode_slowly(kind, sorted(slow), buffer, data_offsets, data_lengths,
+                                                         parts)
+        without_screw += slow_without_screw
     return _assemble(kind, parts, log_times, undecodable, without_screw)
 
 
-def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without_screw: int) -> Decoded:
+def _decode_size_group(kind: str, size: int, todo: np.ndarray, buffer: np.ndarray, data_offsets: np.ndarray,
+                       parts: list[_Part], slow: list[int]) -> int:
+    """Decode the messages ``todo`` (all of ``size`` bytes) in bulk, by up to :data:`MAX_TEMPLATES` + 1 structures.
+
+    Appends each structure's decoded messages to ``parts``, and to ``slow``
+    those left for the rosbags deserializer; returns how many have no screw
+    entry.
+    """
+    layout = _LAYOUTS.get((kind, size))
+    without_screw = 0
+    for _ in range(MAX_TEMPLATES + 1):
+        if not todo.size:
+            break
+        if layout is None:
+            start = int(data_offsets[todo[0]])
+            try:
+                layout = _probe(kind, buffer[start:start + size].tobytes())
+            except NotPlain:
+                slow.append(int(todo[0]))
+                todo = todo[1:]
+                continue
+            if len(_LAYOUTS) > 256:
+                _LAYOUTS.clear()
+            _LAYOUTS[kind, size] = layout
+        offsets = data_offsets[todo]
+        rows = rows_at(buffer, offsets, layout.head)
+        assert layout.check is not None  # _probe sets it
+        same = layout.check(rows)
+        if not same.all():
+            rows, offsets = rows[same], offsets[same]
+        if layout.has_screw:
+            if rows.shape[0]:
+                columns, samples = _decode_rows(kind, rows, layout, buffer, offsets)
+                parts.append((todo[same], columns, samples))
+        else:
+            without_screw += int(same.sum())
+        todo = todo[~same]
+        layout = None
+    slow.extend(todo.tolist())
+    return without_screw
+
+
+def _decode_slowly(kind: str, slow: list[int], buffer: np.ndarray, data_offsets: np.ndarray,
+                   data_lengths: np.ndarray, parts: list[_Part]) -> tuple[int, int]:
+    """Decode the messages ``slow`` (in order) one at a time with rosbags; append them to ``parts`` as one part.
+
+    Returns how many do not decode and how many have no screw entry.
+    """
+    undecodable = without_screw = 0
+    rows_slow, kept = [], []
+    for index in slow:
+        start = int(data_offsets[index])
+        try:
+            values = _decode_one(kind, buffer[start:start + int(data_lengths[index])].tobytes())
+        except Exception:  # rosbags raises assorted errors on malformed CDR
+            undecodable += 1
+            continue
+        if values is None:
+            without_screw += 1
+            continue
+        rows_slow.append(values)
+        kept.append(index)
+    if kept:
+        names = COLUMNS[kind]
+        if kind == VIBRATION:
+            columns = {'stamps': np.array([r[0] for r in rows_slow], np.float64),
+                       'sample_rates': np.array([r[1] for r in rows_slow], np.float64)}
+            parts.append((np.array(kept), columns, [r[2] for r in rows_slow]))
+        else:
+            table = np.array(rows_slow, np.float64).reshape(len(kept), len(names))
+            parts.append((np.array(kept), {name: table[:, i] for i, name in enumerate(names)}, None))
+    return undecodable, without_screw
+
+
+def _assemble(kind: str, parts: list[_Part], log_times: np.ndarray, undecodable: int, without_screw: int) -> Decoded:
     """Join decoded groups back into file order."""
     names = COLUMNS[kind]
     if not parts:
@@ -421,10 +458,11 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
         if kind == VIBRATION:
             decoded.offsets, decoded.samples = np.zeros(1, np.int64), np.empty(0, np.float32)
         return decoded
-    if len(parts) == 1 and not isinstance(parts[0][2], list):      # the usual case: one structure
-        indices, columns, samples = parts[0]
+    indices, columns, samples = parts[0]
+    if len(parts) == 1 and not isinstance(samples, list):      # the usual case: one structure
         offsets = None
         if kind == VIBRATION:
+            assert samples is not None  # vibration parts carry their samples
             offsets = np.arange(indices.size + 1, dtype=np.int64) * (samples.size // max(indices.size, 1))
         return Decoded(log_times if indices.size == log_times.size else log_times[indices], columns, offsets,
                        samples, undecodable, without_screw)
@@ -440,6 +478,7 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
                 pieces.extend(part_samples)
                 counts.extend(s.size for s in part_samples)
             else:
+                assert part_samples is not None  # vibration parts carry their samples
                 rows = part_columns['stamps'].size
                 pieces.append(part_samples)
                 counts.extend([part_samples.size // rows if rows else 0] * rows)
@@ -453,7 +492,7 @@ def _assemble(kind: str, parts, log_times: np.ndarray, undecodable: int, without
     return Decoded(log_times[indices], columns, offsets, samples, undecodable, without_screw)
 
 
-def ragged_take(samples: np.ndarray, offsets: np.ndarray, order: np.ndarray):
+def ragged_take(samples: np.ndarray, offsets: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Blocks ``order`` of a ragged array (``samples`` split at ``offsets``), as (samples, offsets)."""
     counts = np.diff(offsets)[order]
     new_offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])

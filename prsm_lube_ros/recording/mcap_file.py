@@ -20,7 +20,7 @@ from enum import IntEnum
 from functools import lru_cache
 import struct
 from types import ModuleType
-from typing import BinaryIO, cast
+from typing import BinaryIO, cast, TYPE_CHECKING
 from collections.abc import Iterator
 
 import lz4.frame
@@ -30,6 +30,19 @@ try:  # ISA-L's CRC-32 (same polynomial as zlib's): 3.3x zlib 1.2's here (benchm
     from isal.isal_zlib import crc32
 except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
     from zlib import crc32
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+    from pathlib import Path
+    from typing import TypeAlias
+
+    from ..errors import ProblemSink
+    #: Records as read (bytes), or an uncompressed chunk's records as a view into the chunk record.
+    _Bytes: TypeAlias = bytes | memoryview
+    #: Receives each record that is not a message: ``(opcode, content)``.
+    _RecordSink: TypeAlias = Callable[[int, _Bytes], None]
+    #: A chunk read and awaiting its MessageIndex records: ``(records, start_time, indexes, file offset)``.
+    _PendingChunk: TypeAlias = tuple[_Bytes, int, dict[int, bytes], int]
 
 __all__ = ['Channel', 'DataLayout', 'FIRST_USER_OPCODE', 'GATHER_BYTES', 'MAGIC', 'MAX_CHUNK_BYTES',
            'MESSAGE_HEADER', 'McapFile', 'McapProblem', 'MessageGroup', 'OP_CHANNEL', 'OP_CHUNK', 'OP_CHUNK_INDEX',
@@ -177,7 +190,7 @@ class _Fields:
 
     __slots__ = ('data', 'pos')
 
-    def __init__(self, data: bytes | memoryview, pos: int = 0):
+    def __init__(self, data: bytes | memoryview, pos: int = 0) -> None:
         self.data = data
         self.pos = pos
 
@@ -208,13 +221,13 @@ class _Fields:
             raise McapProblem('record string is not UTF-8') from None
 
 
-def parse_schema(content) -> Schema:
+def parse_schema(content: bytes | memoryview) -> Schema:
     """Schema record content -> :class:`Schema`."""
     fields = _Fields(content)
     return Schema(fields.u16(), fields.string(), fields.string(), fields.raw(fields.u32()))
 
 
-def parse_channel(content) -> Channel:
+def parse_channel(content: bytes | memoryview) -> Channel:
     """Channel record content -> :class:`Channel` (metadata ignored)."""
     fields = _Fields(content)
     return Channel(fields.u16(), fields.u16(), fields.string(), fields.string())
@@ -222,7 +235,7 @@ def parse_channel(content) -> Channel:
 
 # -- decompression ----------------------------------------------------------------------------------
 
-def decompress(data, compression: str, size: int, partial: bool = False) -> bytes:
+def decompress(data: bytes | memoryview, compression: str, size: int, partial: bool = False) -> bytes | memoryview:
     """Chunk records from their compressed form.
 
     With ``partial`` (the chunk was cut off by truncation), return as much of
@@ -276,7 +289,7 @@ def zstd_frame(data: bytes, limit: int = MAX_CHUNK_BYTES) -> bytes:
         raise McapProblem(f'zstd data does not decompress ({err})') from None
 
 
-def zstd_file(source, target, limit: int):
+def zstd_file(source: str | Path, target: str | Path, limit: int) -> None:
     """Decompress the zstd file ``source`` (one or more frames) into ``target``, at most ``limit`` bytes.
 
     Raises :class:`McapProblem` when it does not decompress or would grow past ``limit``.
@@ -296,7 +309,7 @@ def zstd_file(source, target, limit: int):
         raise McapProblem(f'zstd data does not decompress ({err})') from None
 
 
-def _zstd_prefix(data, size: int) -> bytes:
+def _zstd_prefix(data: bytes | memoryview, size: int) -> bytes:
     """As much of the start of a cut zstd stream as decompresses, never more than ``size`` bytes."""
     pieces: list[bytes] = []
     got = 0
@@ -316,7 +329,7 @@ def _zstd_prefix(data, size: int) -> bytes:
 
 # -- splitting chunk records ------------------------------------------------------------------------
 
-def walk_records(buf: bytes, start: int = 0, stop: int | None = None):
+def walk_records(buf: bytes | memoryview, start: int = 0, stop: int | None = None) -> Iterator[tuple[int, int, int]]:
     """Yield ``(opcode, content_start, content_end)`` of consecutive records in ``buf[start:stop]``.
 
     Stops quietly at a record that does not fit (the caller compares the last
@@ -333,8 +346,8 @@ def walk_records(buf: bytes, start: int = 0, stop: int | None = None):
         pos = end
 
 
-def split_records(buffers: list[bytes], start_time: int, file_offset: int, on_record,
-                  on_problem=None, offsets: list[int] | None = None) -> tuple[RawChunk, int]:
+def split_records(buffers: list[_Bytes], start_time: int, file_offset: int, on_record: _RecordSink,
+                  on_problem: ProblemSink | None = None, offsets: list[int] | None = None) -> tuple[RawChunk, int]:
     """Split the records of several buffers (chunks' records, top-level records) into one chunk.
 
     Walks every record (no message index); each buffer is walked on its own,
@@ -372,8 +385,8 @@ def split_records(buffers: list[bytes], start_time: int, file_offset: int, on_re
     return RawChunk(start_time, np.frombuffer(joined, np.uint8), groups, file_offset), used
 
 
-def split_sequential(buf: bytes, start_time: int, file_offset: int, on_record,
-                     on_problem=None) -> tuple[RawChunk, int]:
+def split_sequential(buf: bytes | memoryview, start_time: int, file_offset: int, on_record: _RecordSink,
+                     on_problem: ProblemSink | None = None) -> tuple[RawChunk, int]:
     """Split one buffer's records by walking them one by one (no message index); return the chunk and bytes used.
 
     ``on_record(opcode, content)`` receives every non-message record (schemas,
@@ -388,8 +401,8 @@ def _overrun_problem(file_offset: int, used: int, size: int) -> str:
             f'the chunk (corrupt); its last {size - used} bytes are not readable')
 
 
-def split_indexed(buf: bytes, start_time: int, file_offset: int,
-                  indexes: dict[int, bytes], on_record, on_problem=None) -> RawChunk | None:
+def split_indexed(buf: bytes | memoryview, start_time: int, file_offset: int, indexes: dict[int, bytes],
+                  on_record: _RecordSink, on_problem: ProblemSink | None = None) -> RawChunk | None:
     """Split a chunk with its MessageIndex records, vectorised; None if the index does not fit.
 
     The index is trusted only after checking that every entry points at a
@@ -427,20 +440,8 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
     if np.any(starts_sorted[1:] < ends_sorted[:-1]):
         return None
     # Gaps between indexed messages may hold schemas/channels, never unindexed messages.
-    gap_after = np.nonzero(starts_sorted[1:] != ends_sorted[:-1])[0]
-    gaps = [(0, int(starts_sorted[0]))] + [(int(ends_sorted[i]), int(starts_sorted[i + 1])) for i in gap_after]
-    gaps.append((int(ends_sorted[-1]), size))
-    for gap_start, gap_end in gaps:
-        if gap_start == gap_end:
-            continue
-        last = gap_start
-        for opcode, begin, end in walk_records(buf, gap_start, gap_end):
-            if opcode == OP_MESSAGE:
-                return None
-            on_record(opcode, memoryview(buf)[begin:end])
-            last = end
-        if last != gap_end:
-            return None
+    if not _gaps_hold_no_message(buf, size, starts_sorted, ends_sorted, on_record):
+        return None
     own_times = uint64_at[offsets + RECORD_PREFIX + 6].view(np.int64)   # after channel_id u16, sequence u32
     wrong = int(np.count_nonzero(own_times != log_times))
     if wrong and on_problem is not None:
@@ -456,16 +457,41 @@ def split_indexed(buf: bytes, start_time: int, file_offset: int,
     return RawChunk(start_time, data, groups, file_offset)
 
 
+def _gaps_hold_no_message(buf: bytes | memoryview, size: int, starts_sorted: np.ndarray, ends_sorted: np.ndarray,
+                          on_record: _RecordSink) -> bool:
+    """True when the ``size`` bytes of ``buf`` around indexed messages hold whole records, none of them a message.
+
+    ``starts_sorted``/``ends_sorted``: where the indexed messages' records
+    begin and end, each sorted.  Each record found between them (a schema, a
+    channel) goes to ``on_record``.
+    """
+    gap_after = np.nonzero(starts_sorted[1:] != ends_sorted[:-1])[0]
+    gaps = [(0, int(starts_sorted[0]))] + [(int(ends_sorted[i]), int(starts_sorted[i + 1])) for i in gap_after]
+    gaps.append((int(ends_sorted[-1]), size))
+    for gap_start, gap_end in gaps:
+        if gap_start == gap_end:
+            continue
+        last = gap_start
+        for opcode, begin, end in walk_records(buf, gap_start, gap_end):
+            if opcode == OP_MESSAGE:
+                return False
+            on_record(opcode, memoryview(buf)[begin:end])
+            last = end
+        if last != gap_end:
+            return False
+    return True
+
+
 # -- the file ---------------------------------------------------------------------------------------
 
-def _definitions_into(summary: Summary, on_problem):
+def _definitions_into(summary: Summary, on_problem: ProblemSink) -> _RecordSink:
     """A sink for the Schema and Channel records met while reading, filling ``summary``.
 
     It hears the records among messages (inside chunks, or gathered top-level
     ones): any other spec opcode there (a Footer, a Chunk, 0x00) is damage --
     most often a Message whose opcode byte changed -- and said in one line.
     """
-    def on_record(opcode, content):
+    def on_record(opcode: int, content: bytes | memoryview) -> None:
         try:
             if opcode == OP_SCHEMA:
                 schema = parse_schema(content)
@@ -481,7 +507,7 @@ def _definitions_into(summary: Summary, on_problem):
     return on_record
 
 
-def _add_index(indexes: dict[int, bytes], content: bytes):
+def _add_index(indexes: dict[int, bytes], content: bytes) -> None:
     """Add one MessageIndex record's entries to a chunk's ``indexes``; a bad one makes them all unusable."""
     if len(content) >= _INDEX_HEAD.size:
         channel_id, entries = _INDEX_HEAD.unpack_from(content, 0)
@@ -500,7 +526,7 @@ def _compression_name(raw: bytes) -> str:
         raise McapProblem('record string is not UTF-8') from None
 
 
-def _chunk_header(content, at: int) -> tuple[int, int, int, str, int, int]:
+def _chunk_header(content: bytes, at: int) -> tuple[int, int, int, str, int, int]:
     """A Chunk record's fields before its data, read from ``content`` at ``at``.
 
     Returns ``(message_start_time, uncompressed_size, uncompressed_crc,
@@ -521,7 +547,7 @@ def _chunk_header(content, at: int) -> tuple[int, int, int, str, int, int]:
 class _CrcReader:
     """Reads of a data section in file order, keeping the CRC-32 of every byte read or skipped (magic included)."""
 
-    def __init__(self, stream: BinaryIO):
+    def __init__(self, stream: BinaryIO) -> None:
         self.stream = stream
         self.crc = crc32(MAGIC)
 
@@ -540,7 +566,8 @@ class _CrcReader:
             size -= len(piece)
 
 
-def _check_data_crc(stream: BinaryIO, pos: int, opcode: int, length: int, crc: int, on_problem) -> None:
+def _check_data_crc(stream: BinaryIO, pos: int, opcode: int, length: int, crc: int,
+                    on_problem: ProblemSink) -> None:
     """Say when the DataEnd record at ``pos`` states a data-section CRC other than ``crc`` (0: none stated)."""
     if opcode != OP_DATA_END or length < 4:
         return
@@ -558,17 +585,17 @@ class _Gathered:
     decode and a slice step per message; gathered, they cost one per batch.
     """
 
-    def __init__(self, on_record, size: int, on_problem=None):
+    def __init__(self, on_record: _RecordSink, size: int, on_problem: ProblemSink | None = None) -> None:
         self.on_record = on_record
         self.on_problem = on_problem
         self.size = size
-        self.buffers: list[bytes] = []
+        self.buffers: list[_Bytes] = []
         self.offsets: list[int] = []
         self.bytes = 0
         self.file_offset = 0
         self.start_time: int | None = None
 
-    def add(self, buffer: bytes, start_time: int | None, file_offset: int) -> RawChunk | None:
+    def add(self, buffer: bytes | memoryview, start_time: int | None, file_offset: int) -> RawChunk | None:
         """Gather ``buffer`` (records); return a pseudo-chunk when enough is gathered."""
         if not self.buffers:
             self.file_offset = file_offset
@@ -589,7 +616,67 @@ class _Gathered:
         return chunk
 
 
-def _few_messages(records: bytes, indexes: dict[int, bytes]) -> bool:
+def _summary_records(section: bytes) -> tuple[Summary, list[int], bool] | None:
+    """The records of an intact summary section: ``(summary, chunk offsets, Statistics record seen)``.
+
+    None when a record runs past the section's end; a record that does not
+    parse raises :class:`McapProblem`.
+    """
+    summary = Summary(complete=True)
+    statistics = False
+    chunk_index: list[int] = []
+    last = 0
+    for opcode, begin, end in walk_records(section):
+        last = end
+        content = memoryview(section)[begin:end]
+        if opcode == OP_CHUNK_INDEX and end - begin >= 24:
+            chunk_index.append(_U64.unpack_from(content, 16)[0])     # chunk_start_offset
+        elif opcode == OP_SCHEMA:
+            schema = parse_schema(content)
+            summary.schemas[schema.id] = schema
+        elif opcode == OP_CHANNEL:
+            channel = parse_channel(content)
+            summary.channels[channel.id] = channel
+        elif opcode == OP_STATISTICS:
+            _read_statistics(content, summary)
+            statistics = True
+    if last != len(section):
+        return None
+    return summary, chunk_index, statistics
+
+
+def _read_statistics(content: memoryview, summary: Summary) -> None:
+    """Put what a Statistics record says (definition counts, time span, messages per channel) into ``summary``."""
+    fields = _Fields(content)
+    fields.u64()
+    summary.schema_count = fields.u16()
+    summary.channel_count = fields.u32()
+    fields.u32()
+    fields.u32()
+    fields.u32()
+    summary.start_time, summary.end_time = fields.u64(), fields.u64()
+    counts_end = fields.u32() + fields.pos
+    while fields.pos + 10 <= counts_end:
+        channel_id = fields.u16()
+        summary.message_counts[channel_id] = fields.u64()
+
+
+@dataclass
+class _DataWalk:
+    """What :meth:`McapFile.chunks` reads a data section with, and where its walk of the records stopped."""
+
+    stream: BinaryIO
+    data: _CrcReader                        # ``stream`` read in file order, keeping the data section's CRC
+    gathered: _Gathered
+    on_record: _RecordSink
+    on_problem: ProblemSink
+    pos: int = len(MAGIC)                   # file offset where the walk stopped
+    pending: _PendingChunk | None = None    # chunk still waiting for its message index records there
+    cut: int | None = None                  # where a cut-off or damaged record header stopped it (None: none did)
+    ended: bool = False                     # the DataEnd record or the footer ended the data section
+
+
+def _few_messages(records: bytes | memoryview, indexes: dict[int, bytes]) -> bool:
     """True for a chunk small enough that gathering it with its neighbours is cheaper than splitting it alone."""
     if indexes and -1 not in indexes:
         return sum(len(entries) for entries in indexes.values()) <= 16 * SMALL_CHUNK_MESSAGES
@@ -599,7 +686,7 @@ def _few_messages(records: bytes, indexes: dict[int, bytes]) -> bool:
 class McapFile:
     """One MCAP file opened for listing and streaming; problems raise :class:`McapProblem`."""
 
-    def __init__(self, path):
+    def __init__(self, path: str | Path) -> None:
         self.path = path
         self.summary_problem = ''     # why the summary section was not used (a problem line), '' when it was
         self.chunk_index: list[int] = []    # chunk offsets an intact summary's ChunkIndex records give
@@ -613,7 +700,7 @@ class McapFile:
         if self.summary is not None and self.summary.lacks_definitions():
             self._definitions_from_data(self.summary)
 
-    def _definitions_from_data(self, summary: Summary):
+    def _definitions_from_data(self, summary: Summary) -> None:
         """Schemas and channels the summary does not repeat (``noRepeatedChannels``), from the data section."""
         found = Summary()
         for _ in self.chunks(lambda line: None, found):
@@ -650,42 +737,14 @@ class McapFile:
             self.summary_problem = ('its summary section does not match its CRC (corrupt); the listing was rebuilt '
                                     'from the data section')
             return None
-        summary = Summary(complete=True)
-        statistics = False
-        chunk_index = []
         try:
-            last = 0
-            for opcode, begin, end in walk_records(section):
-                last = end
-                content = memoryview(section)[begin:end]
-                if opcode == OP_CHUNK_INDEX and end - begin >= 24:
-                    chunk_index.append(_U64.unpack_from(content, 16)[0])     # chunk_start_offset
-                elif opcode == OP_SCHEMA:
-                    schema = parse_schema(content)
-                    summary.schemas[schema.id] = schema
-                elif opcode == OP_CHANNEL:
-                    channel = parse_channel(content)
-                    summary.channels[channel.id] = channel
-                elif opcode == OP_STATISTICS:
-                    fields = _Fields(content)
-                    fields.u64()
-                    summary.schema_count = fields.u16()
-                    summary.channel_count = fields.u32()
-                    fields.u32()
-                    fields.u32()
-                    fields.u32()
-                    summary.start_time, summary.end_time = fields.u64(), fields.u64()
-                    counts_end = fields.u32() + fields.pos
-                    while fields.pos + 10 <= counts_end:
-                        channel_id = fields.u16()
-                        summary.message_counts[channel_id] = fields.u64()
-                    statistics = True
-            if last != len(section):
-                self.summary_problem = damaged
-                return None
+            parsed = _summary_records(section)
         except McapProblem:
+            parsed = None
+        if parsed is None:
             self.summary_problem = damaged
             return None
+        summary, chunk_index, statistics = parsed
         self.chunk_index = chunk_index
         return summary if statistics else None
 
@@ -718,7 +777,7 @@ class McapFile:
         return summary, problems
 
     # data section -------------------------------------------------------------------------------
-    def chunks(self, on_problem, summary: Summary | None = None,
+    def chunks(self, on_problem: ProblemSink, summary: Summary | None = None,
                unchunked_batch: int = GATHER_BYTES) -> Iterator[RawChunk]:
         """Yield the file's messages chunk by chunk, in file order.
 
@@ -734,84 +793,117 @@ class McapFile:
         gathered = _Gathered(on_record, unchunked_batch, on_problem)
         with open(self.path, 'rb') as stream:
             stream.seek(len(MAGIC))
-            data = _CrcReader(stream)
-            pos = len(MAGIC)
-            ended = False
-            pending = None        # chunk waiting for its message index records
-            previous = None       # opcode of the last record not a MessageIndex of a pending chunk
-            while True:
-                crc_before = data.crc
-                head = data.read(RECORD_PREFIX)
-                if len(head) < RECORD_PREFIX:
-                    cut = pos if head else None
-                    break
-                opcode, length = _RECORD.unpack_from(head, 0)
-                known = 0 < opcode <= Opcode.DATA_END or opcode >= FIRST_USER_OPCODE
-                if length > self.size - pos - RECORD_PREFIX or not known:
-                    cut = pos
-                    break
-                if opcode == OP_MESSAGE_INDEX and pending is not None:
-                    _add_index(pending[2], data.read(length))
-                    pos += RECORD_PREFIX + length
-                    continue
-                if opcode == OP_MESSAGE_INDEX and previous not in (OP_CHUNK, OP_MESSAGE_INDEX):
-                    on_problem(f'a MessageIndex record at byte {pos} follows no chunk (corrupt; a chunk whose opcode '
-                               'was damaged?): skipped')
-                previous = opcode
-                if pending is not None:
-                    yield from self._finish_or_gather(pending, gathered)
-                    pending = None
-                if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
-                    record = head + data.read(length)
-                    start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
-                                  if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
-                    chunk = gathered.add(record, start_time, pos)
-                    if chunk is not None:
-                        yield chunk
-                    pos += RECORD_PREFIX + length
-                    continue
-                if opcode != OP_CHUNK and gathered.buffers:
-                    yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
-                if opcode in (OP_DATA_END, OP_FOOTER):
-                    if _ends_data(stream, pos, opcode, length, self.size):
-                        cut, ended = None, True
-                        _check_data_crc(stream, pos, opcode, length, crc_before, on_problem)
-                        break
-                    on_problem(f'a {"DataEnd" if opcode == OP_DATA_END else "Footer"} record at byte {pos} in the '
-                               f'middle of the data section (corrupt; a damaged opcode?): its {length} bytes skipped')
-                    stream.seek(pos + RECORD_PREFIX)    # the skip below passes its content
-                if opcode == OP_CHUNK:
-                    content = data.read(length)
-                    try:
-                        pending = self._open_chunk(content, pos, on_problem)
-                    except McapProblem as problem:
-                        on_problem(f'chunk at byte {pos} skipped: {problem}')
-                        pending = None
-                elif opcode in (OP_SCHEMA, OP_CHANNEL):
-                    on_record(opcode, data.read(length))
-                else:
-                    if opcode in SUMMARY_OPCODES or (opcode == OP_HEADER and pos != len(MAGIC)):
-                        on_problem(f'a record of opcode {opcode:#04x} at byte {pos} where it does not belong in the '
-                                   'data section (corrupt; a damaged opcode?): skipped')
-                    data.skip(length)
+            walk = _DataWalk(stream, _CrcReader(stream), gathered, on_record, on_problem)
+            yield from self._data_records(walk)
+            yield from self._end_of_data(walk)
+
+    def _data_records(self, walk: _DataWalk) -> Iterator[RawChunk]:
+        """The chunks of the data section's records in file order, up to its end or the first damaged record header.
+
+        Leaves in ``walk`` where it stopped, the chunk still waiting for its
+        message index, where a record header was cut off or damaged, and
+        whether the DataEnd record (or the footer) ended the section.
+        """
+        data, gathered, on_problem = walk.data, walk.gathered, walk.on_problem
+        pos = len(MAGIC)
+        pending: _PendingChunk | None = None    # chunk waiting for its message index records
+        previous = None       # opcode of the last record not a MessageIndex of a pending chunk
+        while True:
+            crc_before = data.crc
+            head = data.read(RECORD_PREFIX)
+            if len(head) < RECORD_PREFIX:
+                walk.cut = pos if head else None
+                break
+            opcode, length = _RECORD.unpack_from(head, 0)
+            known = 0 < opcode <= Opcode.DATA_END or opcode >= FIRST_USER_OPCODE
+            if length > self.size - pos - RECORD_PREFIX or not known:
+                walk.cut = pos
+                break
+            if opcode == OP_MESSAGE_INDEX and pending is not None:
+                _add_index(pending[2], data.read(length))
                 pos += RECORD_PREFIX + length
+                continue
+            if opcode == OP_MESSAGE_INDEX and previous not in (OP_CHUNK, OP_MESSAGE_INDEX):
+                on_problem(f'a MessageIndex record at byte {pos} follows no chunk (corrupt; a chunk whose opcode '
+                           'was damaged?): skipped')
+            previous = opcode
             if pending is not None:
                 yield from self._finish_or_gather(pending, gathered)
-            if gathered.buffers:
+                pending = None
+            if opcode == OP_MESSAGE or (gathered.buffers and opcode in (OP_SCHEMA, OP_CHANNEL)):
+                record = head + data.read(length)
+                start_time = (signed(_MESSAGE.unpack_from(record, RECORD_PREFIX)[2])
+                              if opcode == OP_MESSAGE and length >= MESSAGE_HEADER else None)
+                chunk = gathered.add(record, start_time, pos)
+                if chunk is not None:
+                    yield chunk
+                pos += RECORD_PREFIX + length
+                continue
+            if opcode != OP_CHUNK and gathered.buffers:
                 yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
-            if cut is None and not ended:
-                on_problem(f'ends at byte {pos} without a DataEnd record or footer (truncated: what followed '
-                           'is lost)')
-            if cut is not None:
-                salvage = self._salvage(stream, cut, on_record)
-                lost = f'{self.size - cut} bytes'
-                if salvage is not None:
-                    yield salvage
-                    lost += f' (recovered {salvage.message_count()} messages from the cut chunk)'
-                on_problem(f'truncated or corrupt at byte {cut} of {self.size}: '
-                           f'the last {lost} are not readable')
+            pending = self._other_record(walk, pos, opcode, length, crc_before)
+            if walk.ended:
+                break
+            pos += RECORD_PREFIX + length
+        walk.pos, walk.pending = pos, pending
 
-    def _finish_or_gather(self, pending: list, gathered: _Gathered) -> Iterator[RawChunk]:
+    def _other_record(self, walk: _DataWalk, pos: int, opcode: int, length: int,
+                      crc_before: int) -> _PendingChunk | None:
+        """Act on the record at ``pos`` of the data section: not a message, nor a pending chunk's MessageIndex.
+
+        Its header has been read.  Returns the chunk a Chunk record opens (None
+        for any other record, or a chunk that cannot be read); sets
+        ``walk.ended`` at the DataEnd record or footer that ends the data
+        section (``crc_before``: the CRC of the data section before it).
+        """
+        data, stream, on_problem = walk.data, walk.stream, walk.on_problem
+        if opcode in (OP_DATA_END, OP_FOOTER):
+            if _ends_data(stream, pos, opcode, length, self.size):
+                walk.cut, walk.ended = None, True
+                _check_data_crc(stream, pos, opcode, length, crc_before, on_problem)
+                return None
+            on_problem(f'a {"DataEnd" if opcode == OP_DATA_END else "Footer"} record at byte {pos} in the '
+                       f'middle of the data section (corrupt; a damaged opcode?): its {length} bytes skipped')
+            stream.seek(pos + RECORD_PREFIX)    # the skip below passes its content
+        if opcode == OP_CHUNK:
+            content = data.read(length)
+            try:
+                return self._open_chunk(content, pos, on_problem)
+            except McapProblem as problem:
+                on_problem(f'chunk at byte {pos} skipped: {problem}')
+                return None
+        if opcode in (OP_SCHEMA, OP_CHANNEL):
+            walk.on_record(opcode, data.read(length))
+        else:
+            if opcode in SUMMARY_OPCODES or (opcode == OP_HEADER and pos != len(MAGIC)):
+                on_problem(f'a record of opcode {opcode:#04x} at byte {pos} where it does not belong in the '
+                           'data section (corrupt; a damaged opcode?): skipped')
+            data.skip(length)
+        return None
+
+    def _end_of_data(self, walk: _DataWalk) -> Iterator[RawChunk]:
+        """What is left where the walk of the data section stopped; how it ended, if not at DataEnd or the footer.
+
+        The chunk still waiting for its message index, what is gathered, and
+        the readable beginning of a chunk cut off by the end of the file.
+        """
+        if walk.pending is not None:
+            yield from self._finish_or_gather(walk.pending, walk.gathered)
+        if walk.gathered.buffers:
+            yield cast(RawChunk, walk.gathered.take())   # not None: buffers were gathered
+        if walk.cut is None and not walk.ended:
+            walk.on_problem(f'ends at byte {walk.pos} without a DataEnd record or footer (truncated: what followed '
+                            'is lost)')
+        if walk.cut is not None:
+            salvage = self._salvage(walk.stream, walk.cut, walk.on_record)
+            lost = f'{self.size - walk.cut} bytes'
+            if salvage is not None:
+                yield salvage
+                lost += f' (recovered {salvage.message_count()} messages from the cut chunk)'
+            walk.on_problem(f'truncated or corrupt at byte {walk.cut} of {self.size}: '
+                            f'the last {lost} are not readable')
+
+    def _finish_or_gather(self, pending: _PendingChunk, gathered: _Gathered) -> Iterator[RawChunk]:
         """A read chunk: gathered when small, else split on its own (after what was gathered before it)."""
         records, start_time, indexes, pos = pending
         if _few_messages(records, indexes):
@@ -823,7 +915,8 @@ class McapFile:
             yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
         yield self._finish_chunk(records, start_time, indexes, pos, gathered.on_record, gathered.on_problem)
 
-    def chunks_at(self, offsets, on_problem, summary: Summary | None = None) -> Iterator[RawChunk]:
+    def chunks_at(self, offsets: Iterable[int] | np.ndarray, on_problem: ProblemSink,
+                  summary: Summary | None = None) -> Iterator[RawChunk]:
         """The chunks starting at ``offsets`` (from :func:`data_layout`), in the order given, by seeking.
 
         Reads each chunk with the MessageIndex records that follow it: what
@@ -861,8 +954,8 @@ class McapFile:
         if gathered.buffers:
             yield cast(RawChunk, gathered.take())   # not None: buffers were gathered
 
-    def _open_chunk(self, content: bytes, pos: int, on_problem):
-        """Chunk record -> ``[records, start_time, indexes, pos]`` awaiting its message index."""
+    def _open_chunk(self, content: bytes, pos: int, on_problem: ProblemSink) -> _PendingChunk:
+        """Chunk record -> ``(records, start_time, indexes, pos)`` awaiting its message index."""
         start_time, size, crc, compression, at, compressed_size = _chunk_header(content, 0)
         if compressed_size > len(content) - at:
             raise McapProblem('compressed data runs past its chunk record')
@@ -870,10 +963,10 @@ class McapFile:
         records = decompress(compressed, compression, size)
         if crc and crc32(records) != crc:
             raise McapProblem(f'its records do not match their CRC ({size} bytes, corrupt)')
-        return [records, signed(start_time), {}, pos]
+        return (records, signed(start_time), {}, pos)
 
-    def _finish_chunk(self, records: bytes, start_time: int, indexes: dict[int, bytes], pos: int,
-                      on_record, on_problem=None) -> RawChunk:
+    def _finish_chunk(self, records: bytes | memoryview, start_time: int, indexes: dict[int, bytes], pos: int,
+                      on_record: _RecordSink, on_problem: ProblemSink | None = None) -> RawChunk:
         indexed = indexes and -1 not in indexes
         if indexed:
             chunk = split_indexed(records, start_time, pos, indexes, on_record, on_problem)
@@ -886,7 +979,7 @@ class McapFile:
                        f'{chunk.message_count()} (corrupt)')
         return chunk
 
-    def _salvage(self, stream: BinaryIO, cut: int, on_record) -> RawChunk | None:
+    def _salvage(self, stream: BinaryIO, cut: int, on_record: _RecordSink) -> RawChunk | None:
         """The readable beginning of a chunk cut off by the end of the file, if any."""
         stream.seek(cut)
         content = stream.read(min(self.size - cut, MAX_CHUNK_BYTES))
@@ -940,7 +1033,7 @@ def _ends_data(stream: BinaryIO, pos: int, opcode: int, length: int, size: int) 
     return True
 
 
-def data_layout(path, size: int) -> DataLayout:
+def data_layout(path: str | Path, size: int) -> DataLayout:
     """The :class:`DataLayout` of a file's data section, from its record headers only.
 
     Seeks over chunk data, so it is cheap; a damaged record ends the list
@@ -987,7 +1080,7 @@ class ReadCheck:
     rosbag2's writer leaves a log time of 0 out of it.
     """
 
-    def __init__(self, summary: Summary | None, summary_problem: str = ''):
+    def __init__(self, summary: Summary | None, summary_problem: str = '') -> None:
         self.summary = summary if summary is not None and summary.complete else None
         self.summary_problem = summary_problem
         self.counts: dict[int, int] = {}
@@ -1011,7 +1104,7 @@ class ReadCheck:
         short = [(key, self.counts.get(key, 0), listed) for key, listed in sorted(summary.message_counts.items())
                  if self.counts.get(key, 0) < listed]
         if short:
-            def name(key):
+            def name(key: int) -> str:
                 return summary.channels[key].topic if key in summary.channels else f'channel {key}'
             lost = sum(listed - got for _, got, listed in short)
             lines.append(f'{lost} message(s) listed in the summary were not read (damaged data): '
@@ -1019,7 +1112,7 @@ class ReadCheck:
         return lines
 
 
-def raw_messages(path, on_problem) -> Iterator[tuple[Channel | None, int, int, bytes]]:
+def raw_messages(path: str | Path, on_problem: ProblemSink) -> Iterator[tuple[Channel | None, int, int, bytes]]:
     """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
 
     ``channel`` is None for a message whose channel is nowhere defined.
@@ -1050,7 +1143,7 @@ def raw_messages(path, on_problem) -> Iterator[tuple[Channel | None, int, int, b
         on_problem(line)
 
 
-def bare_read(path) -> tuple[int, int]:
+def bare_read(path: str | Path) -> tuple[int, int]:
     """Read, decompress and split every chunk without decoding; return (messages, message bytes).
 
     The cheapest pass that touches every message of an MCAP file: the baseline

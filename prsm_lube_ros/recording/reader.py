@@ -54,7 +54,7 @@ import math
 from pathlib import Path
 import tempfile
 from typing import Any, cast
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 import yaml
@@ -110,15 +110,16 @@ class _Source:
     through :meth:`raw_chunks`.
     """
 
-    def __init__(self, label: str):
+    def __init__(self, label: str) -> None:
         self.label = label
         self.problems: list[str] = []
         self.topics: dict[str, TopicInfo] = {}
-        self.definitions: dict[str, tuple] = {}           # topic -> (msgtype, encoding, text, message encoding)
+        #: topic -> (msgtype, encoding, text, message encoding)
+        self.definitions: dict[str, tuple[str, str, str, str]] = {}
         self.start_time: int | None = None
         self.end_time: int | None = None
 
-    def list_topic(self, name: str, msgtype: str, count: int, definition: tuple) -> None:
+    def list_topic(self, name: str, msgtype: str, count: int, definition: tuple[str, str, str, str]) -> None:
         """Add ``count`` messages of ``name`` to the listing (the first file to name a topic defines it)."""
         if name in self.topics:
             self.topics[name].message_count += count
@@ -148,7 +149,7 @@ class _Source:
 class _McapSource(_Source):
     """One or more MCAP files (a bare file, or the files of a rosbag2 directory)."""
 
-    def __init__(self, label: str, paths: list[Path]):
+    def __init__(self, label: str, paths: list[Path]) -> None:
         super().__init__(label)
         self.paths = paths
         self.files: list[mcap_file.McapFile] = []
@@ -174,7 +175,7 @@ class _McapSource(_Source):
         """A problem line of one file of a bag names that file (a bare file is named by the label already)."""
         return line if str(mcap.path) == self.label else f'{mcap.path}: {line}'
 
-    def _add_listing(self, summary: mcap_file.Summary):
+    def _add_listing(self, summary: mcap_file.Summary) -> None:
         for channel_id, channel in summary.channels.items():
             schema = summary.schemas.get(channel.schema_id)
             msgtype = schema.name if schema else '(no schema)'
@@ -185,7 +186,7 @@ class _McapSource(_Source):
             self.widen_span(summary.start_time, summary.end_time)
 
     @staticmethod
-    def _horizons(layouts: list[mcap_file.DataLayout]) -> list[tuple]:
+    def _horizons(layouts: list[mcap_file.DataLayout]) -> list[tuple[np.ndarray, np.ndarray]]:
         """Per file: chunk offsets and, for each, the earliest log time from that chunk on (later files too).
 
         For a file read in file order although its chunks go back in log time
@@ -194,7 +195,7 @@ class _McapSource(_Source):
         grows with how far back chunks go.
         """
         later = np.iinfo(np.int64).max
-        horizons: list[tuple] = []
+        horizons: list[tuple[np.ndarray, np.ndarray]] = []
         for layout in reversed(layouts):
             times = layout.times
             suffix = np.minimum.accumulate(times[::-1])[::-1] if times.size else times
@@ -287,7 +288,7 @@ class _McapSource(_Source):
             done += mcap.size
 
 
-def _pack(messages: list[tuple], progress: float) -> _RawChunk:
+def _pack(messages: list[tuple[str, int, bytes]], progress: float) -> _RawChunk:
     """``(topic, log_time, bytes)`` in log time order -> one pseudo-chunk."""
     sizes = np.fromiter((len(m[2]) for m in messages), np.int64, len(messages))
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
@@ -301,7 +302,7 @@ def _pack(messages: list[tuple], progress: float) -> _RawChunk:
     return _RawChunk(int(log_times[0]), buffer, groups, progress)
 
 
-def _pseudo_chunks(messages, start: int, end: int) -> Iterator[_RawChunk]:
+def _pseudo_chunks(messages: Iterable[tuple[str, int, bytes]], start: int, end: int) -> Iterator[_RawChunk]:
     """Gather a time-ordered stream of ``(topic, log_time, bytes)`` into chunks of about 1 MiB."""
     pending, size = [], 0
     for message in messages:
@@ -323,7 +324,10 @@ class _SqliteSource(_Source):
     whichever is larger).
     """
 
-    def __init__(self, label: str, paths: list[Path], compression: str = ''):
+    #: messages per topic as metadata.yaml lists them (a bag folder's: set by :func:`_with_metadata_counts`)
+    metadata_counts: dict[str, int]
+
+    def __init__(self, label: str, paths: list[Path], compression: str = '') -> None:
         super().__init__(label)
         self.files: list[sqlite_file.SqliteFile] = []
         self._scratch = tempfile.TemporaryDirectory(prefix='prsm_lube_bag_') if compression == 'file' else None
@@ -348,7 +352,7 @@ class _SqliteSource(_Source):
     def raw_chunks(self, topics: list[str], on_problem: ProblemSink) -> Iterator[_RawChunk]:
         wanted = set(topics)
 
-        def messages():
+        def messages() -> Iterator[tuple[str, int, bytes]]:
             for db in self.files:      # split bags: one file after the other, as rosbag2 plays them
                 names = {key: topic.name for key, topic in db.topics.items() if topic.name in wanted}
                 for topic_id, log_time, data in db.messages(list(names), on_problem):
@@ -359,7 +363,7 @@ class _SqliteSource(_Source):
 class _RosbagsSource(_Source):
     """A rosbag2 directory read through rosbags' Reader (sqlite3, compressed bags, reference path)."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path) -> None:
         from rosbags.rosbag2 import Reader
         from rosbags.interfaces import MessageDefinitionFormat
         super().__init__(str(path))
@@ -381,7 +385,7 @@ class _RosbagsSource(_Source):
         from rosbags.rosbag2 import Reader
         streamed = dict.fromkeys(topics, 0)
 
-        def counted(messages):
+        def counted(messages: Iterable[tuple[str, int, bytes]]) -> Iterator[tuple[str, int, bytes]]:
             for topic, log_time, data in messages:
                 streamed[topic] += 1
                 yield topic, log_time, data
@@ -412,13 +416,13 @@ def _mcap_library_chunks(path: Path, topics: list[str], on_problem: ProblemSink)
         on_problem(f'reading stopped early: {exception_text(err)}')
 
 
-def _split_index(path: Path) -> tuple:
+def _split_index(path: Path) -> tuple[str, int]:
     """Sort key of the files of a split bag: ``name_2`` before ``name_10``."""
     stem, _, number = path.stem.rpartition('_')
     return (stem, int(number)) if stem and number.isdigit() else (path.stem, -1)
 
 
-def _source_without_metadata(path: Path):
+def _source_without_metadata(path: Path) -> _Source:
     """A bag folder without metadata.yaml (what ``ros2 bag reindex`` repairs): its files in split order.
 
     Taken when it holds one storage file, or only the files of one split bag
@@ -435,7 +439,7 @@ def _source_without_metadata(path: Path):
     raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml, no .mcap or .db3 file)')
 
 
-def _open_source(path: Path):
+def _open_source(path: Path) -> _Source:
     """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
     if not path.exists():
         raise RecordingError(f'{path}: no such file or directory')
@@ -474,7 +478,7 @@ def _open_source(path: Path):
     return _RosbagsSource(path)
 
 
-def _with_metadata_counts(source, info: dict):
+def _with_metadata_counts(source: _SqliteSource, info: dict[str, Any]) -> _SqliteSource:
     """``source`` with ``metadata_counts``: messages per topic as metadata.yaml lists them (unreadable: none)."""
     counts = {}
     try:
@@ -512,7 +516,7 @@ def _merge(parts: list[Decoded], kind: str) -> Decoded:
     return merged
 
 
-def _cut(decoded: Decoded, count: int):
+def _cut(decoded: Decoded, count: int) -> tuple[Decoded, Decoded]:
     """The first ``count`` messages and the rest, as views (vibration offsets stay absolute)."""
     head = Decoded(decoded.log_times[:count], {k: v[:count] for k, v in decoded.columns.items()})
     rest = Decoded(decoded.log_times[count:], {k: v[count:] for k, v in decoded.columns.items()})
@@ -541,7 +545,7 @@ def _batch(kind: str, pieces: list[Decoded]) -> InputBatch:
 class _Slicer:
     """Holds decoded data until a whole time slice is complete, then hands it out."""
 
-    def __init__(self, kinds: list[str], slice_ns: int):
+    def __init__(self, kinds: list[str], slice_ns: int) -> None:
         self.kinds = kinds
         self.slice_ns = slice_ns
         self.origin: int | None = None
@@ -551,7 +555,7 @@ class _Slicer:
         #: messages left out because they came after their slice was handed out, by kind
         self.too_late: dict[str, int] = dict.fromkeys(kinds, 0)
 
-    def add(self, kind: str, decoded: Decoded):
+    def add(self, kind: str, decoded: Decoded) -> None:
         """Queue decoded messages; parts are kept in log time order."""
         log_times = decoded.log_times
         if not log_times.size:
@@ -603,12 +607,38 @@ class _Slicer:
             yield batches
 
 
+@dataclass
+class _Tally:
+    """What decoding a recording's topics counted, per kind, for the problem lines after the data."""
+
+    undecodable: dict[str, int]             # messages that did not decode
+    stamp_spikes: dict[str, SpikeCount]     # header stamps jumping away and back
+    rate_spikes: SpikeCount                 # vibration sample rates jumping away and back
+    streamed: dict[str, int]                # messages read
+    without_screw: int = 0                  # JointState messages without a screw entry
+
+    @classmethod
+    def of(cls, kinds: list[str]) -> _Tally:
+        """Nothing counted yet for ``kinds``."""
+        return cls(dict.fromkeys(kinds, 0), {kind: SpikeCount(STAMP_SPIKE_SECONDS) for kind in kinds},
+                   SpikeCount(RATE_SPIKE_FRACTION, relative=True), dict.fromkeys(kinds, 0))
+
+    def add(self, kind: str, decoded: Decoded, group: mcap_file.MessageGroup) -> None:
+        """Count the messages of one topic from one chunk (``group``) as decoded."""
+        self.undecodable[kind] += decoded.undecodable
+        self.without_screw += decoded.without_screw
+        self.streamed[kind] += int(group.data_offsets.size)
+        self.stamp_spikes[kind].add(decoded.columns['stamps'])
+        if kind == VIBRATION:
+            self.rate_spikes.add(decoded.columns['sample_rates'])
+
+
 # -- the recording -----------------------------------------------------------------------------------
 
 class Recording:
     """An opened recording: what it holds, and its contract topics as a stream of batches."""
 
-    def __init__(self, path, namespace: str = DEFAULT_NAMESPACE):
+    def __init__(self, path: str | Path, namespace: str = DEFAULT_NAMESPACE) -> None:
         self.path = Path(path)
         self.namespace = namespace
         self._source = _open_source(self.path)
@@ -636,7 +666,7 @@ class Recording:
                 return kind
         return None
 
-    def _validate(self):
+    def _validate(self) -> None:
         label = self._source.label
         if not self.topics:
             raise RecordingError(f'{label}: holds no topics' + self._problem_hint())
@@ -703,11 +733,7 @@ class Recording:
         kinds = [kind for kind in KINDS if kind in self.selected]
         by_topic = {topic: kind for kind, topic in self.selected.items()}
         slicer = _Slicer(kinds, int(round(slice_seconds * 1e9)))
-        undecodable = dict.fromkeys(kinds, 0)
-        stamp_spikes = {kind: SpikeCount(STAMP_SPIKE_SECONDS) for kind in kinds}
-        rate_spikes = SpikeCount(RATE_SPIKE_FRACTION, relative=True)
-        streamed = dict.fromkeys(kinds, 0)
-        without_screw = 0
+        tally = _Tally.of(kinds)
         vectorised = engine == 'fast'
         for chunk in self._raw_chunks(list(by_topic), problems.append, engine):
             yield from slicer.flush(chunk.start_time)
@@ -715,33 +741,38 @@ class Recording:
                 kind = by_topic[topic]
                 decoded = decode_messages(kind, chunk.buffer, group.data_offsets, group.data_lengths,
                                           group.log_times, vectorised)
-                undecodable[kind] += decoded.undecodable
-                without_screw += decoded.without_screw
-                streamed[kind] += int(group.data_offsets.size)
-                stamp_spikes[kind].add(decoded.columns['stamps'])
-                if kind == VIBRATION:
-                    rate_spikes.add(decoded.columns['sample_rates'])
+                tally.add(kind, decoded, group)
                 slicer.add(kind, decoded)
             if progress is not None:
                 progress(min(max(chunk.progress, 0.0), 1.0))
         yield from slicer.flush(None)
         if progress is not None:
             progress(1.0)
-        for kind, count in slicer.too_late.items():
+        problems.extend(self._stream_lines(slicer.too_late, tally))
+        for line in problems:
+            sink(line)
+
+    def _stream_lines(self, too_late: dict[str, int], tally: _Tally) -> list[str]:
+        """Problem lines for what streaming left out or found damaged, once all data is yielded.
+
+        ``too_late``: per kind, messages that came after their time slice was
+        handed out; ``tally``: what decoding counted.
+        """
+        problems = []
+        for kind, count in too_late.items():
             if count:
                 problems.append(f'{self.selected[kind]}: {count} message(s) found after their time slice was '
                                 'handed out (a chunk states a later start time than its messages) left out')
-        for kind, count in undecodable.items():
+        for kind, count in tally.undecodable.items():
             if count:
                 problems.append(f'{self.selected[kind]}: {count} message(s) could not be decoded and were '
                                 'skipped')
-        if without_screw:
-            problems.append(f'{self.selected[JOINT_STATES]}: {without_screw} JointState message(s) without '
+        if tally.without_screw:
+            problems.append(f'{self.selected[JOINT_STATES]}: {tally.without_screw} JointState message(s) without '
                             f'a "screw" entry skipped')
-        problems.extend(self._damage_lines({kind: count.finish() for kind, count in stamp_spikes.items()},
-                                           rate_spikes.finish(), streamed))
-        for line in problems:
-            sink(line)
+        problems.extend(self._damage_lines({kind: count.finish() for kind, count in tally.stamp_spikes.items()},
+                                           tally.rate_spikes.finish(), tally.streamed))
+        return problems
 
     def _damage_lines(self, spikes: dict[str, int], rate_spikes: int, streamed: dict[str, int]) -> list[str]:
         """Lines for damage the container does not show: stamp and rate spikes, messages metadata.yaml lists unread.
@@ -773,7 +804,7 @@ class Recording:
         return source.raw_chunks(topics, on_problem)
 
 
-def open_recording(path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
+def open_recording(path: str | Path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
     """Open a rosbag2 directory or bare ``.mcap`` file for the actuator at ``namespace``.
 
     Raises :class:`InputError` (one line naming the file) when it cannot be used.
@@ -781,7 +812,7 @@ def open_recording(path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
     return Recording(path, namespace)
 
 
-def find_actuators(path) -> list[str]:
+def find_actuators(path: str | Path) -> list[str]:
     """Namespaces (or prefixes) of a recording that carry a vibration topic of the VibrationBlock layout."""
     source = _open_source(Path(path))
     actuators = []
@@ -792,13 +823,13 @@ def find_actuators(path) -> list[str]:
     return sorted(actuators)
 
 
-def iter_batches(path, namespace: str = DEFAULT_NAMESPACE, on_problem: ProblemSink | None = None,
+def iter_batches(path: str | Path, namespace: str = DEFAULT_NAMESPACE, on_problem: ProblemSink | None = None,
                  slice_seconds: float = DEFAULT_SLICE_SECONDS) -> Iterator[list[InputBatch]]:
     """Shorthand: ``open_recording(path, namespace).slices(on_problem, slice_seconds=...)``."""
     return open_recording(path, namespace).slices(on_problem, slice_seconds=slice_seconds)
 
 
-def bare_read(path) -> int:
+def bare_read(path: str | Path) -> int:
     """Read, decompress and split every message of a recording without decoding; return the message count.
 
     The cheapest full pass over the data: the baseline the decoding is timed against.
@@ -810,7 +841,7 @@ def bare_read(path) -> int:
     return count
 
 
-def topic_messages(path, on_problem: ProblemSink | None = None) -> Iterator[tuple]:
+def topic_messages(path: str | Path, on_problem: ProblemSink | None = None) -> Iterator[tuple[str, int, bytes]]:
     """Every message of any recording as ``(topic, log_time, data)``, undecoded; per topic in reading order.
 
     Raises :class:`InputError` (one line naming the file) when it cannot be opened.
@@ -824,12 +855,13 @@ def topic_messages(path, on_problem: ProblemSink | None = None) -> Iterator[tupl
                 yield topic, log_time, bytes(buffer[start:start + length])
 
 
-def list_topics(path) -> dict[str, TopicInfo]:
+def list_topics(path: str | Path) -> dict[str, TopicInfo]:
     """Every topic of a recording with its type and message count, by name; InputError if it is unusable."""
     return _open_source(Path(path)).topics
 
 
-def raw_messages(path, on_problem: ProblemSink | None = None) -> Iterator[tuple]:
+def raw_messages(path: str | Path,
+                 on_problem: ProblemSink | None = None) -> Iterator[tuple[str | None, int, int, bytes]]:
     """Every message of a bare ``.mcap`` file in file order: ``(topic, sequence, log_time, data)``, undecoded.
 
     ``topic`` is None for a message on a channel defined nowhere in the file.
