@@ -201,6 +201,7 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
 
 def _explain_misses(out: Path, jobs: int, command: str) -> int:
     """``--explain-misses``: the size of what each missed case concealed, to ``out``/misses.md."""
+    from ..diagnosis.effects import effect_ids
     from .random_study import explain_miss, misses_markdown
     try:
         document = json.loads((out / 'results.json').read_text())
