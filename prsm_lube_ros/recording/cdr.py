@@ -24,7 +24,7 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from rosbags.typesys import get_types_from_idl, get_types_from_msg
-from rosbags.typesys.base import Nodetype
+from rosbags.interfaces import Nodetype
 
 from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, JOINT_STATE, JOINT_STATES_TOPIC as JOINT_STATES, SCREW_JOINT,
                         TEMPERATURE, TEMPERATURE_TOPIC as TEMPERATURE_KIND, VIBRATION_BLOCK,

@@ -248,7 +248,7 @@ def decompress(data: bytes | memoryview, compression: str, size: int, partial: b
             out = data
         elif compression == 'zstd':
             if _zstandard is None:  # pragma: no cover
-                from rosbags.rosbag2.storage_mcap import zstd
+                from rosbags.rosbag2.storage_mcap import zstd  # type: ignore[attr-defined]  # rosbags' own zstd
                 out = zstd.decompress(bytes(data))
             elif partial:
                 out = _zstd_prefix(data, size)

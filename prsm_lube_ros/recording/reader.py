@@ -60,10 +60,11 @@ import numpy as np
 import yaml
 
 from . import mcap_file, sqlite_file
-from ..contract import DEFAULT_NAMESPACE, namespace_of, topic_name
+from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, DEFAULT_NAMESPACE, JOINT_STATES_TOPIC as JOINT_STATES,
+                        namespace_of, topic_name, VIBRATION_TOPIC as VIBRATION)
 from ..errors import ConfigError, exception_text, ProblemSink, RecordingError
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
-from .cdr import AXIAL_LOAD, check_layout, decode_messages, Decoded, JOINT_STATES, KINDS, ragged_take, VIBRATION
+from .cdr import check_layout, decode_messages, Decoded, KINDS, ragged_take
 from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
 __all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'Recording', 'SQLITE_MAGIC', 'TopicInfo', 'bare_read',

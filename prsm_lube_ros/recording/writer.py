@@ -25,8 +25,7 @@ from typing import Literal, TYPE_CHECKING
 
 import numpy as np
 from rosbags.interfaces import Connection
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.rosbag2.writer import CompressionFormat, CompressionMode
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from ..contract import (AXIAL_LOAD_TOPIC, JOINT_STATE, JOINT_STATES_TOPIC, SCREW_JOINT, TEMPERATURE, TEMPERATURE_TOPIC,
                         topic_name, VIBRATION_BLOCK, VIBRATION_TOPIC, WRENCH_STAMPED)

@@ -106,7 +106,7 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
     rngs = dict(zip(effect_ids(), (np.random.default_rng(s) for s in
                                    np.random.SeedSequence(seed).spawn(len(effect_ids())))))
     actuator = rig.actuator
-    makers = {
+    makers: dict[str, Callable[[np.random.Generator], object]] = {
         'position_dependent_stiffness': lambda rng: draw_position_dependent_stiffness(
             rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
             stroke=plan.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
