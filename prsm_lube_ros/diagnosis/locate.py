@@ -560,7 +560,8 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     modelled = table.rms if residual is None else table.rms * np.exp(residual)
     model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(edges))])
     result = SpectralLines(testable=True)
-    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, np.argsort(edges)[:2], df)
+    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, np.argsort(edges)[:2], df,
+                 table.band_high)
     _mode_bands(result, medians, freqs, model_square, edges, df)
     result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
     return result
@@ -613,7 +614,7 @@ def fixed_line_power(table: WindowTable) -> float:
         mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
         result = SpectralLines(testable=True)
         _fixed_lines(result, medians, floors, excess, widened, np.arange(medians.shape[1]) * df, lowest,
-                     mean_square, np.argsort(edges)[:2], df)
+                     mean_square, np.argsort(edges)[:2], df, table.band_high)
         power = result.total_power
     for key in [key for key, (ref, _) in _LINE_POWER.items() if ref() is None]:
         del _LINE_POWER[key]
@@ -751,10 +752,16 @@ def _line_groups(candidate: np.ndarray) -> list[np.ndarray]:
 
 def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray, excess: np.ndarray,
                  widened: np.ndarray, freqs: np.ndarray, lowest: float, mean_square: np.ndarray, slow: np.ndarray,
-                 df: float) -> None:
-    """Lines prominent at the two lowest speeds whose power stays put while the total power moves."""
+                 df: float, highest: float = math.nan) -> None:
+    """Lines prominent at the two lowest speeds whose power stays put while the total power moves.
+
+    Only lines below ``highest`` (Hz, the RMS band's upper edge; NaN: no edge)
+    count: content above it is not in the window RMS the model is fitted to.
+    """
     candidate = np.all(widened[slow] >= LINE_PROMINENCE, axis=0) & (freqs >= lowest)
     candidate &= excess[slow].max(axis=0) >= LINE_PROMINENCE
+    if math.isfinite(highest):
+        candidate &= freqs < highest
     for group in _line_groups(candidate):
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
         prominent = widened[:, lo:hi].max(axis=1) >= LINE_PROMINENCE

@@ -28,9 +28,11 @@ from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 if TYPE_CHECKING:
+    from ..estimation.pipeline import RecordingWindows
     from ..estimation.windowing import Window
 
-__all__ = ['COLUMNS', 'Columns', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'table_from_windows']
+__all__ = ['COLUMNS', 'Columns', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'band_high_of',
+           'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
@@ -109,7 +111,9 @@ class WindowTable:
     temperature degC (NaN when not recorded), run (unique over recordings),
     recording index.  ``direction`` is +1 on windows of runs out (nut travel > 0) and -1 on
     runs back (default: the sign of ``speed``).  ``spectra`` (n x bins, (m/s^2)^2/Hz) and
-    ``spectrum_resolution`` (Hz) are set when the windows carried spectra.
+    ``spectrum_resolution`` (Hz) are set when the windows carried spectra; ``band_high`` (Hz)
+    is the upper edge of the band the RMS was taken in (NaN: raw RMS, or not known), so
+    spectral content above it is not in ``rms``.
     """
 
     speed: np.ndarray
@@ -126,6 +130,7 @@ class WindowTable:
     spectrum_resolution: float = math.nan
     sources: tuple[str, ...] = ()
     direction: np.ndarray | None = field(default=None, compare=False, repr=False)
+    band_high: float = math.nan
 
     def __post_init__(self) -> None:
         """Coerce the columns to arrays of one length."""
@@ -193,12 +198,22 @@ class WindowTable:
         return out
 
 
+def band_high_of(recordings: Sequence[RecordingWindows]) -> float:
+    """Upper edge (Hz) of the RMS band the recordings were read in (the first with a band; NaN: raw RMS)."""
+    for recording in recordings:
+        if recording.band is not None:
+            return float(recording.band.high)
+    return math.nan
+
+
 def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, theta: float = 1.0,
-                       min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = ()) -> WindowTable:
+                       min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = (),
+                       band_high: float = math.nan) -> WindowTable:
     """Build a :class:`WindowTable` from lists of windows (``estimation.windowing.Window``), one per recording.
 
     Keeps steady windows with a finite positive RMS, speed and load of at least
     ``min_axial_load``; raises :class:`InputError` when none is left.
+    ``band_high``: the upper edge (Hz) of the RMS's analysis band, if any.
     """
     rows: dict[str, list] = {name: [] for name in COLUMNS}
     directions: list[float] = []
@@ -239,6 +254,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
+                       band_high=float(band_high),
                        **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
 
 

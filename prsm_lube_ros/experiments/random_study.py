@@ -175,7 +175,7 @@ def explain_miss(case: tuple) -> dict:
     catalogue effect or without a usable window).
     """
     kind, seed, effect_pool, quick = case
-    from ..diagnosis.table import table_from_windows
+    from ..diagnosis.table import band_high_of, table_from_windows
     from ..errors import InputError
     from ..simulation.effects import Effects
     from .effect_size import effect_size
@@ -184,7 +184,8 @@ def explain_miss(case: tuple) -> dict:
         paths, setup, names, truth = simulate_case(kind, seed, list(effect_pool), quick=quick, folder=folder)
         recordings = case_recordings(paths, setup)
         try:
-            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths])
+            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths],
+                                       band_high=band_high_of(recordings))
         except InputError:
             return {'kind': kind, 'seed': seed, 'size': None}
     finally:
@@ -199,7 +200,7 @@ def run_random_case(case: tuple) -> dict:
     """Simulate, read and diagnose one (kind, seed, effect pool, quick) case; the case's record."""
     kind, seed, effect_pool, quick = case
     from ..diagnosis.engine import diagnose_table
-    from ..diagnosis.table import table_from_windows
+    from ..diagnosis.table import band_high_of, table_from_windows
     from ..errors import InputError
     start = time.time()
     folder = Path(tempfile.mkdtemp(prefix='prsm_study_'))
@@ -212,7 +213,8 @@ def run_random_case(case: tuple) -> dict:
         recordings = case_recordings(paths, setup)
         record['problems'] = sum(len(r.problems) for r in recordings)
         try:
-            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths])
+            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths],
+                                       band_high=band_high_of(recordings))
             result = diagnose_table(table)
         except InputError as exc:      # diagnose refuses the data: what a user would see
             record.update({'verdict': 'cannot tell', 'named': [], 'error': str(exc)})
