@@ -163,6 +163,15 @@ def test_fixed_line_power_is_what_the_spectral_test_reports_and_zero_without_lin
     assert fixed_line_power(spectra_table()) == 0.0
 
 
+def test_a_line_above_the_rms_band_is_not_in_the_rms_and_does_not_count():
+    """A 120 Hz line with the RMS taken up to 100 Hz (an aliased tone above a low rate's band, say)."""
+    import dataclasses
+    from prsm_lube_ros.diagnosis.locate import fixed_line_power
+    table = dataclasses.replace(spectra_table(line_power=0.05), band_high=100.0)
+    assert fixed_line_power(table) == 0.0 and spectral_lines(table).frequencies == []
+    assert fixed_line_power(dataclasses.replace(table, band_high=200.0)) > 0.02
+
+
 def test_a_fixed_band_with_a_constant_share_is_the_contact_response_not_a_mode():
     assert spectral_lines(spectra_table(mode_share=[0.2, 0.2, 0.2, 0.2])).mode_frequencies == []
 
