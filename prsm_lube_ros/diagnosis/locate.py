@@ -812,9 +812,12 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
         share = power / mean_square
         seen = prominent[:, lo:hi].any(axis=1)
+        # A speed whose largest bin is the window's edge has its power from outside: a neighbouring line's skirt.
+        top = lo + np.argmax(medians[:, lo:hi], axis=1)
+        seen &= (top > lo) & (top < hi - 1)
         if seen.sum() < MODE_MIN_SPEEDS or power[seen].min() <= 0:
             continue
-        peaks = lo + np.argmax(medians[seen, lo:hi], axis=1)
+        peaks = top[seen]
         if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
             continue
         if np.ptp(peaks) == 2 and np.all(np.diff(peaks[np.argsort(edges[seen])]) > 0):
