@@ -241,3 +241,28 @@ def test_orders_passing_through_a_mode_follow_its_transfer_in_hz():
     plain = spectral_lines(order_table()).order_mode            # a factor common to all orders per speed: no mode
     assert plain and not plain['found']
     assert not spectral_lines(order_table(stray=True)).order_mode['found']
+
+
+def test_a_window_whose_largest_bin_is_its_edge_is_no_mode_band_there():
+    """Three speeds, 2 Hz bins: an order at bins 4 and 5 and a neighbouring line's skirt at the third speed's
+    window edge made a 'band' at 9.8 Hz (random-study seeds with no effect); a peak inside at all three is one."""
+    from prsm_lube_ros.diagnosis.locate import _mode_bands, SpectralLines
+    df, bins = 1.953125, 200
+    freqs = np.arange(bins) * df
+    edges = np.array([12.39, 17.28, 24.11])
+
+    def medians(peaks, skirt_at=None):
+        rows = np.full((3, bins), 1e-4)
+        for level, peak in enumerate(peaks):
+            if peak is not None:
+                rows[level, peak] = 0.02 * (level + 1) ** 2
+        if skirt_at is not None:           # a strong line two bins below the window at the fastest speed
+            rows[2, skirt_at - 1:skirt_at + 2] = [0.3, 0.3, 0.003]
+        return rows
+    mean_square = np.array([0.2, 0.3, 0.8])
+    crossing = SpectralLines(testable=True)
+    _mode_bands(crossing, medians([4, 5, None], skirt_at=2), freqs, mean_square, edges, df)
+    assert crossing.mode_frequencies == []
+    ringing = SpectralLines(testable=True)
+    _mode_bands(ringing, medians([5, 5, 5]), freqs, mean_square, edges, df)
+    assert [round(f, 1) for f in ringing.mode_frequencies] == [9.8]
