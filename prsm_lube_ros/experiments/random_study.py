@@ -416,8 +416,8 @@ def misses_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str
     lines = ['# Missed cases and the size of what was concealed', '', f'Command: `{command}`', '',
              'Size: the concealed effects\' change of ln A per run beyond what the paper\'s constants absorb '
              '(RMS over runs), against the rig\'s run-to-run scatter, and about the run means (see '
-             '`prsm_lube_ros/experiments/effect_size.py`). A ratio well below 1 leaves nothing for any method to '
-             'name.', '',
+             '`prsm_lube_ros/experiments/effect_size.py`). The smaller the ratio, the less the run amplitudes can show '
+             'of the effect, whatever method reads them; on two-effect rows the size is both effects together.', '',
              '| kind | seed | effects | verdict | between runs | run scatter | ratio | within runs |',
              '|---|---|---|---|---|---|---|---|']
     for record in records:
