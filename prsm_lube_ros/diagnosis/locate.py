@@ -70,6 +70,7 @@ the runs at one speed.
 from __future__ import annotations
 
 from collections.abc import Sequence
+import copy
 from dataclasses import dataclass, field
 import math
 from typing import Any
@@ -550,19 +551,15 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     paper's model's mean square per speed, against which a mode band's power is
     compared; without it the recorded mean square is used.
     """
-    spectra = _speed_spectra(table)
+    spectra, fixed = _fixed_line_spectra(table)
+    result = copy.deepcopy(fixed)            # the cached fixed lines stay as they are
     if isinstance(spectra, str):
-        return SpectralLines(note=spectra)
+        return result
     edges, index, medians, floors, excess, widened, lowest = spectra
     df = table.spectrum_resolution
-    freqs = np.arange(medians.shape[1]) * df
-    mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
     modelled = table.rms if residual is None else table.rms * np.exp(residual)
     model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(edges))])
-    result = SpectralLines(testable=True)
-    _fixed_lines(result, medians, floors, excess, widened, freqs, lowest, mean_square, np.argsort(edges)[:2], df,
-                 table.band_high)
-    _mode_bands(result, medians, freqs, model_square, edges, df)
+    _mode_bands(result, medians, np.arange(medians.shape[1]) * df, model_square, edges, df)
     result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
     return result
 
@@ -593,8 +590,35 @@ def _speed_spectra(table: WindowTable) -> str | tuple[np.ndarray, np.ndarray, np
     return edges, index, medians, floors, excess, widened, lowest
 
 
-#: Tables whose fixed-line power is known: id -> (weak reference, power); see :func:`fixed_line_power`.
-_LINE_POWER: dict[int, tuple[Any, float]] = {}
+#: Tables whose per-speed spectra and fixed lines are known: id -> (weak reference, (spectra, fixed lines)).
+_LINE_SPECTRA: dict[int, tuple[Any, tuple[Any, SpectralLines]]] = {}
+
+
+def _fixed_line_spectra(table: WindowTable) -> tuple[Any, SpectralLines]:
+    """:func:`_speed_spectra` of ``table`` and its fixed lines, computed once per table.
+
+    They depend on the table alone, while :func:`locate` runs once per model
+    residual and the background's fits ask for the lines' power
+    (:func:`fixed_line_power`); the medians over every window's spectrum are
+    the costly part.  Kept while the table lives.
+    """
+    cached = _LINE_SPECTRA.get(id(table))
+    if cached is not None and cached[0]() is table:
+        return cached[1]
+    spectra = _speed_spectra(table)
+    if isinstance(spectra, str):
+        fixed = SpectralLines(note=spectra)
+    else:
+        edges, index, medians, floors, excess, widened, lowest = spectra
+        df = table.spectrum_resolution
+        mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
+        fixed = SpectralLines(testable=True)
+        _fixed_lines(fixed, medians, floors, excess, widened, np.arange(medians.shape[1]) * df, lowest,
+                     mean_square, np.argsort(edges)[:2], df, table.band_high)
+    for key in [key for key, (ref, _) in _LINE_SPECTRA.items() if ref() is None]:
+        del _LINE_SPECTRA[key]
+    _LINE_SPECTRA[id(table)] = (weakref.ref(table), (spectra, fixed))
+    return spectra, fixed
 
 
 def fixed_line_power(table: WindowTable) -> float:
@@ -603,23 +627,7 @@ def fixed_line_power(table: WindowTable) -> float:
     What :func:`spectral_lines` reports as ``total_power``: vibration from
     elsewhere that the spectrum measures directly, whatever the amplitude fit.
     """
-    cached = _LINE_POWER.get(id(table))
-    if cached is not None and cached[0]() is table:
-        return cached[1]
-    spectra = _speed_spectra(table)
-    power = 0.0
-    if not isinstance(spectra, str):
-        edges, index, medians, floors, excess, widened, lowest = spectra
-        df = table.spectrum_resolution
-        mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
-        result = SpectralLines(testable=True)
-        _fixed_lines(result, medians, floors, excess, widened, np.arange(medians.shape[1]) * df, lowest,
-                     mean_square, np.argsort(edges)[:2], df, table.band_high)
-        power = result.total_power
-    for key in [key for key, (ref, _) in _LINE_POWER.items() if ref() is None]:
-        del _LINE_POWER[key]
-    _LINE_POWER[id(table)] = (weakref.ref(table), power)
-    return power
+    return _fixed_line_spectra(table)[1].total_power
 
 
 def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
