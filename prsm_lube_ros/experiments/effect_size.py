@@ -65,15 +65,11 @@ def effect_size(table: WindowTable, rig: RigConfig, effects: Effects) -> EffectS
     speed = np.abs(table.speed)
     change = (np.log(expected_rms(speed, table.load, table.theta, rig, effects, **state))
               - np.log(expected_rms(speed, table.load, table.theta, rig, None, **state)))
-    runs, inverse, counts = np.unique(table.run, return_inverse=True, return_counts=True)
-
-    def run_means(values: np.ndarray) -> np.ndarray:
-        return np.bincount(inverse, weights=values, minlength=runs.size) / counts
-    means = run_means(change)
-    design = np.column_stack([np.ones(runs.size), run_means(np.abs(table.load)),
-                              run_means(-table.theta * table.film_term)])
+    means = table.run_means(change)
+    design = np.column_stack([np.ones(means.size), table.run_means(np.abs(table.load)),
+                              table.run_means(-table.theta * table.film_term)])
     coefficients, *_ = np.linalg.lstsq(design, means, rcond=None)
     left = means - design @ coefficients
-    within = change - means[inverse]
+    within = change - means[np.searchsorted(table.runs, table.run)]
     return EffectSize(between_runs=float(np.sqrt(np.mean(left ** 2))),
                       within_runs=float(np.sqrt(np.mean(within ** 2))), run_scatter=float(rig.run_scatter))

@@ -35,14 +35,15 @@ from ..physics.effects.resonance import band_position
 
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
+    from ..diagnosis.table import WindowTable
     from ..estimation.pipeline import RecordingWindows
     from ..simulation.effects import Effects
     from .study_draws import CaseSetup
 
 __all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
-           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_recordings', 'case_rng', 'confusion_markdown',
-           'explain_miss', 'misses_markdown', 'run_random_case', 'simulate_case', 'summarise', 'truth_form',
-           'write_random_outputs']
+           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_recordings', 'case_rng', 'case_table',
+           'confusion_markdown', 'explain_miss', 'misses_markdown', 'run_random_case', 'simulate_case', 'summarise',
+           'truth_form', 'write_random_outputs']
 
 NONE, TWO = 'none', 'two'
 #: Kinds with physics outside the diagnosis catalogue, and the covariate diagnose must locate for each: a step of
@@ -167,6 +168,13 @@ def case_recordings(paths: Sequence[Path], setup: CaseSetup) -> list[RecordingWi
             for p in paths]
 
 
+def case_table(paths: Sequence[Path], recordings: Sequence[RecordingWindows]) -> WindowTable:
+    """The window table ``prsm-lube diagnose`` builds of a case's recordings (InputError when none is usable)."""
+    from ..diagnosis.table import band_high_of, table_from_windows
+    return table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths],
+                              band_high=band_high_of(recordings))
+
+
 def explain_miss(case: tuple) -> dict:
     """The concealed effects' size against the scatter (:mod:`.effect_size`) for one (kind, seed, pool, quick) case.
 
@@ -175,7 +183,6 @@ def explain_miss(case: tuple) -> dict:
     catalogue effect or without a usable window).
     """
     kind, seed, effect_pool, quick = case
-    from ..diagnosis.table import band_high_of, table_from_windows
     from ..errors import InputError
     from ..simulation.effects import Effects
     from .effect_size import effect_size
@@ -184,8 +191,7 @@ def explain_miss(case: tuple) -> dict:
         paths, setup, names, truth = simulate_case(kind, seed, list(effect_pool), quick=quick, folder=folder)
         recordings = case_recordings(paths, setup)
         try:
-            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths],
-                                       band_high=band_high_of(recordings))
+            table = case_table(paths, recordings)
         except InputError:
             return {'kind': kind, 'seed': seed, 'size': None}
     finally:
@@ -200,7 +206,6 @@ def run_random_case(case: tuple) -> dict:
     """Simulate, read and diagnose one (kind, seed, effect pool, quick) case; the case's record."""
     kind, seed, effect_pool, quick = case
     from ..diagnosis.engine import diagnose_table
-    from ..diagnosis.table import band_high_of, table_from_windows
     from ..errors import InputError
     start = time.time()
     folder = Path(tempfile.mkdtemp(prefix='prsm_study_'))
@@ -213,8 +218,7 @@ def run_random_case(case: tuple) -> dict:
         recordings = case_recordings(paths, setup)
         record['problems'] = sum(len(r.problems) for r in recordings)
         try:
-            table = table_from_windows([r.windows for r in recordings], sources=[p.name for p in paths],
-                                       band_high=band_high_of(recordings))
+            table = case_table(paths, recordings)
             result = diagnose_table(table)
         except InputError as exc:      # diagnose refuses the data: what a user would see
             record.update({'verdict': 'cannot tell', 'named': [], 'error': str(exc)})
