@@ -567,10 +567,13 @@ def _earns_by_evidence(table: WindowTable, pair: SecondEffect, other: Candidate,
     """The evidence rule: ``other`` shows outside the amplitude fit and costs little held-out (route, basis set).
 
     ``other`` has evidence outside the amplitude fit, with the pair's
-    parameters, and the pair predicts held-out runs no worse than
-    :data:`EVIDENCE_TOLERANCE` than the first alone.
+    parameters and not the first effect's own signature (a resonance changes
+    the spectral shape by itself, see :attr:`.effects.Effect.changes_spectral_shape`),
+    and the pair predicts held-out runs no worse than :data:`EVIDENCE_TOLERANCE`
+    than the first alone.
     """
-    evidence = other.evidence and pair.effect.independent_evidence(table, location, pair.params)
+    evidence = other.evidence and pair.effect.independent_evidence(table, location, pair.params,
+                                                                   beside=pair.first_effect)
     if not (evidence and pair.gain >= -EVIDENCE_TOLERANCE):
         return False
     pair.route = 3

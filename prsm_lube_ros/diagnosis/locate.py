@@ -806,8 +806,9 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     its peak may wander), so closely spaced speeds do not hide a mode the whole
     band sweeps past, and an order that barely moves is not taken for one.
     Nor is a peak that climbs a bin with each faster speed across the band's
-    window: at low frequencies and coarse resolution an order crossing the
-    window looks fixed within 2 bins.
+    window, or whose bins a rotation order fits better than one fixed bin
+    (:func:`_follows_an_order`): at low frequencies and coarse resolution an
+    order crossing the window looks fixed within 2 bins.
     """
     floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
     prominent = widened >= LINE_PROMINENCE
@@ -830,6 +831,8 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
             continue
         if np.ptp(peaks) == 2 and np.all(np.diff(peaks[np.argsort(edges[seen])]) > 0):
             continue                   # a peak climbing a bin per speed: an order crossing the window, no mode
+        if _follows_an_order(peaks, edges[seen]):
+            continue
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
         if freqs[int(np.median(peaks))] * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
             continue
@@ -848,6 +851,21 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
                             f'its share of the power following the speed ({by_speed})')
     else:
         result.mode_note = 'no band fixed in frequency whose power follows the speed'
+
+
+def _follows_an_order(peaks: np.ndarray, speeds: np.ndarray) -> bool:
+    """The peak bins move with the speed as one rotation order would, closer than they stay at one frequency.
+
+    A rotation order puts its peak at bin ``k omega``; a mode keeps it at one
+    bin.  Both are fitted to the peak bins by least squares (``k`` through the
+    origin, the mode's bin as the mean): when the order fits with the smaller
+    squared error, the peak is an order passing through the band's window, not
+    a band fixed in Hz.
+    """
+    peaks, speeds = peaks.astype(float), speeds.astype(float)
+    fixed_error = float(np.sum((peaks - peaks.mean()) ** 2))
+    order = float(peaks @ speeds / (speeds @ speeds))
+    return float(np.sum((peaks - order * speeds) ** 2)) < fixed_error
 
 
 def _band_edges(resolution: float, bins: int) -> list:

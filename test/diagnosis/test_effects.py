@@ -181,3 +181,17 @@ def test_a_changing_spectral_shape_supports_a_background_only_without_a_mode_ban
     location = Location([], SpectralLines(testable=True, mode_frequencies=mode_bands), 'spectrum', '', shape)
     evidence = get_effect('background_vibration').independent_evidence(None, location, {'background_rms': 0.2})
     assert bool(evidence) == supported
+
+
+@pytest.mark.parametrize('beside, supported', [(None, True), ('lubricant_depletion', True), ('resonance', False)])
+def test_a_changing_spectral_shape_is_no_background_evidence_beside_a_resonance(beside, supported):
+    """A resonance changes the shape by itself even where no band of it is located (random-study resonance
+    seeds 5, 15 and 21 had a background named beside it on the shape alone); a depletion does not."""
+    from prsm_lube_ros.diagnosis.locate import Location, SpectralLines, SpectralShape
+    shape = SpectralShape(testable=True, distance=0.13, noise=0.02, structure=0.5, added_ratio=7.2,
+                          note='the spectral shape changes between the lowest and highest speed')
+    location = Location([], SpectralLines(testable=True), 'none', '', shape)
+    first = get_effect(beside) if beside else None
+    evidence = get_effect('background_vibration').independent_evidence(None, location, {'background_rms': 0.2},
+                                                                       beside=first)
+    assert bool(evidence) == supported

@@ -266,3 +266,25 @@ def test_a_window_whose_largest_bin_is_its_edge_is_no_mode_band_there():
     ringing = SpectralLines(testable=True)
     _mode_bands(ringing, medians([5, 5, 5]), freqs, mean_square, edges, df)
     assert [round(f, 1) for f in ringing.mode_frequencies] == [9.8]
+
+
+def test_a_peak_that_follows_a_rotation_order_across_the_window_is_no_mode_band():
+    """Five speeds, 2 Hz bins: the peak at bins 3, 3, 4, 5, 5 is an order crossing the window (background seed 1
+    of the random study named a resonance on it); a peak wandering a bin about one frequency is a mode."""
+    from prsm_lube_ros.diagnosis.locate import _mode_bands, SpectralLines
+    df, bins = 1.953125, 200
+    freqs = np.arange(bins) * df
+    edges = np.array([9.22, 10.89, 12.86, 15.19, 17.94])
+
+    def medians(peaks):
+        rows = np.full((5, bins), 1e-4)
+        for level, peak in enumerate(peaks):
+            rows[level, peak] = 0.02 * (level + 1) ** 2
+        return rows
+    mean_square = np.full(5, 0.5)
+    crossing = SpectralLines(testable=True)
+    _mode_bands(crossing, medians([3, 3, 4, 5, 5]), freqs, mean_square, edges, df)
+    assert crossing.mode_frequencies == []
+    ringing = SpectralLines(testable=True)
+    _mode_bands(ringing, medians([4, 5, 4, 4, 5]), freqs, mean_square, edges, df)
+    assert len(ringing.mode_frequencies) == 1

@@ -79,7 +79,7 @@ class BackgroundVibration(Effect, law.Extension):
         return {'background_rms': float(math.hypot(line_rms, p[0] * scales['rms_scale'])), **scales}
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
-                             params: dict[str, float] | None = None) -> str:
+                             params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
         """Fixed lines with constant power (at least :data:`MIN_LINE_SHARE` of it), or a spectral shape that changes.
 
         Power added from elsewhere with a spectrum of its own changes the
@@ -87,13 +87,17 @@ class BackgroundVibration(Effect, law.Extension):
         whatever multiplies the whole response does not.  A band fixed in Hz whose
         power follows the speed (a mode the orders pass) changes the shape too,
         beyond the octave around it that the shape leaves out: with such a band
-        located, a changing shape is no evidence of added power.
+        located, or ``beside`` an effect whose law changes the shape by itself
+        (a resonance, located or not), a changing shape is no evidence of added
+        power.
         """
         lines = location.spectrum if location is not None else None
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
         shape = getattr(location, 'shape', None)
-        if shape is not None and shape.floor_added and not (lines is not None and lines.mode_frequencies):
+        shaped = ((lines is not None and lines.mode_frequencies)
+                  or (beside is not None and beside.changes_spectral_shape))
+        if shape is not None and shape.floor_added and not shaped:
             return 'spectrum: ' + shape.note
         return ''
 

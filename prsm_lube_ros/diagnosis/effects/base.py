@@ -60,6 +60,8 @@ class Effect(Extension):
     to_separate: str = ''
     #: Name of this physical form of the effect (each of :meth:`variants` has its own).
     form: str = ''
+    #: The law alone changes the spectrum's shape between speeds (a gain that depends on the frequency in Hz).
+    changes_spectral_shape: bool = False
 
     def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""
@@ -98,11 +100,12 @@ class Effect(Extension):
         return self.form
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
-                             params: dict[str, Any] | None = None) -> str:
+                             params: dict[str, Any] | None = None, beside: Effect | None = None) -> str:
         """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none.
 
         ``params`` (the fitted parameters, when there is a fit) lets the evidence
-        be checked against what the fitted law predicts.
+        be checked against what the fitted law predicts; ``beside`` is the effect
+        fitted with this one, whose own signature the evidence must not be.
         """
         return ''
 

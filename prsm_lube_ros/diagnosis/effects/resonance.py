@@ -51,6 +51,7 @@ class Resonance(Effect, law.Extension):
     """The excitation frequency approaches a structural mode above the speed band."""
 
     id = 'resonance'
+    changes_spectral_shape = True
     title = 'structural resonance'
     form = 'mode above the speed band'
     physics = ('A rotation-order excitation (any order) meets a lightly damped natural frequency of the '
@@ -87,7 +88,7 @@ class Resonance(Effect, law.Extension):
         return scales['top_speed'] / p[0]
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
-                             params: dict[str, float] | None = None) -> str:
+                             params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
         """Order lines whose powers follow one mode in Hz, or a band fixed in Hz whose power follows the speed.
 
         With fitted ``params`` the band must also follow the fitted transfer:
