@@ -209,16 +209,24 @@ class EmpiricalFit:
         """True when it predicts held-out runs better than ``named`` (the catalogue model) does.
 
         A step, stretch or direction factor is a shape no catalogue law has: the
-        catalogue model must predict held-out runs better to be named.  A
-        smooth term follows any monotone or curved law, so it overrules the
-        catalogue model only when it is better by :data:`MIN_GAIN`, and never
-        in one of ``covariates``, those the named effects follow (their law is
-        a smooth law of it: a curve fitting better says the law's form is
-        approximate, not that the physics is missing).
+        catalogue model must predict held-out runs better to be named.  A step's
+        or stretch's place was chosen on all runs, the held-out ones included,
+        which flatters its held-out error; so it must also have the lower BIC
+        with its place counted as a parameter (a warm actuator cooling down
+        follows its thermal law as closely as a step, with the place found in
+        the temperature recorded).  A smooth term follows any monotone or
+        curved law, so it overrules the catalogue model only when it is better
+        by :data:`MIN_GAIN`, and never in one of ``covariates``, those the
+        named effects follow (their law is a smooth law of it: a curve fitting
+        better says the law's form is approximate, not that the physics is
+        missing).
         """
         if not self.earns or not named.cv_rmse > 0:
             return False
         if self.term.form == 'smooth' and self.term.covariate in covariates:
+            return False
+        place = math.log(max(self.fit.n_eff, 2.0))          # the BIC cost of one more parameter
+        if self.term.form in ('step', 'stretch') and _delta_bic(self.fit, named) + place >= 0:
             return False
         margin = MIN_GAIN if self.term.form == 'smooth' else 0.0
         return self.fit.cv_rmse < (1.0 - margin) * named.cv_rmse

@@ -132,15 +132,34 @@ def test_an_empirical_term_overrules_a_named_effect_only_by_held_out_runs_and_no
     from prsm_lube_ros.diagnosis.empirical import EmpiricalTerm
     from prsm_lube_ros.diagnosis.engine import EmpiricalFit
 
-    def fit(cv_rmse):
-        return SimpleNamespace(cv_rmse=cv_rmse, unphysical=lambda: [])
+    def fit(cv_rmse, rmse=0.04, n_params=4):
+        return SimpleNamespace(cv_rmse=cv_rmse, unphysical=lambda: [], log_residual=np.full(400, rmse),
+                               n_params=n_params, n_eff=100.0)
 
     named = fit(0.040)
     smooth = EmpiricalFit(EmpiricalTerm('temperature', 'smooth', scale=(30.0, 5.0)), fit(0.036), 0.4, -50.0)
     assert smooth.beats(named, {'revolutions'})
     assert not smooth.beats(named, {'temperature'})
     assert not EmpiricalFit(smooth.term, fit(0.039), 0.4, -50.0).beats(named, {'revolutions'})   # < MIN_GAIN
-    step = EmpiricalFit(EmpiricalTerm('time', 'step', runs=[3, 4]), fit(0.039), 0.4, -50.0)
+    step = EmpiricalFit(EmpiricalTerm('time', 'step', runs=[3, 4]), fit(0.039, rmse=0.035), 0.4, -50.0)
     assert step.beats(named, {'revolutions', 'time'})
     assert not step.beats(fit(0.038))
     assert not EmpiricalFit(step.term, fit(0.01), 0.01, -50.0).beats(named)   # does not earn its parameter
+
+
+def test_a_step_whose_place_was_chosen_on_all_runs_must_also_win_by_bic_with_the_place_counted():
+    """thermal_free seed 15 of the random study: a warm start cooling down, held-out error 4.72 % for the thermal law
+    against 4.71 % for a step in time, BIC -50 against -51 with the step's place uncounted."""
+    from prsm_lube_ros.diagnosis.empirical import EmpiricalTerm
+    from prsm_lube_ros.diagnosis.engine import EmpiricalFit
+
+    def fit(cv_rmse, rmse, n_params):
+        return SimpleNamespace(cv_rmse=cv_rmse, unphysical=lambda: [], log_residual=np.full(400, rmse),
+                               n_params=n_params, n_eff=100.0)
+    thermal = fit(0.0472, 0.0400, 4)
+    term = EmpiricalTerm('time', 'step', runs=[8, 9, 10])
+    # ln(n_eff) = 4.6 for the place: a BIC 1.2 lower is not enough, 10 lower is
+    close = 0.0400 * np.exp(-1.2 / 200.0)
+    assert not EmpiricalFit(term, fit(0.0471, close, 4), 0.45, -51.4).beats(thermal)
+    clear = 0.0400 * np.exp(-10.0 / 200.0)
+    assert EmpiricalFit(term, fit(0.0471, clear, 4), 0.45, -60.0).beats(thermal)

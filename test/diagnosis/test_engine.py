@@ -162,8 +162,9 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence=''):
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
-    pair = SimpleNamespace(gain=gain, delta_bic=delta_bic, params={}, route=1, basis='',
-                           effect=SimpleNamespace(independent_evidence=lambda table, location, params: evidence))
+    pair = SimpleNamespace(gain=gain, delta_bic=delta_bic, params={}, route=1, basis='', first_effect=None,
+                           effect=SimpleNamespace(independent_evidence=lambda table, location, params,
+                                                  beside: evidence))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
     other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence=evidence,
