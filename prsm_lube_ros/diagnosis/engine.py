@@ -212,7 +212,8 @@ class EmpiricalFit:
         catalogue model must predict held-out runs better to be named.  A step's
         or stretch's place was chosen on all runs, the held-out ones included,
         which flatters its held-out error; so it must also have the lower BIC
-        with its place counted as a parameter (a warm actuator cooling down
+        with its place counted as parameters (one for a step, its start and
+        its end for a stretch; a warm actuator cooling down
         follows its thermal law as closely as a step, with the place found in
         the temperature recorded).  A smooth term follows any monotone or
         curved law, so it overrules the catalogue model only when it is better
@@ -225,9 +226,11 @@ class EmpiricalFit:
             return False
         if self.term.form == 'smooth' and self.term.covariate in covariates:
             return False
-        place = math.log(max(self.fit.n_eff, 2.0))          # the BIC cost of one more parameter
-        if self.term.form in ('step', 'stretch') and _delta_bic(self.fit, named) + place >= 0:
-            return False
+        if self.term.form in ('step', 'stretch'):
+            # the BIC cost of the place: one run for a step, the first and the last for a stretch
+            place = (2 if self.term.form == 'stretch' else 1) * math.log(max(self.fit.n_eff, 2.0))
+            if not _delta_bic(self.fit, named) + place < 0:
+                return False
         margin = MIN_GAIN if self.term.form == 'smooth' else 0.0
         return self.fit.cv_rmse < (1.0 - margin) * named.cv_rmse
 

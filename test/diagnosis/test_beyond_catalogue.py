@@ -158,8 +158,12 @@ def test_a_step_whose_place_was_chosen_on_all_runs_must_also_win_by_bic_with_the
                                n_params=n_params, n_eff=100.0)
     thermal = fit(0.0472, 0.0400, 4)
     term = EmpiricalTerm('time', 'step', runs=[8, 9, 10])
-    # ln(n_eff) = 4.6 for the place: a BIC 1.2 lower is not enough, 10 lower is
+    # ln(n_eff) = 4.6 for the place: a BIC 1.2 lower is not enough, 7 lower is
     close = 0.0400 * np.exp(-1.2 / 200.0)
     assert not EmpiricalFit(term, fit(0.0471, close, 4), 0.45, -51.4).beats(thermal)
-    clear = 0.0400 * np.exp(-10.0 / 200.0)
+    clear = 0.0400 * np.exp(-7.0 / 200.0)
     assert EmpiricalFit(term, fit(0.0471, clear, 4), 0.45, -60.0).beats(thermal)
+    # a stretch's place is its first and its last run: 2 ln(n_eff) = 9.2
+    stretch = EmpiricalTerm('time', 'stretch', runs=[8, 9, 10])
+    assert not EmpiricalFit(stretch, fit(0.0471, clear, 4), 0.45, -60.0).beats(thermal)
+    assert EmpiricalFit(stretch, fit(0.0471, 0.0400 * np.exp(-10.0 / 200.0), 4), 0.45, -60.0).beats(thermal)
