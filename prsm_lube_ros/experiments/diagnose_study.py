@@ -199,16 +199,34 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
     return 0
 
 
+def _study_cases(out: Path) -> list[dict] | None:
+    """The cases of ``out``/results.json, or None with one line on stderr saying why not."""
+    try:
+        return list(json.loads((out / 'results.json').read_text())['cases'])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        print(f'diagnose_study: cannot read the cases of {out / "results.json"}: {exc!r}', file=sys.stderr)
+        return None
+
+
+def _margins(out: Path, command: str) -> int:
+    """``--margins``: the candidates a lower BIC margin would name, to ``out``/margins.md."""
+    from .margins import margins_markdown
+    records = _study_cases(out)
+    if records is None:
+        return 2
+    text = margins_markdown(records, command)
+    (out / 'margins.md').write_text(text)
+    print(text)
+    return 0
+
+
 def _explain_misses(out: Path, jobs: int, command: str) -> int:
     """``--explain-misses``: the size of what each missed case concealed, to ``out``/misses.md."""
     from ..diagnosis.effects import effect_ids
     from .random_study import explain_miss, misses_markdown
-    try:
-        document = json.loads((out / 'results.json').read_text())
-    except (OSError, ValueError) as exc:
-        print(f'diagnose_study: cannot read {out / "results.json"}: {exc}', file=sys.stderr)
+    records = _study_cases(out)
+    if records is None:
         return 2
-    records = document['cases']
     pool_effects = tuple(e for e in effect_ids() if e != NONE)
     cases = [(r['kind'], r['seed'], pool_effects, False) for r in records if not r.get('right')]
     with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
@@ -242,6 +260,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--explain-misses', action='store_true',
                         help='random design: simulate the missed cases of --out/results.json again and write '
                              'misses.md with the size of what was concealed against the scatter')
+    parser.add_argument('--margins', action='store_true',
+                        help='random design: write margins.md from --out/results.json, the candidates a lower BIC '
+                             'margin would name (no case is run again)')
     args = parser.parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
@@ -250,6 +271,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                + ' '.join(argv if argv is not None else sys.argv[1:]))
     if args.design == 'random' and args.explain_misses:
         return _explain_misses(Path(args.out), args.jobs, command)
+    if args.design == 'random' and args.margins:
+        return _margins(Path(args.out), command)
     if args.design == 'random':
         return _run_random(args, [e for e in effects if e != NONE], command)
     classes = [e for e in effects if e != NONE] + [NONE]

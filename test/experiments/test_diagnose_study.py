@@ -40,6 +40,32 @@ def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
     text = (out / 'confusion.md').read_text()
     assert '## Confusion per form' in text and '## Misses' in text
     assert document['summary']['cases'] == 4
+    assert all(case['candidates'] and {'effect', 'status', 'gain', 'delta_bic'} <= set(case['candidates'][0])
+               for case in document['cases'])
+    assert diagnose_study.main(['--out', str(out), '--margins']) == 0
+    assert '## Margin 8' in (out / 'margins.md').read_text()
+
+
+def test_margins_list_what_a_lower_bic_margin_would_let_in(tmp_path, capsys):
+    from prsm_lube_ros.experiments.margins import margin_entrants, margins_markdown
+
+    def candidate(effect, delta_bic, gain, status='rejected', reason='does not earn its 1 parameter(s)'):
+        return {'effect': effect, 'status': status, 'gain': gain, 'delta_bic': delta_bic, 'reason': reason}
+    records = [
+        {'kind': 'lubricant_depletion', 'seed': 16, 'effects': ['lubricant_depletion'], 'verdict': 'adequate',
+         'candidates': [candidate('lubricant_depletion', -8.2, 0.107), candidate('resonance', 8.0, -0.02)]},
+        {'kind': 'thermal_viscosity', 'seed': 26, 'effects': ['thermal_viscosity'], 'verdict': 'thermal_viscosity',
+         'candidates': [candidate('thermal_viscosity', -80.0, 0.5, status='earns'),
+                        candidate('lubricant_depletion', -9.4, 0.113),
+                        candidate('background_vibration', -9.0, 0.2, reason='unphysical constants'),
+                        candidate('resonance', -7.0, 0.03)]}]
+    at_8 = margin_entrants(records, 8.0)
+    assert [(e['seed'], e['effect'], e['concealed']) for e in at_8] == [
+        (16, 'lubricant_depletion', True), (26, 'lubricant_depletion', False)]
+    assert margin_entrants(records, 9.0)[0]['seed'] == 26          # -8.2 does not reach a margin of 9
+    assert '## Margin 8: 1 concealed, 1 not concealed' in margins_markdown(records, 'cmd')
+    assert diagnose_study.main(['--out', str(tmp_path / 'absent'), '--margins']) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
 def test_tables_report_misses_and_wrong_names():
