@@ -252,3 +252,25 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
         assert chosen is None and len(tied) == 2
     else:
         assert chosen.candidate.effect.id == named and tied == [] and 'follows position' in chosen.basis
+
+
+def test_the_pair_pool_takes_candidates_with_spectral_evidence_first_then_the_largest_gains(monkeypatch):
+    """When none earns alone, PAIR_POOL candidates are paired: those with evidence outside the amplitude fit go
+    first (a resonance whose band the spectrum shows, though its gain alone is the smallest), then by gain."""
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    tried = []
+    monkeypatch.setattr(engine, 'CombinedEffect', lambda a, b, *vectors: (a, b))
+    monkeypatch.setattr(engine, '_best_pair', lambda table, combos, reference, other, folds, location:
+                        tried.append(tuple(e.id for e in combos[0])))
+
+    def candidate(name, gain, evidence=''):
+        effect = SimpleNamespace(id=name, form=name)
+        return SimpleNamespace(effect=effect, fit=SimpleNamespace(), gain=gain, evidence=evidence, form_vectors={},
+                               family=SimpleNamespace(variants=lambda: [effect]))
+    ranked = [candidate('thermal_viscosity', 0.04), candidate('lubricant_depletion', 0.03),
+              candidate('background_vibration', 0.02), candidate('resonance', 0.01, 'spectrum: a band at 13 Hz'),
+              candidate('position_dependent_stiffness', float('nan'))]
+    assert engine._pair_when_none_earns(None, ranked, None, [], None) is None
+    assert tried == [('resonance', 'thermal_viscosity'), ('resonance', 'lubricant_depletion'),
+                     ('thermal_viscosity', 'lubricant_depletion')]
