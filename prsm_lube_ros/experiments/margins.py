@@ -47,6 +47,9 @@ def margins_markdown(records: Sequence[dict], command: str, margins: Sequence[fl
              f'Candidates rejected at the engine\'s margin (BIC drop of {BIC_MARGIN:g}) with physical constants '
              f'and a held-out gain of {100 * MIN_GAIN:.0f} % or more, whose BIC drop reaches the lower margin '
              '(see `prsm_lube_ros/experiments/margins.py`).', '']
+    if any('reason' not in c for record in records for c in record.get('candidates') or []):
+        lines += ['The study\'s records do not keep the candidates\' reasons (written before they did): a candidate '
+                  'rejected for unphysical constants cannot be left out, and is listed if its scores qualify.', '']
     for margin in margins:
         entrants = margin_entrants(records, margin)
         caught = sum(e['concealed'] for e in entrants)

@@ -248,7 +248,7 @@ def run_random_case(case: tuple) -> dict:
         'lack_of_fit_excess_rms': test.excess_rms if test else None,
         # every candidate's scores against the paper's model, each fitted alone (its evidence too, even where
         # the engine did not count it beside another effect): what a change of the margins would do
-        'candidates': [{key: c.get(key) for key in ('effect', 'status', 'gain', 'delta_bic', 'evidence')}
+        'candidates': [{key: c.get(key) for key in ('effect', 'status', 'reason', 'gain', 'delta_bic', 'evidence')}
                        for c in document.get('candidates', [])],
         'seconds': round(time.time() - start, 2)})
     record['right'] = _right(record)

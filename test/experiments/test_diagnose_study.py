@@ -40,7 +40,7 @@ def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
     text = (out / 'confusion.md').read_text()
     assert '## Confusion per form' in text and '## Misses' in text
     assert document['summary']['cases'] == 4
-    assert all(case['candidates'] and {'effect', 'status', 'gain', 'delta_bic'} <= set(case['candidates'][0])
+    assert all(case['candidates'] and {'effect', 'status', 'reason', 'gain', 'delta_bic'} <= set(case['candidates'][0])
                for case in document['cases'])
     assert diagnose_study.main(['--out', str(out), '--margins']) == 0
     assert '## Margin 8' in (out / 'margins.md').read_text()
@@ -64,6 +64,9 @@ def test_margins_list_what_a_lower_bic_margin_would_let_in(tmp_path, capsys):
         (16, 'lubricant_depletion', True), (26, 'lubricant_depletion', False)]
     assert margin_entrants(records, 9.0)[0]['seed'] == 26          # -8.2 does not reach a margin of 9
     assert '## Margin 8: 1 concealed, 1 not concealed' in margins_markdown(records, 'cmd')
+    assert 'do not keep the candidates' not in margins_markdown(records, 'cmd')
+    del records[0]['candidates'][0]['reason']                        # a study written before reasons were kept
+    assert 'do not keep the candidates\' reasons' in margins_markdown(records, 'cmd')
     assert diagnose_study.main(['--out', str(tmp_path / 'absent'), '--margins']) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
