@@ -807,8 +807,8 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     band sweeps past, and an order that barely moves is not taken for one.
     Nor is a peak that climbs a bin with each faster speed across the band's
     window, or whose bins a rotation order fits better than one fixed bin
-    (:func:`_follows_an_order`): at low frequencies and coarse resolution an
-    order crossing the window looks fixed within 2 bins.
+    (both :func:`_follows_an_order`): at low frequencies and coarse resolution
+    an order crossing the window looks fixed within 2 bins.
     """
     floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
     prominent = widened >= LINE_PROMINENCE
@@ -829,8 +829,6 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         peaks = top[seen]
         if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
             continue
-        if np.ptp(peaks) == 2 and np.all(np.diff(peaks[np.argsort(edges[seen])]) > 0):
-            continue                   # a peak climbing a bin per speed: an order crossing the window, no mode
         if _follows_an_order(peaks, edges[seen]):
             continue
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
@@ -854,14 +852,16 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
 
 
 def _follows_an_order(peaks: np.ndarray, speeds: np.ndarray) -> bool:
-    """The peak bins move with the speed as one rotation order would, closer than they stay at one frequency.
+    """The peak bins move with the speed as one rotation order would: an order crossing the band's window.
 
-    A rotation order puts its peak at bin ``k omega``; a mode keeps it at one
-    bin.  Both are fitted to the peak bins by least squares (``k`` through the
-    origin, the mode's bin as the mean): when the order fits with the smaller
-    squared error, the peak is an order passing through the band's window, not
-    a band fixed in Hz.
+    A peak that climbs a bin with each faster speed (2 bins in all) is one.
+    Otherwise a rotation order puts its peak at bin ``k omega`` and a mode keeps
+    it at one bin; both are fitted to the peak bins by least squares (``k``
+    through the origin, the mode's bin as the mean), and the peak is an order
+    when the order fits with the smaller squared error.
     """
+    if np.ptp(peaks) == 2 and np.all(np.diff(peaks[np.argsort(speeds)]) > 0):
+        return True
     peaks, speeds = peaks.astype(float), speeds.astype(float)
     fixed_error = float(np.sum((peaks - peaks.mean()) ** 2))
     order = float(peaks @ speeds / (speeds @ speeds))
