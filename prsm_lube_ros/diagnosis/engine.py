@@ -371,7 +371,8 @@ class Diagnosis:
                 'data': {'windows': len(table), 'runs': int(table.runs.size),
                          'recordings': int(np.unique(table.recording).size),
                          'speed_levels': operating_levels(table.speed), 'load_levels': operating_levels(table.load),
-                         'reference_theta': table.theta, 'sources': list(table.sources)}}
+                         'reference_theta': table.theta, 'sources': list(table.sources),
+                         'standstill_rms': _num(table.rest_rms), 'standstill_windows': table.rest_windows}}
 
 
 def _num(value: float | None) -> float | None:
@@ -599,7 +600,9 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     Tried only when the first effect leaves a lack of fit or a located pattern,
     or when another candidate alone predicted held-out runs better than the
     paper's model by :data:`MIN_GAIN` (an effect drifting between replicate runs,
-    depletion say, leaves no lack of fit in the condition means).
+    depletion say, leaves no lack of fit in the condition means); otherwise only
+    the candidates with evidence outside the amplitude fit are tried (a floor
+    measured at standstill that a resonance's fit has absorbed).
     Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
     within :data:`BIC_MARGIN` of each other tie, and neither is named, unless
     what the first leaves is located on the covariate of one of them only; one
@@ -611,7 +614,8 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
                       for c in candidates)
     left = locate(table, first.fit.log_residual)
     if not remaining.significant and not others_gain and left.located == 'none':
-        return None, []
+        # Nothing left in the amplitudes: only a candidate seen outside them (vibration at standstill, say) is tried.
+        candidates = [c for c in candidates if c.evidence]
     earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:

@@ -24,15 +24,15 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import InputError
-from ..estimation.windowing import MIN_AXIAL_LOAD, usable_windows
+from ..estimation.windowing import AT_REST, MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 if TYPE_CHECKING:
     from ..estimation.pipeline import RecordingWindows
     from ..estimation.windowing import Window
 
-__all__ = ['COLUMNS', 'Columns', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'band_high_of',
-           'table_from_windows']
+__all__ = ['COLUMNS', 'Columns', 'REST_SPEED', 'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP',
+           'WindowTable', 'band_high_of', 'rest_rms_values', 'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
@@ -41,6 +41,11 @@ COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperatu
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
+#: Screw speed, rad/s, at or below which a window at rest counts as standstill (a servo holding
+#: position), so a window that holds the end of a run's deceleration does not.
+REST_SPEED = 0.05
+#: Windows at standstill needed for :attr:`WindowTable.rest_rms`.
+REST_WINDOWS_NEEDED = 3
 
 
 class Columns(Protocol):
@@ -113,7 +118,10 @@ class WindowTable:
     runs back (default: the sign of ``speed``).  ``spectra`` (n x bins, (m/s^2)^2/Hz) and
     ``spectrum_resolution`` (Hz) are set when the windows carried spectra; ``band_high`` (Hz)
     is the upper edge of the band the RMS was taken in (NaN: raw RMS, or not known), so
-    spectral content above it is not in ``rms``.
+    spectral content above it is not in ``rms``.  ``rest_rms`` (m/s^2, same band) is the
+    median RMS of the windows recorded at standstill (:data:`REST_SPEED`), NaN with fewer than
+    :data:`REST_WINDOWS_NEEDED` of them: what the accelerometer reads with the screw still, which
+    the contact law of Eq. 22 puts at zero.
     """
 
     speed: np.ndarray
@@ -131,6 +139,8 @@ class WindowTable:
     sources: tuple[str, ...] = ()
     direction: np.ndarray | None = field(default=None, compare=False, repr=False)
     band_high: float = math.nan
+    rest_rms: float = math.nan
+    rest_windows: int = 0
 
     def __post_init__(self) -> None:
         """Coerce the columns to arrays of one length."""
@@ -252,10 +262,19 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
     if sizes and len(set(sizes)) == 1 and len(sizes) >= SPECTRA_NEEDED * len(spectra):
         # Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
         spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
+    rest = rest_rms_values(windows_per_recording)
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
-                       band_high=float(band_high),
+                       band_high=float(band_high), rest_windows=int(rest.size),
+                       rest_rms=float(np.median(rest)) if rest.size >= REST_WINDOWS_NEEDED else math.nan,
                        **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+
+
+def rest_rms_values(windows_per_recording: Sequence[Sequence[Window]]) -> np.ndarray:
+    """RMS (m/s^2) of every window at standstill: at rest, screw speed at most :data:`REST_SPEED`, RMS finite."""
+    return np.array([w.vibration_rms for windows in windows_per_recording for w in windows
+                     if w.reason_kind == AT_REST and w.screw_speed <= REST_SPEED
+                     and math.isfinite(w.vibration_rms) and w.vibration_rms > 0], dtype=float)
 
 
 def _temperatures(windows: Sequence[Window], chosen: Sequence[Window]) -> list[float]:

@@ -15,6 +15,10 @@ CONTRACT_IDS = {'position_dependent_stiffness', 'resonance', 'thermal_viscosity'
                 'background_vibration'}
 
 
+#: A window table's standstill attributes when no window was recorded at standstill (and the RMS they compare with).
+NO_STANDSTILL = SimpleNamespace(rms=np.full(10, 0.5), rest_rms=math.nan, rest_windows=0)
+
+
 def covariates(**values):
     base = dict(speed=np.array([10.0]), load=np.array([100.0]), position=np.array([0.0]),
                 revolutions=np.array([0.0]), temperature=np.array([30.0]), time=np.array([0.0]))
@@ -141,7 +145,8 @@ def test_a_mode_band_is_resonance_evidence_only_where_the_fitted_transfer_puts_i
 def test_a_background_the_spectral_shape_does_not_show_is_argued_against_unless_lines_hold_it():
     from prsm_lube_ros.diagnosis.locate import SpectralLines, SpectralShape
     background = get_effect('background_vibration')
-    table = SimpleNamespace(speed=np.repeat([10.0, 20.0], 20), rms=np.repeat([0.1, 0.4], 20))
+    table = SimpleNamespace(speed=np.repeat([10.0, 20.0], 20), rms=np.repeat([0.1, 0.4], 20),
+                            rest_rms=math.nan, rest_windows=0)       # no standstill recorded
     keeps = SpectralShape(testable=True, distance=0.005, noise=0.004, structure=0.6, bands=15, note='keeps')
     location = SimpleNamespace(shape=keeps, spectrum=SpectralLines(testable=True))
     strong = {'background_rms': 0.09}          # 81 % of the power at 10 rad/s, 5 % at 20 rad/s
@@ -179,7 +184,8 @@ def test_a_changing_spectral_shape_supports_a_background_only_without_a_mode_ban
                           note='the spectral shape changes between the lowest and highest speed')
     assert shape.floor_added
     location = Location([], SpectralLines(testable=True, mode_frequencies=mode_bands), 'spectrum', '', shape)
-    evidence = get_effect('background_vibration').independent_evidence(None, location, {'background_rms': 0.2})
+    evidence = get_effect('background_vibration').independent_evidence(NO_STANDSTILL, location,
+                                                                       {'background_rms': 0.2})
     assert bool(evidence) == supported
 
 
@@ -192,6 +198,24 @@ def test_a_changing_spectral_shape_is_no_background_evidence_beside_a_resonance(
                           note='the spectral shape changes between the lowest and highest speed')
     location = Location([], SpectralLines(testable=True), 'none', '', shape)
     first = get_effect(beside) if beside else None
-    evidence = get_effect('background_vibration').independent_evidence(None, location, {'background_rms': 0.2},
+    evidence = get_effect('background_vibration').independent_evidence(NO_STANDSTILL, location,
+                                                                       {'background_rms': 0.2}, beside=first)
+    assert bool(evidence) == supported
+
+
+@pytest.mark.parametrize('beside', [None, 'resonance'])
+@pytest.mark.parametrize('rest_rms, supported', [(0.003, False), (0.1, False), (0.13, True), (0.4, True)])
+def test_vibration_at_standstill_is_background_evidence_beside_any_effect(rest_rms, supported, beside):
+    """Random-study two-effect seed 27 (a floor of 0.41 m/s^2 RMS with a resonance): the resonance's fit absorbed the
+    floor and nothing was left to locate, yet the accelerometer read 0.36 m/s^2 with the screw still. Power at
+    standstill is measured, not fitted: from 5 % of the quietest running windows' power it counts, beside a resonance
+    too; a sensor's noise floor (0.003 m/s^2) or 4 % of the power does not."""
+    from prsm_lube_ros.diagnosis.locate import Location, SpectralLines
+    table = SimpleNamespace(rms=np.r_[np.full(20, 0.5), np.full(80, 2.0)], rest_rms=rest_rms, rest_windows=12)
+    location = Location([], SpectralLines(testable=True), 'none', '', None)
+    first = get_effect(beside) if beside else None
+    evidence = get_effect('background_vibration').independent_evidence(table, location, {'background_rms': 0.3},
                                                                        beside=first)
     assert bool(evidence) == supported
+    if supported:
+        assert evidence.startswith('standstill:') and f'{rest_rms:.3g} m/s^2' in evidence and '12 windows' in evidence

@@ -22,13 +22,18 @@ if TYPE_CHECKING:
     from ..locate import Location
     from ..table import WindowTable
 
-__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'SHAPE_CONTRARY_FACTOR',
-           'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE']
+__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE', 'REST_SHARE',
+           'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE', 'rest_share']
 
 #: Bounds of B over the smallest recorded RMS.
 FRACTION_RANGE = (0.0, 1.5)
 #: Smallest share of the power at the lowest speed in fixed spectral lines that counts as evidence.
 MIN_LINE_SHARE = 1e-3
+#: Smallest share of the quietest running windows' power that the vibration at standstill must carry to count
+#: as evidence: enough to lift their amplitude by about 2.5 %, beyond what a sensor's noise floor does.
+REST_SHARE = 0.05
+#: The quietest running windows: this quantile of the window RMS.
+QUIET_QUANTILE = 0.1
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
 LINE_SHARE = 0.4
 #: Contrary evidence: the highest speed's spectral shape differs from white by at least this total variation ...
@@ -80,7 +85,13 @@ class BackgroundVibration(Effect, law.Extension):
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
                              params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
-        """Fixed lines with constant power (at least :data:`MIN_LINE_SHARE` of it), or a spectral shape that changes.
+        """Fixed lines of constant power (:data:`MIN_LINE_SHARE`), vibration at standstill, or a spectral shape change.
+
+        Vibration the accelerometer reads with the screw still
+        (:attr:`.table.WindowTable.rest_rms`) is power from elsewhere measured
+        directly, when it carries :data:`REST_SHARE` of the quietest running
+        windows' power (:func:`rest_share`): a resonance or any law of the
+        contacts puts it at zero, so it counts beside any effect.
 
         Power added from elsewhere with a spectrum of its own changes the
         shape of the recorded spectrum between the lowest and the highest speed;
@@ -94,6 +105,11 @@ class BackgroundVibration(Effect, law.Extension):
         lines = location.spectrum if location is not None else None
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
+        share = rest_share(table)
+        if share >= REST_SHARE:
+            return (f'standstill: with the screw still the accelerometer reads {table.rest_rms:.3g} m/s^2 RMS '
+                    f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
+                    'running windows, which the contact law puts at zero')
         shape = getattr(location, 'shape', None)
         shaped = ((lines is not None and lines.mode_frequencies)
                   or (beside is not None and beside.changes_spectral_shape))
@@ -153,3 +169,11 @@ class BackgroundVibration(Effect, law.Extension):
         b = params['background_rms']
         return (f'Background of B = {b:.4g} m/s^2 RMS, {100 * b / params["rms_scale"]:.0f} % of the smallest '
                 'window RMS recorded. ' + self.physics)
+
+
+def rest_share(table: WindowTable) -> float:
+    """Power at standstill over that of the quietest running windows (:data:`QUIET_QUANTILE`); 0 if not recorded."""
+    quiet = float(np.quantile(table.rms, QUIET_QUANTILE)) if len(table.rms) else math.nan
+    if not (math.isfinite(table.rest_rms) and quiet > 0):
+        return 0.0
+    return table.rest_rms ** 2 / quiet ** 2
