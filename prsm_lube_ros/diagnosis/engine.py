@@ -578,14 +578,16 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
 def _earns_by_evidence(table: WindowTable, pair: SecondEffect, other: Candidate, location: Location) -> bool:
     """The evidence rule: ``other`` shows outside the amplitude fit and costs little held-out (route, basis set).
 
-    ``other`` has evidence outside the amplitude fit, with the pair's
-    parameters and not the first effect's own signature (a resonance changes
-    the spectral shape by itself, see :attr:`.effects.Effect.changes_spectral_shape`),
+    ``other`` has evidence outside the amplitude fit, whatever its parameters
+    and with the pair's (its fit alone may have given its part to the first:
+    a floor a resonance absorbed), and not the first effect's own signature (a
+    resonance changes the spectral shape by itself, see
+    :attr:`.effects.Effect.changes_spectral_shape`),
     and the pair predicts held-out runs no worse than :data:`EVIDENCE_TOLERANCE`
     than the first alone.
     """
-    evidence = other.evidence and pair.effect.independent_evidence(table, location, pair.params,
-                                                                   beside=pair.first_effect)
+    evidence = (other.effect.independent_evidence(table, location)
+                and pair.effect.independent_evidence(table, location, pair.params, beside=pair.first_effect))
     if not (evidence and pair.gain >= -EVIDENCE_TOLERANCE):
         return False
     pair.route = 3
@@ -615,7 +617,7 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     left = locate(table, first.fit.log_residual)
     if not remaining.significant and not others_gain and left.located == 'none':
         # Nothing left in the amplitudes: only a candidate seen outside them (vibration at standstill, say) is tried.
-        candidates = [c for c in candidates if c.evidence]
+        candidates = [c for c in candidates if c.effect.independent_evidence(table, location)]
     earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:

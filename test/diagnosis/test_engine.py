@@ -168,7 +168,8 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence=''):
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
     other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence=evidence,
-                            effect=SimpleNamespace(covariate='position'))
+                            effect=SimpleNamespace(covariate='position', independent_evidence=lambda table, location:
+                                                   evidence))
     left = Location([], None, located, '')
     return engine._add_second(None, first, other, None, None, left)
 

@@ -22,8 +22,9 @@ if TYPE_CHECKING:
     from ..locate import Location
     from ..table import WindowTable
 
-__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE', 'REST_SHARE',
-           'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE', 'rest_share']
+__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE',
+           'REST_AGREEMENT', 'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
+           'rest_share']
 
 #: Bounds of B over the smallest recorded RMS.
 FRACTION_RANGE = (0.0, 1.5)
@@ -34,6 +35,9 @@ MIN_LINE_SHARE = 1e-3
 REST_SHARE = 0.05
 #: The quietest running windows: this quantile of the window RMS.
 QUIET_QUANTILE = 0.1
+#: A fitted B below this fraction of the RMS at standstill does not carry what was measured there (vibration
+#: at standstill only: a servo dithering to hold position, say), and the standstill is no evidence for it.
+REST_AGREEMENT = 0.5
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
 LINE_SHARE = 0.4
 #: Contrary evidence: the highest speed's spectral shape differs from white by at least this total variation ...
@@ -90,8 +94,9 @@ class BackgroundVibration(Effect, law.Extension):
         Vibration the accelerometer reads with the screw still
         (:attr:`.table.WindowTable.rest_rms`) is power from elsewhere measured
         directly, when it carries :data:`REST_SHARE` of the quietest running
-        windows' power (:func:`rest_share`): a resonance or any law of the
-        contacts puts it at zero, so it counts beside any effect.
+        windows' power (:func:`rest_share`) and the fitted B (``params``, if
+        given) carries at least :data:`REST_AGREEMENT` of its RMS: a resonance
+        or any law of the contacts puts it at zero, so it counts beside any effect.
 
         Power added from elsewhere with a spectrum of its own changes the
         shape of the recorded spectrum between the lowest and the highest speed;
@@ -106,7 +111,7 @@ class BackgroundVibration(Effect, law.Extension):
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
         share = rest_share(table)
-        if share >= REST_SHARE:
+        if share >= REST_SHARE and (params is None or params['background_rms'] >= REST_AGREEMENT * table.rest_rms):
             return (f'standstill: with the screw still the accelerometer reads {table.rest_rms:.3g} m/s^2 RMS '
                     f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
                     'running windows, which the contact law puts at zero')
