@@ -30,6 +30,8 @@ def test_diagnose_command_writes_json_report_and_calibration(tmp_path, capsys):
     # Stiffness changes along the stroke: located inside runs, whatever the run-level lack-of-fit test says.
     assert 'lack of fit: ' in printed and 'located: the mismatch follows position' in printed
     assert document['location']['located'] == 'position' and document['adequacy']['baseline']['testable']
+    # The rests between runs are read too: with the screw still the accelerometer gives its noise (0.003 m/s^2).
+    assert document['data']['standstill_windows'] >= 3 and 0.001 < document['data']['standstill_rms'] < 0.006
     assert 'Lack of fit, paper' in (tmp_path / 'report' / 'index.html').read_text()
 
 
