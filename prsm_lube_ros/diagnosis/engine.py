@@ -458,13 +458,17 @@ def _too_few_conditions(table: WindowTable, effect: Effect, location: Location) 
 
     Its law is a function of the (speed, load) condition, so it needs at least
     as many conditions as the constants and its parameters; evidence from
-    outside the amplitude fit (the spectrum) still tests it.
+    the spectrum still tests it, vibration measured at standstill does not
+    (:meth:`.effects.Effect.standstill_evidence`).
     """
     if effect.covariate not in ('speed', 'load'):
         return ''
     conditions = operating_conditions(table.speed, table.load)
     needed = 3 + min(len(form.parameter_names) for form in effect.variants())
-    if conditions >= needed or effect.independent_evidence(table, location):
+    if conditions >= needed:
+        return ''
+    evidence = effect.independent_evidence(table, location)
+    if evidence and evidence != effect.standstill_evidence(table):      # measured at rest: no law tested
         return ''
     return (f'{conditions} (speed, load) conditions for 3 constants and its {needed - 3} parameter(s): a law of '
             f'speed and load cannot be tested on so few conditions (record {needed - conditions} more)')
@@ -572,22 +576,21 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
         pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
                       f'{100 * pair.gain:.0f} % lower, BIC {pair.delta_bic:+.1f}')
         return pair
-    return pair if _earns_by_evidence(table, pair, other, location) else None
+    return pair if _earns_by_evidence(table, pair, location) else None
 
 
-def _earns_by_evidence(table: WindowTable, pair: SecondEffect, other: Candidate, location: Location) -> bool:
-    """The evidence rule: ``other`` shows outside the amplitude fit and costs little held-out (route, basis set).
+def _earns_by_evidence(table: WindowTable, pair: SecondEffect, location: Location) -> bool:
+    """The evidence rule: the added effect shows outside the amplitude fit and costs little held-out (route, basis set).
 
-    ``other`` has evidence outside the amplitude fit, whatever its parameters
-    and with the pair's (its fit alone may have given its part to the first:
-    a floor a resonance absorbed), and not the first effect's own signature (a
-    resonance changes the spectral shape by itself, see
+    The added effect has evidence outside the amplitude fit with the pair's
+    parameters, whatever its fit alone showed (that fit may have given its part
+    to the first: a floor a resonance absorbed), and not the first effect's own
+    signature (a resonance changes the spectral shape by itself, see
     :attr:`.effects.Effect.changes_spectral_shape`),
     and the pair predicts held-out runs no worse than :data:`EVIDENCE_TOLERANCE`
     than the first alone.
     """
-    evidence = (other.effect.independent_evidence(table, location)
-                and pair.effect.independent_evidence(table, location, pair.params, beside=pair.first_effect))
+    evidence = pair.effect.independent_evidence(table, location, pair.params, beside=pair.first_effect)
     if not (evidence and pair.gain >= -EVIDENCE_TOLERANCE):
         return False
     pair.route = 3
@@ -603,8 +606,9 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     or when another candidate alone predicted held-out runs better than the
     paper's model by :data:`MIN_GAIN` (an effect drifting between replicate runs,
     depletion say, leaves no lack of fit in the condition means); otherwise only
-    the candidates with evidence outside the amplitude fit are tried (a floor
-    measured at standstill that a resonance's fit has absorbed).
+    the candidates with evidence at standstill are tried
+    (:meth:`.effects.Effect.standstill_evidence`: a floor measured with the
+    screw still that a resonance's fit has absorbed).
     Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
     within :data:`BIC_MARGIN` of each other tie, and neither is named, unless
     what the first leaves is located on the covariate of one of them only; one
@@ -616,8 +620,8 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
                       for c in candidates)
     left = locate(table, first.fit.log_residual)
     if not remaining.significant and not others_gain and left.located == 'none':
-        # Nothing left in the amplitudes: only a candidate seen outside them (vibration at standstill, say) is tried.
-        candidates = [c for c in candidates if c.effect.independent_evidence(table, location)]
+        # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill.
+        candidates = [c for c in candidates if c.effect.standstill_evidence(table)]
     earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
@@ -664,7 +668,7 @@ def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline:
                       for b in other.family.variants()]
             second = _best_pair(table, combos, first.fit, other, folds, location)
             if second is None or not (_earns_by_bic(second, BIC_MARGIN)
-                                      or _earns_by_evidence(table, second, other, location)):
+                                      or _earns_by_evidence(table, second, location)):
                 continue
             pair = second.fit
             earns = (_delta_bic(pair, baseline) <= -BIC_MARGIN and _delta_bic(pair, other.fit) <= -BIC_MARGIN

@@ -167,9 +167,9 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence=''):
                                                   beside: evidence))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
-    other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence=evidence,
-                            effect=SimpleNamespace(covariate='position', independent_evidence=lambda table, location:
-                                                   evidence))
+    # The other's fit alone showed no evidence: the pair's parameters decide (a floor a resonance absorbed alone).
+    other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence='',
+                            effect=SimpleNamespace(covariate='position'))
     left = Location([], None, located, '')
     return engine._add_second(None, first, other, None, None, left)
 

@@ -5,7 +5,8 @@
 ``A = sqrt(A_22^2 + B^2)``; B shows most at low speed.  Its forms differ in
 the spectrum only: lines at fixed frequencies, a broadband floor, or both
 (:meth:`BackgroundVibration.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2), at least the RMS
-of the fixed lines the spectrum measures; internally the rest of B (added in power) over the smallest RMS recorded.
+of the fixed lines the spectrum measures and of the vibration at standstill (the larger); internally the rest of B
+(added in power) over the smallest RMS recorded.
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from ..table import WindowTable
 
 __all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE',
-           'REST_AGREEMENT', 'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
+           'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
            'rest_share']
 
 #: Bounds of B over the smallest recorded RMS.
@@ -35,9 +36,6 @@ MIN_LINE_SHARE = 1e-3
 REST_SHARE = 0.05
 #: The quietest running windows: this quantile of the window RMS.
 QUIET_QUANTILE = 0.1
-#: A fitted B below this fraction of the RMS at standstill does not carry what was measured there (vibration
-#: at standstill only: a servo dithering to hold position, say), and the standstill is no evidence for it.
-REST_AGREEMENT = 0.5
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
 LINE_SHARE = 0.4
 #: Contrary evidence: the highest speed's spectral shape differs from white by at least this total variation ...
@@ -65,8 +63,14 @@ class BackgroundVibration(Effect, law.Extension):
                    'on, and vibration spectra')
 
     def scales(self, table: WindowTable) -> dict[str, float]:
-        """Smallest recorded RMS and the RMS of the fixed lines the spectrum measures, m/s^2."""
-        return {'rms_scale': float(np.min(table.rms)), 'line_rms': math.sqrt(fixed_line_power(table))}
+        """Smallest recorded RMS, the RMS of the fixed lines the spectrum measures and that at standstill, m/s^2.
+
+        ``rest_rms`` is the table's figure at standstill when it counts
+        (:data:`REST_SHARE` of the quietest running power, :func:`rest_share`), else 0.
+        """
+        rest = table.rest_rms if rest_share(table) >= REST_SHARE else 0.0
+        return {'rms_scale': float(np.min(table.rms)), 'line_rms': math.sqrt(fixed_line_power(table)),
+                'rest_rms': float(rest)}
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The part of B beyond the fixed lines, over min RMS, in :data:`FRACTION_RANGE`."""
@@ -77,15 +81,18 @@ class BackgroundVibration(Effect, law.Extension):
         return [np.array([0.1]), np.array([0.3]), np.array([0.6])]
 
     def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, float]:
-        """background_rms B (m/s^2): the fixed lines' RMS and the fitted rest added in power.
+        """background_rms B (m/s^2): what was measured (lines, standstill) and the fitted rest added in power.
 
-        Lines at fixed frequencies with constant power are vibration from
-        elsewhere measured directly, so B is never fitted below them (a fit
-        that would rather give their power to the contact law, with a negative
-        C_lambda say, cannot).
+        Lines at fixed frequencies with constant power, and vibration with the
+        screw still, are vibration from elsewhere measured directly, so B is
+        never fitted below the larger of the two (a fit that would rather give
+        their power to the contact law, with a negative C_lambda say, or to a
+        resonance, cannot).  Vibration at standstill that running does not
+        carry (a servo dithering to hold position, say) then makes the fit
+        worse, and the background does not earn.
         """
-        line_rms = scales.get('line_rms', 0.0)
-        return {'background_rms': float(math.hypot(line_rms, p[0] * scales['rms_scale'])), **scales}
+        measured = max(scales.get('line_rms', 0.0), scales.get('rest_rms', 0.0))
+        return {'background_rms': float(math.hypot(measured, p[0] * scales['rms_scale'])), **scales}
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
                              params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
@@ -94,9 +101,9 @@ class BackgroundVibration(Effect, law.Extension):
         Vibration the accelerometer reads with the screw still
         (:attr:`.table.WindowTable.rest_rms`) is power from elsewhere measured
         directly, when it carries :data:`REST_SHARE` of the quietest running
-        windows' power (:func:`rest_share`) and the fitted B (``params``, if
-        given) carries at least :data:`REST_AGREEMENT` of its RMS: a resonance
-        or any law of the contacts puts it at zero, so it counts beside any effect.
+        windows' power (:func:`rest_share`); B is then never fitted below it
+        (:meth:`to_params`).  A resonance or any law of the contacts puts it at
+        zero, so it counts beside any effect.
 
         Power added from elsewhere with a spectrum of its own changes the
         shape of the recorded spectrum between the lowest and the highest speed;
@@ -110,17 +117,21 @@ class BackgroundVibration(Effect, law.Extension):
         lines = location.spectrum if location is not None else None
         if lines is not None and lines.frequencies and lines.share_at_lowest_speed >= MIN_LINE_SHARE:
             return 'spectrum: ' + lines.note
-        share = rest_share(table)
-        if share >= REST_SHARE and (params is None or params['background_rms'] >= REST_AGREEMENT * table.rest_rms):
-            return (f'standstill: with the screw still the accelerometer reads {table.rest_rms:.3g} m/s^2 RMS '
-                    f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
-                    'running windows, which the contact law puts at zero')
         shape = getattr(location, 'shape', None)
         shaped = ((lines is not None and lines.mode_frequencies)
                   or (beside is not None and beside.changes_spectral_shape))
         if shape is not None and shape.floor_added and not shaped:
             return 'spectrum: ' + shape.note
-        return ''
+        return self.standstill_evidence(table, params)
+
+    def standstill_evidence(self, table: WindowTable, params: dict[str, float] | None = None) -> str:
+        """Vibration at standstill carrying :data:`REST_SHARE` of the quietest running power (B is fitted above it)."""
+        share = rest_share(table)
+        if not share >= REST_SHARE:
+            return ''
+        return (f'standstill: with the screw still the accelerometer reads {table.rest_rms:.3g} m/s^2 RMS '
+                f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
+                'running windows, which the contact law puts at zero')
 
     def contrary_evidence(self, table: WindowTable, location: Location | None,
                           params: dict[str, float] | None = None) -> str:

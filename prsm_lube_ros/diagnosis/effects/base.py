@@ -109,6 +109,16 @@ class Effect(Extension):
         """
         return ''
 
+    def standstill_evidence(self, table: WindowTable, params: dict[str, Any] | None = None) -> str:
+        """Evidence read with the screw still, which no law of the contacts explains; empty when none.
+
+        Part of :meth:`independent_evidence` that holds beside any effect, so
+        the engine seeks the effect as a second one even when the first leaves
+        nothing in the amplitudes.  It measures, it does not test a law of
+        speed and load: it makes no such law testable on too few conditions.
+        """
+        return ''
+
     def contrary_evidence(self, table: WindowTable, location: Location | None,
                           params: dict[str, Any] | None = None) -> str:
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
