@@ -17,15 +17,17 @@ Two effects at once (forward selection): once an effect is named, the
 residual it leaves is tested the same way (lack of fit and located pattern);
 when something remains, each other candidate (in its own chosen form) is
 fitted together with the first, and the best pair is kept when the second
-effect earns its parameters over the first alone (BIC by :data:`BIC_MARGIN`
-and held-out error by :data:`MIN_GAIN`).  Both are then reported (``effects``
+effect earns its place by the rules of :func:`_add_second`; when nothing
+remains, only candidates with evidence at standstill are tried (a floor the
+first effect's fit absorbed).  Both are then reported (``effects``
 in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
 :mod:`.fitting`) by :data:`BIC_MARGIN` or more **and** lowers the held-out
 error by :data:`MIN_GAIN` or more; or when evidence from outside the
-amplitude fit (the spectrum's fixed lines for background vibration) shows it
+amplitude fit (the spectrum's fixed lines or the vibration at standstill for
+background vibration, a mode band for a resonance) shows it
 and it does not predict held-out runs worse.  Earning candidates rank by
 held-out error.  When the runner-up comes close (half the leader's gain or
 more) both are fitted together and each is tested for what it adds given the

@@ -5,7 +5,10 @@
 Diagnosis works on the windows ``prsm-lube calibrate`` would fit (steady, under
 load), with the covariates the contract's topics give: screw speed, axial load,
 nut position, revolutions and time since the start of the recording, and, when
-recorded, temperature and the Welch spectrum of each window.
+recorded, temperature and the Welch spectrum of each window.  Of the windows
+at standstill it keeps one figure, their median RMS (``rest_rms``): what the
+accelerometer reads with the screw still, the windows at rest counted in
+``rest_windows``.
 
 Runs are numbered uniquely over all recordings (``run``); ``recording`` says
 which recording a window came from.  ``position`` is the nut's place along the
@@ -121,7 +124,8 @@ class WindowTable:
     spectral content above it is not in ``rms``.  ``rest_rms`` (m/s^2, same band) is the
     median RMS of the windows recorded at standstill (:data:`REST_SPEED`), NaN with fewer than
     :data:`REST_WINDOWS_NEEDED` of them: what the accelerometer reads with the screw still, which
-    the contact law of Eq. 22 puts at zero.
+    the contact law of Eq. 22 puts at zero; ``rest_windows`` is how many windows it was taken over
+    (counted also when too few).
     """
 
     speed: np.ndarray
