@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from ..estimation.windowing import Window
 
 __all__ = ['COLUMNS', 'Columns', 'REST_SPEED', 'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP',
-           'WindowTable', 'band_high_of', 'rest_rms_values', 'table_from_windows']
+           'WindowTable', 'band_high_of', 'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
@@ -266,7 +266,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
     if sizes and len(set(sizes)) == 1 and len(sizes) >= SPECTRA_NEEDED * len(spectra):
         # Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
         spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
-    rest = rest_rms_values(windows_per_recording)
+    rest = _rest_rms_values(windows_per_recording)
     return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
                        band_high=float(band_high), rest_windows=int(rest.size),
@@ -274,7 +274,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
                        **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
 
 
-def rest_rms_values(windows_per_recording: Sequence[Sequence[Window]]) -> np.ndarray:
+def _rest_rms_values(windows_per_recording: Sequence[Sequence[Window]]) -> np.ndarray:
     """RMS (m/s^2) of every window at standstill: at rest, screw speed at most :data:`REST_SPEED`, RMS finite."""
     return np.array([w.vibration_rms for windows in windows_per_recording for w in windows
                      if w.reason_kind == AT_REST and w.screw_speed <= REST_SPEED

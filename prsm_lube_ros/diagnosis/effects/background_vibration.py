@@ -122,9 +122,9 @@ class BackgroundVibration(Effect, law.Extension):
                   or (beside is not None and beside.changes_spectral_shape))
         if shape is not None and shape.floor_added and not shaped:
             return 'spectrum: ' + shape.note
-        return self.standstill_evidence(table, params)
+        return self.standstill_evidence(table)
 
-    def standstill_evidence(self, table: WindowTable, params: dict[str, float] | None = None) -> str:
+    def standstill_evidence(self, table: WindowTable) -> str:
         """Vibration at standstill carrying :data:`REST_SHARE` of the quietest running power (B is fitted above it)."""
         share = rest_share(table)
         if not share >= REST_SHARE:

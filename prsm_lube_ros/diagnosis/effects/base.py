@@ -109,7 +109,7 @@ class Effect(Extension):
         """
         return ''
 
-    def standstill_evidence(self, table: WindowTable, params: dict[str, Any] | None = None) -> str:
+    def standstill_evidence(self, table: WindowTable) -> str:
         """Evidence read with the screw still, which no law of the contacts explains; empty when none.
 
         Part of :meth:`independent_evidence` that holds beside any effect, so
