@@ -469,8 +469,7 @@ def _too_few_conditions(table: WindowTable, effect: Effect, location: Location) 
     needed = 3 + min(len(form.parameter_names) for form in effect.variants())
     if conditions >= needed:
         return ''
-    evidence = effect.independent_evidence(table, location)
-    if evidence and evidence != effect.standstill_evidence(table):      # measured at rest: no law tested
+    if effect.spectral_evidence(table, location):      # not the standstill: measured at rest, it tests no law
         return ''
     return (f'{conditions} (speed, load) conditions for 3 constants and its {needed - 3} parameter(s): a law of '
             f'speed and load cannot be tested on so few conditions (record {needed - conditions} more)')

@@ -68,7 +68,7 @@ class BackgroundVibration(Effect, law.Extension):
         ``rest_rms`` is the table's figure at standstill when it counts
         (:data:`REST_SHARE` of the quietest running power, :func:`rest_share`), else 0.
         """
-        rest = table.rest_rms if rest_share(table) >= REST_SHARE else 0.0
+        rest = table.rest_rms if self.standstill_evidence(table) else 0.0
         return {'rms_scale': float(np.min(table.rms)), 'line_rms': math.sqrt(fixed_line_power(table)),
                 'rest_rms': float(rest)}
 
@@ -94,16 +94,9 @@ class BackgroundVibration(Effect, law.Extension):
         measured = max(scales.get('line_rms', 0.0), scales.get('rest_rms', 0.0))
         return {'background_rms': float(math.hypot(measured, p[0] * scales['rms_scale'])), **scales}
 
-    def independent_evidence(self, table: WindowTable, location: Location | None,
-                             params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
-        """Fixed lines of constant power (:data:`MIN_LINE_SHARE`), vibration at standstill, or a spectral shape change.
-
-        Vibration the accelerometer reads with the screw still
-        (:attr:`.table.WindowTable.rest_rms`) is power from elsewhere measured
-        directly, when it carries :data:`REST_SHARE` of the quietest running
-        windows' power (:func:`rest_share`); B is then never fitted below it
-        (:meth:`to_params`).  A resonance or any law of the contacts puts it at
-        zero, so it counts beside any effect.
+    def spectral_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
+        """Fixed lines of constant power (:data:`MIN_LINE_SHARE`) or a spectral shape change.
 
         Power added from elsewhere with a spectrum of its own changes the
         shape of the recorded spectrum between the lowest and the highest speed;
@@ -122,10 +115,18 @@ class BackgroundVibration(Effect, law.Extension):
                   or (beside is not None and beside.changes_spectral_shape))
         if shape is not None and shape.floor_added and not shaped:
             return 'spectrum: ' + shape.note
-        return self.standstill_evidence(table)
+        return ''
 
     def standstill_evidence(self, table: WindowTable) -> str:
-        """Vibration at standstill carrying :data:`REST_SHARE` of the quietest running power (B is fitted above it)."""
+        """Vibration at standstill carrying :data:`REST_SHARE` of the quietest running power (B is fitted above it).
+
+        Vibration the accelerometer reads with the screw still
+        (:attr:`.table.WindowTable.rest_rms`) is power from elsewhere measured
+        directly, when it carries :data:`REST_SHARE` of the quietest running
+        windows' power (:func:`rest_share`); B is then never fitted below it
+        (:meth:`to_params`).  A resonance or any law of the contacts puts it at
+        zero, so it counts beside any effect.
+        """
         share = rest_share(table)
         if not share >= REST_SHARE:
             return ''

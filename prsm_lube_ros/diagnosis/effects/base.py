@@ -101,7 +101,15 @@ class Effect(Extension):
 
     def independent_evidence(self, table: WindowTable, location: Location | None,
                              params: dict[str, Any] | None = None, beside: Effect | None = None) -> str:
-        """Evidence for the effect from outside the amplitude fit (e.g. the spectrum); empty when none.
+        """Evidence for the effect from outside the amplitude fit; empty when none.
+
+        :meth:`spectral_evidence`, else :meth:`standstill_evidence`.
+        """
+        return self.spectral_evidence(table, location, params, beside) or self.standstill_evidence(table)
+
+    def spectral_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, Any] | None = None, beside: Effect | None = None) -> str:
+        """Evidence for the effect in the recorded spectra; empty when none.
 
         ``params`` (the fitted parameters, when there is a fit) lets the evidence
         be checked against what the fitted law predicts; ``beside`` is the effect

@@ -87,8 +87,8 @@ class Resonance(Effect, law.Extension):
     def _resonant_speed(self, p: np.ndarray, scales: dict[str, float]) -> float:
         return scales['top_speed'] / p[0]
 
-    def independent_evidence(self, table: WindowTable, location: Location | None,
-                             params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
+    def spectral_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, float] | None = None, beside: Effect | None = None) -> str:
         """Order lines whose powers follow one mode in Hz, or a band fixed in Hz whose power follows the speed.
 
         With fitted ``params`` the band must also follow the fitted transfer:
