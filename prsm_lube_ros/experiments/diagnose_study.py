@@ -220,19 +220,45 @@ def _margins(out: Path, command: str) -> int:
     return 0
 
 
+def _effect_sizes(records: list[dict], jobs: int) -> list[dict]:
+    """The concealed effects' sizes (:func:`.random_study.explain_miss`) of ``records``, simulated again."""
+    from ..diagnosis.effects import effect_ids
+    from .random_study import explain_miss
+    pool_effects = tuple(e for e in effect_ids() if e != NONE)
+    cases = [(r['kind'], r['seed'], pool_effects, False) for r in records]
+    with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
+        return list(pool.map(explain_miss, cases))
+
+
 def _explain_misses(out: Path, jobs: int, command: str) -> int:
     """``--explain-misses``: the size of what each missed case concealed, to ``out``/misses.md."""
-    from ..diagnosis.effects import effect_ids
-    from .random_study import explain_miss, misses_markdown
+    from .random_study import misses_markdown
     records = _study_cases(out)
     if records is None:
         return 2
-    pool_effects = tuple(e for e in effect_ids() if e != NONE)
-    cases = [(r['kind'], r['seed'], pool_effects, False) for r in records if not r.get('right')]
-    with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
-        sizes = list(pool.map(explain_miss, cases))
+    sizes = _effect_sizes([r for r in records if not r.get('right')], jobs)
     text = misses_markdown(records, sizes, command)
     (out / 'misses.md').write_text(text)
+    print(text)
+    return 0
+
+
+def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
+    """``--power``: every case of ``kinds`` against what an ideal test would name, to ``out``/power.md."""
+    from ..diagnosis.effects import effect_ids
+    from .detection_power import power_markdown
+    records = _study_cases(out)
+    if records is None:
+        return 2
+    single = set(effect_ids()) - {NONE}
+    wrong = sorted(set(kinds) - single)
+    if wrong:
+        print(f'diagnose_study: --power takes single catalogue effects, not {", ".join(wrong)}; '
+              f'known: {", ".join(sorted(single))}', file=sys.stderr)
+        return 2
+    chosen = [r for r in records if r['kind'] in kinds]
+    text = power_markdown(chosen, _effect_sizes(chosen, jobs), command)
+    (out / 'power.md').write_text(text)
     print(text)
     return 0
 
@@ -263,6 +289,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--margins', action='store_true',
                         help='random design: write margins.md from --out/results.json, the candidates a lower BIC '
                              'margin would name (no case is run again)')
+    parser.add_argument('--power', nargs='+', default=None, metavar='EFFECT',
+                        help='random design: simulate every case of these effects in --out/results.json again and '
+                             'write power.md, the chance an ideal test would name each')
     args = parser.parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
@@ -273,6 +302,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _explain_misses(Path(args.out), args.jobs, command)
     if args.design == 'random' and args.margins:
         return _margins(Path(args.out), command)
+    if args.design == 'random' and args.power:
+        return _power(Path(args.out), args.power, args.jobs, command)
     if args.design == 'random':
         return _run_random(args, [e for e in effects if e != NONE], command)
     classes = [e for e in effects if e != NONE] + [NONE]

@@ -20,7 +20,10 @@ Eq. 22), so only the rest can show as a mismatch.  Two sizes are reported:
 
 The ratio ``between_runs / run_scatter`` is the effect's size in units of the
 noise it competes with; well below 1 no method can name it from the
-amplitudes, whatever its form.
+amplitudes, whatever its form.  ``runs * ratio**2`` is the noncentrality of the
+likelihood-ratio statistic with which an ideal test (true form known, run
+scatter known) would see it: :mod:`.detection_power` turns it into the chance
+that such a test names the effect.
 """
 from __future__ import annotations
 
@@ -45,16 +48,22 @@ class EffectSize:
     between_runs: float     # RMS over runs of the run-mean change left by the model's constants (ln units)
     within_runs: float      # RMS of the change about its run means (ln units)
     run_scatter: float      # the rig's run-to-run log scatter
+    runs: int = 0           # runs of the table
 
     @property
     def ratio(self) -> float:
         """``between_runs / run_scatter`` (inf without run scatter)."""
         return self.between_runs / self.run_scatter if self.run_scatter > 0 else math.inf
 
+    @property
+    def noncentrality(self) -> float:
+        """``runs * ratio**2``: the sum over runs of the squared change left, in units of the run scatter."""
+        return self.runs * self.ratio ** 2
+
     def as_json(self) -> dict[str, float]:
         """The sizes, rounded for a results file."""
         return {'between_runs': round(self.between_runs, 5), 'within_runs': round(self.within_runs, 5),
-                'run_scatter': round(self.run_scatter, 5), 'ratio': round(self.ratio, 3)}
+                'run_scatter': round(self.run_scatter, 5), 'ratio': round(self.ratio, 3), 'runs': self.runs}
 
 
 def effect_size(table: WindowTable, rig: RigConfig, effects: Effects) -> EffectSize:
@@ -72,4 +81,5 @@ def effect_size(table: WindowTable, rig: RigConfig, effects: Effects) -> EffectS
     left = means - design @ coefficients
     within = change - means[np.searchsorted(table.runs, table.run)]
     return EffectSize(between_runs=float(np.sqrt(np.mean(left ** 2))),
-                      within_runs=float(np.sqrt(np.mean(within ** 2))), run_scatter=float(rig.run_scatter))
+                      within_runs=float(np.sqrt(np.mean(within ** 2))), run_scatter=float(rig.run_scatter),
+                      runs=int(means.size))

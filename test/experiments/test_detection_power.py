@@ -1,0 +1,66 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The ideal test a study's misses are measured against (no ROS graph)."""
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from prsm_lube_ros.experiments import diagnose_study
+from prsm_lube_ros.experiments.detection_power import chance_of_at_least, ideal_detection, power_markdown
+from prsm_lube_ros.experiments.effect_size import EffectSize
+
+
+def _size(ratio: float, runs: int) -> EffectSize:
+    return EffectSize(between_runs=ratio * 0.03, within_runs=0.0, run_scatter=0.03, runs=runs)
+
+
+def test_ideal_detection_is_the_chance_a_shifted_normal_clears_the_guard():
+    # (Z + sqrt(lambda))^2 >= threshold, computed by hand, and by simulation.
+    size = _size(0.59, 30)
+    threshold = 10.0 + math.log(30)
+    root = math.sqrt(size.noncentrality)
+    by_hand = stats.norm.sf(math.sqrt(threshold) - root) + stats.norm.cdf(-math.sqrt(threshold) - root)
+    assert size.noncentrality == pytest.approx(30 * 0.59 ** 2)
+    assert ideal_detection(size) == pytest.approx(by_hand, rel=1e-6)
+    draws = (np.random.default_rng(1).standard_normal(200_000) + root) ** 2
+    assert ideal_detection(size) == pytest.approx(np.mean(draws >= threshold), abs=0.005)
+
+
+def test_the_guard_costs_detection_and_an_absent_effect_is_a_rare_false_name():
+    assert ideal_detection(_size(0.59, 30), margin=0.0) > ideal_detection(_size(0.59, 30)) + 0.3
+    assert ideal_detection(_size(0.0, 30)) < 1e-3
+    assert ideal_detection(_size(0.0, 30)) == pytest.approx(stats.chi2.sf(10.0 + math.log(30), df=1))
+    assert ideal_detection(_size(2.0, 30)) > 0.999
+    assert ideal_detection(EffectSize(0.01, 0.0, 0.0, 30)) == 1.0     # no run scatter: nothing hides it
+    assert ideal_detection(_size(0.66, 40)) > ideal_detection(_size(0.66, 20))
+
+
+def test_chance_of_at_least_is_the_binomial_tail_for_equal_chances():
+    assert chance_of_at_least([0.9] * 30, 29) == pytest.approx(stats.binom.sf(28, 30, 0.9))
+    assert chance_of_at_least([1.0, 1.0, 0.5], 3) == pytest.approx(0.5)
+    assert chance_of_at_least([0.2, 0.7], 0) == pytest.approx(1.0)
+    assert chance_of_at_least([0.2, 0.7], 3) == 0.0
+
+
+def test_power_markdown_sets_what_was_named_beside_the_ideal_test():
+    records = [{'kind': 'lubricant_depletion', 'seed': 1, 'verdict': 'lubricant_depletion', 'right': True},
+               {'kind': 'lubricant_depletion', 'seed': 2, 'verdict': 'adequate', 'right': False},
+               {'kind': 'lubricant_depletion', 'seed': 3, 'verdict': 'adequate', 'right': False}]
+    sizes = [{'kind': 'lubricant_depletion', 'seed': s, 'size': _size(r, 30).as_json()}
+             for s, r in ((1, 2.0), (2, 0.59))]
+    sizes.append({'kind': 'lubricant_depletion', 'seed': 3, 'size': None})    # no usable window: left out
+    text = power_markdown(records, sizes, 'cmd')
+    assert '| lubricant_depletion | 2 | adequate | no | 30 | 0.59 | 10.4 | 33 % | 92 % |' in text
+    assert '| lubricant_depletion | 2 | 1 | 1.3 |' in text
+    assert '(2 or more)' in text
+
+
+def test_power_option_takes_single_effects_only(tmp_path, capsys):
+    assert diagnose_study.main(['--out', str(tmp_path / 'absent'), '--power', 'resonance']) == 2
+    assert 'cannot read the cases' in capsys.readouterr().err
+    (tmp_path / 'results.json').write_text('{"cases": []}')
+    assert diagnose_study.main(['--out', str(tmp_path), '--power', 'two']) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'not two' in err[0]
