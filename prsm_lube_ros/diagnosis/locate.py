@@ -36,11 +36,13 @@ trough, a steady rise or fall, or a step) and, for nut position, in how many
 runs the same shape is seen.
 
 The spectral test looks for lines at fixed frequencies: narrow peaks standing
-out of their neighbourhood at the same frequency at the two lowest screw
-speeds at least (so not rotation orders, which move with speed) whose power
-stays put, wherever they stand out, while the total power changes with speed
-(so not a resonance of the thread-contact excitation, which scales with it).  That is the signature
-of vibration from elsewhere.
+out of their neighbourhood at the same frequency at two screw speeds at least
+(so not rotation orders, which move with speed) whose power stays put wherever
+it can be measured (the line at least as strong as the floor under it), while the total power
+changes with speed (so not a resonance of the thread-contact excitation, which scales with it).  That is the
+signature of vibration from elsewhere.  Any two speeds, not the two lowest: a
+mode the orders pass raises the floor around the line at the speeds where it
+rings, yet the line's power is still measured there.
 
 The same spectra are order-tracked for a structural mode: a band standing out
 at the same frequency in Hz at two speeds or more while the rotation orders
@@ -84,7 +86,7 @@ from ..estimation.calibration import operating_levels
 from .fitting import effective_sample_size
 from .table import WindowTable
 
-__all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_PROMINENCE',
+__all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE', 'LINE_PROMINENCE',
            'Location', 'MIN_SEGMENT_RUNS', 'MODE_FLOOR_HALF_WIDTH', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS',
            'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS',
            'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
@@ -95,8 +97,10 @@ __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE
 SIGNIFICANCE = 1e-3
 #: Quantile bins of the flexible (any-shape) covariate tests.
 BINS = 6
-#: A spectral line stands out when it exceeds its neighbourhood's median by this factor at every speed.
+#: A spectral line stands out when it exceeds its neighbourhood's median by this factor (at two speeds at least).
 LINE_PROMINENCE = 4.0
+#: A line's power is measured at the speeds where it exceeds its neighbourhood's median by this factor.
+LINE_MEASURABLE = 2.0
 #: Half width, bins, of the neighbourhood a line is compared with.
 FLOOR_HALF_WIDTH = 8
 #: Fixed lines count as constant when their power varies by less than this factor between speeds ...
@@ -614,7 +618,7 @@ def _fixed_line_spectra(table: WindowTable) -> tuple[Any, SpectralLines]:
         mean_square = np.array([np.mean(table.rms[index == i] ** 2) for i in range(len(edges))])
         fixed = SpectralLines(testable=True)
         _fixed_lines(fixed, medians, floors, excess, widened, np.arange(medians.shape[1]) * df, lowest,
-                     mean_square, np.argsort(edges)[:2], df, table.band_high)
+                     mean_square, int(np.argmin(edges)), df, table.band_high)
     for key in [key for key, (ref, _) in _LINE_SPECTRA.items() if ref() is None]:
         del _LINE_SPECTRA[key]
     _LINE_SPECTRA[id(table)] = (weakref.ref(table), (spectra, fixed))
@@ -759,32 +763,34 @@ def _line_groups(candidate: np.ndarray) -> list[np.ndarray]:
 
 
 def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray, excess: np.ndarray,
-                 widened: np.ndarray, freqs: np.ndarray, lowest: float, mean_square: np.ndarray, slow: np.ndarray,
+                 widened: np.ndarray, freqs: np.ndarray, lowest: float, mean_square: np.ndarray, slowest: int,
                  df: float, highest: float = math.nan) -> None:
-    """Lines prominent at the two lowest speeds whose power stays put while the total power moves.
+    """Lines prominent at two speeds or more whose power stays put while the total power moves.
 
-    Only lines below ``highest`` (Hz, the RMS band's upper edge; NaN: no edge)
-    count: content above it is not in the window RMS the model is fitted to.
+    The power is compared over every speed where the line is measurable
+    (:data:`LINE_MEASURABLE`).  Only lines below ``highest`` (Hz, the RMS band's
+    upper edge; NaN: no edge) count: content above it is not in the window RMS
+    the model is fitted to.  ``slowest``: the row of the lowest speed.
     """
-    candidate = np.all(widened[slow] >= LINE_PROMINENCE, axis=0) & (freqs >= lowest)
-    candidate &= excess[slow].max(axis=0) >= LINE_PROMINENCE
+    candidate = (np.count_nonzero(widened >= LINE_PROMINENCE, axis=0) >= 2) & (freqs >= lowest)
+    candidate &= excess.max(axis=0) >= LINE_PROMINENCE
     if math.isfinite(highest):
         candidate &= freqs < highest
     for group in _line_groups(candidate):
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
-        prominent = widened[:, lo:hi].max(axis=1) >= LINE_PROMINENCE
+        measured = widened[:, lo:hi].max(axis=1) >= LINE_MEASURABLE
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
-        power = power[prominent]
+        power = power[measured]
         if power.size < 2 or power.min() <= 0:
             continue
         constant = power.max() / power.min() <= LINE_CONSTANCY
-        spread = mean_square[prominent].max() / mean_square[prominent].min()
+        spread = mean_square[measured].max() / mean_square[measured].min()
         if constant and spread >= POWER_SPREAD:
-            peak = lo + int(np.argmax(medians[slow, lo:hi].mean(axis=0)))
+            peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
             result.frequencies.append(float(freqs[peak]))
             result.powers.append(float(np.median(power)))
     result.total_power = float(sum(result.powers))
-    result.share_at_lowest_speed = result.total_power / float(mean_square[slow[0]])
+    result.share_at_lowest_speed = result.total_power / float(mean_square[slowest])
     if result.frequencies:
         result.note = (f'{len(result.frequencies)} line(s) at fixed frequencies '
                        f'({", ".join(f"{f:.0f}" for f in result.frequencies)} Hz) with constant power, '
