@@ -199,10 +199,11 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
     return 0
 
 
-def _study_cases(out: Path) -> list[dict] | None:
-    """The cases of ``out``/results.json, or None with one line on stderr saying why not."""
+def _study_cases(out: Path) -> tuple[list[dict], bool] | None:
+    """The cases of ``out``/results.json and whether the study ran ``--quick``; None (one line on stderr) if unread."""
     try:
-        return list(json.loads((out / 'results.json').read_text())['cases'])
+        document = json.loads((out / 'results.json').read_text())
+        return list(document['cases']), '--quick' in str(document.get('command', '')).split()
     except (OSError, ValueError, KeyError, TypeError) as exc:
         print(f'diagnose_study: cannot read the cases of {out / "results.json"}: {exc!r}', file=sys.stderr)
         return None
@@ -211,21 +212,21 @@ def _study_cases(out: Path) -> list[dict] | None:
 def _margins(out: Path, command: str) -> int:
     """``--margins``: the candidates a lower BIC margin would name, to ``out``/margins.md."""
     from .margins import margins_markdown
-    records = _study_cases(out)
-    if records is None:
+    study = _study_cases(out)
+    if study is None:
         return 2
-    text = margins_markdown(records, command)
+    text = margins_markdown(study[0], command)
     (out / 'margins.md').write_text(text)
     print(text)
     return 0
 
 
-def _effect_sizes(records: list[dict], jobs: int) -> list[dict]:
+def _effect_sizes(records: list[dict], quick: bool, jobs: int) -> list[dict]:
     """The concealed effects' sizes (:func:`.random_study.explain_miss`) of ``records``, simulated again."""
     from ..diagnosis.effects import effect_ids
     from .random_study import explain_miss
     pool_effects = tuple(e for e in effect_ids() if e != NONE)
-    cases = [(r['kind'], r['seed'], pool_effects, False) for r in records]
+    cases = [(r['kind'], r['seed'], pool_effects, quick) for r in records]
     with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
         return list(pool.map(explain_miss, cases))
 
@@ -233,10 +234,11 @@ def _effect_sizes(records: list[dict], jobs: int) -> list[dict]:
 def _explain_misses(out: Path, jobs: int, command: str) -> int:
     """``--explain-misses``: the size of what each missed case concealed, to ``out``/misses.md."""
     from .random_study import misses_markdown
-    records = _study_cases(out)
-    if records is None:
+    study = _study_cases(out)
+    if study is None:
         return 2
-    sizes = _effect_sizes([r for r in records if not r.get('right')], jobs)
+    records, quick = study
+    sizes = _effect_sizes([r for r in records if not r.get('right')], quick, jobs)
     text = misses_markdown(records, sizes, command)
     (out / 'misses.md').write_text(text)
     print(text)
@@ -247,9 +249,10 @@ def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
     """``--power``: every case of ``kinds`` against what an ideal test would name, to ``out``/power.md."""
     from ..diagnosis.effects import effect_ids
     from .detection_power import power_markdown
-    records = _study_cases(out)
-    if records is None:
+    study = _study_cases(out)
+    if study is None:
         return 2
+    records, quick = study
     single = set(effect_ids()) - {NONE}
     wrong = sorted(set(kinds) - single)
     if wrong:
@@ -257,7 +260,7 @@ def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
               f'known: {", ".join(sorted(single))}', file=sys.stderr)
         return 2
     chosen = [r for r in records if r['kind'] in kinds]
-    text = power_markdown(chosen, _effect_sizes(chosen, jobs), command)
+    text = power_markdown(chosen, _effect_sizes(chosen, quick, jobs), command)
     (out / 'power.md').write_text(text)
     print(text)
     return 0

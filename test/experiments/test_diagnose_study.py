@@ -44,6 +44,12 @@ def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
                for case in document['cases'])
     assert diagnose_study.main(['--out', str(out), '--margins']) == 0
     assert '## Margin 8' in (out / 'margins.md').read_text()
+    # The case is simulated again as the quick study drew it: the same runs.
+    assert diagnose_study.main(['--out', str(out), '--power', 'resonance', '--jobs', '1']) == 0
+    resonance = next(case for case in document['cases'] if case['kind'] == 'resonance')
+    rows = [line.split(' | ') for line in (out / 'power.md').read_text().splitlines()
+            if line.startswith('| resonance | 0 |')]
+    assert len(rows) == 1 and rows[0][2] == resonance['verdict'] and int(rows[0][4]) == resonance['runs']
 
 
 def test_margins_list_what_a_lower_bic_margin_would_let_in(tmp_path, capsys):
