@@ -86,12 +86,12 @@ from ..estimation.calibration import operating_levels
 from .fitting import effective_sample_size
 from .table import WindowTable
 
-__all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE', 'LINE_PROMINENCE',
-           'Location', 'MIN_SEGMENT_RUNS', 'MODE_FLOOR_HALF_WIDTH', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS',
-           'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS',
-           'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
-           'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines',
-           'spectral_shape', 'time_segment']
+__all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
+           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MODE_FLOOR_HALF_WIDTH', 'MODE_MIN_SHARE',
+           'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS',
+           'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines',
+           'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode',
+           'spectral_lines', 'spectral_shape', 'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
