@@ -38,7 +38,8 @@ runs the same shape is seen.
 The spectral test looks for lines at fixed frequencies: narrow peaks standing
 out of their neighbourhood at the same frequency at two screw speeds at least
 (so not rotation orders, which move with speed) whose power stays put wherever
-it can be measured (the line at least as strong as the floor under it), while the total power
+it can be measured (the line at least as strong as the floor under it) and wherever a line of that power would
+stand out (so not two orders that meet on one bin at two speeds, nor a mode ringing at two), while the total power
 changes with speed (so not a resonance of the thread-contact excitation, which scales with it).  That is the
 signature of vibration from elsewhere.  Any two speeds, not the two lowest: a
 mode the orders pass raises the floor around the line at the speeds where it
@@ -768,7 +769,8 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
     """Lines prominent at two speeds or more whose power stays put while the total power moves.
 
     The power is compared over every speed where the line is measurable
-    (:data:`LINE_MEASURABLE`).  Only lines below ``highest`` (Hz, the RMS band's
+    (:data:`LINE_MEASURABLE`) or where a line of its (median) power would
+    carry ``LINE_PROMINENCE - 1`` times the floor's power in its bins.  Only lines below ``highest`` (Hz, the RMS band's
     upper edge; NaN: no edge) count: content above it is not in the window RMS
     the model is fitted to.  ``slowest``: the row of the lowest speed.
     """
@@ -780,11 +782,18 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
         measured = widened[:, lo:hi].max(axis=1) >= LINE_MEASURABLE
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
-        power = power[measured]
-        if power.size < 2 or power.min() <= 0:
+        if np.count_nonzero(measured) < 2:
+            continue
+        # Also compared where a line of its power would stand out but may not: two rotation orders on one bin at
+        # two speeds, or a mode ringing at two speeds, are absent (power 0) where a fixed line would show.
+        floor_power = np.sum(floors[:, lo:hi], axis=1) * df
+        should_show = float(np.median(power[measured])) >= (LINE_PROMINENCE - 1.0) * floor_power
+        compared = measured | should_show
+        power = power[compared]
+        if power.min() <= 0:
             continue
         constant = power.max() / power.min() <= LINE_CONSTANCY
-        spread = mean_square[measured].max() / mean_square[measured].min()
+        spread = mean_square[compared].max() / mean_square[compared].min()
         if constant and spread >= POWER_SPREAD:
             peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
             result.frequencies.append(float(freqs[peak]))

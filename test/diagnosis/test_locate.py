@@ -101,7 +101,7 @@ def test_a_step_between_runs_is_a_shape_in_time():
 
 
 def spectra_table(mode_share=None, line_power=0.0, seed=0, levels=(10.0, 14.0, 19.0, 26.0), mode_hz=50.0,
-                  raised=None):
+                  raised=None, orders=(1.0, 3.75, 7.5, 15.0)):
     """Speeds ``levels`` (rad/s), orders 1-15 moving with speed over a flat floor; optional fixed band and line.
 
     ``mode_share`` per speed: the share of each window's mean square in a band fixed at ``mode_hz`` (a mode
@@ -120,7 +120,7 @@ def spectra_table(mode_share=None, line_power=0.0, seed=0, levels=(10.0, 14.0, 1
         psd = np.full(bins, (1 - 0.2 - share) * ms / (bins * df))
         if raised is not None:
             psd[(freqs >= 100.0) & (freqs <= 140.0)] *= raised[level]
-        for order in (1.0, 3.75, 7.5, 15.0):
+        for order in orders:
             psd[int(round(order * speed / (2 * np.pi) / df))] += 0.05 * ms / df
         if share:       # a resonance peak: a triangle 4 Hz wide at its foot
             weight = np.maximum(1.0 - np.abs(freqs - mode_hz) / 2.0, 0.0)
@@ -170,6 +170,17 @@ def test_a_fixed_line_is_found_when_ringing_around_it_at_one_speed_hides_it_ther
     assert [round(f) for f in lines.frequencies] == [120]
     assert lines.total_power == pytest.approx(0.05, rel=0.3)
     assert spectral_lines(spectra_table(raised=[1.0, 6.0, 1.0, 1.0])).frequencies == []     # the ringing alone
+
+
+def test_two_orders_on_one_bin_at_two_speeds_and_a_mode_ringing_at_two_are_not_lines():
+    """Orders 6 at 10 rad/s and 5 at 12 rad/s both sit at 9.55 Hz; a band at 50 Hz rings at 14 and 19 rad/s only.
+
+    Each stands out at two speeds, but is absent where a fixed line of its power would show.
+    """
+    harmonics = spectra_table(levels=(7.0, 10.0, 12.0, 17.0), orders=(5.0, 6.0))
+    assert spectral_lines(harmonics).frequencies == []
+    ringing = spectra_table(mode_share=[0.0, 0.1, 0.06, 0.0])
+    assert spectral_lines(ringing).frequencies == []
 
 
 def test_fixed_line_power_is_what_the_spectral_test_reports_and_zero_without_lines():
