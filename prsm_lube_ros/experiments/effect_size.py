@@ -48,7 +48,7 @@ class EffectSize:
     between_runs: float     # RMS over runs of the run-mean change left by the model's constants (ln units)
     within_runs: float      # RMS of the change about its run means (ln units)
     run_scatter: float      # the rig's run-to-run log scatter
-    runs: int = 0           # runs of the table
+    runs: int               # runs of the table
 
     @property
     def ratio(self) -> float:

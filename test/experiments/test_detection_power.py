@@ -8,7 +8,8 @@ import pytest
 from scipy import stats
 
 from prsm_lube_ros.experiments import diagnose_study
-from prsm_lube_ros.experiments.detection_power import chance_of_at_least, ideal_detection, power_markdown
+from prsm_lube_ros.experiments.detection_power import (
+    chance_of_at_least, ideal_detection, one_sided_detection, power_markdown)
 from prsm_lube_ros.experiments.effect_size import EffectSize
 
 
@@ -37,6 +38,14 @@ def test_the_guard_costs_detection_and_an_absent_effect_is_a_rare_false_name():
     assert ideal_detection(_size(0.66, 40)) > ideal_detection(_size(0.66, 20))
 
 
+def test_knowing_the_sign_names_more_at_the_same_false_name_rate():
+    size, absent = _size(0.59, 30), _size(0.0, 30)
+    assert one_sided_detection(absent) == pytest.approx(ideal_detection(absent), rel=1e-6)     # the same rate
+    assert ideal_detection(size) < one_sided_detection(size) < ideal_detection(size) + 0.15
+    critical = stats.norm.isf(ideal_detection(absent))
+    assert one_sided_detection(size) == pytest.approx(stats.norm.sf(critical - math.sqrt(size.noncentrality)))
+
+
 def test_chance_of_at_least_is_the_binomial_tail_for_equal_chances():
     assert chance_of_at_least([0.9] * 30, 29) == pytest.approx(stats.binom.sf(28, 30, 0.9))
     assert chance_of_at_least([1.0, 1.0, 0.5], 3) == pytest.approx(0.5)
@@ -52,8 +61,8 @@ def test_power_markdown_sets_what_was_named_beside_the_ideal_test():
              for s, r in ((1, 2.0), (2, 0.59))]
     sizes.append({'kind': 'lubricant_depletion', 'seed': 3, 'size': None})    # no usable window: left out
     text = power_markdown(records, sizes, 'cmd')
-    assert '| lubricant_depletion | 2 | adequate | no | 30 | 0.59 | 10.4 | 33 % | 92 % |' in text
-    assert '| lubricant_depletion | 2 | 1 | 1.3 |' in text
+    assert '| lubricant_depletion | 2 | adequate | no | 30 | 0.59 | 10.4 | 33 % | 40 % | 92 % |' in text
+    assert '| lubricant_depletion | 2 | 1 | 1.3 | 1.4 | 1.9 |' in text
     assert '(2 or more)' in text
 
 
