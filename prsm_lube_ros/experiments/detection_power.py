@@ -109,9 +109,9 @@ def power_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str)
               'ideal | one-sided |', '|---|---|---|---|---|---|---|---|']
     for kind, rows in sorted(per_kind.items()):
         needed = math.ceil(TARGET_SHARE * len(rows) - 1e-9)
-        guarded, sided = [row[1] for row in rows], [row[2] for row in rows]
-        lines.append(f'| {kind} | {len(rows)} | {sum(row[0] for row in rows)} | {sum(guarded):.1f} | '
-                     f'{sum(sided):.1f} | {sum(row[3] for row in rows):.1f} | '
-                     f'{100 * chance_of_at_least(guarded, needed):.0f} % ({needed} or more) | '
-                     f'{100 * chance_of_at_least(sided, needed):.0f} % |')
+        ideal_chances, sided_chances = [row[1] for row in rows], [row[2] for row in rows]
+        lines.append(f'| {kind} | {len(rows)} | {sum(row[0] for row in rows)} | {sum(ideal_chances):.1f} | '
+                     f'{sum(sided_chances):.1f} | {sum(row[3] for row in rows):.1f} | '
+                     f'{100 * chance_of_at_least(ideal_chances, needed):.0f} % ({needed} or more) | '
+                     f'{100 * chance_of_at_least(sided_chances, needed):.0f} % |')
     return '\n'.join(lines) + '\n'
