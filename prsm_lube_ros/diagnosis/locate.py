@@ -770,9 +770,10 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
 
     The power is compared over every speed where the line is measurable
     (:data:`LINE_MEASURABLE`) or where a line of its (median) power would
-    carry ``LINE_PROMINENCE - 1`` times the floor's power in its bins.  Only lines below ``highest`` (Hz, the RMS band's
-    upper edge; NaN: no edge) count: content above it is not in the window RMS
-    the model is fitted to.  ``slowest``: the row of the lowest speed.
+    carry ``LINE_PROMINENCE - 1`` times the floor's power in its bins.  Only
+    lines below ``highest`` (Hz, the RMS band's upper edge; NaN: no edge)
+    count: content above it is not in the window RMS the model is fitted to.
+    ``slowest``: the row of the lowest speed.
     """
     candidate = (np.count_nonzero(widened >= LINE_PROMINENCE, axis=0) >= 2) & (freqs >= lowest)
     candidate &= excess.max(axis=0) >= LINE_PROMINENCE

@@ -48,24 +48,27 @@ __all__ = ['TARGET_SHARE', 'chance_of_at_least', 'ideal_detection', 'one_sided_d
 TARGET_SHARE = 0.95
 
 
+def _threshold(size: EffectSize, margin: float) -> float:
+    """The statistic the ideal test must reach: ``margin`` plus one parameter's BIC penalty over the runs."""
+    return margin + math.log(max(size.runs, 2))
+
+
 def ideal_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
     """Chance that the ideal test (module doc) names an effect of ``size`` with a BIC guard of ``margin``."""
     noncentrality = size.noncentrality
     if not math.isfinite(noncentrality):
         return 1.0
-    threshold = margin + math.log(max(size.runs, 2))
     if noncentrality <= 0.0:
-        return float(stats.chi2.sf(threshold, df=1))
-    return float(stats.ncx2.sf(threshold, df=1, nc=noncentrality))
+        return float(stats.chi2.sf(_threshold(size, margin), df=1))
+    return float(stats.ncx2.sf(_threshold(size, margin), df=1, nc=noncentrality))
 
 
 def one_sided_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
     """Chance that a one-sided test (the effect's sign known) names ``size``, false names as :func:`ideal_detection`."""
-    threshold = margin + math.log(max(size.runs, 2))
-    critical = float(stats.norm.isf(stats.chi2.sf(threshold, df=1)))
     noncentrality = size.noncentrality
     if not math.isfinite(noncentrality):
         return 1.0
+    critical = float(stats.norm.isf(stats.chi2.sf(_threshold(size, margin), df=1)))
     return float(stats.norm.sf(critical - math.sqrt(max(noncentrality, 0.0))))
 
 
