@@ -26,7 +26,11 @@ the case.  It is not a bound for every test with the same false-name rate:
 Summed over a kind's cases the chance is the number of cases the ideal test is
 expected to name, and :func:`chance_of_at_least` the chance it reaches a
 study's target on those drawn cases (independent cases; it says nothing of
-strengths the study did not draw).
+strengths the study did not draw).  :func:`names_on_recording` is what the
+ideal test does on the recording itself (its statistic computed from the
+recorded run means, :attr:`.effect_size.EffectSize.recorded_statistic`): the
+chance averages over the run scatter a recording might have drawn, this takes
+the scatter it did draw.
 """
 from __future__ import annotations
 
@@ -42,7 +46,8 @@ from ..diagnosis.engine import BIC_MARGIN
 if TYPE_CHECKING:
     from .effect_size import EffectSize
 
-__all__ = ['TARGET_SHARE', 'chance_of_at_least', 'ideal_detection', 'one_sided_detection', 'power_markdown']
+__all__ = ['TARGET_SHARE', 'chance_of_at_least', 'ideal_detection', 'names_on_recording', 'one_sided_detection',
+           'power_markdown']
 
 #: The share of a kind's cases a study must name (issue 17: 95 %).
 TARGET_SHARE = 0.95
@@ -72,6 +77,13 @@ def one_sided_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
     return float(stats.norm.sf(critical - math.sqrt(max(noncentrality, 0.0))))
 
 
+def names_on_recording(size: EffectSize, margin: float = BIC_MARGIN) -> bool | None:
+    """Whether the ideal test names the effect on the recording of ``size`` (None: statistic not known)."""
+    if not math.isfinite(size.recorded_statistic):
+        return None
+    return size.recorded_statistic >= _threshold(size, margin)
+
+
 def chance_of_at_least(chances: Sequence[float], count: int) -> float:
     """Chance that ``count`` or more of independent events with ``chances`` happen (Poisson binomial)."""
     distribution = np.zeros(len(chances) + 1)
@@ -94,27 +106,40 @@ def power_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str)
              'and fits its strength only; "ideal" is the chance it names the effect with the engine\'s guard (BIC '
              f'drop of {BIC_MARGIN:g}), "one-sided" the same knowing the effect\'s sign (same false-name rate), '
              '"plain BIC" without the guard (see `prsm_lube_ros/experiments/detection_power.py`, also for what the '
-             'ideal test leaves out).', '',
-             '| kind | seed | verdict | right | runs | ratio | noncentrality | ideal | one-sided | plain BIC |',
-             '|---|---|---|---|---|---|---|---|---|---|']
-    per_kind: dict[str, list[tuple[bool, float, float, float]]] = {}
+             'ideal test leaves out). "On this recording": the ideal test\'s statistic computed from the recorded '
+             'run means, against its threshold (the guard plus ln(runs)), and whether it names the effect there.', '',
+             '| kind | seed | verdict | right | runs | ratio | noncentrality | ideal | one-sided | plain BIC | '
+             'on this recording |',
+             '|---|---|---|---|---|---|---|---|---|---|---|']
+    per_kind: dict[str, list[tuple[bool, float, float, float, bool | None]]] = {}
     for record in records:
         raw = size_of.get((record['kind'], record['seed']))
         if raw is None:
             continue
-        size = EffectSize(raw['between_runs'], raw['within_runs'], raw['run_scatter'], raw['runs'])
+        size = EffectSize.from_json(raw)
         guarded, sided, plain = ideal_detection(size), one_sided_detection(size), ideal_detection(size, 0.0)
-        per_kind.setdefault(record['kind'], []).append((bool(record.get('right')), guarded, sided, plain))
+        recorded = names_on_recording(size)
+        per_kind.setdefault(record['kind'], []).append((bool(record.get('right')), guarded, sided, plain, recorded))
+        on_recording = ('-' if recorded is None else
+                        f'{size.recorded_statistic:.1f} of {_threshold(size, BIC_MARGIN):.1f}: '
+                        f'{"names" if recorded else "misses"}')
         lines.append(f'| {record["kind"]} | {record["seed"]} | {record.get("verdict")} | '
                      f'{"yes" if record.get("right") else "no"} | {size.runs} | {size.ratio:.2f} | '
-                     f'{size.noncentrality:.1f} | {100 * guarded:.0f} % | {100 * sided:.0f} % | {100 * plain:.0f} % |')
+                     f'{size.noncentrality:.1f} | {100 * guarded:.0f} % | {100 * sided:.0f} % | {100 * plain:.0f} % | '
+                     f'{on_recording} |')
     lines += ['', '| kind | cases | right | expected right: ideal | one-sided | plain BIC | chance of the target: '
-              'ideal | one-sided |', '|---|---|---|---|---|---|---|---|']
+              'ideal | one-sided | ideal names on these recordings |', '|---|---|---|---|---|---|---|---|---|']
     for kind, rows in sorted(per_kind.items()):
         needed = math.ceil(TARGET_SHARE * len(rows) - 1e-9)
         ideal_chances, sided_chances = [row[1] for row in rows], [row[2] for row in rows]
         lines.append(f'| {kind} | {len(rows)} | {sum(row[0] for row in rows)} | {sum(ideal_chances):.1f} | '
                      f'{sum(sided_chances):.1f} | {sum(row[3] for row in rows):.1f} | '
                      f'{100 * chance_of_at_least(ideal_chances, needed):.0f} % ({needed} or more) | '
-                     f'{100 * chance_of_at_least(sided_chances, needed):.0f} % |')
+                     f'{100 * chance_of_at_least(sided_chances, needed):.0f} % | {_recorded_count(rows)} |')
     return '\n'.join(lines) + '\n'
+
+
+def _recorded_count(rows: Sequence[tuple[bool, float, float, float, bool | None]]) -> str:
+    """How many of a kind's cases the ideal test names on the recordings ('-' when none has the statistic)."""
+    known = [row[4] for row in rows if row[4] is not None]
+    return f'{sum(known)} of {len(known)}' if known else '-'

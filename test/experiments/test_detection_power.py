@@ -8,9 +8,11 @@ import pytest
 from scipy import stats
 
 from prsm_lube_ros.experiments import diagnose_study
+from prsm_lube_ros.diagnosis.table import WindowTable
 from prsm_lube_ros.experiments.detection_power import (
-    chance_of_at_least, ideal_detection, one_sided_detection, power_markdown)
-from prsm_lube_ros.experiments.effect_size import EffectSize
+    chance_of_at_least, ideal_detection, names_on_recording, one_sided_detection, power_markdown)
+from prsm_lube_ros.experiments.effect_size import EffectSize, recorded_statistic
+from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, ModelConstants
 
 
 def _size(ratio: float, runs: int) -> EffectSize:
@@ -73,3 +75,51 @@ def test_power_option_takes_single_effects_only(tmp_path, capsys):
     assert diagnose_study.main(['--out', str(tmp_path), '--power', 'two']) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'not two' in err[0]
+
+
+def _recording(rng, strength, run_scatter=0.03, window_scatter=0.02, per_run=12):
+    """Three speeds x two loads, five times over; amplitude rising by ``strength`` (ln) over the revolutions."""
+    conditions = [(w, f) for w in (20.0, 40.0, 80.0) for f in (2000.0, 4000.0)] * 5
+    run = np.repeat(np.arange(len(conditions)), per_run)
+    speed = np.array([conditions[r][0] for r in run])
+    load = np.array([conditions[r][1] for r in run])
+    revolutions = np.cumsum(speed) / (2 * math.pi)
+    form = revolutions / revolutions[-1]
+    constants = ModelConstants(c_sys=1e-9, c_f=1e-5, c_lambda=0.05)
+    run_factor = run_scatter * rng.standard_normal(len(conditions))[run]
+    log_rms = (np.log(acceleration_amplitude(speed, load, 1.0, constants)) + strength * form + run_factor
+               + window_scatter * rng.standard_normal(run.size))
+    n = run.size
+    table = WindowTable(speed=speed, load=load, rms=np.exp(log_rms), position=np.zeros(n), revolutions=revolutions,
+                        time=np.arange(n, dtype=float), temperature=np.full(n, np.nan), run=run,
+                        recording=np.zeros(n, dtype=int))
+    return table, form
+
+
+def test_the_recorded_statistic_is_chi2_with_the_noncentrality_of_the_effect_size():
+    rng = np.random.default_rng(7)
+    null = [recorded_statistic(*_recording(rng, 0.0), 0.03) for _ in range(300)]
+    assert np.mean(null) == pytest.approx(1.0, abs=0.25)          # chi^2 with one degree of freedom
+    assert np.mean(np.array(null) >= stats.chi2.isf(0.05, df=1)) == pytest.approx(0.05, abs=0.035)
+    table, form = _recording(rng, 0.0)
+    # The form's change beyond the constants, as effect_size measures it: noncentrality runs * ratio^2.
+    means = table.run_means(0.06 * form)
+    design = np.column_stack([np.ones(table.runs.size), table.run_means(table.load),
+                              table.run_means(-table.film_term)])
+    left = means - design @ np.linalg.lstsq(design, means, rcond=None)[0]
+    run_variance = 0.03 ** 2 + 0.02 ** 2 / 12
+    noncentrality = float(left @ left) / run_variance
+    shifted = [recorded_statistic(*_recording(rng, 0.06), 0.03) for _ in range(300)]
+    assert np.mean(shifted) == pytest.approx(1.0 + noncentrality, rel=0.15)
+    assert noncentrality > 5.0
+
+
+def test_names_on_recording_holds_the_statistic_to_the_guard_plus_ln_runs():
+    threshold = 10.0 + math.log(30)
+    below = EffectSize(0.02, 0.0, 0.03, 30, recorded_statistic=threshold - 0.1)
+    above = EffectSize(0.02, 0.0, 0.03, 30, recorded_statistic=threshold + 0.1)
+    assert names_on_recording(below) is False and names_on_recording(above) is True
+    assert names_on_recording(_size(0.5, 30)) is None
+    assert EffectSize.from_json(above.as_json()).recorded_statistic == pytest.approx(threshold + 0.1, abs=1e-3)
+    assert math.isnan(EffectSize.from_json({k: v for k, v in above.as_json().items()
+                                            if k != 'recorded_statistic'}).recorded_statistic)
