@@ -46,8 +46,8 @@ from ..diagnosis.engine import BIC_MARGIN
 if TYPE_CHECKING:
     from .effect_size import EffectSize
 
-__all__ = ['TARGET_SHARE', 'chance_of_at_least', 'ideal_detection', 'names_on_recording', 'one_sided_detection',
-           'power_markdown']
+__all__ = ['TARGET_SHARE', 'chance_of_at_least', 'ideal_detection', 'names_on_recording', 'on_recording',
+           'one_sided_detection', 'power_markdown']
 
 #: The share of a kind's cases a study must name (issue 17: 95 %).
 TARGET_SHARE = 0.95
@@ -82,6 +82,15 @@ def names_on_recording(size: EffectSize, margin: float = BIC_MARGIN) -> bool | N
     if not math.isfinite(size.recorded_statistic):
         return None
     return size.recorded_statistic >= _threshold(size, margin)
+
+
+def on_recording(size: EffectSize) -> str:
+    """The ideal test on the recording as a table cell: ``statistic of threshold: names`` (or ``misses``; ``-``)."""
+    recorded = names_on_recording(size)
+    if recorded is None:
+        return '-'
+    return (f'{size.recorded_statistic:.1f} of {_threshold(size, BIC_MARGIN):.1f}: '
+            f'{"names" if recorded else "misses"}')
 
 
 def chance_of_at_least(chances: Sequence[float], count: int) -> float:
@@ -120,13 +129,10 @@ def power_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str)
         guarded, sided, plain = ideal_detection(size), one_sided_detection(size), ideal_detection(size, 0.0)
         recorded = names_on_recording(size)
         per_kind.setdefault(record['kind'], []).append((bool(record.get('right')), guarded, sided, plain, recorded))
-        on_recording = ('-' if recorded is None else
-                        f'{size.recorded_statistic:.1f} of {_threshold(size, BIC_MARGIN):.1f}: '
-                        f'{"names" if recorded else "misses"}')
         lines.append(f'| {record["kind"]} | {record["seed"]} | {record.get("verdict")} | '
                      f'{"yes" if record.get("right") else "no"} | {size.runs} | {size.ratio:.2f} | '
                      f'{size.noncentrality:.1f} | {100 * guarded:.0f} % | {100 * sided:.0f} % | {100 * plain:.0f} % | '
-                     f'{on_recording} |')
+                     f'{on_recording(size)} |')
     lines += ['', '| kind | cases | right | expected right: ideal | one-sided | plain BIC | chance of the target: '
               'ideal | one-sided | ideal names on these recordings |', '|---|---|---|---|---|---|---|---|---|']
     for kind, rows in sorted(per_kind.items()):

@@ -209,6 +209,34 @@ def _study_cases(out: Path) -> tuple[list[dict], bool] | None:
         return None
 
 
+def _combine(out: Path, folders: Sequence[Path], command: str) -> int:
+    """``--combine``: the cases of several studies' results.json (no case twice) as one study in ``out``."""
+    from .random_study import write_random_outputs
+    records: list[dict] = []
+    wall, jobs, commands = 0.0, 1, []
+    for folder in folders:
+        try:
+            document = json.loads((folder / 'results.json').read_text())
+            cases, seconds = list(document['cases']), float(document['wall_seconds'])
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            print(f'diagnose_study: cannot read the cases of {folder / "results.json"}: {exc!r}', file=sys.stderr)
+            return 2
+        seen = {(r['kind'], r['seed']) for r in records}
+        twice = sorted(f'{r["kind"]} seed {r["seed"]}' for r in cases if (r['kind'], r['seed']) in seen)
+        if twice:
+            print(f'diagnose_study: {folder / "results.json"} repeats cases of the folders before it '
+                  f'({", ".join(twice[:3])}{", ..." if len(twice) > 3 else ""}); combine studies of disjoint seeds',
+                  file=sys.stderr)
+            return 2
+        records += cases
+        wall += seconds
+        jobs = max(jobs, int(document.get('jobs', 1)))
+        commands.append(str(document.get('command', '')))
+    records.sort(key=lambda r: (r['kind'], r['seed']))
+    print(write_random_outputs(out, records, command, wall, jobs, sources=commands))
+    return 0
+
+
 def _margins(out: Path, command: str) -> int:
     """``--margins``: the candidates a lower BIC margin would name, to ``out``/margins.md."""
     from .margins import margins_markdown
@@ -292,6 +320,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--margins', action='store_true',
                         help='random design: write margins.md from --out/results.json, the candidates a lower BIC '
                              'margin would name (no case is run again)')
+    parser.add_argument('--combine', nargs='+', default=None, metavar='DIR',
+                        help='random design: merge the results.json of these study folders (disjoint seeds, each '
+                             'from --first-seed) into --out: one confusion.md and results.json over all their cases')
     parser.add_argument('--power', nargs='+', default=None, metavar='EFFECT',
                         help='random design: simulate every case of these effects in --out/results.json again and '
                              'write power.md, the chance an ideal test would name each')
@@ -303,6 +334,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                + ' '.join(argv if argv is not None else sys.argv[1:]))
     if args.design == 'random' and args.explain_misses:
         return _explain_misses(Path(args.out), args.jobs, command)
+    if args.design == 'random' and args.combine:
+        return _combine(Path(args.out), [Path(d) for d in args.combine], command)
     if args.design == 'random' and args.margins:
         return _margins(Path(args.out), command)
     if args.design == 'random' and args.power:

@@ -30,6 +30,7 @@ import zlib
 from collections.abc import Iterable, Sequence
 
 import numpy as np
+from scipy import stats
 
 from ..physics.effects.resonance import band_position
 
@@ -363,21 +364,32 @@ def _miss_lines(misses: list[dict]) -> list[str]:
     return lines
 
 
-def confusion_markdown(records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
-    """The study's Markdown: summary, confusion per form, misses listed."""
+def confusion_markdown(records: list[dict], command: str, wall_seconds: float, jobs: int,
+                       sources: Sequence[str] = ()) -> str:
+    """The study's Markdown: summary, confusion per form, misses listed.
+
+    ``sources``: the commands of the studies whose cases ``records`` merges (their wall times summed).
+    """
     summary = summarise(records)
     rows, columns = _confusion(records)
-    lines = ['# Diagnose study, random cases', '', f'Command: `{command}`', '',
-             f'{summary["cases"]} cases in {wall_seconds / 60:.1f} min wall time with {jobs} process(es) '
-             f'({summary["seconds_total_cpu"] / 60:.1f} min of case time). Plans, recording set-up, nuisances '
-             'and effect strengths are drawn at random per case (see `prsm_lube_ros/experiments/study_draws.py`).',
-             '', '## Score per kind', '',
-             '| concealed | right | median held-out gain when named | gain >= 30 % |', '|---|---|---|---|']
+    lines = ['# Diagnose study, random cases', '', f'Command: `{command}`', '']
+    if sources:
+        lines += ['The cases of these studies, merged (wall time: the sum of theirs):', '',
+                  *[f'- `{source}`' for source in sources], '']
+    lines += [f'{summary["cases"]} cases in {wall_seconds / 60:.1f} min wall time with {jobs} process(es) '
+              f'({summary["seconds_total_cpu"] / 60:.1f} min of case time). Plans, recording set-up, nuisances '
+              'and effect strengths are drawn at random per case (see `prsm_lube_ros/experiments/study_draws.py`).',
+              '', '## Score per kind', '',
+              'Interval: the Wilson 95 % confidence interval of the share a kind\'s cases would have right over '
+              'many more seeds.', '',
+              '| concealed | right | 95 % interval | median held-out gain when named | gain >= 30 % |',
+              '|---|---|---|---|---|']
     for kind, row in summary['kinds'].items():
         gain = f'{100 * row["median_gain"]:.0f} %' if row['median_gain'] is not None and kind != NONE else '-'
         at_least = f'{row["gain_at_least_target"]}/{row["named"]}' if kind != NONE else '-'
+        low, high = stats.binomtest(row['right'], row['cases']).proportion_ci(method='wilson')
         lines.append(f'| {kind} | {row["right"]}/{row["cases"]} ({100 * row["right"] / row["cases"]:.0f} %) '
-                     f'| {gain} | {at_least} |')
+                     f'| {100 * low:.0f}-{100 * high:.0f} % | {gain} | {at_least} |')
     lines += ['', f'Unaffected recordings called `adequate`: {summary["adequate_on_unaffected"]}/'
               f'{summary["unaffected"]}. Cases where the lack-of-fit test finds '
               f'the paper\'s model missing (condition means against replicate runs): {summary["lack_of_fit"]}, '
@@ -407,34 +419,45 @@ def confusion_markdown(records: list[dict], command: str, wall_seconds: float, j
     return '\n'.join(lines)
 
 
-def write_random_outputs(out: Path, records: list[dict], command: str, wall_seconds: float, jobs: int) -> str:
-    """Write ``confusion.md`` and ``results.json`` (summary and every case) to ``out``; return the Markdown."""
-    text = confusion_markdown(records, command, wall_seconds, jobs)
+def write_random_outputs(out: Path, records: list[dict], command: str, wall_seconds: float, jobs: int,
+                         sources: Sequence[str] = ()) -> str:
+    """Write ``confusion.md`` and ``results.json`` (summary and every case) to ``out``; return the Markdown.
+
+    ``sources``: as :func:`confusion_markdown` (kept in results.json).
+    """
+    text = confusion_markdown(records, command, wall_seconds, jobs, sources)
     out.mkdir(parents=True, exist_ok=True)
     (out / 'confusion.md').write_text(text)
     document = {'command': command, 'wall_seconds': round(wall_seconds, 1), 'jobs': jobs,
-                'summary': summarise(records), 'cases': records}
+                **({'sources': list(sources)} if sources else {}), 'summary': summarise(records), 'cases': records}
     (out / 'results.json').write_text(json.dumps(document, indent=1, default=float))
     return text
 
 
 def misses_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str) -> str:
     """The missed cases with the size of what was concealed (:func:`explain_miss`), as Markdown."""
+    from .detection_power import on_recording
+    from .effect_size import EffectSize
     size_of = {(item['kind'], item['seed']): item['size'] for item in sizes}
     lines = ['# Missed cases and the size of what was concealed', '', f'Command: `{command}`', '',
              'Size: the concealed effects\' change of ln A per run beyond what the paper\'s constants absorb '
              '(RMS over runs), against the rig\'s run-to-run scatter, and about the run means (see '
              '`prsm_lube_ros/experiments/effect_size.py`). The smaller the ratio, the less the run amplitudes can show '
-             'of the effect, whatever method reads them; on two-effect rows the size is both effects together.', '',
-             '| kind | seed | effects | verdict | between runs | run scatter | ratio | within runs |',
-             '|---|---|---|---|---|---|---|---|']
+             'of the effect, whatever method reads them; on two-effect rows the size is both effects together. '
+             'Ideal test on this recording: the statistic of a test that knows the effect\'s form and the run '
+             'scatter, computed from the recorded run means, against the engine\'s threshold (see '
+             '`prsm_lube_ros/experiments/detection_power.py`).', '',
+             '| kind | seed | effects | verdict | between runs | run scatter | ratio | within runs | '
+             'ideal test on this recording |',
+             '|---|---|---|---|---|---|---|---|---|']
     for record in records:
         if record.get('right'):
             continue
         size = size_of.get((record['kind'], record['seed']))
-        cells = (['-'] * 4 if size is None else
+        cells = (['-'] * 5 if size is None else
                  [f'{100 * size["between_runs"]:.1f} %', f'{100 * size["run_scatter"]:.1f} %',
-                  f'{size["ratio"]:.2f}', f'{100 * size["within_runs"]:.1f} %'])
+                  f'{size["ratio"]:.2f}', f'{100 * size["within_runs"]:.1f} %',
+                  on_recording(EffectSize.from_json(size))])
         lines.append(f'| {record["kind"]} | {record["seed"]} | {", ".join(record.get("effects", [])) or "-"} | '
                      f'{record.get("verdict")} | ' + ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'

@@ -102,3 +102,43 @@ def test_truth_forms_name_band_lines_and_recovery():
     assert truth_form('lubricant_depletion', {'form': 'linear', 'recovery_time': 300.0}, speeds) == \
         'linear, recovery at rest'
     assert truth_form('position_dependent_stiffness', {'arrangement': 'fixed-fixed'}, speeds) == 'fixed-fixed'
+
+
+def _study_folder(folder, seeds, command):
+    records = [{'kind': 'lubricant_depletion', 'seed': seed, 'effects': ['lubricant_depletion'],
+                'forms': {'lubricant_depletion': 'linear'},
+                'verdict': 'lubricant_depletion' if seed % 2 else 'adequate',
+                'named': ['lubricant_depletion'] if seed % 2 else [], 'right': bool(seed % 2), 'gain': 0.3,
+                'lack_of_fit': False, 'seconds': 10.0} for seed in seeds]
+    folder.mkdir()
+    (folder / 'results.json').write_text(json.dumps({'command': command, 'wall_seconds': 60.0, 'jobs': 2,
+                                                     'cases': records}))
+
+
+def test_combine_merges_studies_of_disjoint_seeds_and_refuses_a_case_twice(tmp_path, capsys):
+    _study_folder(tmp_path / 'a', range(0, 3), 'study a')
+    _study_folder(tmp_path / 'b', range(3, 6), 'study b')
+    out = tmp_path / 'all'
+    assert diagnose_study.main(['--out', str(out), '--combine', str(tmp_path / 'a'), str(tmp_path / 'b')]) == 0
+    document = json.loads((out / 'results.json').read_text())
+    assert [case['seed'] for case in document['cases']] == list(range(6))
+    assert document['sources'] == ['study a', 'study b'] and document['wall_seconds'] == 120.0
+    text = (out / 'confusion.md').read_text()
+    assert '- `study a`' in text and '6 cases in 2.0 min' in text
+    assert '| lubricant_depletion | 3/6 (50 %) | 19-81 % |' in text          # Wilson interval of 3 in 6
+    capsys.readouterr()
+    _study_folder(tmp_path / 'c', range(2, 4), 'study c')
+    assert diagnose_study.main(['--out', str(tmp_path / 'x'), '--combine', str(tmp_path / 'a'),
+                                str(tmp_path / 'c')]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'lubricant_depletion seed 2' in err[0] and not (tmp_path / 'x').exists()
+
+
+def test_misses_say_what_the_ideal_test_does_on_the_recording():
+    from prsm_lube_ros.experiments.effect_size import EffectSize
+    from prsm_lube_ros.experiments.random_study import misses_markdown
+    records = [{'kind': 'lubricant_depletion', 'seed': 13, 'effects': ['lubricant_depletion'], 'verdict': 'adequate',
+                'right': False}]
+    size = EffectSize(0.026, 0.0005, 0.039, 40, recorded_statistic=5.75).as_json()
+    text = misses_markdown(records, [{'kind': 'lubricant_depletion', 'seed': 13, 'size': size}], 'cmd')
+    assert '| 2.6 % | 3.9 % | 0.67 | 0.1 % | 5.8 of 13.7: misses |' in text
