@@ -81,18 +81,18 @@ import weakref
 
 import numpy as np
 from scipy import stats
-from scipy.ndimage import median_filter
+from scipy.ndimage import median_filter, uniform_filter1d
 
 from ..estimation.calibration import operating_levels
 from .fitting import effective_sample_size
 from .table import WindowTable
 
 __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
-           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MODE_FLOOR_HALF_WIDTH', 'MODE_MIN_SHARE',
-           'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS',
-           'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines',
-           'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode',
-           'spectral_lines', 'spectral_shape', 'time_segment']
+           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MODE_BROAD_PROMINENCE', 'MODE_FLOOR_HALF_WIDTH',
+           'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD',
+           'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
+           'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate',
+           'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
@@ -110,6 +110,9 @@ LINE_CONSTANCY = 2.5
 POWER_SPREAD = 1.5
 #: Half width, bins, of the neighbourhood a mode's band (2 zeta f_r wide) is compared with.
 MODE_FLOOR_HALF_WIDTH = 32
+#: A band stands out of the spectrum an octave either side of it by this factor (a mode's ringing over its
+#: excitation peaks at 1 / (4 zeta^2): 6.25 at zeta 0.2, and the octave's median holds some of the band).
+MODE_BROAD_PROMINENCE = 2.5
 #: Third-octave bands of the shape test hold this many spectrum bins at least (medians step over lines).
 SHAPE_MIN_BINS = 8
 #: The shape changes when its distance exceeds this many times the distance between halves of one speed's runs ...
@@ -825,9 +828,53 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     window, or whose bins a rotation order fits better than one fixed bin
     (both :func:`_follows_an_order`): at low frequencies and coarse resolution
     an order crossing the window looks fixed within 2 bins.
+
+    Bands are sought twice: over the running median of
+    :data:`MODE_FLOOR_HALF_WIDTH` bins a side (narrow bands, lines beside them),
+    and over the spectrum an octave either side (:func:`_octave_excess`),
+    where a well-damped mode's band, wider than that running median, stands
+    out by :data:`MODE_BROAD_PROMINENCE`.
     """
-    floors, _, widened = _excess(medians, MODE_FLOOR_HALF_WIDTH)
-    prominent = widened >= LINE_PROMINENCE
+    for floors, widened, prominence in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE),
+                                        (*_octave_excess(medians), MODE_BROAD_PROMINENCE)):
+        _mode_bands_over(result, medians, freqs, mean_square, edges, df, floors, widened >= prominence)
+    result.mode_speeds = [float(v) for v in edges]
+    if result.mode_frequencies:
+        strongest = int(np.argmax([max(v) for v in result.mode_shares]))
+        shares = result.mode_shares[strongest]
+        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {edges[i]:.1f} rad/s' for i in np.argsort(edges))
+        result.mode_note = (f'a band fixed at {result.mode_frequencies[strongest]:.1f} Hz while the orders move, '
+                            f'its share of the power following the speed ({by_speed})')
+    else:
+        result.mode_note = 'no band fixed in frequency whose power follows the speed'
+
+
+def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(floors, widened excess) with each bin's floor the median of the spectrum an octave either side of it.
+
+    A well-damped mode's band is ``2 zeta f_r`` wide (0.4 f_r at zeta 0.2):
+    wider than the running median of :data:`MODE_FLOOR_HALF_WIDTH` bins at
+    fine resolution, which then takes the band for the floor.  Floors are
+    medians over ``[f / 2, 2 f]``, computed at 24 centres an octave and
+    interpolated in log frequency.
+    """
+    bins = medians.shape[1]
+    centres = np.unique(np.clip(np.round(2.0 ** np.arange(0.0, math.log2(bins) + 1 / 24, 1 / 24)), 1, bins - 1)
+                        .astype(int))
+    at_centres = np.array([[np.median(row[max(c // 2, 1):min(2 * c + 1, bins)]) for c in centres] for row in medians])
+    index = np.arange(bins, dtype=float)
+    floors = np.array([np.exp(np.interp(np.log(np.maximum(index, 1.0)), np.log(centres), np.log(np.maximum(r, 1e-300))))
+                       for r in at_centres])
+    excess = medians / np.maximum(floors, 1e-300)
+    return floors, np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
+
+
+def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, mean_square: np.ndarray,
+                     edges: np.ndarray, df: float, floors: np.ndarray, prominent: np.ndarray) -> None:
+    """:func:`_mode_bands` against one floor (``prominent``: the bins standing out of it per speed).
+
+    Bands found are added to ``result``, none twice.
+    """
     # Two speeds can put two different orders on one bin; three seldom do.
     candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= 3 * df)
     for group in _line_groups(candidate):
@@ -838,12 +885,16 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         share = power / mean_square
         seen = prominent[:, lo:hi].any(axis=1)
         # A speed whose largest bin is the window's edge has its power from outside: a neighbouring line's skirt.
-        top = lo + np.argmax(medians[:, lo:hi], axis=1)
+        # The peak of a wide band (a well-damped mode's flat top) is taken on the spectrum smoothed over a
+        # sixth of the band, where the noise of single bins does not move it.
+        top = lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
         seen &= (top > lo) & (top < hi - 1)
         if seen.sum() < MODE_MIN_SPEEDS or power[seen].min() <= 0:
             continue
         peaks = top[seen]
-        if np.ptp(peaks) > 2:          # not one frequency: lines of different orders side by side
+        # Not one frequency (lines of different orders side by side): the peak may wander by 2 bins, or by an
+        # eighth of a wide band.
+        if np.ptp(peaks) > max(2, (hi - lo) // 8):
             continue
         if _follows_an_order(peaks, edges[seen]):
             continue
@@ -854,17 +905,10 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD
         if varies and share_varies and share.max() >= MODE_MIN_SHARE:
             peak = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
+            if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):
+                continue
             result.mode_frequencies.append(float(freqs[peak]))
             result.mode_shares.append([float(v) for v in share])
-    result.mode_speeds = [float(v) for v in edges]
-    if result.mode_frequencies:
-        strongest = int(np.argmax([max(v) for v in result.mode_shares]))
-        shares = result.mode_shares[strongest]
-        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {edges[i]:.1f} rad/s' for i in np.argsort(edges))
-        result.mode_note = (f'a band fixed at {result.mode_frequencies[strongest]:.1f} Hz while the orders move, '
-                            f'its share of the power following the speed ({by_speed})')
-    else:
-        result.mode_note = 'no band fixed in frequency whose power follows the speed'
 
 
 def _follows_an_order(peaks: np.ndarray, speeds: np.ndarray) -> bool:
