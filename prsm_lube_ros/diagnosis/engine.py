@@ -44,7 +44,10 @@ of repeated runs (pure error), and that scatter against what a rig's set-up
 gives.  ``adequate`` needs no candidate to earn its parameters, no lack of
 fit, no excess run scatter *and* no covariate left carrying the residual;
 otherwise, with no candidate, the verdict is ``unexplained`` with where the
-residual lives and its size.  A plan with no repeated condition cannot tell
+residual lives and its size, unless the residual is located on a candidate's
+own covariate and its law explains it (:func:`_located_law`: a BIC drop of
+:data:`LOCATED_LAW_BIC`, the held-out gain, no pattern left there, and better
+held-out predictions than the empirical term of the located shape).  A plan with no repeated condition cannot tell
 run scatter from model error: ``cannot tell``, with what to record.
 ``confident`` is true only when the chosen model (the paper's for
 ``adequate``) passes the lack-of-fit test; the statistics are in the JSON
@@ -81,7 +84,7 @@ from .effects import Effect, registered
 from .empirical import causes, empirical_terms, EmpiricalTerm
 from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, \
     predict_log, score_held_out
-from .locate import locate, Location, SIGNIFICANCE
+from .locate import covariate_tests, locate, Location, SIGNIFICANCE
 from .table import WindowTable
 
 if TYPE_CHECKING:
@@ -92,8 +95,8 @@ _E = TypeVar('_E', bound=Effect)
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'BIC_MARGIN', 'CANNOT_TELL', 'COLLINEAR', 'CONFOUNDED', 'Candidate',
            'Confounding', 'Diagnosis', 'EVIDENCE_TOLERANCE', 'EmpiricalFit', 'FORM_MARGIN', 'FORM_TIE',
-           'LOCATED_BIC_TOLERANCE', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN', 'SecondEffect', 'Status',
-           'TIE_RATIO', 'UNEXPLAINED', 'confounding', 'diagnose_table', 'drift_correlation']
+           'LOCATED_BIC_TOLERANCE', 'LOCATED_LAW_BIC', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN', 'SecondEffect',
+           'Status', 'TIE_RATIO', 'UNEXPLAINED', 'confounding', 'diagnose_table', 'drift_correlation']
 
 #: BIC improvement (effective sample size) a candidate needs.
 BIC_MARGIN = 10.0
@@ -104,6 +107,9 @@ SECOND_BIC_MARGIN = 5.0
 #: BIC rise a second effect may cost when what the first leaves is located on its covariate (a BIC
 #: difference under 2 is no evidence either way).
 LOCATED_BIC_TOLERANCE = 2.0
+#: BIC drop that names an effect none of whose rivals earns when the mismatch is located on its own covariate
+#: and its law leaves nothing there (:func:`_located_law`): a drop of 2 or more is positive evidence.
+LOCATED_LAW_BIC = 2.0
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative).
 EVIDENCE_TOLERANCE = 0.02
 #: BIC drop a form with more parameters needs over the simpler forms of the same effect.
@@ -857,12 +863,12 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
     earning = [c for c in ranked if c.status == Status.EARNS]
     out.best = earning[0] if earning else (ranked[0] if ranked else None)
     conditions = operating_conditions(table.speed, table.load)
+    empirical = _empirical(table, baseline, location, folds)
     if earning:
         _settle_earning(table, earning, out, folds, location, correlation)
     else:
-        _when_none_earns(table, ranked, baseline, baseline_test, location, folds, conditions, out)
+        _when_none_earns(table, ranked, baseline, baseline_test, location, folds, conditions, out, empirical)
     _qualify_verdict(out, bool(confounded_with), conditions, baseline_test)
-    empirical = _empirical(table, baseline, location, folds)
     _let_empirical_overrule(out, empirical)
     chosen_test = _name_second_and_test(table, out, candidates, folds, location)
     return Diagnosis(verdict=out.verdict, baseline=baseline, candidates=candidates, best=out.best,
@@ -938,9 +944,45 @@ def _settle_earning(table: WindowTable, earning: list[Candidate], out: _Outcome,
     out.best = best
 
 
+def _located_law(table: WindowTable, ranked: list[Candidate], location: Location,
+                 empirical: EmpiricalFit | None) -> Candidate | None:
+    """The candidate whose law is the mismatch located on its covariate, when none earns alone (None if none is).
+
+    The located test has already shown structure in that covariate
+    (revolutions, temperature, position, ...); a candidate that follows it is
+    named with a BIC drop of :data:`LOCATED_LAW_BIC` (instead of
+    :data:`BIC_MARGIN`) when, with physical constants, it also lowers the
+    held-out error by :data:`MIN_GAIN`, leaves no significant pattern in the
+    covariate (:func:`.locate.covariate_tests` on its residual), and predicts
+    held-out runs better than the empirical term of the located shapes
+    (``empirical``): a catalogue law is named only where it explains the
+    shape better than a shape no law has.  Of several, the one predicting
+    held-out runs best.
+    """
+    best: Candidate | None = None
+    for cand in ranked:
+        fit = cand.fit
+        if fit is None or cand.effect.covariate != location.located or fit.unphysical():
+            continue
+        if not (cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN):
+            continue
+        if empirical is not None and not fit.cv_rmse < empirical.fit.cv_rmse:
+            continue
+        if any(t.covariate == location.located and t.p_value < SIGNIFICANCE
+               for t in covariate_tests(table, fit.log_residual)):
+            continue
+        if best is None or fit.cv_rmse < cast(ModelFit, best.fit).cv_rmse:
+            best = cand
+    return best
+
+
 def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, baseline_test: LackOfFit,
-                     location: Location, folds: list[int], conditions: int, out: _Outcome) -> None:
-    """No candidate earns alone: two that only together explain a mismatch, ``unexplained``, or adequate."""
+                     location: Location, folds: list[int], conditions: int, out: _Outcome,
+                     empirical: EmpiricalFit | None = None) -> None:
+    """No candidate earns alone: a located mismatch's law, two that only together explain it, unexplained, adequate.
+
+    ``empirical``: the empirical term of the located shapes (:func:`_empirical`), which a law must beat.
+    """
     pattern = location.located not in ('none', 'spectrum')
     mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
     if mismatch and not pattern and not form_testable(conditions):
@@ -950,8 +992,21 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
         found = baseline_test.finding or 'the constants are unphysical'
         out.notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
                          'well as a model error')
-    together = _pair_when_none_earns(table, ranked, baseline, folds, location) if mismatch else None
-    if together is not None:
+    located = _located_law(table, ranked, location, empirical) if mismatch and pattern else None
+    together = (_pair_when_none_earns(table, ranked, baseline, folds, location)
+                if mismatch and located is None else None)
+    if located is not None:
+        out.best = located
+        located.status = Status.EARNS
+        fit = cast(ModelFit, located.fit)
+        located.reason += (f'; named as the law of the mismatch located on {location.located}: its fit leaves no '
+                           f'pattern there and predicts held-out runs better than any empirical shape '
+                           f'(BIC {located.delta_bic:+.1f}, {LOCATED_LAW_BIC:g} suffices once located)')
+        out.verdict = located.effect.id
+        out.notes.append(f'no candidate earns by the BIC margin, but the mismatch follows {location.located} and '
+                         f'{located.effect.id}\'s law of {location.located} explains it (held-out error '
+                         f'{100 * fit.cv_rmse:.2f} % against {100 * baseline.cv_rmse:.2f} % for the paper\'s model)')
+    elif together is not None:
         out.best, out.second = together
         out.best.status = Status.EARNS
         out.best.reason += f'; with {out.second.effect.id} it does: the two explain the mismatch only together'
