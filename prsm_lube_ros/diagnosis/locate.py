@@ -89,10 +89,11 @@ from .table import WindowTable
 
 __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
            'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MODE_BROAD_PROMINENCE', 'MODE_FLOOR_HALF_WIDTH',
-           'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_SHARE_SPREAD', 'POWER_SPREAD',
-           'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
-           'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate',
-           'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
+           'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_RING_RATIO',
+           'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE',
+           'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape', 'covariate_tests',
+           'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines', 'spectral_shape',
+           'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
@@ -113,6 +114,11 @@ MODE_FLOOR_HALF_WIDTH = 32
 #: A band stands out of the spectrum an octave either side of it by this factor (a mode's ringing over its
 #: excitation peaks at 1 / (4 zeta^2): 6.25 at zeta 0.2, and the octave's median holds some of the band).
 MODE_BROAD_PROMINENCE = 2.5
+#: Highest rotation order taken to excite a well-damped mode (rollers times thread starts stay below it) ...
+MODE_MAX_ORDER = 50.0
+#: ... which rings appreciably from this frequency ratio on (|H|^2 >= 1.2): a wide band above
+#: MODE_MAX_ORDER f_rot / MODE_RING_RATIO at the top speed is out of the orders' reach (the contact's own mode).
+MODE_RING_RATIO = 0.4
 #: Third-octave bands of the shape test hold this many spectrum bins at least (medians step over lines).
 SHAPE_MIN_BINS = 8
 #: The shape changes when its distance exceeds this many times the distance between halves of one speed's runs ...
@@ -174,6 +180,14 @@ class SpectralLines:
     mode_speeds: list = field(default_factory=list)        # rad/s, the speed levels of mode_shares
     mode_note: str = ''
     order_mode: dict = field(default_factory=dict)        # order-tracked line gains following a mode (see below)
+
+    def band_note(self, band: int) -> str:
+        """The mode band ``band`` (index into :attr:`mode_frequencies`) in words, its share at each speed."""
+        shares = self.mode_shares[band]
+        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {self.mode_speeds[i]:.1f} rad/s'
+                             for i in np.argsort(self.mode_speeds))
+        return (f'a band fixed at {self.mode_frequencies[band]:.1f} Hz while the orders move, its share of the '
+                f'power following the speed ({by_speed})')
 
     def as_json(self) -> dict:
         """Plain mapping."""
@@ -833,18 +847,19 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     :data:`MODE_FLOOR_HALF_WIDTH` bins a side (narrow bands, lines beside them),
     and over the spectrum an octave either side (:func:`_octave_excess`),
     where a well-damped mode's band, wider than that running median, stands
-    out by :data:`MODE_BROAD_PROMINENCE`.
+    out by :data:`MODE_BROAD_PROMINENCE`, when an order up to :data:`MODE_MAX_ORDER`
+    can reach it (a frequency ratio of :data:`MODE_RING_RATIO` at the top speed):
+    the contact's own mode, far above, is broad too and needs no order to ring.
     """
-    for floors, widened, prominence in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE),
-                                        (*_octave_excess(medians), MODE_BROAD_PROMINENCE)):
-        _mode_bands_over(result, medians, freqs, mean_square, edges, df, floors, widened >= prominence)
+    reach = MODE_MAX_ORDER * float(np.max(edges)) / (2.0 * math.pi) / MODE_RING_RATIO
+    for floors, widened, prominence, broad in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE, False),
+                                               (*_octave_excess(medians), MODE_BROAD_PROMINENCE, True)):
+        within = np.ones(freqs.size, dtype=bool) if not broad else freqs <= reach
+        _mode_bands_over(result, medians, freqs, mean_square, edges, df, floors,
+                         (widened >= prominence) & within[None, :], broad)
     result.mode_speeds = [float(v) for v in edges]
     if result.mode_frequencies:
-        strongest = int(np.argmax([max(v) for v in result.mode_shares]))
-        shares = result.mode_shares[strongest]
-        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {edges[i]:.1f} rad/s' for i in np.argsort(edges))
-        result.mode_note = (f'a band fixed at {result.mode_frequencies[strongest]:.1f} Hz while the orders move, '
-                            f'its share of the power following the speed ({by_speed})')
+        result.mode_note = result.band_note(int(np.argmax([max(v) for v in result.mode_shares])))
     else:
         result.mode_note = 'no band fixed in frequency whose power follows the speed'
 
@@ -870,10 +885,14 @@ def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, mean_square: np.ndarray,
-                     edges: np.ndarray, df: float, floors: np.ndarray, prominent: np.ndarray) -> None:
+                     edges: np.ndarray, df: float, floors: np.ndarray, prominent: np.ndarray, broad: bool) -> None:
     """:func:`_mode_bands` against one floor (``prominent``: the bins standing out of it per speed).
 
-    Bands found are added to ``result``, none twice.
+    Bands found are added to ``result``, none twice.  A ``broad`` band (the
+    octave floor) whose share is largest at the slowest speed it is seen at is
+    not taken: the orders, growing faster than the contacts' broadband, take
+    share from any band that broadband fills (the contact's own mode, in the
+    paper's model), while the orders approaching a mode give it share.
     """
     # Two speeds can put two different orders on one bin; three seldom do.
     candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= 3 * df)
@@ -903,6 +922,8 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
             continue
         varies = power[seen].max() / power[seen].min() > LINE_CONSTANCY
         share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD
+        if broad and np.argmax(np.where(seen, share, -np.inf)) == np.argmin(np.where(seen, edges, np.inf)):
+            continue
         if varies and share_varies and share.max() >= MODE_MIN_SHARE:
             peak = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
             if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):

@@ -140,6 +140,12 @@ def test_a_mode_band_is_resonance_evidence_only_where_the_fitted_transfer_puts_i
     inside = {'resonant_speed': 12.0, 'damping_ratio': 0.05}     # strongest at 10-14 rad/s, not at the top
     assert resonance.independent_evidence(None, location, inside) == ''
     assert resonance.independent_evidence(None, SimpleNamespace(spectrum=SpectralLines()), above) == ''
+    # A second band with a larger share falling with the speed (the contact's own mode): the first still counts.
+    both = SpectralLines(testable=True, mode_frequencies=[50.0, 1200.0],
+                         mode_shares=[[0.02, 0.05, 0.12, 0.3], [0.5, 0.4, 0.3, 0.2]], mode_speeds=speeds)
+    evidence = resonance.independent_evidence(None, SimpleNamespace(spectrum=both), above)
+    assert 'a band fixed at 50.0 Hz' in evidence and '1200' not in evidence
+    assert resonance.independent_evidence(None, SimpleNamespace(spectrum=both), below) == ''
 
 
 def test_a_background_the_spectral_shape_does_not_show_is_argued_against_unless_lines_hold_it():

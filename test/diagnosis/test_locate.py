@@ -164,6 +164,19 @@ def test_a_well_damped_mode_wider_than_the_running_floor_is_a_mode(zeta):
     assert spectral_lines(spectra_table(mode_share=[0.5] * 4, mode_hz=150.0, zeta=zeta)).mode_frequencies == []
 
 
+def test_a_wide_band_no_order_can_ring_or_losing_share_to_the_orders_is_not_a_mode():
+    """The contact's own mode is broad too: out of reach of order 50 at the top speed, or fading as orders grow.
+
+    At speeds ten times lower an order of 50 reaches 0.4 f_r only up to 52 Hz, so the 150 Hz band (zeta 0.1)
+    is not a mode; nor is a band of that width whose share falls from the slowest speed on.
+    """
+    slow = tuple(v / 10 for v in (10.0, 14.0, 19.0, 26.0))
+    assert spectral_lines(spectra_table(mode_share=[0.1, 0.3, 0.55, 0.8], mode_hz=150.0, zeta=0.1,
+                                        levels=slow)).mode_frequencies == []
+    assert spectral_lines(spectra_table(mode_share=[0.8, 0.55, 0.3, 0.1], mode_hz=150.0,
+                                        zeta=0.1)).mode_frequencies == []
+
+
 def test_closely_spaced_speeds_do_not_hide_a_mode_the_whole_band_sweeps_past():
     """Six speeds 9 % apart: neighbours move an order at 21 Hz by 1.9 Hz only, the band's ends by 11 Hz."""
     levels = tuple(10.0 * 1.09 ** k for k in range(6))

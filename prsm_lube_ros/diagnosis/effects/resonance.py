@@ -95,7 +95,9 @@ class Resonance(Effect, law.Extension):
         the mode rings with the share ``1 - 1/|H|^2`` of the response where
         ``|H| > 1``, so the speed where the band is strongest must be where
         (or next to where) that predicted share is largest, and the prediction
-        must reach a quarter of the band's largest share.
+        must reach a quarter of the band's largest share.  Of several bands,
+        those that follow count (the largest named); a band the transfer does
+        not put there is another mode or the contact's own response.
         """
         lines = location.spectrum if location is not None else None
         if lines is None:
@@ -105,12 +107,13 @@ class Resonance(Effect, law.Extension):
             return tracked
         if params is None:
             return 'spectrum: ' + lines.mode_note
-        if not self._follows_transfer(lines, params):
+        following = [band for band in range(len(lines.mode_frequencies)) if self._follows_transfer(lines, band, params)]
+        if not following:
             return ''
-        strongest = int(np.argmax([max(v) for v in lines.mode_shares]))
-        order = lines.mode_frequencies[strongest] * 2.0 * math.pi / params['resonant_speed']
-        return (f'spectrum: {lines.mode_note}; at the fitted resonant speed it is order {order:.2f}, '
-                f'natural frequency {lines.mode_frequencies[strongest]:.1f} Hz')
+        band = max(following, key=lambda b: max(lines.mode_shares[b]))
+        order = lines.mode_frequencies[band] * 2.0 * math.pi / params['resonant_speed']
+        return (f'spectrum: {lines.band_note(band)}; at the fitted resonant speed it is order {order:.2f}, '
+                f'natural frequency {lines.mode_frequencies[band]:.1f} Hz')
 
     @staticmethod
     def _order_evidence(lines: SpectralLines, params: dict[str, float] | None) -> str:
@@ -130,10 +133,10 @@ class Resonance(Effect, law.Extension):
         return 'spectrum: ' + found['note']
 
     @staticmethod
-    def _follows_transfer(lines: SpectralLines, params: dict[str, float]) -> bool:
-        """Whether the strongest mode band's shares per speed follow the fitted magnification (see above)."""
+    def _follows_transfer(lines: SpectralLines, band: int, params: dict[str, float]) -> bool:
+        """Whether the shares per speed of mode band ``band`` follow the fitted magnification (see above)."""
         speeds = np.asarray(lines.mode_speeds, dtype=float)
-        shares = np.asarray(max(lines.mode_shares, key=max), dtype=float)
+        shares = np.asarray(lines.mode_shares[band], dtype=float)
         gain = law.magnification(speeds / params['resonant_speed'], params['damping_ratio'])
         predicted = np.where(gain > 1.0, 1.0 - 1.0 / np.maximum(gain, 1.0) ** 2, 0.0)
         rank = np.argsort(np.argsort(speeds))
