@@ -949,20 +949,23 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
     """The candidate whose law is the mismatch located on its covariate, when none earns alone (None if none is).
 
     The located test has already shown structure in that covariate
-    (revolutions, temperature, position, ...); a candidate that follows it is
+    (revolutions, temperature, position: not speed or load, whose few levels
+    a law of two or three parameters follows whatever the physics); a
+    candidate that follows it is
     named with a BIC drop of :data:`LOCATED_LAW_BIC` (instead of
     :data:`BIC_MARGIN`) when, with physical constants, it also lowers the
     held-out error by :data:`MIN_GAIN`, leaves no significant pattern in the
     covariate (:func:`.locate.covariate_tests` on its residual), and predicts
-    held-out runs better than the empirical term of the located shapes
-    (``empirical``): a catalogue law is named only where it explains the
-    shape better than a shape no law has.  Of several, the one predicting
+    held-out runs better than the empirical term chosen for the located
+    shapes (``empirical``, :func:`_empirical`): a catalogue law is named only
+    where it explains the shape better than a shape no law has.  Of several, the one predicting
     held-out runs best.
     """
     best: Candidate | None = None
     for cand in ranked:
         fit = cand.fit
-        if fit is None or cand.effect.covariate != location.located or fit.unphysical():
+        if fit is None or cand.effect.covariate in ('speed', 'load') or cand.effect.covariate != location.located \
+                or fit.unphysical():
             continue
         if not (cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN):
             continue
@@ -999,9 +1002,10 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
         out.best = located
         located.status = Status.EARNS
         fit = cast(ModelFit, located.fit)
-        located.reason += (f'; named as the law of the mismatch located on {location.located}: its fit leaves no '
-                           f'pattern there and predicts held-out runs better than any empirical shape '
-                           f'(BIC {located.delta_bic:+.1f}, {LOCATED_LAW_BIC:g} suffices once located)')
+        located.reason = (f'named as the law of the mismatch located on {location.located}: its fit leaves no '
+                          f'pattern there and predicts held-out runs better than the empirical term of the located '
+                          f'shape; held-out error {100 * located.gain:.0f} % lower, BIC {located.delta_bic:+.1f} '
+                          f'({LOCATED_LAW_BIC:g} suffices once located)')
         out.verdict = located.effect.id
         out.notes.append(f'no candidate earns by the BIC margin, but the mismatch follows {location.located} and '
                          f'{located.effect.id}\'s law of {location.located} explains it (held-out error '

@@ -285,6 +285,7 @@ def test_the_pair_pool_takes_candidates_with_spectral_evidence_first_then_the_la
     ('revolutions', -4.0, 0.07, 1e-4, 0.050, [], False),       # its fit leaves the pattern where it was located
     ('revolutions', -4.0, 0.07, 1.0, 0.039, [], False),        # an empirical shape predicts held-out runs better
     ('revolutions', -4.0, 0.07, 1.0, 0.050, ['C_lambda < 0'], False),   # unphysical constants
+    ('speed', -4.0, 0.07, 1.0, 0.050, [], False),              # a law of speed follows a few levels whatever it is
 ])
 def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_none_earns(
         monkeypatch, covariate, delta_bic, gain, left, empirical_cv, unphysical, named):
@@ -296,7 +297,7 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: unphysical)
     candidate = SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=fit, delta_bic=delta_bic, gain=gain)
     empirical = SimpleNamespace(fit=SimpleNamespace(cv_rmse=empirical_cv))
-    location = Location([], None, 'revolutions', '')
+    location = Location([], None, covariate if covariate == 'speed' else 'revolutions', '')
     assert (engine._located_law(None, [candidate], location, empirical) is candidate) is named
     if named:       # without an empirical term (none located earns a place) the law is named too
         assert engine._located_law(None, [candidate], location, None) is candidate
