@@ -769,7 +769,11 @@ def _excess(medians: np.ndarray, half_width: int) -> tuple[np.ndarray, np.ndarra
     spectra over them, widened the excess widened by a bin each side (a line
     may sit one bin off between speeds).
     """
-    floors = median_filter(medians, size=(1, 2 * half_width + 1), mode='nearest')
+    return _excess_over(medians, median_filter(medians, size=(1, 2 * half_width + 1), mode='nearest'))
+
+
+def _excess_over(medians: np.ndarray, floors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(floors, excess, widened) of spectra per speed level over given ``floors`` (see :func:`_excess`)."""
     excess = medians / np.maximum(floors, 1e-300)
     return floors, excess, np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
 
@@ -853,7 +857,7 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     """
     reach = MODE_MAX_ORDER * float(np.max(edges)) / (2.0 * math.pi) / MODE_RING_RATIO
     for floors, widened, prominence, broad in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE, False),
-                                               (*_octave_excess(medians), MODE_BROAD_PROMINENCE, True)):
+                                               (*_octave_excess(medians)[::2], MODE_BROAD_PROMINENCE, True)):
         within = np.ones(freqs.size, dtype=bool) if not broad else freqs <= reach
         _mode_bands_over(result, medians, freqs, mean_square, edges, df, floors,
                          (widened >= prominence) & within[None, :], broad)
@@ -864,8 +868,8 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         result.mode_note = 'no band fixed in frequency whose power follows the speed'
 
 
-def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(floors, widened excess) with each bin's floor the median of the spectrum an octave either side of it.
+def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(floors, excess, widened) as :func:`_excess`, each bin's floor the median of the spectrum an octave either side.
 
     A well-damped mode's band is ``2 zeta f_r`` wide (0.4 f_r at zeta 0.2):
     wider than the running median of :data:`MODE_FLOOR_HALF_WIDTH` bins at
@@ -880,8 +884,7 @@ def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     index = np.arange(bins, dtype=float)
     floors = np.array([np.exp(np.interp(np.log(np.maximum(index, 1.0)), np.log(centres), np.log(np.maximum(r, 1e-300))))
                        for r in at_centres])
-    excess = medians / np.maximum(floors, 1e-300)
-    return floors, np.maximum(excess, np.maximum(np.roll(excess, 1, axis=1), np.roll(excess, -1, axis=1)))
+    return _excess_over(medians, floors)
 
 
 def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, mean_square: np.ndarray,

@@ -205,8 +205,13 @@ def _study_cases(out: Path) -> tuple[list[dict], bool] | None:
         document = json.loads((out / 'results.json').read_text())
         return list(document['cases']), '--quick' in str(document.get('command', '')).split()
     except (OSError, ValueError, KeyError, TypeError) as exc:
-        print(f'diagnose_study: cannot read the cases of {out / "results.json"}: {exc!r}', file=sys.stderr)
+        _cannot_read(out, exc)
         return None
+
+
+def _cannot_read(folder: Path, exc: Exception) -> None:
+    """The one line for a study's results.json that cannot be read."""
+    print(f'diagnose_study: cannot read the cases of {folder / "results.json"}: {exc!r}', file=sys.stderr)
 
 
 def _combine(out: Path, folders: Sequence[Path], command: str) -> int:
@@ -219,7 +224,7 @@ def _combine(out: Path, folders: Sequence[Path], command: str) -> int:
             document = json.loads((folder / 'results.json').read_text())
             cases, seconds = list(document['cases']), float(document['wall_seconds'])
         except (OSError, ValueError, KeyError, TypeError) as exc:
-            print(f'diagnose_study: cannot read the cases of {folder / "results.json"}: {exc!r}', file=sys.stderr)
+            _cannot_read(folder, exc)
             return 2
         seen = {(r['kind'], r['seed']) for r in records}
         twice = sorted(f'{r["kind"]} seed {r["seed"]}' for r in cases if (r['kind'], r['seed']) in seen)
