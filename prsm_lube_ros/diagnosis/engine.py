@@ -5,8 +5,9 @@
 An effect with several physical forms (:meth:`.effects.Effect.variants`: the
 shaft stiffness of each bearing arrangement, a mode below, inside or above the
 speed band, the viscosity laws, depletion exponential or linear, with or
-without recovery at rest) is fitted in each on all windows; the form with the
-lowest BIC stands for it, except that a form with more parameters than the
+without recovery at rest) is fitted in each on all windows; of the forms whose
+constants are physical (all forms when none is), the one with the lowest BIC
+stands for it, except that a form with more parameters than the
 best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`;
 forms with as many parameters within :data:`FORM_TIE` of it are named with it
 ("Vogel or Walther (ASTM D341)": the data fit them equally well).  Only the
@@ -437,17 +438,19 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
     fits = [fit_model(table, form, folds=[]) for form in forms]
     n_common = min(f.n_eff for f in fits)
     scores = [bic(f.log_residual, f.n_params, n_common) for f in fits]
-    fewest = min(f.n_params for f in fits)
-    simple = min((i for i, f in enumerate(fits) if f.n_params == fewest), key=lambda i: scores[i])
-    richer = [i for i, f in enumerate(fits) if f.n_params > fewest]
+    # A form whose constants no actuator gives does not stand for the effect while another form's are physical.
+    eligible = [i for i, f in enumerate(fits) if not f.unphysical()] or list(range(len(fits)))
+    fewest = min(fits[i].n_params for i in eligible)
+    simple = min((i for i in eligible if fits[i].n_params == fewest), key=lambda i: scores[i])
+    richer = [i for i in eligible if fits[i].n_params > fewest]
     chosen = simple
     if richer:
         best_richer = min(richer, key=lambda i: scores[i])
         if scores[best_richer] <= scores[simple] - FORM_MARGIN:
             chosen = best_richer
     fit = score_held_out(table, fits[chosen], forms[chosen], folds) if folds else fits[chosen]
-    ties = [forms[i].form for i, f in enumerate(fits)
-            if i != chosen and f.n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
+    ties = [forms[i].form for i in eligible
+            if i != chosen and fits[i].n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
     vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
     return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
             ties, vectors)

@@ -9,7 +9,8 @@ strongly, with windows of one run treated as correlated:
 * ``position`` — nut position inside runs (residual and position centred per
   run, so only the within-run trend counts);
 * ``revolutions``, ``time`` and ``temperature`` — linear trend over all
-  windows;
+  windows (temperature only when it spans :data:`MIN_TEMPERATURE_SPAN` K,
+  the floor the thermal candidate needs too: less is the sensor's noise);
 * ``speed`` and ``load`` — residual means per operating level (what the
   model's speed and load laws leave over);
 * ``direction`` — out and back at the same speed and load (return runs:
@@ -84,19 +85,22 @@ from scipy import stats
 from scipy.ndimage import median_filter, uniform_filter1d
 
 from ..estimation.calibration import operating_levels
+from .effects.thermal_viscosity import MIN_SPREAD
 from .fitting import effective_sample_size
 from .table import WindowTable
 
 __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
-           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MODE_BROAD_PROMINENCE', 'MODE_FLOOR_HALF_WIDTH',
-           'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS', 'MODE_RING_RATIO',
-           'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE',
-           'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape', 'covariate_tests',
-           'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines', 'spectral_shape',
-           'time_segment']
+           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MIN_TEMPERATURE_SPAN', 'MODE_BROAD_PROMINENCE',
+           'MODE_FLOOR_HALF_WIDTH', 'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS',
+           'MODE_RING_RATIO', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS',
+           'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
+           'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines',
+           'spectral_shape', 'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
+#: Temperature is a covariate when it spans this many K (the floor the thermal candidate needs too).
+MIN_TEMPERATURE_SPAN = MIN_SPREAD
 #: Quantile bins of the flexible (any-shape) covariate tests.
 BINS = 6
 #: A spectral line stands out when it exceeds its neighbourhood's median by this factor (at two speeds at least).
@@ -543,6 +547,19 @@ def _level_means(residual: np.ndarray, values: np.ndarray, groups: np.ndarray, n
     return CovariateTest(name, 'level means', r2, f, float(stats.f.sf(f, dof1, dof2)))
 
 
+def _drifting_covariates(table: WindowTable) -> tuple[str, ...]:
+    """Revolutions and time, and temperature when it spans :data:`MIN_TEMPERATURE_SPAN` K or more.
+
+    A smaller span is the sensor's noise and drift, not a condition the
+    actuator ran at: binned by it, the windows fall into bins by chance and
+    the run scatter can pass for a pattern.
+    """
+    temperature = np.asarray(table.temperature, dtype=float)
+    finite = temperature[np.isfinite(temperature)]
+    spans = finite.size and float(np.max(finite) - np.min(finite)) >= MIN_TEMPERATURE_SPAN
+    return ('revolutions', 'time', 'temperature') if spans else ('revolutions', 'time')
+
+
 def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateTest]:
     """Every test the table supports: trends and level means, then binned means, strongest evidence first."""
     residual = np.asarray(residual, dtype=float)
@@ -550,14 +567,15 @@ def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateT
     centred_r = residual - table.run_means(residual)[np.searchsorted(table.runs, table.run)]
     centred_x = table.position - table.run_means('position')[np.searchsorted(table.runs, table.run)]
     tests.append(_cluster_trend(centred_r, centred_x, table.run, 'position', 'within-run trend'))
-    for name in ('revolutions', 'time', 'temperature'):
+    drifting = _drifting_covariates(table)
+    for name in drifting:
         tests.append(_cluster_trend(residual, getattr(table, name), table.run, name, 'trend'))
     for name in ('speed', 'load'):
         tests.append(_level_means(residual, getattr(table, name), table.run, name))
     tests = [t for t in tests if t is not None]
     tests.sort(key=lambda t: (t.p_value, -t.r_squared))
     flexible: list[Any] = [_binned_means(centred_r, table.position, table.run, 'position', True)]
-    for name in ('revolutions', 'time', 'temperature'):
+    for name in drifting:
         flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
     flexible.append(_segment_run_means(table, residual))
     flexible.append(_direction_test(table, residual))

@@ -301,3 +301,32 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
     assert (engine._located_law(None, [candidate], location, empirical) is candidate) is named
     if named:       # without an empirical term (none located earns a place) the law is named too
         assert engine._located_law(None, [candidate], location, None) is candidate
+
+
+@pytest.mark.parametrize('inside_physical, chosen', [(False, 'mode above the speed band'),
+                                                     (True, 'mode inside the speed band')])
+def test_a_form_with_unphysical_constants_does_not_stand_for_the_effect_while_another_is_physical(
+        monkeypatch, inside_physical, chosen):
+    # Resonance 65 of the fresh random study: with 3 speeds the mode inside the band fitted best (by a BIC of 0.4)
+    # with C_lambda = -0.74, so the effect was rejected although the mode above the band fitted as well with
+    # C_lambda = 0.34 (true 0.3).  The physical form stands for it; all else equal, the lower BIC does.
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.effects import registered
+    from prsm_lube_ros.diagnosis.fitting import ModelFit
+    forms = registered()['resonance'].variants()
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0.0, 0.05, 200)
+    spread = {'mode above the speed band': 1.00, 'mode inside the speed band': 0.99, 'mode below the speed band': 1.2}
+    c_lambda = {'mode above the speed band': 0.34, 'mode inside the speed band': 0.3 if inside_physical else -0.74,
+                'mode below the speed band': -0.69}
+
+    def fake_fit(table, form, folds=None, starts=None):
+        return ModelFit(effect=form.id, vector=np.r_[0.0, 0.0, c_lambda[form.form], 0.5, 0.05], params={},
+                        log_residual=spread[form.form] * noise, cv_log_residual=noise, n_params=5, n_eff=200.0,
+                        c_lambda_std=0.01)
+    monkeypatch.setattr(engine, 'fit_model', fake_fit)
+    form, fit, bics, ties, _ = engine._choose_form(None, forms, [])
+    assert form.form == chosen and fit.vector[2] == c_lambda[chosen]
+    # Every form's BIC is still reported; an unphysical form is never named as a tie.
+    assert {name for name, _ in bics} == set(spread)
+    assert all(c_lambda[t] > 0 for t in ties)
