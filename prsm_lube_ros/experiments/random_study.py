@@ -251,6 +251,8 @@ def run_random_case(case: tuple) -> dict:
         # the engine did not count it beside another effect): what a change of the margins would do
         'candidates': [{key: c.get(key) for key in ('effect', 'status', 'reason', 'gain', 'delta_bic', 'evidence')}
                        for c in document.get('candidates', [])],
+        # the engine's own account (ties, second effects and why): which cases a change of its rules can reach
+        'notes': list(document.get('notes', [])),
         'seconds': round(time.time() - start, 2)})
     record['right'] = _right(record)
     return record
