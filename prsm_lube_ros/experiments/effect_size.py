@@ -114,6 +114,9 @@ def recorded_statistic(table: WindowTable, change: np.ndarray, run_scatter: floa
     ``change``: the effect's change of ln A per window (its form; the strength is fitted); ``run_scatter``:
     the log standard deviation of the run amplitude factors.
     """
+    measured = np.isfinite(table.reduced)
+    if not measured.all():      # windows without an amplitude count nowhere: not in a mean, nor in the dof
+        table, change = table.subset(measured), np.asarray(change)[measured]
     design = _constants_design(table)
     change = table.run_means(change)
     reduced = table.reduced
@@ -125,7 +128,7 @@ def recorded_statistic(table: WindowTable, change: np.ndarray, run_scatter: floa
     dof = len(table) - table.runs.size
     if dof <= 0 or np.count_nonzero(usable) <= design.shape[1] + 1:
         return math.nan
-    window_variance = float(np.nansum(deviation ** 2) / dof)
+    window_variance = float(np.sum(deviation ** 2) / dof)
     weight = np.sqrt(1.0 / (run_scatter ** 2 + window_variance / np.maximum(windows, 1.0)))[usable]
     target = means[usable] * weight
     sums = []

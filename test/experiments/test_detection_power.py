@@ -1,6 +1,7 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
 """The ideal test a study's misses are measured against (no ROS graph)."""
+import dataclasses
 import math
 
 import numpy as np
@@ -112,6 +113,18 @@ def test_the_recorded_statistic_is_chi2_with_the_noncentrality_of_the_effect_siz
     shifted = [recorded_statistic(*_recording(rng, 0.06), 0.03) for _ in range(300)]
     assert np.mean(shifted) == pytest.approx(1.0 + noncentrality, rel=0.15)
     assert noncentrality > 5.0
+
+
+def test_the_recorded_statistic_skips_windows_without_an_amplitude():
+    table, form = _recording(np.random.default_rng(3), 0.04)
+    whole = recorded_statistic(table, form, 0.03)
+    # Lost windows (NaN RMS) are left out, not counted: the same as the table without them.
+    lost = np.zeros(len(table), dtype=bool)
+    lost[5::7] = True
+    gappy = dataclasses.replace(table, rms=np.where(lost, np.nan, table.rms))
+    kept = table.subset(~lost)
+    assert recorded_statistic(gappy, form, 0.03) == pytest.approx(recorded_statistic(kept, form[~lost], 0.03))
+    assert recorded_statistic(gappy, form, 0.03) != pytest.approx(whole)
 
 
 def test_names_on_recording_holds_the_statistic_to_the_guard_plus_ln_runs():
