@@ -986,10 +986,13 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
     named with a BIC drop of :data:`LOCATED_LAW_BIC` (instead of
     :data:`BIC_MARGIN`) when, with physical constants, it also lowers the
     held-out error by :data:`MIN_GAIN`, leaves no significant pattern in the
-    covariate (:func:`.locate.covariate_tests` on its residual), and predicts
-    held-out runs better than the empirical term chosen for the located
-    shapes (``empirical``, :func:`_empirical`): a catalogue law is named only
-    where it explains the shape better than a shape no law has.  Of several, the one predicting
+    covariate (:func:`.locate.covariate_tests` on its residual), and the
+    empirical term chosen for the located shapes (``empirical``,
+    :func:`_empirical`) does not beat it by the rule that makes a named effect
+    give way (:meth:`EmpiricalFit.beats`: a smooth curve in the law's own
+    covariate never does, and a step must predict held-out runs better with
+    the lower BIC): a catalogue law is named only where a shape no law has
+    does not explain the mismatch better.  Of several, the one predicting
     held-out runs best.
     """
     best: Candidate | None = None
@@ -1000,7 +1003,7 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
             continue
         if not (cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN):
             continue
-        if empirical is not None and not fit.cv_rmse < empirical.fit.cv_rmse:
+        if empirical is not None and empirical.beats(fit, {cand.effect.covariate}):
             continue
         if any(t.covariate == location.located and t.p_value < SIGNIFICANCE
                for t in covariate_tests(table, fit.log_residual)):

@@ -302,18 +302,22 @@ def test_the_pair_pool_takes_candidates_with_spectral_evidence_first_then_the_la
                      ('thermal_viscosity', 'lubricant_depletion')]
 
 
-@pytest.mark.parametrize('covariate, delta_bic, gain, left, empirical_cv, unphysical, named', [
-    ('revolutions', -4.0, 0.07, 1.0, 0.050, [], True),         # the located mismatch's law, BIC drop of 2 or more
-    ('revolutions', -1.5, 0.07, 1.0, 0.050, [], False),        # a BIC drop under 2 is no evidence
-    ('revolutions', -4.0, 0.03, 1.0, 0.050, [], False),        # held-out gain under MIN_GAIN
-    ('position', -4.0, 0.07, 1.0, 0.050, [], False),           # the mismatch is located on another covariate
-    ('revolutions', -4.0, 0.07, 1e-4, 0.050, [], False),       # its fit leaves the pattern where it was located
-    ('revolutions', -4.0, 0.07, 1.0, 0.039, [], False),        # an empirical shape predicts held-out runs better
-    ('revolutions', -4.0, 0.07, 1.0, 0.050, ['C_lambda < 0'], False),   # unphysical constants
-    ('speed', -4.0, 0.07, 1.0, 0.050, [], False),              # a law of speed follows a few levels whatever it is
+@pytest.mark.parametrize('covariate, delta_bic, gain, left, empirical, unphysical, named', [
+    ('revolutions', -4.0, 0.07, 1.0, (0.050, 'time'), [], True),   # the located mismatch's law, BIC drop of 2 or more
+    ('revolutions', -1.5, 0.07, 1.0, (0.050, 'time'), [], False),  # a BIC drop under 2 is no evidence
+    ('revolutions', -4.0, 0.03, 1.0, (0.050, 'time'), [], False),  # held-out gain under MIN_GAIN
+    ('position', -4.0, 0.07, 1.0, (0.050, 'time'), [], False),     # the mismatch is located on another covariate
+    ('revolutions', -4.0, 0.07, 1e-4, (0.050, 'time'), [], False),  # its fit leaves the pattern where it was located
+    ('revolutions', -4.0, 0.07, 1.0, (0.037, 'time'), [], False),  # an empirical curve in time predicts better by 7 %
+    ('revolutions', -4.0, 0.07, 1.0, (0.039, 'time'), [], True),   # ... by 2.5 %: a curve follows any law that well
+    # A curve in the law's own covariate says its form is approximate, not that the physics is missing (stiffness
+    # 97 of the random study: fixed-free shaft, held-out 3.505 % against a smooth term in position's 3.478 %).
+    ('revolutions', -4.0, 0.07, 1.0, (0.030, 'revolutions'), [], True),
+    ('revolutions', -4.0, 0.07, 1.0, (0.050, 'time'), ['C_lambda < 0'], False),   # unphysical constants
+    ('speed', -4.0, 0.07, 1.0, (0.050, 'time'), [], False),        # a law of speed follows a few levels whatever it is
 ])
 def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_none_earns(
-        monkeypatch, covariate, delta_bic, gain, left, empirical_cv, unphysical, named):
+        monkeypatch, covariate, delta_bic, gain, left, empirical, unphysical, named):
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
@@ -321,9 +325,12 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
                         lambda table, residual: [SimpleNamespace(covariate='revolutions', p_value=left)])
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: unphysical)
     candidate = SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=fit, delta_bic=delta_bic, gain=gain)
-    empirical = SimpleNamespace(fit=SimpleNamespace(cv_rmse=empirical_cv))
+    cv_rmse, followed = empirical
+    term = SimpleNamespace(earns=True, term=SimpleNamespace(form='smooth', covariate=followed),
+                           fit=SimpleNamespace(cv_rmse=cv_rmse))
+    term.beats = lambda named, covariates: engine.EmpiricalFit.beats(term, named, covariates)
     location = Location([], None, covariate if covariate == 'speed' else 'revolutions', '')
-    assert (engine._located_law(None, [candidate], location, empirical) is candidate) is named
+    assert (engine._located_law(None, [candidate], location, term) is candidate) is named
     if named:       # without an empirical term (none located earns a place) the law is named too
         assert engine._located_law(None, [candidate], location, None) is candidate
 
