@@ -872,6 +872,9 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     out by :data:`MODE_BROAD_PROMINENCE`, when an order up to :data:`MODE_MAX_ORDER`
     can reach it (a frequency ratio of :data:`MODE_RING_RATIO` at the top speed):
     the contact's own mode, far above, is broad too and needs no order to ring.
+    Such a band's place at each speed is where its power over the floor is
+    centred (its flat top puts the largest bin anywhere), and that is the
+    frequency reported.
     """
     reach = MODE_MAX_ORDER * float(np.max(edges)) / (2.0 * math.pi) / MODE_RING_RATIO
     for floors, widened, prominence, broad in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE, False),
@@ -931,7 +934,9 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         seen &= (top > lo) & (top < hi - 1)
         if seen.sum() < MODE_MIN_SPEEDS or power[seen].min() <= 0:
             continue
-        peaks = top[seen]
+        # A broad band's flat top puts its largest bin anywhere on it (a mode at zeta 0.2: the smoothed top of
+        # one band wandered by 16 Hz between speeds); the band sits where its power over the floor is centred.
+        peaks = _centroids(medians[:, lo:hi] - floors[:, lo:hi], lo)[seen] if broad else top[seen]
         # Not one frequency (lines of different orders side by side): the peak may wander by 2 bins, or by an
         # eighth of a wide band.
         if np.ptp(peaks) > max(2, (hi - lo) // 8):
@@ -946,11 +951,20 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         if broad and np.argmax(np.where(seen, share, -np.inf)) == np.argmin(np.where(seen, edges, np.inf)):
             continue
         if varies and share_varies and share.max() >= MODE_MIN_SHARE:
-            peak = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
+            largest = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
+            peak = float(np.median(peaks)) * df if broad else float(freqs[largest])
             if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):
                 continue
-            result.mode_frequencies.append(float(freqs[peak]))
+            result.mode_frequencies.append(peak)
             result.mode_shares.append([float(v) for v in share])
+
+
+def _centroids(excess_power: np.ndarray, first: int) -> np.ndarray:
+    """Per row, the bin (fractional, counted from ``first``) where the power over the floor is centred."""
+    weight = np.maximum(excess_power, 0.0)
+    total = weight.sum(axis=1)
+    position = weight @ np.arange(first, first + weight.shape[1], dtype=float)
+    return np.divide(position, total, out=np.full(total.shape, float(first)), where=total > 0)
 
 
 def _follows_an_order(peaks: np.ndarray, speeds: np.ndarray) -> bool:
