@@ -666,15 +666,15 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
         if len(located) == 1:
             located[0].basis += f'; what {first.effect.id} leaves follows {left.located}, as this effect does'
             return located[0], []
-        shown = {id(second): second.effect.independent_evidence(table, location, second.params,
-                                                                beside=second.first_effect) for second in earning[:2]}
-        with_evidence = [second for second in earning[:2] if shown[id(second)]]
+        shown = [(second, second.effect.independent_evidence(table, location, second.params,
+                                                             beside=second.first_effect)) for second in earning[:2]]
+        with_evidence = [(second, evidence) for second, evidence in shown if evidence]
         if len(with_evidence) != 1:
             return None, earning[:2]
-        other = next(second for second in earning[:2] if second is not with_evidence[0])
-        with_evidence[0].basis += (f'; {shown[id(with_evidence[0])]}; {other.effect.id} fits as well but shows '
-                                   'nothing outside the amplitude fit')
-        return with_evidence[0], []
+        (named, evidence), = with_evidence
+        other = earning[1] if named is earning[0] else earning[0]
+        named.basis += f'; {evidence}; {other.effect.id} fits as well but shows nothing outside the amplitude fit'
+        return named, []
     return (earning[0] if earning else None), []
 
 

@@ -554,9 +554,7 @@ def _drifting_covariates(table: WindowTable) -> tuple[str, ...]:
     actuator ran at: binned by it, the windows fall into bins by chance and
     the run scatter can pass for a pattern.
     """
-    temperature = np.asarray(table.temperature, dtype=float)
-    finite = temperature[np.isfinite(temperature)]
-    spans = finite.size and float(np.max(finite) - np.min(finite)) >= MIN_TEMPERATURE_SPAN
+    spans = table.temperature_span >= MIN_TEMPERATURE_SPAN      # False when none is recorded (NaN)
     return ('revolutions', 'time', 'temperature') if spans else ('revolutions', 'time')
 
 
@@ -951,10 +949,12 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         if broad and np.argmax(np.where(seen, share, -np.inf)) == np.argmin(np.where(seen, edges, np.inf)):
             continue
         if varies and share_varies and share.max() >= MODE_MIN_SHARE:
-            largest = lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))
-            peak = float(np.median(peaks)) * df if broad else float(freqs[largest])
             if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):
                 continue
+            if broad:
+                peak = float(np.median(peaks)) * df
+            else:
+                peak = float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))])
             result.mode_frequencies.append(peak)
             result.mode_shares.append([float(v) for v in share])
 

@@ -193,6 +193,12 @@ class WindowTable:
         """True when most windows carry a temperature."""
         return bool(np.isfinite(self.temperature).mean() >= 0.8) if len(self) else False
 
+    @property
+    def temperature_span(self) -> float:
+        """Highest minus lowest recorded temperature, K (NaN when no window carries one)."""
+        finite = self.temperature[np.isfinite(self.temperature)]
+        return float(np.max(finite) - np.min(finite)) if finite.size else math.nan
+
     def subset(self, mask: npt.ArrayLike) -> WindowTable:
         """Rows where ``mask`` is true (a boolean array or indices)."""
         mask = np.asarray(mask)

@@ -57,7 +57,7 @@ class ThermalViscosity(Effect, law.Extension):
         """Needs a temperature in most windows that varies by :data:`MIN_SPREAD` K or more."""
         if not table.has_temperature:
             return 'no temperature recorded (/prsm/temperature is optional): cannot test'
-        spread = float(np.nanmax(table.temperature) - np.nanmin(table.temperature))
+        spread = table.temperature_span
         if spread < MIN_SPREAD:
             return f'temperature varies by {spread:.2f} K only: cannot show a viscosity effect'
         return ''
