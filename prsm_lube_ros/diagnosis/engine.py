@@ -1037,8 +1037,8 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
         located.status = Status.EARNS
         fit = cast(ModelFit, located.fit)
         located.reason = (f'named as the law of the mismatch located on {location.located}: its fit leaves no '
-                          f'pattern there and predicts held-out runs better than the empirical term of the located '
-                          f'shape; held-out error {100 * located.gain:.0f} % lower, BIC {located.delta_bic:+.1f} '
+                          f'pattern there and the empirical term of the located shape does not explain it better; '
+                          f'held-out error {100 * located.gain:.0f} % lower, BIC {located.delta_bic:+.1f} '
                           f'({LOCATED_LAW_BIC:g} suffices once located)')
         out.verdict = located.effect.id
         out.notes.append(f'no candidate earns by the BIC margin, but the mismatch follows {location.located} and '
