@@ -157,14 +157,15 @@ def test_a_within_run_effect_is_still_named_on_three_conditions():
     assert result.verdict == 'position_dependent_stiffness'
 
 
-def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_gain=float('nan')):
+def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_gain=float('nan'), runs=100):
     """What engine._add_second decides for a pair fit with ``gain`` and ``delta_bic`` (the fit itself stubbed)."""
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
     pair = SimpleNamespace(gain=gain, run_gain=run_gain, delta_bic=delta_bic, params={}, route=1, basis='',
                            first_effect=None,
-                           effect=SimpleNamespace(independent_evidence=lambda table, location, params,
+                           effect=SimpleNamespace(parameter_names=('a', 'b'),
+                                                  independent_evidence=lambda table, location, params,
                                                   beside: evidence))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
@@ -172,7 +173,65 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_
     other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence='',
                             effect=SimpleNamespace(covariate='position'))
     left = Location([], None, located, '')
-    return engine._add_second(None, first, other, None, None, left)
+    return engine._add_second(SimpleNamespace(runs=np.arange(runs)), first, other, None, None, left)
+
+
+@pytest.mark.parametrize('runs, added, tolerance', [
+    (100, 1, 0.02),         # many runs: the floor EVIDENCE_TOLERANCE
+    (12, 2, 2 / 24),        # resonance 151 of the fresh random study: 3 speeds in 12 runs, 8.3 %
+    (24, 1, 0.0208),
+    (0, 1, 0.5),            # no run: as for one
+])
+def test_the_held_out_tolerance_of_evidence_is_what_estimating_the_parameters_costs(runs, added, tolerance):
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis.engine import evidence_tolerance
+    assert evidence_tolerance(SimpleNamespace(runs=np.arange(runs)), added) == pytest.approx(tolerance, abs=1e-4)
+
+
+@pytest.mark.parametrize('runs, gain, named', [
+    (100, -0.03, False),    # 2 parameters on 100 runs cost 1 %: the floor of 2 % holds
+    (12, -0.046, True),     # on 12 runs they cost 8.3 %
+    (12, -0.09, False),
+])
+def test_a_second_effect_with_evidence_may_cost_what_its_parameters_cost_held_out(monkeypatch, runs, gain, named):
+    second = _second_case(monkeypatch, gain, 1.0, evidence='spectrum: a band at 31.7 Hz', runs=runs)
+    assert (second is not None) == named
+    if named:
+        assert second.route == 3
+
+
+@pytest.mark.parametrize('evidence, verdict, second', [
+    # Two 177 of the fresh random study: a broadband floor read at standstill and a mode at 10 Hz whose band
+    # the orders pass, each earning alone and neither adding by BIC given the other: both are named.
+    (('standstill: 0.65 m/s^2', 'spectrum: a band at 9.9 Hz'), 'background_vibration', 'resonance'),
+    (('standstill: 0.65 m/s^2', ''), 'background_vibration', None),     # evidence for one: the other dropped
+    (('', ''), 'ambiguous', None),                                        # the recording cannot tell them apart
+])
+def test_a_tie_where_each_effect_shows_outside_the_amplitude_fit_names_both(monkeypatch, evidence, verdict, second):
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.engine import Status
+
+    def candidate(effect_id, shown, cv_rmse):
+        effect = SimpleNamespace(id=effect_id, form=effect_id, covariate='speed', to_separate='more speeds',
+                                 parameter_names=('a',),
+                                 independent_evidence=lambda table, location, params, beside: shown,
+                                 contrary_evidence=lambda *args: '')
+        return engine.Candidate(effect, SimpleNamespace(cv_rmse=cv_rmse, params={}, vector=np.zeros(4)),
+                                Status.EARNS, gain=0.1, delta_bic=-50.0, evidence=shown,
+                                family=SimpleNamespace(variants=lambda: [effect]))
+    best, runner = candidate('background_vibration', evidence[0], 0.030), candidate('resonance', evidence[1], 0.031)
+    pair = SimpleNamespace(gain=-0.003, params={}, first_params={}, effect=runner.effect, first_effect=best.effect,
+                           route=1, basis='')
+    monkeypatch.setattr(engine, '_pair_test', lambda *args: (False, False))
+    monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
+    monkeypatch.setattr(engine, 'CombinedEffect', lambda *args: args)
+    out = engine._Outcome()
+    engine._settle_earning(SimpleNamespace(runs=np.arange(48)), [best, runner], out, [], None, float('nan'))
+    assert out.verdict == verdict
+    assert (out.second.effect.id if out.second is not None else None) == second
+    if second:
+        assert 'standstill' in out.second.basis and 'band at 9.9 Hz' in out.second.basis
 
 
 @pytest.mark.parametrize('gain, delta_bic, located, evidence, route', [
