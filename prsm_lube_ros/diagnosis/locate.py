@@ -92,7 +92,8 @@ from .table import WindowTable
 __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
            'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MIN_TEMPERATURE_SPAN', 'MODE_BROAD_PROMINENCE',
            'MODE_FLOOR_HALF_WIDTH', 'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS',
-           'MODE_RING_RATIO', 'MODE_SHARE_SPREAD', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS', 'SHAPE_MIN_BINS',
+           'MODE_RING_RATIO', 'MODE_SHARE_SPREAD', 'MODE_UPPER_SKIRT', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS',
+           'SHAPE_MIN_BINS',
            'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
            'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines',
            'spectral_shape', 'time_segment']
@@ -123,6 +124,9 @@ MODE_MAX_ORDER = 50.0
 #: ... which rings appreciably from this frequency ratio on (|H|^2 >= 1.2): a wide band above
 #: MODE_MAX_ORDER f_rot / MODE_RING_RATIO at the top speed is out of the orders' reach (the contact's own mode).
 MODE_RING_RATIO = 0.4
+#: A wide band counts only where this many times its frequency lies inside the spectrum: its upper skirt (a mode
+#: damped 20 % rings over 2 zeta f_r, and falls back to the floor by about half an octave above f_r).
+MODE_UPPER_SKIRT = math.sqrt(2.0)
 #: Third-octave bands of the shape test hold this many spectrum bins at least (medians step over lines).
 SHAPE_MIN_BINS = 8
 #: The shape changes when its distance exceeds this many times the distance between halves of one speed's runs ...
@@ -869,7 +873,14 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     where a well-damped mode's band, wider than that running median, stands
     out by :data:`MODE_BROAD_PROMINENCE`, when an order up to :data:`MODE_MAX_ORDER`
     can reach it (a frequency ratio of :data:`MODE_RING_RATIO` at the top speed):
-    the contact's own mode, far above, is broad too and needs no order to ring.
+    the contact's own mode, far above, is broad too and needs no order to ring;
+    and only when the band's upper skirt, to :data:`MODE_UPPER_SKIRT` times
+    its frequency, lies inside the spectrum: near the top the octave above is
+    cut off, and a spectrum rising to its edge (the skirt of a mode above the
+    top, an anti-alias filter's shape) stands out of the octave below alone
+    (background 198 of the fresh random study: a "band" at 396 Hz sampled at
+    1 kHz, its share growing with speed as the contact's own mode at 1024 Hz
+    is approached).
     Such a band's place at each speed is where its power over the floor is
     centred (its flat top puts the largest bin anywhere), and that is the
     frequency reported.
@@ -941,6 +952,8 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
             continue
         if _follows_an_order(peaks, edges[seen]):
             continue
+        if broad and freqs[int(np.median(peaks))] * MODE_UPPER_SKIRT > freqs[-1]:
+            continue            # its upper skirt is cut off by the spectrum's top (see _mode_bands)
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
         if freqs[int(np.median(peaks))] * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
             continue

@@ -394,10 +394,15 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
         assert engine._located_law(None, [candidate], location, None) is candidate
 
 
-@pytest.mark.parametrize('inside_physical, chosen', [(False, 'mode above the speed band'),
-                                                     (True, 'mode inside the speed band')])
-def test_a_form_with_unphysical_constants_does_not_stand_for_the_effect_while_another_is_physical(
-        monkeypatch, inside_physical, chosen):
+@pytest.mark.parametrize('inside_physical, refit_spread, chosen', [
+    (False, 1.5, 'mode above the speed band'),
+    (True, 1.5, 'mode inside the speed band'),
+    # Resonance 183 of the fresh random study: the free in-band fit drew the peak of 3 level means with
+    # C_lambda = -0.50; held physical it fits as well (the true constants and a mode at the middle speed).
+    (False, 0.99, 'mode inside the speed band'),
+])
+def test_a_form_with_unphysical_constants_is_fitted_again_physical_and_does_not_stand_unphysical(
+        monkeypatch, inside_physical, refit_spread, chosen):
     # Resonance 65 of the fresh random study: with 3 speeds the mode inside the band fitted best (by a BIC of 0.4)
     # with C_lambda = -0.74, so the effect was rejected although the mode above the band fitted as well with
     # C_lambda = 0.34 (true 0.3).  The physical form stands for it; all else equal, the lower BIC does.
@@ -410,14 +415,24 @@ def test_a_form_with_unphysical_constants_does_not_stand_for_the_effect_while_an
     spread = {'mode above the speed band': 1.00, 'mode inside the speed band': 0.99, 'mode below the speed band': 1.2}
     c_lambda = {'mode above the speed band': 0.34, 'mode inside the speed band': 0.3 if inside_physical else -0.74,
                 'mode below the speed band': -0.69}
+    refitted = []
 
-    def fake_fit(table, form, folds=None, starts=None):
+    def fake_fit(table, form, folds=None, starts=None, physical=False):
+        if physical:        # held at C_lambda >= 0, from the free fit among its starts
+            refitted.append(form.form)
+            assert any(np.size(start) == 5 and start[2] == c_lambda[form.form] for start in starts)
+            return ModelFit(effect=form.id, vector=np.r_[0.0, 0.0, 0.0, 0.5, 0.05], params={},
+                            log_residual=(refit_spread if 'inside' in form.form else 1.5) * noise,
+                            cv_log_residual=noise, n_params=5, n_eff=200.0,
+                            c_lambda_std=0.01, physical=True)
         return ModelFit(effect=form.id, vector=np.r_[0.0, 0.0, c_lambda[form.form], 0.5, 0.05], params={},
                         log_residual=spread[form.form] * noise, cv_log_residual=noise, n_params=5, n_eff=200.0,
                         c_lambda_std=0.01)
     monkeypatch.setattr(engine, 'fit_model', fake_fit)
     form, fit, bics, ties, _ = engine._choose_form(None, forms, [])
-    assert form.form == chosen and fit.vector[2] == c_lambda[chosen]
+    assert sorted(refitted) == sorted(f for f, c in c_lambda.items() if c < 0)
+    expected = 0.0 if refit_spread < 1 else c_lambda[chosen]
+    assert form.form == chosen and fit.vector[2] == expected
     # Every form's BIC is still reported; an unphysical form is never named as a tie.
     assert {name for name, _ in bics} == set(spread)
-    assert all(c_lambda[t] > 0 for t in ties)
+    assert all(c_lambda[t] > 0 or t == chosen for t in ties) and chosen not in ties

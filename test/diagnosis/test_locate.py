@@ -190,6 +190,26 @@ def test_a_flat_topped_band_is_placed_where_its_power_is_centred_not_at_its_larg
     assert lines.frequencies == []
 
 
+@pytest.mark.parametrize('top_hz, found', [(150.0, False), (170.0, True), (200.0, True)])
+def test_a_wide_band_whose_upper_skirt_the_spectrum_cuts_off_is_not_a_mode(top_hz, found):
+    """The band raised over 100-140 Hz, centred at 120 Hz, in spectra that stop at ``top_hz``.
+
+    Near the top the octave above is cut off, and a spectrum rising to its
+    edge stands out of the octave below alone (background 198 of the random
+    study: a "band" at 396 Hz sampled at 1 kHz, the contact's own mode at
+    1024 Hz approached as the speed grows).  A band counts when its upper
+    skirt, to MODE_UPPER_SKIRT = sqrt(2) times its frequency (170 Hz), is in
+    the spectrum.
+    """
+    import dataclasses
+    for seed in (0, 2):
+        table = spectra_table(raised=[3.0, 5.0, 8.0, 12.0], seed=seed)
+        table = dataclasses.replace(table, spectra=table.spectra[:, :int(top_hz / table.spectrum_resolution) + 1])
+        frequencies = spectral_lines(table).mode_frequencies
+        assert (len(frequencies) == 1 and frequencies[0] == pytest.approx(120.0, abs=2.0)) if found \
+            else frequencies == []
+
+
 def test_a_wide_band_no_order_can_ring_or_losing_share_to_the_orders_is_not_a_mode():
     """The contact's own mode is broad too: out of reach of order 50 at the top speed, or fading as orders grow.
 
