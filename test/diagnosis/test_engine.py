@@ -389,9 +389,12 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
                            fit=SimpleNamespace(cv_rmse=cv_rmse))
     term.beats = lambda named, covariates: engine.EmpiricalFit.beats(term, named, covariates)
     location = Location([], None, covariate if covariate == 'speed' else 'revolutions', '')
-    assert (engine._located_law(None, [candidate], location, term) is candidate) is named
+    # time and revolutions not collinear over runs (runs in random order of speed)
+    means = {'revolutions': np.array([20.0, 91, 163, 235, 310, 379]), 'time': np.array([130.0, 6, 84, 28, 110, 54])}
+    table = SimpleNamespace(has_temperature=False, run_means=lambda name: means[name])
+    assert (engine._located_law(table, [candidate], location, term) is candidate) is named
     if named:       # without an empirical term (none located earns a place) the law is named too
-        assert engine._located_law(None, [candidate], location, None) is candidate
+        assert engine._located_law(table, [candidate], location, None) is candidate
 
 
 @pytest.mark.parametrize('inside_physical, refit_spread, chosen', [
@@ -436,3 +439,30 @@ def test_a_form_with_unphysical_constants_is_fitted_again_physical_and_does_not_
     # Every form's BIC is still reported; an unphysical form is never named as a tie.
     assert {name for name, _ in bics} == set(spread)
     assert all(c_lambda[t] > 0 or t == chosen for t in ties) and chosen not in ties
+
+
+@pytest.mark.parametrize('time_means, named', [
+    # Depletion 201 of the fresh random study: two sessions of 6 runs, time and revolutions rising together
+    # (r = 0.99); a quadratic in time predicted held-out runs 19 % better than the concealed depletion law.
+    ([6, 28, 54, 84, 110, 130, 12, 38, 62, 89, 114, 132], True),
+    ([130, 6, 84, 28, 110, 54, 12, 132, 38, 114, 62, 89], False),     # runs in another order: time is not revolutions
+])
+def test_a_smooth_in_a_covariate_collinear_with_the_named_law_s_does_not_overrule_it(time_means, named):
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.effects import registered
+    revolutions = np.array([20, 91, 163, 235, 310, 379, 19, 91, 163, 235, 309, 378], dtype=float)
+    means = {'revolutions': revolutions, 'time': np.array(time_means, dtype=float)}
+    table = SimpleNamespace(has_temperature=False, run_means=lambda name: means[name])
+    depletion = registered()['lubricant_depletion']
+    best = engine.Candidate(depletion, SimpleNamespace(cv_rmse=0.0459), engine.Status.EARNS)
+    term = SimpleNamespace(form='smooth', covariate='time', describe=lambda params: 'a quadratic')
+    fit = SimpleNamespace(cv_rmse=0.0371, n_eff=100.0, params={}, unphysical=lambda: [])
+    empirical = engine.EmpiricalFit(term, fit, 0.66, -45.0)
+    out = engine._Outcome(verdict='lubricant_depletion', best=best)
+    engine._let_empirical_overrule(table, out, empirical)
+    assert (out.verdict == 'lubricant_depletion') is named
+    assert ('time' in engine.same_shape_covariates(table, {'revolutions'})) is named
+    assert any('collinear over runs' in note for note in out.notes) is named
+    if not named:
+        assert out.verdict == 'unexplained' and empirical.overrules == 'lubricant_depletion'
