@@ -466,3 +466,25 @@ def test_a_smooth_in_a_covariate_collinear_with_the_named_law_s_does_not_overrul
     assert any('collinear over runs' in note for note in out.notes) is named
     if not named:
         assert out.verdict == 'unexplained' and empirical.overrules == 'lubricant_depletion'
+
+
+@pytest.mark.parametrize('gain, unphysical, tried', [
+    # Two 199 of the fresh random study: no lack of fit and nothing located, a resonance alone 14 % better held out
+    # (BIC -7.1), thermal viscosity 8 %: together they earn (29 % better than the resonance alone, BIC -24).
+    (0.142, [], True),
+    (0.03, [], False),                      # no candidate predicts held-out runs better by MIN_GAIN
+    (0.142, ['C_lambda < 0'], False),       # one does, with unphysical constants
+])
+def test_pairs_are_tried_when_a_candidate_alone_predicts_held_out_runs_better(monkeypatch, gain, unphysical, tried):
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.locate import Location
+    calls = []
+    monkeypatch.setattr(engine, '_pair_when_none_earns', lambda *args: calls.append(args) or None)
+    candidate = SimpleNamespace(gain=gain, fit=SimpleNamespace(unphysical=lambda: unphysical))
+    baseline = SimpleNamespace(unphysical=lambda: [])
+    test = SimpleNamespace(significant=False, lack_of_fit=False, excess_scatter=False)
+    out = engine._Outcome()
+    engine._when_none_earns(None, [candidate], baseline, test, Location([], None, 'none', ''), [], 12, out)
+    assert bool(calls) is tried
+    assert out.verdict == engine.ADEQUATE      # the pair did not earn: nothing is named
