@@ -278,6 +278,34 @@ def _explain_misses(out: Path, jobs: int, command: str) -> int:
     return 0
 
 
+def _rerun_misses(out: Path, jobs: int, command: str) -> int:
+    """``--rerun-misses``: the missed cases of ``out``/results.json run again on this engine, to ``out``/rerun.md."""
+    from ..diagnosis.effects import effect_ids
+    from .random_study import run_random_case
+    study = _study_cases(out)
+    if study is None:
+        return 2
+    records, quick = study
+    missed = [r for r in records if not r.get('right')]
+    pool_effects = tuple(e for e in effect_ids() if e != NONE)
+    with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
+        again = list(pool.map(run_random_case, [(r['kind'], r['seed'], pool_effects, quick) for r in missed]))
+    lines = ['# Missed cases run again on the current engine', '', f'Command: `{command}`', '',
+             f'{sum(r["right"] for r in again)} of the {len(missed)} cases the study missed are right now. '
+             'These seeds are not fresh for the engine that ran them again: a rerun says what a change did to '
+             'the cases it was made for, not how it generalises.', '',
+             '| kind | seed | concealed | verdict in the study | verdict now | named now | right now |',
+             '|---|---|---|---|---|---|---|']
+    for before, now in zip(missed, again):
+        lines.append(f'| {before["kind"]} | {before["seed"]} | {", ".join(before.get("effects", [])) or "-"} | '
+                     f'{before["verdict"]} | {now["verdict"]} | {", ".join(now.get("named", [])) or "-"} | '
+                     f'{"yes" if now["right"] else "no"} |')
+    text = '\n'.join(lines) + '\n'
+    (out / 'rerun.md').write_text(text)
+    print(text)
+    return 0
+
+
 def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
     """``--power``: every case of ``kinds`` against what an ideal test would name, to ``out``/power.md."""
     from ..diagnosis.effects import effect_ids
@@ -322,6 +350,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--explain-misses', action='store_true',
                         help='random design: simulate the missed cases of --out/results.json again and write '
                              'misses.md with the size of what was concealed against the scatter')
+    parser.add_argument('--rerun-misses', action='store_true',
+                        help='random design: run the missed cases of --out/results.json again on this engine and '
+                             'write rerun.md with what it says now')
     parser.add_argument('--margins', action='store_true',
                         help='random design: write margins.md from --out/results.json, the candidates a lower BIC '
                              'margin would name (no case is run again)')
@@ -339,6 +370,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                + ' '.join(argv if argv is not None else sys.argv[1:]))
     if args.design == 'random' and args.explain_misses:
         return _explain_misses(Path(args.out), args.jobs, command)
+    if args.design == 'random' and args.rerun_misses:
+        return _rerun_misses(Path(args.out), args.jobs, command)
     if args.design == 'random' and args.combine:
         return _combine(Path(args.out), [Path(d) for d in args.combine], command)
     if args.design == 'random' and args.margins:
