@@ -327,9 +327,8 @@ def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command line of the study."""
-    from ..diagnosis.effects import effect_ids
+def _parser() -> argparse.ArgumentParser:
+    """The study's command-line options."""
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.diagnose_study',
                                      description=__doc__.split('\n')[0])
     parser.add_argument('--out', default='out/diagnose_study')
@@ -362,7 +361,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--power', nargs='+', default=None, metavar='EFFECT',
                         help='random design: simulate every case of these effects in --out/results.json again and '
                              'write power.md, the chance an ideal test would name each')
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line of the study."""
+    from ..diagnosis.effects import effect_ids
+    args = _parser().parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
     effects = list(args.effects) if args.effects else list(effect_ids())
