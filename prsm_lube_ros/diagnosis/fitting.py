@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 import math
+import warnings
 from typing import Any, TYPE_CHECKING
 
 import numpy as np
@@ -143,10 +144,17 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
             candidates.append((float(r0 @ r0), len(candidates), x0))
     best, best_cost = None, math.inf
     # Starts given explicitly are all tried; of a grid, the MAX_STARTS that fit best to begin with.
-    for _, _, x0 in sorted(candidates)[:None if starts is not None else MAX_STARTS]:
-        result = least_squares(residual, x0, bounds=(lower, upper), x_scale='jac', max_nfev=300)
-        if np.all(np.isfinite(result.fun)) and result.cost < best_cost:
-            best, best_cost = result.x, result.cost
+    for initial, _, x0 in sorted(candidates)[:None if starts is not None else MAX_STARTS]:
+        try:
+            with warnings.catch_warnings():     # the NaN below, met inside the solver first
+                warnings.simplefilter('ignore', RuntimeWarning)
+                result = least_squares(residual, x0, bounds=(lower, upper), x_scale='jac', max_nfev=300)
+            x, cost = (result.x, result.cost) if np.all(np.isfinite(result.fun)) else (x0, math.inf)
+        except ValueError:
+            # A step met a point where the law is not finite (NaN in the Jacobian): the start itself stands.
+            x, cost = x0, 0.5 * initial
+        if cost < best_cost:
+            best, best_cost = x, cost
     if best is None:
         best = np.r_[baseline, np.clip(np.asarray(effect.starts()[0], float), lo, hi)]
     return best

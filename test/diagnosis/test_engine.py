@@ -488,3 +488,37 @@ def test_pairs_are_tried_when_a_candidate_alone_predicts_held_out_runs_better(mo
     engine._when_none_earns(None, [candidate], baseline, test, Location([], None, 'none', ''), [], 12, out)
     assert bool(calls) is tried
     assert out.verdict == engine.ADEQUATE      # the pair did not earn: nothing is named
+
+
+def test_a_start_whose_law_turns_nan_a_step_away_is_kept_not_a_crash():
+    """Two 220 of the fresh random study: a fold refit met a NaN Jacobian and least_squares raised ValueError.
+
+    A law finite at its start but not a finite-difference step beyond it (here ln(1 - a) at a = 1 - 1e-12):
+    the solver cannot step, so the start itself is the fit, and no warning leaks.
+    """
+    import warnings
+    from prsm_lube_ros.diagnosis.effects.base import Effect
+    from prsm_lube_ros.diagnosis.fitting import fit_vector
+
+    class Cliff(Effect):
+        id = 'cliff'
+        parameter_names = ('a',)
+
+        def bounds(self):
+            return np.array([0.0]), np.array([2.0])
+
+        def starts(self):
+            return [np.array([1.0 - 1e-12])]
+
+        def to_params(self, p, scales):
+            return {'a': float(p[0])}
+
+        def log_gain(self, params, covariates, ln_a22):
+            with np.errstate(invalid='ignore', divide='ignore'):
+                return np.full(np.shape(ln_a22), np.log(1.0 - params['a']))
+
+    table, _ = synthetic_table(np.random.default_rng(3), None, PLAN)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        vector = fit_vector(table, Cliff(), {})
+    assert np.all(np.isfinite(vector)) and vector[3] == pytest.approx(1.0 - 1e-12)
