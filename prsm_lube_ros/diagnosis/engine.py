@@ -96,9 +96,8 @@ _E = TypeVar('_E', bound=Effect)
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'BIC_MARGIN', 'CANNOT_TELL', 'COLLINEAR', 'CONFOUNDED', 'Candidate',
            'Confounding', 'DRIFT_COVARIATES', 'Diagnosis', 'EVIDENCE_TOLERANCE', 'EmpiricalFit', 'FORM_MARGIN',
-           'FORM_TIE',
-           'LOCATED_BIC_TOLERANCE', 'LOCATED_LAW_BIC', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN', 'SecondEffect',
-           'Status', 'TIE_RATIO', 'UNEXPLAINED', 'confounding', 'diagnose_table', 'drift_correlation',
+           'FORM_TIE', 'LOCATED_BIC_TOLERANCE', 'LOCATED_LAW_BIC', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN',
+           'SecondEffect', 'Status', 'TIE_RATIO', 'UNEXPLAINED', 'confounding', 'diagnose_table', 'drift_correlation',
            'evidence_tolerance', 'same_shape_covariates']
 
 #: BIC improvement (effective sample size) a candidate needs.
@@ -549,13 +548,12 @@ def _evaluate(table: WindowTable, effect: Effect, baseline: ModelFit, location: 
     elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
         candidate.status = Status.EARNS
         candidate.reason = f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}'
-    elif evidence and gain >= -evidence_tolerance(table, len(effect.parameter_names)):
+    elif evidence and gain >= -(tolerance := evidence_tolerance(table, len(effect.parameter_names))):
         candidate.status = Status.EARNS
         candidate.reason = f'{evidence}; held-out error {100 * gain:+.1f} % lower'
         if gain < -EVIDENCE_TOLERANCE:
-            candidate.reason += (f' (within the {100 * evidence_tolerance(table, len(effect.parameter_names)):.1f} % '
-                                 f'that estimating {len(effect.parameter_names)} parameter(s) costs on '
-                                 f'{table.runs.size} runs)')
+            candidate.reason += (f' (within the {100 * tolerance:.1f} % that estimating '
+                                 f'{len(effect.parameter_names)} parameter(s) costs on {table.runs.size} runs)')
     else:
         candidate.reason = (f'does not earn its {len(effect.parameter_names)} parameter(s): held-out error '
                             f'{100 * gain:+.1f} % lower, BIC {delta:+.1f}')
