@@ -620,6 +620,16 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
                         run_gain=run_gain)
 
 
+def _on_top(table: WindowTable, first: Candidate, other: Candidate, folds: list[int],
+            location: Location) -> SecondEffect | None:
+    """``other`` fitted on top of ``first`` (first's form held), every form of ``other``: :func:`_best_pair`."""
+    family = other.family
+    assert family is not None and first.fit is not None  # set by _evaluate on fitted candidates
+    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
+              for form in family.variants()]
+    return _best_pair(table, combos, first.fit, other, folds, location)
+
+
 def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int], location: Location,
                 left: Location) -> SecondEffect | None:
     """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC.
@@ -634,11 +644,7 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
     signature, with the pair's parameters) and the pair predicts held-out runs
     no worse than :func:`evidence_tolerance` allows -- the rules a single effect earns by.
     """
-    family = other.family
-    assert family is not None and first.fit is not None  # set by _evaluate on fitted candidates
-    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
-              for form in family.variants()]
-    pair = _best_pair(table, combos, first.fit, other, folds, location)
+    pair = _on_top(table, first, other, folds, location)
     if pair is None:
         return None
     if _earns_by_bic(pair, SECOND_BIC_MARGIN):
@@ -773,12 +779,9 @@ def _tie_both_shown(table: WindowTable, best: Candidate, runner: Candidate, fold
     each holds with the pair's parameters beside the other (the evidence rule
     of a second effect, :func:`_earns_by_evidence`, both ways round).
     """
-    if not (best.evidence and runner.evidence) or runner.family is None:
+    if not (best.evidence and runner.evidence):
         return None
-    assert best.fit is not None  # tied candidates both earn, so both were fitted
-    combos = [CombinedEffect(best.effect, form, best.fit.vector[3:], runner.form_vectors.get(form.form))
-              for form in runner.family.variants()]
-    pair = _best_pair(table, combos, best.fit, runner, folds, location)
+    pair = _on_top(table, best, runner, folds, location)
     if pair is None or not _earns_by_evidence(table, pair, location):
         return None
     first_shown = pair.first_effect.independent_evidence(table, location, pair.first_params, beside=pair.effect)
@@ -1190,9 +1193,9 @@ def _let_empirical_overrule(table: WindowTable, out: _Outcome, empirical: Empiri
     """
     best = out.best
     if empirical is not None and best is not None and out.verdict in (best.effect.id, AMBIGUOUS):
-        pair = out.second is not None and out.verdict == best.effect.id
-        named_fit = cast(SecondEffect, out.second).fit if pair else cast(ModelFit, best.fit)
-        followed = {best.effect.covariate} | ({cast(SecondEffect, out.second).effect.covariate} if pair else set())
+        second = out.second if out.verdict == best.effect.id else None
+        named_fit = second.fit if second is not None else cast(ModelFit, best.fit)
+        followed = {best.effect.covariate} | ({second.effect.covariate} if second is not None else set())
         followed |= {registered()[name].covariate for name in out.tied if name in registered()}
         collinear = same_shape_covariates(table, followed) - followed
         if empirical.term.covariate in collinear and empirical.beats(named_fit, followed):

@@ -41,9 +41,8 @@ if TYPE_CHECKING:
 
 __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_START', 'UNPHYSICAL_SIGMAS', 'bic',
            'constants_jacobian', 'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector',
-           'held_out_log_residuals', 'identifiable',
-           'intraclass_correlation', 'ln_eq22', 'predict_log', 'relative_errors', 'relative_rmse', 'run_level_rmse',
-           'score_held_out']
+           'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22', 'predict_log',
+           'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out']
 
 BASELINE = 'baseline'
 #: Starts of an effect's own grid that are optimised (those with the lowest initial cost).

@@ -93,10 +93,9 @@ __all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE
            'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MIN_TEMPERATURE_SPAN', 'MODE_BROAD_PROMINENCE',
            'MODE_FLOOR_HALF_WIDTH', 'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS',
            'MODE_RING_RATIO', 'MODE_SHARE_SPREAD', 'MODE_UPPER_SKIRT', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS',
-           'SHAPE_MIN_BINS',
-           'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines', 'SpectralShape',
-           'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode', 'spectral_lines',
-           'spectral_shape', 'time_segment']
+           'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines',
+           'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode',
+           'spectral_lines', 'spectral_shape', 'time_segment']
 
 #: A covariate carries the mismatch when its p-value is below this.
 SIGNIFICANCE = 1e-3
@@ -952,10 +951,11 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
             continue
         if _follows_an_order(peaks, edges[seen]):
             continue
-        if broad and freqs[int(np.median(peaks))] * MODE_UPPER_SKIRT > freqs[-1]:
+        centre = float(freqs[int(np.median(peaks))])
+        if broad and centre * MODE_UPPER_SKIRT > freqs[-1]:
             continue            # its upper skirt is cut off by the spectrum's top (see _mode_bands)
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
-        if freqs[int(np.median(peaks))] * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
+        if centre * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
             continue
         varies = power[seen].max() / power[seen].min() > LINE_CONSTANCY
         share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD

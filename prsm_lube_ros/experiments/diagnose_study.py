@@ -50,7 +50,7 @@ from typing import cast, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Callable, Sequence
 
     from ..diagnosis.fitting import ModelFit
     from ..diagnosis.table import WindowTable
@@ -254,14 +254,20 @@ def _margins(out: Path, command: str) -> int:
     return 0
 
 
-def _effect_sizes(records: list[dict], quick: bool, jobs: int) -> list[dict]:
-    """The concealed effects' sizes (:func:`.random_study.explain_miss`) of ``records``, simulated again."""
+def _simulate_again(records: list[dict], quick: bool, jobs: int, case_function: Callable[[tuple], dict]) \
+        -> list[dict]:
+    """``case_function`` on each of ``records``' cases, simulated again from its (kind, seed) as the study drew it."""
     from ..diagnosis.effects import effect_ids
-    from .random_study import explain_miss
     pool_effects = tuple(e for e in effect_ids() if e != NONE)
     cases = [(r['kind'], r['seed'], pool_effects, quick) for r in records]
     with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
-        return list(pool.map(explain_miss, cases))
+        return list(pool.map(case_function, cases))
+
+
+def _effect_sizes(records: list[dict], quick: bool, jobs: int) -> list[dict]:
+    """The concealed effects' sizes (:func:`.random_study.explain_miss`) of ``records``, simulated again."""
+    from .random_study import explain_miss
+    return _simulate_again(records, quick, jobs, explain_miss)
 
 
 def _explain_misses(out: Path, jobs: int, command: str) -> int:
@@ -280,16 +286,13 @@ def _explain_misses(out: Path, jobs: int, command: str) -> int:
 
 def _rerun_misses(out: Path, jobs: int, command: str) -> int:
     """``--rerun-misses``: the missed cases of ``out``/results.json run again on this engine, to ``out``/rerun.md."""
-    from ..diagnosis.effects import effect_ids
     from .random_study import run_random_case
     study = _study_cases(out)
     if study is None:
         return 2
     records, quick = study
     missed = [r for r in records if not r.get('right')]
-    pool_effects = tuple(e for e in effect_ids() if e != NONE)
-    with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
-        again = list(pool.map(run_random_case, [(r['kind'], r['seed'], pool_effects, quick) for r in missed]))
+    again = _simulate_again(missed, quick, jobs, run_random_case)
     lines = ['# Missed cases run again on the current engine', '', f'Command: `{command}`', '',
              f'{sum(r["right"] for r in again)} of the {len(missed)} cases the study missed are right now. '
              'These seeds are not fresh for the engine that ran them again: a rerun says what a change did to '
