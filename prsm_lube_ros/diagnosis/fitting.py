@@ -42,7 +42,8 @@ if TYPE_CHECKING:
 __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_START', 'UNPHYSICAL_SIGMAS', 'bic',
            'constants_jacobian', 'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector',
            'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22', 'predict_log',
-           'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out']
+           'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out', 'within_run_delta_bic',
+           'within_run_residual', 'within_run_share']
 
 BASELINE = 'baseline'
 #: Starts of an effect's own grid that are optimised (those with the lowest initial cost).
@@ -240,6 +241,53 @@ def bic(log_residual: npt.ArrayLike, n_params: int, n_eff: float) -> float:
     r = np.asarray(log_residual, dtype=float)
     ssr = float(np.mean(r ** 2))
     return float(n_eff * math.log(max(ssr, 1e-300)) + n_params * math.log(max(n_eff, 2.0)))
+
+
+def within_run_residual(table: WindowTable, residual: npt.ArrayLike) -> tuple[np.ndarray, float]:
+    """``residual`` less its run means, and the windows it counts as independent.
+
+    The deviations have n - runs degrees of freedom, counted as
+    n_w (1 - rho) / (1 + rho) with rho the lag-1 autocorrelation left between
+    consecutive windows of a run (>= 0): a slow wander within runs is not
+    taken for independent windows.
+    """
+    residual = np.asarray(residual, dtype=float)
+    labels, inverse, sizes = np.unique(table.run, return_inverse=True, return_counts=True)
+    within = residual - (np.bincount(inverse, residual) / sizes)[inverse]
+    order = np.lexsort((table.time, table.run))
+    ordered, runs = within[order], table.run[order]
+    same = runs[1:] == runs[:-1]
+    power = float(ordered @ ordered)
+    rho = float(ordered[1:][same] @ ordered[:-1][same]) / power if same.any() and power > 0 else 0.0
+    rho = min(max(rho, 0.0), 0.95)
+    return within, max((residual.size - labels.size) * (1.0 - rho) / (1.0 + rho), 2.0)
+
+
+def within_run_delta_bic(table: WindowTable, candidate: npt.ArrayLike, reference: npt.ArrayLike,
+                         added_params: int) -> float:
+    """BIC(candidate) - BIC(reference) on the windows' deviations from their run means (log residuals).
+
+    Windows of one run share its set-up scatter (sensor coupling, preload,
+    temperature: 1-4 % of amplitude), which :func:`effective_sample_size`
+    counts once a run; a law that changes the amplitude along each run
+    (position along the stroke) is instead seen against the scatter between
+    windows of a run, which the run means leave out.  The sample size is the
+    candidate's (:func:`within_run_residual`); its ``added_params`` are
+    charged ln n_eff each.
+    """
+    own, n_eff = within_run_residual(table, candidate)
+    return bic(own, added_params, n_eff) - bic(within_run_residual(table, reference)[0], 0, n_eff)
+
+
+def within_run_share(table: WindowTable, covariate: str) -> float:
+    """Share of ``covariate``'s variance over windows that lies within runs (1: every run sweeps it alike)."""
+    values = np.asarray(getattr(table, covariate, np.full(len(table), np.nan)), dtype=float)
+    keep = np.isfinite(values)
+    if keep.sum() < 2 or not np.var(values[keep]) > 0:
+        return 0.0
+    _, inverse, sizes = np.unique(table.run[keep], return_inverse=True, return_counts=True)
+    within = values[keep] - (np.bincount(inverse, values[keep]) / sizes)[inverse]
+    return float(np.var(within) / np.var(values[keep]))
 
 
 @dataclass
