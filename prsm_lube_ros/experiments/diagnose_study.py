@@ -300,7 +300,9 @@ def _rerun_misses(out: Path, jobs: int, command: str) -> int:
              '| kind | seed | concealed | verdict in the study | verdict now | named now | right now |',
              '|---|---|---|---|---|---|---|']
     for before, now in zip(missed, again):
-        lines.append(f'| {before["kind"]} | {before["seed"]} | {", ".join(before.get("effects", [])) or "-"} | '
+        # A case that crashed in the study has no effects in its record; the rerun simulated the same ones.
+        concealed = before.get('effects') or now.get('effects') or []
+        lines.append(f'| {before["kind"]} | {before["seed"]} | {", ".join(concealed) or "-"} | '
                      f'{before["verdict"]} | {now["verdict"]} | {", ".join(now.get("named", [])) or "-"} | '
                      f'{"yes" if now["right"] else "no"} |')
     text = '\n'.join(lines) + '\n'

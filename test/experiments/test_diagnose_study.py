@@ -50,13 +50,15 @@ def test_quick_study_runs_cases_in_two_processes_and_writes_tables(tmp_path):
     rows = [line.split(' | ') for line in (out / 'power.md').read_text().splitlines()
             if line.startswith('| resonance | 0 |')]
     assert len(rows) == 1 and rows[0][2] == resonance['verdict'] and int(rows[0][4]) == resonance['runs']
-    # A case marked missed is run again on this engine: the same recording, so the same verdict.
+    # A case marked missed is run again on this engine: the same recording, so the same verdict. Its record
+    # without effects (a case that crashed in the study) takes them from the rerun.
     resonance['right'] = False
+    resonance['effects'] = []
     (out / 'results.json').write_text(json.dumps(document))
     assert diagnose_study.main(['--out', str(out), '--rerun-misses', '--jobs', '1']) == 0
     rows = [line.split(' | ') for line in (out / 'rerun.md').read_text().splitlines()
             if line.startswith('| resonance | 0 |')]
-    assert len(rows) == 1 and rows[0][3] == rows[0][4] == resonance['verdict']
+    assert len(rows) == 1 and rows[0][3] == rows[0][4] == resonance['verdict'] and rows[0][2] == 'resonance'
     missed = sum(not case['right'] for case in document['cases'])
     assert f'of the {missed} cases the study missed are right now' in (out / 'rerun.md').read_text()
 
