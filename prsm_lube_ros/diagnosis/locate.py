@@ -183,7 +183,7 @@ class SpectralLines:
     testable: bool = False
     note: str = ''
     mode_frequencies: list = field(default_factory=list)   # Hz, fixed bands whose power follows the speed
-    mode_shares: list = field(default_factory=list)        # per band: its share of the mean square per speed level
+    mode_shares: list = field(default_factory=list)        # per band: its power / the model's mean square per speed
     mode_speeds: list = field(default_factory=list)        # rad/s, the speed levels of mode_shares
     mode_note: str = ''
     order_mode: dict = field(default_factory=dict)        # order-tracked line gains following a mode (see below)
@@ -193,8 +193,9 @@ class SpectralLines:
         shares = self.mode_shares[band]
         by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {self.mode_speeds[i]:.1f} rad/s'
                              for i in np.argsort(self.mode_speeds))
-        return (f'a band fixed at {self.mode_frequencies[band]:.1f} Hz while the orders move, its share of the '
-                f'power following the speed ({by_speed})')
+        # Against the model's mean square, not the recorded power: a mode's band may exceed it (187 %).
+        return (f'a band fixed at {self.mode_frequencies[band]:.1f} Hz while the orders move, its power over the '
+                f'floor against the mean square the paper\'s model gives at each speed ({by_speed})')
 
     def as_json(self) -> dict:
         """Plain mapping."""

@@ -163,6 +163,8 @@ def test_a_band_fixed_in_hz_whose_share_follows_speed_is_a_mode_and_moving_order
     assert abs(lines.mode_frequencies[0] - 50.0) <= 2.5
     assert lines.mode_shares[0][3] > 2 * lines.mode_shares[0][0]
     assert '50.0 Hz' in lines.mode_note and lines.frequencies == []
+    # The percentages are of the model's mean square, which a band may exceed: the text says so.
+    assert "against the mean square the paper's model gives at each speed" in lines.mode_note
     assert spectral_lines(spectra_table()).mode_frequencies == []       # orders alone: no mode
 
 
