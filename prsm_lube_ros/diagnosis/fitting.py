@@ -43,7 +43,7 @@ __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_ST
            'constants_jacobian', 'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector',
            'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22', 'predict_log',
            'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out', 'within_run_delta_bic',
-           'within_run_residual', 'within_run_share']
+           'within_run_gain', 'within_run_residual', 'within_run_share']
 
 BASELINE = 'baseline'
 #: Starts of an effect's own grid that are optimised (those with the lowest initial cost).
@@ -251,11 +251,15 @@ def within_run_residual(table: WindowTable, residual: npt.ArrayLike) -> tuple[np
     consecutive windows of a run (>= 0): a slow wander within runs is not
     taken for independent windows.
     """
-    residual = np.asarray(residual, dtype=float)
-    labels, inverse, sizes = np.unique(table.run, return_inverse=True, return_counts=True)
+    return _deviations(np.asarray(residual, dtype=float), table.run, table.time)
+
+
+def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`within_run_residual` on the windows' ``run`` and ``time`` columns."""
+    labels, inverse, sizes = np.unique(run, return_inverse=True, return_counts=True)
     within = residual - (np.bincount(inverse, residual) / sizes)[inverse]
-    order = np.lexsort((table.time, table.run))
-    ordered, runs = within[order], table.run[order]
+    order = np.lexsort((time, run))
+    ordered, runs = within[order], run[order]
     same = runs[1:] == runs[:-1]
     power = float(ordered @ ordered)
     rho = float(ordered[1:][same] @ ordered[:-1][same]) / power if same.any() and power > 0 else 0.0
@@ -279,9 +283,27 @@ def within_run_delta_bic(table: WindowTable, candidate: npt.ArrayLike, reference
     return bic(own, added_params, n_eff) - bic(within_run_residual(table, reference)[0], 0, n_eff)
 
 
+def within_run_gain(table: WindowTable, candidate: npt.ArrayLike, reference: npt.ArrayLike) -> float:
+    """1 - RMS / reference RMS of held-out log residuals' deviations from their run means (NaN: not held out).
+
+    How much better a law predicts the shape of held-out runs along the run
+    (:func:`held_out_log_residuals`), whatever their set-up offsets.
+    """
+    cand, ref = np.asarray(candidate, dtype=float), np.asarray(reference, dtype=float)
+    held = np.isfinite(cand) & np.isfinite(ref)
+    if not held.any():
+        return math.nan
+    own, other = (_deviations(r[held], table.run[held], table.time[held])[0] for r in (cand, ref))
+    power = float(other @ other)
+    return 1.0 - math.sqrt(float(own @ own) / power) if power > 0 else math.nan
+
+
 def within_run_share(table: WindowTable, covariate: str) -> float:
     """Share of ``covariate``'s variance over windows that lies within runs (1: every run sweeps it alike)."""
-    values = np.asarray(getattr(table, covariate, np.full(len(table), np.nan)), dtype=float)
+    column = getattr(table, covariate, None) if covariate else None
+    if column is None:      # not a column of the table ('speed' is one; a pair's or no covariate)
+        return 0.0
+    values = np.asarray(column, dtype=float)
     keep = np.isfinite(values)
     if keep.sum() < 2 or not np.var(values[keep]) > 0:
         return 0.0

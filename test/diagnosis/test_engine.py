@@ -157,18 +157,28 @@ def test_a_within_run_effect_is_still_named_on_three_conditions():
     assert result.verdict == 'position_dependent_stiffness'
 
 
-def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_gain=float('nan'), runs=100):
-    """What engine._add_second decides for a pair fit with ``gain`` and ``delta_bic`` (the fit itself stubbed)."""
+def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_gain=float('nan'), runs=100,
+                 within=None):
+    """What engine._add_second decides for a pair fit with ``gain`` and ``delta_bic`` (the fit itself stubbed).
+
+    ``within``: (BIC, held-out gain) on the deviations from run means of a law swept within runs (None: the
+    added law is not swept within runs).
+    """
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
     pair = SimpleNamespace(gain=gain, run_gain=run_gain, delta_bic=delta_bic, params={}, route=1, basis='',
-                           first_effect=None,
-                           effect=SimpleNamespace(parameter_names=('a', 'b'),
+                           first_effect=None, fit=SimpleNamespace(log_residual=None, cv_log_residual=None),
+                           effect=SimpleNamespace(parameter_names=('a', 'b'), covariate='position',
                                                   independent_evidence=lambda table, location, params,
                                                   beside: evidence))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
-    first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'), fit=SimpleNamespace(vector=np.zeros(4)))
+    monkeypatch.setattr(engine, 'within_run_share', lambda table, covariate: 0.0 if within is None else 1.0)
+    if within is not None:
+        monkeypatch.setattr(engine, 'within_run_delta_bic', lambda *args: within[0])
+        monkeypatch.setattr(engine, 'within_run_gain', lambda *args: within[1])
+    first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'),
+                            fit=SimpleNamespace(vector=np.zeros(4), log_residual=None, cv_log_residual=None))
     # The other's fit alone showed no evidence: the pair's parameters decide (a floor a resonance absorbed alone).
     other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence='',
                             effect=SimpleNamespace(covariate='position'))
@@ -250,6 +260,23 @@ def test_a_second_effect_is_named_by_the_rules_a_single_effect_earns_by(
     assert (second.route if second is not None else None) == route
     if second is not None:
         assert second.basis
+
+
+@pytest.mark.parametrize('gain, within, named', [
+    # Two 74 of the fresh random study: stiffness on top of a resonance; what the resonance leaves follows
+    # position, 1.1 % on held-out windows, within runs BIC -39 and the held-out shape 1.3 % closer.
+    (0.011, (-38.6, 0.013), True),
+    (0.011, (-8.0, 0.013), False),      # within-run BIC short of BIC_MARGIN
+    (0.011, (-38.6, -0.002), False),    # the shape does not carry over to held-out runs
+    (-0.004, (-38.6, 0.013), False),    # held-out windows predicted worse
+])
+def test_a_second_law_swept_within_runs_may_show_there_on_top_of_the_first(monkeypatch, gain, within, named):
+    second = _second_case(monkeypatch, gain, -21.1, 'position', within=within)
+    assert (second is not None) == named
+    if named:
+        assert second.route == 2 and 'within runs' in second.basis and 'BIC -39' in second.basis
+    # Not swept within runs: the held-out gain of MIN_GAIN is needed.
+    assert _second_case(monkeypatch, gain, -21.1, 'position') is None
 
 
 @pytest.mark.parametrize('gain, run_gain, named', [
@@ -383,7 +410,8 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
     monkeypatch.setattr(engine, 'covariate_tests',
                         lambda table, residual: [SimpleNamespace(covariate='revolutions', p_value=left)])
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: unphysical)
-    candidate = SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=fit, delta_bic=delta_bic, gain=gain)
+    candidate = SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=fit, delta_bic=delta_bic, gain=gain,
+                                within_delta_bic=float('nan'), within_gain=float('nan'))
     cv_rmse, followed = empirical
     term = SimpleNamespace(earns=True, term=SimpleNamespace(form='smooth', covariate=followed),
                            fit=SimpleNamespace(cv_rmse=cv_rmse))
@@ -554,6 +582,18 @@ def test_a_shape_along_each_run_is_seen_within_runs_where_counting_runs_hides_it
     assert within_run_delta_bic(table, offsets + measured.mean(), measured, 1) > 0.0
 
 
+def test_the_within_run_gain_scores_the_shape_of_held_out_runs_not_their_offsets():
+    from prsm_lube_ros.diagnosis.fitting import within_run_gain
+    table, measured, shape = _runs_with_a_shape_along_the_stroke(
+        0.03, lambda x: 0.05 * np.sin(np.pi * x), np.random.default_rng(7))
+    held = np.where(table.run < 6, 1.0, np.nan)       # runs 0-5 held out
+    run_offsets = np.random.default_rng(8).normal(0.0, 0.05, 24)[table.run]
+    # The law's residual also misses each run's offset by 5 %: within runs only its shape counts.
+    assert within_run_gain(table, held * (measured - shape + run_offsets), held * measured) > 0.25
+    assert within_run_gain(table, held * (measured + run_offsets), held * measured) == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(within_run_gain(table, np.full(table.run.size, np.nan), measured))
+
+
 def test_a_wander_within_runs_is_not_counted_as_independent_windows():
     from prsm_lube_ros.diagnosis.fitting import within_run_residual
     still = within_run_residual(*_runs_with_a_shape_along_the_stroke(
@@ -576,3 +616,23 @@ def test_a_weak_arch_under_set_up_scatter_is_named_by_what_it_changes_within_run
     assert result.chosen.form == 'fixed-fixed'
     assert result.chosen.within_delta_bic < -100
     assert result.as_json()['candidates'][0]['within_run_delta_bic'] < -100
+
+
+@pytest.mark.parametrize('delta_bic, gain, within, named', [
+    (-0.4, 0.080, (-335.0, 0.189), True),   # stiffness 214 of the fresh random study
+    (-0.4, 0.080, (-6.0, 0.189), False),    # within runs short of BIC_MARGIN, and BIC -0.4 short of 2
+    (-0.4, 0.080, (-335.0, -0.01), False),  # the shape does not carry over to held-out runs
+    (-3.0, 0.080, (5.0, -0.01), True),      # BIC drop of 2 and MIN_GAIN: named as any located law
+])
+def test_a_located_law_swept_within_runs_is_named_by_what_it_shows_within_runs(monkeypatch, delta_bic, gain, within,
+                                                                               named):
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis import engine
+    from prsm_lube_ros.diagnosis.locate import Location
+    monkeypatch.setattr(engine, 'covariate_tests', lambda table, residual: [])
+    fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: [])
+    candidate = SimpleNamespace(effect=SimpleNamespace(covariate='position'), fit=fit, delta_bic=delta_bic, gain=gain,
+                                within_delta_bic=within[0], within_gain=within[1])
+    location = Location([], None, 'position', '')
+    assert (engine._located_law(None, [candidate], location, None) is candidate) is named
+    assert 'BIC -335, the shape of held-out runs 18.9 % closer' in engine._within_runs_note(-335.0, 0.189)
