@@ -10,7 +10,9 @@ constants are physical (all forms when none is), the one with the lowest BIC
 stands for it, except that a form with more parameters than the
 best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`;
 forms with as many parameters within :data:`FORM_TIE` of it are named with it
-("Vogel or Walther (ASTM D341)": the data fit them equally well).  Only the
+("Vogel or Walther (ASTM D341)": the data fit them equally well); the forms
+of a law swept within runs (position) are compared on the windows'
+deviations from their run means (:data:`WITHIN_RUN_SHARE`).  Only the
 chosen form is scored on held-out runs.  Its name is in the JSON (``form``,
 and ``forms`` with every form's BIC relative to it).
 
@@ -47,8 +49,9 @@ fit, no excess run scatter *and* no covariate left carrying the residual;
 otherwise, with no candidate, the verdict is ``unexplained`` with where the
 residual lives and its size, unless the residual is located on a candidate's
 own covariate and its law explains it (:func:`_located_law`: a BIC drop of
-:data:`LOCATED_LAW_BIC`, the held-out gain, no pattern left there, and better
-held-out predictions than the empirical term of the located shape).  A plan with no repeated condition cannot tell
+:data:`LOCATED_LAW_BIC` and the held-out gain, or for a law swept within runs
+what it shows there; no pattern left there, and better held-out predictions
+than the empirical term of the located shape).  A plan with no repeated condition cannot tell
 run scatter from model error: ``cannot tell``, with what to record.
 ``confident`` is true only when the chosen model (the paper's for
 ``adequate``) passes the lack-of-fit test; the statistics are in the JSON
@@ -84,8 +87,8 @@ from .combined import CombinedEffect
 from .effects import Effect, registered
 from .empirical import causes, empirical_terms, EmpiricalTerm
 from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, \
-    predict_log, score_held_out, within_run_delta_bic, within_run_gain, within_run_residual, \
-    within_run_share
+    predict_log, score_held_out, within_run_correlation, within_run_delta_bic, within_run_gain, \
+    within_run_residual, within_run_sample_size, within_run_share
 from .locate import covariate_tests, locate, Location, SIGNIFICANCE
 from .table import WindowTable
 
@@ -115,9 +118,11 @@ LOCATED_BIC_TOLERANCE = 2.0
 LOCATED_LAW_BIC = 2.0
 #: Share of a covariate's variance within runs from which a law of it is also scored on the windows' deviations
 #: from their run means (:func:`.fitting.within_run_delta_bic`, :func:`.fitting.within_run_gain`; position: every
-#: run sweeps the stroke).  Such a law located on its covariate is named by what it shows within runs as well
-#: (:func:`_shows_within_runs`): counted by runs, a 2 % change along the stroke is hidden by 3 % set-up scatter
-#: between runs (stiffness 214 and 220 of the fresh random study: BIC -0.4 and -0.7, within runs -335 and -270).
+#: run sweeps the stroke; revolutions or temperature only where each recording holds about one run).  Such a
+#: law located on its covariate is named by what it shows within runs as well (:func:`_shows_within_runs`):
+#: counted by runs, a 2 % change along the stroke is hidden by 3 % set-up scatter between runs (stiffness 214
+#: and 220 of the fresh random study: BIC -0.4 and -0.7, within runs -335 and -270).  Its forms are compared
+#: within runs (:func:`_choose_form`; the JSON's ``forms`` BICs are then on that scale).
 WITHIN_RUN_SHARE = 0.5
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative), or than
 #: what estimating its parameters costs on the runs recorded (:func:`evidence_tolerance`), the larger.
@@ -206,7 +211,8 @@ class SecondEffect:
         """Entry of the ``effects`` list."""
         return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
                 'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
-                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'basis': self.basis}
+                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'basis': self.basis,
+                'within_run_delta_bic': _num(self.within_delta_bic), 'within_run_gain': _num(self.within_gain)}
 
     def first_as_json(self) -> dict:
         """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
@@ -450,7 +456,9 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
     Forms are compared on one effective sample size: each fit's own would favour the form that leaves the
     more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).  Forms of a law
     swept within runs (:data:`WITHIN_RUN_SHARE`) are compared on the deviations from run means
-    (:func:`.fitting.within_run_residual`), where their shapes along the stroke differ.
+    (:func:`.fitting.within_run_residual`), where their shapes along the stroke differ, with the sample size of
+    the best of them there (:func:`.fitting.within_run_sample_size`: a form that misses the shape leaves
+    consecutive windows correlated, which says nothing of the scatter between windows).
     """
     fits = [fit_model(table, form, folds=[]) for form in forms]
     # A free fit that trades C_lambda below zero against the form's own parameters is fitted again with C_lambda
@@ -459,9 +467,10 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
     shape = forms[0].added if isinstance(forms[0], CombinedEffect) else forms[0]   # a pair's forms are the added's
-    if within_run_share(table, shape.covariate) >= WITHIN_RUN_SHARE:
+    if _swept_within_runs(table, shape):
         # A law swept along every run: its forms differ in the shape along the run, seen within runs.
-        residuals, counts = map(list, zip(*(within_run_residual(table, f.log_residual) for f in fits)))
+        within = [within_run_residual(table, f.log_residual) for f in fits]
+        residuals, counts = [w for w, _ in within], [within_run_sample_size(within)]
     n_common = min(counts)
     scores = [bic(r, f.n_params, n_common) for r, f in zip(residuals, fits)]
     # A form whose constants no actuator gives does not stand for the effect while another form's are physical.
@@ -563,7 +572,7 @@ def _evaluate(table: WindowTable, effect: Effect, baseline: ModelFit, location: 
         forms = [(form, 0.0)]
     candidate = Candidate(effect, fit, Status.REJECTED, gain=gain, delta_bic=delta, evidence=evidence,
                           form=form, forms=forms, family=family, form_vectors=vectors)
-    if within_run_share(table, effect.covariate) >= WITHIN_RUN_SHARE:
+    if _swept_within_runs(table, effect):
         candidate.within_delta_bic = within_run_delta_bic(table, fit.log_residual, baseline.log_residual,
                                                           len(effect.parameter_names))
         candidate.within_gain = within_run_gain(table, fit.cv_log_residual, baseline.cv_log_residual)
@@ -682,7 +691,7 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
         pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
                       f'{100 * pair.gain:.1f} % lower, BIC {pair.delta_bic:+.1f}')
         if pair.gain < MIN_GAIN:
-            pair.basis += '; ' + _within_runs_note(pair.within_delta_bic, pair.within_gain)
+            pair.basis += '; ' + _within_runs_note(table, left.located, pair.within_delta_bic, pair.within_gain)
         return pair
     return pair if _earns_by_evidence(table, pair, location) else None
 
@@ -692,13 +701,13 @@ def _within_runs_on_top(table: WindowTable, first: Candidate, pair: SecondEffect
 
     Its within-run scores are set on ``pair`` (:func:`_shows_within_runs`); other laws are not scored.
     """
-    if within_run_share(table, pair.effect.covariate) < WITHIN_RUN_SHARE:
+    if not _swept_within_runs(table, pair.effect):
         return False
     assert first.fit is not None    # a first effect was fitted
     pair.within_delta_bic = within_run_delta_bic(table, pair.fit.log_residual, first.fit.log_residual,
                                                  len(pair.effect.parameter_names))
     pair.within_gain = within_run_gain(table, pair.fit.cv_log_residual, first.fit.cv_log_residual)
-    return _shows_within_runs(pair.within_delta_bic, pair.within_gain, pair.gain)
+    return _shows_within_runs(table, pair.effect.covariate, (pair.within_delta_bic, pair.within_gain, pair.gain))
 
 
 def _earns_by_evidence(table: WindowTable, pair: SecondEffect, location: Location) -> bool:
@@ -1122,27 +1131,54 @@ def _settle_earning(table: WindowTable, earning: list[Candidate], out: _Outcome,
     out.best = best
 
 
-def _shows_within_runs(within_delta_bic: float, within_gain: float, gain: float) -> bool:
-    """True when a law swept within runs shows there (its BIC and held-out gains on run deviations, see below).
+def _swept_within_runs(table: WindowTable, effect: Effect) -> bool:
+    """True when ``effect``'s covariate varies mostly within runs (:data:`WITHIN_RUN_SHARE`: position)."""
+    return within_run_share(table, effect.covariate) >= WITHIN_RUN_SHARE
+
+
+def _with_time_within_runs(table: WindowTable, covariate: str) -> float:
+    """Pearson r of ``covariate`` and time within runs when collinear (|r| >= :data:`COLLINEAR`), else NaN."""
+    r = within_run_correlation(table, covariate)
+    return r if abs(r) >= COLLINEAR else math.nan
+
+
+def _shows_within_runs(table: WindowTable, covariate: str, scores: tuple[float, float, float]) -> bool:
+    """True when a law swept within runs shows there; ``scores``: within-run BIC and gain, held-out gain.
 
     The BIC on the windows' deviations from their run means is lower by
-    :data:`BIC_MARGIN`, and held-out runs are predicted better, on their shape
-    along the run and on their windows.
-
-    Within runs the law is seen against the scatter between windows
-    (sensor noise, contact events), which a weak shape along the stroke
-    reduces by little even where it is certain (stiffness on top of a
-    resonance, two 74 of the fresh random study: within-run BIC -39, the
-    held-out shape 1.3 % closer, 1.1 % on windows); the held-out gains only
-    have to show that the shape found carries over to runs it was not fitted on.
+    :data:`BIC_MARGIN` and held-out runs are predicted better, on their shape
+    along the run and on their windows (the BIC counted by runs charges the
+    law's parameters against runs it does not change: it is not asked).  Within runs the law is
+    seen against the scatter between windows (sensor noise, contact events),
+    which a weak shape along the stroke reduces by little even where it is
+    certain (stiffness on top of a resonance, two 74 of the fresh random
+    study: within-run BIC -39, the held-out shape 1.3 % closer, 1.1 % on
+    windows); the held-out gains only have to show that the shape found
+    carries over to runs it was not fitted on.  Where every traverse runs one
+    way, ``covariate`` and time are collinear within runs and a drift during
+    each traverse has the law's shape: the held-out shape must then be closer
+    by :data:`MIN_GAIN` (stiffness 188 of seeds 180-209: 20 %).
     """
-    return within_delta_bic <= -BIC_MARGIN and within_gain > 0 and gain > 0
+    within_delta_bic, within_gain, gain = scores
+    if not (within_delta_bic <= -BIC_MARGIN and gain > 0):     # NaN: not scored within runs
+        return False
+    return within_gain > (MIN_GAIN if math.isfinite(_with_time_within_runs(table, covariate)) else 0.0)
 
 
-def _within_runs_note(within_delta_bic: float, within_gain: float) -> str:
-    """What a law swept within runs shows there, in words."""
-    return (f'within runs (the windows\' deviations from their run means, the set-up scatter between runs left out) '
+def _within_runs_note(table: WindowTable, covariate: str, within_delta_bic: float, within_gain: float) -> str:
+    """What a law swept within runs shows there, in words (and when time within runs shows the same)."""
+    note = (f'within runs (the windows\' deviations from their run means, the set-up scatter between runs left out) '
             f'BIC {within_delta_bic:+.0f}, the shape of held-out runs {100 * within_gain:.1f} % closer')
+    r = _with_time_within_runs(table, covariate)
+    if math.isfinite(r):
+        note += (f'; {covariate} and time are collinear within runs (r = {r:+.2f}: every traverse one way), so a '
+                 'drift during each traverse would look the same: traverses out and back tell them apart')
+    return note
+
+
+def _located_by_bic(cand: Candidate) -> bool:
+    """The located law's rule on all windows: a BIC drop of :data:`LOCATED_LAW_BIC`, held-out :data:`MIN_GAIN`."""
+    return cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN
 
 
 def _located_law(table: WindowTable, ranked: list[Candidate], location: Location,
@@ -1154,11 +1190,10 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
     a law of two or three parameters follows whatever the physics); a
     candidate that follows it is
     named with a BIC drop of :data:`LOCATED_LAW_BIC` (instead of
-    :data:`BIC_MARGIN`) and a held-out error lower by :data:`MIN_GAIN`, or a
-    law swept within runs by what it shows there (:func:`_shows_within_runs`),
-    when, with physical constants, it also lowers the
-    leaves no significant pattern in the
-    covariate (:func:`.locate.covariate_tests` on its residual), and the
+    :data:`BIC_MARGIN`) and a held-out error lower by :data:`MIN_GAIN`
+    (:func:`_located_by_bic`), or a law swept within runs by what it shows
+    there (:func:`_shows_within_runs`), when its constants are physical, its
+    fit leaves no significant pattern in the covariate (:func:`.locate.covariate_tests` on its residual), and the
     empirical term chosen for the located shapes (``empirical``,
     :func:`_empirical`) does not beat it by the rule that makes a named effect
     give way (:meth:`EmpiricalFit.beats`: a smooth curve in the law's own
@@ -1173,8 +1208,8 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
         if fit is None or cand.effect.covariate in ('speed', 'load') or cand.effect.covariate != location.located \
                 or fit.unphysical():
             continue
-        if not ((cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN)
-                or _shows_within_runs(cand.within_delta_bic, cand.within_gain, cand.gain)):
+        if not (_located_by_bic(cand) or _shows_within_runs(table, cand.effect.covariate, (
+                cand.within_delta_bic, cand.within_gain, cand.gain))):
             continue
         if empirical is not None and empirical.beats(fit, same_shape_covariates(table, {cand.effect.covariate})):
             continue
@@ -1215,10 +1250,12 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
         fit = cast(ModelFit, located.fit)
         located.reason = (f'named as the law of the mismatch located on {location.located}: its fit leaves no '
                           f'pattern there and the empirical term of the located shape does not explain it better; '
-                          f'held-out error {100 * located.gain:.0f} % lower, BIC {located.delta_bic:+.1f} '
-                          f'({LOCATED_LAW_BIC:g} suffices once located)')
-        if not (located.delta_bic <= -LOCATED_LAW_BIC and located.gain >= MIN_GAIN):
-            located.reason += '; ' + _within_runs_note(located.within_delta_bic, located.within_gain)
+                          f'held-out error {100 * located.gain:.1f} % lower, BIC {located.delta_bic:+.1f}')
+        if _located_by_bic(located):
+            located.reason += f' ({LOCATED_LAW_BIC:g} suffices once located)'
+        else:
+            located.reason += '; ' + _within_runs_note(table, location.located, located.within_delta_bic,
+                                                       located.within_gain)
         out.verdict = located.effect.id
         out.notes.append(f'no candidate earns by the BIC margin, but the mismatch follows {location.located} and '
                          f'{located.effect.id}\'s law of {location.located} explains it (held-out error '

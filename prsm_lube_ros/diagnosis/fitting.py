@@ -43,7 +43,8 @@ __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_ST
            'constants_jacobian', 'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector',
            'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22', 'predict_log',
            'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out', 'within_run_delta_bic',
-           'within_run_gain', 'within_run_residual', 'within_run_share']
+           'within_run_correlation', 'within_run_gain', 'within_run_residual',
+           'within_run_sample_size', 'within_run_share']
 
 BASELINE = 'baseline'
 #: Starts of an effect's own grid that are optimised (those with the lowest initial cost).
@@ -244,12 +245,14 @@ def bic(log_residual: npt.ArrayLike, n_params: int, n_eff: float) -> float:
 
 
 def within_run_residual(table: WindowTable, residual: npt.ArrayLike) -> tuple[np.ndarray, float]:
-    """``residual`` less its run means, and the windows it counts as independent.
+    """``residual`` less its run means, and how many windows it counts as independent.
 
-    The deviations have n - runs degrees of freedom, counted as
-    n_w (1 - rho) / (1 + rho) with rho the lag-1 autocorrelation left between
-    consecutive windows of a run (>= 0): a slow wander within runs is not
-    taken for independent windows.
+    With n windows in R runs the deviations have n_w = n - R degrees of
+    freedom, counted as n_w (1 - rho) / (1 + rho) (at least 2), rho the lag-1
+    autocorrelation between consecutive windows of a run in time, in
+    [0, 0.95]: a slow wander within runs is not taken for independent windows.
+    Taking out run means biases the raw estimate r by -(1 + 3 rho) / m on runs
+    of m windows (m the mean, at least 4), so rho = (r + 1/m) / (1 - 3/m).
     """
     return _deviations(np.asarray(residual, dtype=float), table.run, table.time)
 
@@ -262,8 +265,9 @@ def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tupl
     ordered, runs = within[order], run[order]
     same = runs[1:] == runs[:-1]
     power = float(ordered @ ordered)
-    rho = float(ordered[1:][same] @ ordered[:-1][same]) / power if same.any() and power > 0 else 0.0
-    rho = min(max(rho, 0.0), 0.95)
+    raw = float(ordered[1:][same] @ ordered[:-1][same]) / power if same.any() and power > 0 else 0.0
+    m = max(float(sizes.mean()), 4.0)
+    rho = min(max((raw + 1.0 / m) / (1.0 - 3.0 / m), 0.0), 0.95)
     return within, max((residual.size - labels.size) * (1.0 - rho) / (1.0 + rho), 2.0)
 
 
@@ -275,12 +279,26 @@ def within_run_delta_bic(table: WindowTable, candidate: npt.ArrayLike, reference
     temperature: 1-4 % of amplitude), which :func:`effective_sample_size`
     counts once a run; a law that changes the amplitude along each run
     (position along the stroke) is instead seen against the scatter between
-    windows of a run, which the run means leave out.  The sample size is the
-    candidate's (:func:`within_run_residual`); its ``added_params`` are
-    charged ln n_eff each.
+    windows of a run, which the run means leave out.  Both are scored on the
+    sample size of :func:`within_run_residual` of the one that fits better
+    there (:func:`within_run_sample_size`); the candidate's ``added_params``
+    are charged ln n_eff each.  A law that moves run means only gains nothing
+    here and pays its parameters.
     """
-    own, n_eff = within_run_residual(table, candidate)
-    return bic(own, added_params, n_eff) - bic(within_run_residual(table, reference)[0], 0, n_eff)
+    residuals = [within_run_residual(table, r) for r in (candidate, reference)]
+    n_eff = within_run_sample_size(residuals)
+    return bic(residuals[0][0], added_params, n_eff) - bic(residuals[1][0], 0, n_eff)
+
+
+def within_run_sample_size(residuals: Sequence[tuple[np.ndarray, float]]) -> float:
+    """The sample size to compare fits on within runs: that of the one fitting best (:func:`within_run_residual`).
+
+    A misfit along the run leaves consecutive windows correlated, which says
+    nothing of the scatter between windows itself: the best fit's residual
+    is the closest to that scatter (its lag-1 autocorrelation the least
+    inflated), and all are counted with its sample size.
+    """
+    return min(residuals, key=lambda pair: float(pair[0] @ pair[0]))[1]
 
 
 def within_run_gain(table: WindowTable, candidate: npt.ArrayLike, reference: npt.ArrayLike) -> float:
@@ -296,6 +314,20 @@ def within_run_gain(table: WindowTable, candidate: npt.ArrayLike, reference: npt
     own, other = (_deviations(r[held], table.run[held], table.time[held])[0] for r in (cand, ref))
     power = float(other @ other)
     return 1.0 - math.sqrt(float(own @ own) / power) if power > 0 else math.nan
+
+
+def within_run_correlation(table: WindowTable, first: str, second: str = 'time') -> float:
+    """Pearson r of two columns' deviations from their run means (NaN when either does not vary within runs).
+
+    Position and time within runs: +-1 when every traverse runs one way
+    (a drift during each traverse has the shape of a law of position), near 0
+    with traverses out and back.
+    """
+    columns = [np.asarray(getattr(table, name), dtype=float) for name in (first, second)]
+    keep = np.isfinite(columns[0]) & np.isfinite(columns[1])
+    a, b = (_deviations(c[keep], table.run[keep], table.time[keep])[0] for c in columns)
+    scale = math.sqrt(float(a @ a) * float(b @ b))
+    return float(a @ b) / scale if scale > 0 else math.nan
 
 
 def within_run_share(table: WindowTable, covariate: str) -> float:

@@ -174,6 +174,7 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_
                                                   beside: evidence))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     monkeypatch.setattr(engine, 'within_run_share', lambda table, covariate: 0.0 if within is None else 1.0)
+    monkeypatch.setattr(engine, 'within_run_correlation', lambda table, covariate: 0.0)   # traverses out and back
     if within is not None:
         monkeypatch.setattr(engine, 'within_run_delta_bic', lambda *args: within[0])
         monkeypatch.setattr(engine, 'within_run_gain', lambda *args: within[1])
@@ -577,9 +578,10 @@ def test_a_shape_along_each_run_is_seen_within_runs_where_counting_runs_hides_it
     n_eff = effective_sample_size(law, table.run)
     assert bic(law, 3, n_eff) - bic(measured, 0, n_eff) > -2.0
     assert within_run_delta_bic(table, law, measured, 3) < -20.0
-    # A law that changes run means only is charged its parameters and gains nothing within runs.
-    offsets = measured - np.bincount(table.run, measured)[table.run] / 15
-    assert within_run_delta_bic(table, offsets + measured.mean(), measured, 1) > 0.0
+    # A law that changes run means only (it takes out each run's offset) leaves the deviations within runs as
+    # they were: it is charged its parameter and gains nothing there.
+    without_offsets = measured - np.bincount(table.run, measured)[table.run] / 15
+    assert within_run_delta_bic(table, without_offsets, measured, 1) == pytest.approx(np.log(24 * 14), rel=0.1)
 
 
 def test_the_within_run_gain_scores_the_shape_of_held_out_runs_not_their_offsets():
@@ -594,14 +596,15 @@ def test_the_within_run_gain_scores_the_shape_of_held_out_runs_not_their_offsets
     assert np.isnan(within_run_gain(table, np.full(table.run.size, np.nan), measured))
 
 
-def test_a_wander_within_runs_is_not_counted_as_independent_windows():
+@pytest.mark.parametrize('windows, rho', [(50, 0.0), (50, 0.8), (8, 0.0), (8, 0.6), (15, 0.3)])
+def test_a_wander_within_runs_is_not_counted_as_independent_windows(windows, rho):
+    """n_w (1 - rho) / (1 + rho), rho estimated on deviations from run means (biased low on short runs, corrected)."""
     from prsm_lube_ros.diagnosis.fitting import within_run_residual
-    still = within_run_residual(*_runs_with_a_shape_along_the_stroke(
-        0.03, np.zeros_like, np.random.default_rng(6), runs=40, windows=50)[:2])[1]
-    wander = within_run_residual(*_runs_with_a_shape_along_the_stroke(
-        0.03, np.zeros_like, np.random.default_rng(6), runs=40, windows=50, wander=0.8)[:2])[1]
-    assert 0.85 * 40 * 49 < still <= 40 * 49
-    assert wander < 0.25 * still
+    runs = 4000 // windows
+    counted = within_run_residual(*_runs_with_a_shape_along_the_stroke(
+        0.03, np.zeros_like, np.random.default_rng(6), runs=runs, windows=windows, wander=rho)[:2])[1]
+    true = runs * (windows - 1) * (1 - rho) / (1 + rho)
+    assert 0.8 * true < counted < 1.25 * true
 
 
 @pytest.mark.parametrize('contact_ratio, seed', [(2.5, 1), (2.0, 2)])
@@ -618,21 +621,40 @@ def test_a_weak_arch_under_set_up_scatter_is_named_by_what_it_changes_within_run
     assert result.as_json()['candidates'][0]['within_run_delta_bic'] < -100
 
 
-@pytest.mark.parametrize('delta_bic, gain, within, named', [
-    (-0.4, 0.080, (-335.0, 0.189), True),   # stiffness 214 of the fresh random study
-    (-0.4, 0.080, (-6.0, 0.189), False),    # within runs short of BIC_MARGIN, and BIC -0.4 short of 2
-    (-0.4, 0.080, (-335.0, -0.01), False),  # the shape does not carry over to held-out runs
-    (-3.0, 0.080, (5.0, -0.01), True),      # BIC drop of 2 and MIN_GAIN: named as any located law
+@pytest.mark.parametrize('delta_bic, gain, within, time_r, named', [
+    (-0.4, 0.080, (-335.0, 0.189), 0.0, True),    # stiffness 214 of the fresh random study (out and back)
+    (-0.4, 0.080, (-6.0, 0.189), 0.0, False),     # within runs short of BIC_MARGIN, and BIC -0.4 short of 2
+    (-0.4, 0.080, (-335.0, -0.01), 0.0, False),   # the shape does not carry over to held-out runs
+    (-0.4, -0.01, (-335.0, 0.189), 0.0, False),   # held-out windows predicted worse
+    (0.8, 0.084, (-114.0, 0.200), 0.97, True),    # stiffness 188 of seeds 180-209: every traverse one way
+    (0.8, 0.030, (-14.0, 0.031), 0.97, False),    # one way, the held-out shape closer by less than MIN_GAIN
+    (-3.0, 0.080, (5.0, -0.01), 0.0, True),       # BIC drop of 2 and MIN_GAIN: named as any located law
 ])
 def test_a_located_law_swept_within_runs_is_named_by_what_it_shows_within_runs(monkeypatch, delta_bic, gain, within,
-                                                                               named):
+                                                                               time_r, named):
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
     monkeypatch.setattr(engine, 'covariate_tests', lambda table, residual: [])
+    monkeypatch.setattr(engine, 'within_run_correlation', lambda table, covariate: time_r)
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: [])
     candidate = SimpleNamespace(effect=SimpleNamespace(covariate='position'), fit=fit, delta_bic=delta_bic, gain=gain,
                                 within_delta_bic=within[0], within_gain=within[1])
     location = Location([], None, 'position', '')
     assert (engine._located_law(None, [candidate], location, None) is candidate) is named
-    assert 'BIC -335, the shape of held-out runs 18.9 % closer' in engine._within_runs_note(-335.0, 0.189)
+    note = engine._within_runs_note(None, 'position', *within)
+    assert f'BIC {within[0]:+.0f}, the shape of held-out runs {100 * within[1]:.1f} % closer' in note
+    assert ('position and time are collinear within runs (r = +0.97' in note) == (time_r == 0.97)
+
+
+def test_position_and_time_within_runs_are_collinear_when_every_traverse_runs_one_way():
+    from types import SimpleNamespace
+    from prsm_lube_ros.diagnosis.fitting import within_run_correlation
+    x = np.tile(np.linspace(0.0, 0.17, 10), 6)
+    run = np.repeat(np.arange(6), 10)
+    time = np.arange(60, dtype=float)
+    one_way = SimpleNamespace(run=run, time=time, position=x)
+    out_and_back = SimpleNamespace(run=run, time=time, position=np.where(run % 2 == 1, 0.17 - x, x))
+    assert within_run_correlation(one_way, 'position') == pytest.approx(1.0)
+    assert within_run_correlation(out_and_back, 'position') == pytest.approx(0.0, abs=1e-12)
+    assert np.isnan(within_run_correlation(SimpleNamespace(run=run, time=time, position=np.ones(60)), 'position'))
