@@ -339,8 +339,7 @@ def within_run_share(table: WindowTable, covariate: str) -> float:
     keep = np.isfinite(values)
     if keep.sum() < 2 or not np.var(values[keep]) > 0:
         return 0.0
-    _, inverse, sizes = np.unique(table.run[keep], return_inverse=True, return_counts=True)
-    within = values[keep] - (np.bincount(inverse, values[keep]) / sizes)[inverse]
+    within = _deviations(values[keep], table.run[keep], table.time[keep])[0]
     return float(np.var(within) / np.var(values[keep]))
 
 
