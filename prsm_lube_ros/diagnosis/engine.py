@@ -121,7 +121,7 @@ LOCATED_LAW_BIC = 2.0
 #: run sweeps the stroke; revolutions or temperature only where each recording holds about one run).  Such a
 #: law located on its covariate is named by what it shows within runs as well (:func:`_shows_within_runs`):
 #: counted by runs, a 2 % change along the stroke is hidden by 3 % set-up scatter between runs (stiffness 214
-#: and 220 of the fresh random study: BIC -0.4 and -0.7, within runs -335 and -270).  Its forms are compared
+#: and 220 of the fresh random study: BIC -0.4 and -0.7, within runs -329 and -270).  Its forms are compared
 #: within runs (:func:`_choose_form`; the JSON's ``forms`` BICs are then on that scale).
 WITHIN_RUN_SHARE = 0.5
 #: A candidate with independent evidence may not predict held-out runs worse than this (relative), or than
@@ -1152,7 +1152,7 @@ def _shows_within_runs(table: WindowTable, covariate: str, scores: tuple[float, 
     seen against the scatter between windows (sensor noise, contact events),
     which a weak shape along the stroke reduces by little even where it is
     certain (stiffness on top of a resonance, two 74 of the fresh random
-    study: within-run BIC -39, the held-out shape 1.3 % closer, 1.1 % on
+    study: within-run BIC -36, the held-out shape 1.3 % closer, 1.1 % on
     windows); the held-out gains only have to show that the shape found
     carries over to runs it was not fitted on.  Where every traverse runs one
     way, ``covariate`` and time are collinear within runs and a drift during
