@@ -244,6 +244,12 @@ def _fleet_commands(folder: Path, recordings: Path, seed: int, actuators: int,
     return list(zip(commands, shown))
 
 
+def _newest_recording_day(truth: Path) -> str:
+    """The UTC day (YYYY-MM-DD) of the newest recording the fleet simulator wrote (its ``truth.json``)."""
+    document = json.loads(truth.read_text())
+    return max(r['start_utc'] for a in document['actuators'] for r in a['recordings'])[:10]
+
+
 def _run_fleet_commands(step: StepResult, say: Callable[[str], None], folder: Path, recordings: Path,
                         commands: list[tuple[list | None, str]], log: Path) -> str | None:
     """Run the commands in order, output to ``log``: the last one's output, or None (a failed check) if one fails."""
@@ -254,6 +260,11 @@ def _run_fleet_commands(step: StepResult, say: Callable[[str], None], folder: Pa
             argv = ['assess', *paths, '--calibration', folder / 'calibration.yaml', '--history',
                     folder / 'history', '--actuator-id', 'folder']
             line = line.replace('recordings/A*/*', f'recordings/A*/* ({len(paths)} recordings)')
+        if argv[0] == 'trend':
+            # As of the day of the newest recording, not the wall clock: the fleet is simulated in the past.
+            day = _newest_recording_day(recordings / 'truth.json')
+            argv = [*argv, '--as-of', day]
+            line += f' --as-of {day}'
         say(f'    $ prsm-lube {line}')
         status, text = run_command(argv, log)
         if status != 0:

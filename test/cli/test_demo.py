@@ -51,6 +51,9 @@ def test_every_step_runs_and_passes_its_check_against_the_truth(demo):
     assert 'theta_Oil before: median' in text and 'after: median' in text          # step 2
     assert 'concealed:' in text and 'held-out gain' in text                        # step 3
     assert 'forecast' in text and 'inside' in text                                 # step 4
+    # The fleet is simulated in the past: days to go as of its newest recording's day, never "overdue by 300 d".
+    as_of = re.search(r'trend history --report trend --as-of (\d{4}-\d{2}-\d{2})', text)
+    assert as_of and f'days to go as of {as_of.group(1)}' in text, text[-3000:]
     checks = [line for line in text.splitlines() if line.strip().startswith('check: ')]
     assert len(checks) >= 5 and all(line.endswith(': PASS') for line in checks), checks
     assert 'FAIL' not in text
