@@ -684,9 +684,8 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
         return None
     if _earns_by_bic(pair, SECOND_BIC_MARGIN):
         return pair
-    within = _within_runs_on_top(table, first, pair)
     if left.located == other.effect.covariate and pair.delta_bic < LOCATED_BIC_TOLERANCE \
-            and (pair.gain >= MIN_GAIN or within):
+            and (pair.gain >= MIN_GAIN or _within_runs_on_top(table, first, pair)):
         pair.route = 2
         pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
                       f'{100 * pair.gain:.1f} % lower, BIC {pair.delta_bic:+.1f}')

@@ -257,10 +257,16 @@ def within_run_residual(table: WindowTable, residual: npt.ArrayLike) -> tuple[np
     return _deviations(np.asarray(residual, dtype=float), table.run, table.time)
 
 
+def _run_deviations(values: np.ndarray, run: np.ndarray) -> np.ndarray:
+    """``values`` less the mean of their run."""
+    _, inverse, sizes = np.unique(run, return_inverse=True, return_counts=True)
+    return values - (np.bincount(inverse, values) / sizes)[inverse]
+
+
 def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, float]:
     """:func:`within_run_residual` on the windows' ``run`` and ``time`` columns."""
-    labels, inverse, sizes = np.unique(run, return_inverse=True, return_counts=True)
-    within = residual - (np.bincount(inverse, residual) / sizes)[inverse]
+    labels, sizes = np.unique(run, return_counts=True)
+    within = _run_deviations(residual, run)
     order = np.lexsort((time, run))
     ordered, runs = within[order], run[order]
     same = runs[1:] == runs[:-1]
@@ -311,7 +317,7 @@ def within_run_gain(table: WindowTable, candidate: npt.ArrayLike, reference: npt
     held = np.isfinite(cand) & np.isfinite(ref)
     if not held.any():
         return math.nan
-    own, other = (_deviations(r[held], table.run[held], table.time[held])[0] for r in (cand, ref))
+    own, other = (_run_deviations(r[held], table.run[held]) for r in (cand, ref))
     power = float(other @ other)
     return 1.0 - math.sqrt(float(own @ own) / power) if power > 0 else math.nan
 
@@ -325,7 +331,7 @@ def within_run_correlation(table: WindowTable, first: str, second: str = 'time')
     """
     columns = [np.asarray(getattr(table, name), dtype=float) for name in (first, second)]
     keep = np.isfinite(columns[0]) & np.isfinite(columns[1])
-    a, b = (_deviations(c[keep], table.run[keep], table.time[keep])[0] for c in columns)
+    a, b = (_run_deviations(c[keep], table.run[keep]) for c in columns)
     scale = math.sqrt(float(a @ a) * float(b @ b))
     return float(a @ b) / scale if scale > 0 else math.nan
 
@@ -339,7 +345,7 @@ def within_run_share(table: WindowTable, covariate: str) -> float:
     keep = np.isfinite(values)
     if keep.sum() < 2 or not np.var(values[keep]) > 0:
         return 0.0
-    within = _deviations(values[keep], table.run[keep], table.time[keep])[0]
+    within = _run_deviations(values[keep], table.run[keep])
     return float(np.var(within) / np.var(values[keep]))
 
 
