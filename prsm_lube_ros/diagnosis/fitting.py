@@ -217,11 +217,10 @@ def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: di
 def intraclass_correlation(residual: npt.ArrayLike, groups: npt.ArrayLike) -> tuple[float, float]:
     """One-way ANOVA ICC of ``residual`` between ``groups`` and the mean group size m0."""
     residual = np.asarray(residual, dtype=float)
-    labels, inverse, sizes = np.unique(groups, return_inverse=True, return_counts=True)
-    n, k = residual.size, labels.size
+    means, inverse, sizes = _group_means(residual, np.asarray(groups))
+    n, k = residual.size, sizes.size
     if k < 2 or n <= k:
         return 0.0, float(n / max(k, 1))
-    means = np.bincount(inverse, residual) / sizes
     grand = residual.mean()
     msb = float(np.sum(sizes * (means - grand) ** 2) / (k - 1))
     msw = float(np.sum((residual - means[inverse]) ** 2) / (n - k))
@@ -257,10 +256,17 @@ def within_run_residual(table: WindowTable, residual: npt.ArrayLike) -> tuple[np
     return _deviations(np.asarray(residual, dtype=float), table.run, table.time)
 
 
+def _group_means(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mean of ``values`` in each group, each value's group (index into the means) and the group sizes."""
+    _, inverse, sizes = np.unique(groups, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    return np.bincount(inverse, values, minlength=sizes.size) / sizes, inverse, sizes
+
+
 def _run_deviations(values: np.ndarray, run: np.ndarray) -> np.ndarray:
     """``values`` less the mean of their run."""
-    _, inverse, sizes = np.unique(run, return_inverse=True, return_counts=True)
-    return values - (np.bincount(inverse, values) / sizes)[inverse]
+    means, inverse, _ = _group_means(values, run)
+    return values - means[inverse]
 
 
 def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, float]:
