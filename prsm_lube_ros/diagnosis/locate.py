@@ -813,8 +813,9 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
     (:data:`LINE_MEASURABLE`) or where a line of its (median) power would
     carry ``LINE_PROMINENCE - 1`` times the floor's power in its bins.  Only
     lines below ``highest`` (Hz, the RMS band's upper edge; NaN: no edge)
-    count: content above it is not in the window RMS the model is fitted to.
-    ``slowest``: the row of the lowest speed.
+    count: content above it is not in the window RMS the model is fitted to;
+    nor does one whose peak lies below ``lowest`` (Hz), where rotation orders
+    of neighbouring speeds share bins.  ``slowest``: the row of the lowest speed.
     """
     candidate = (np.count_nonzero(widened >= LINE_PROMINENCE, axis=0) >= 2) & (freqs >= lowest)
     candidate &= excess.max(axis=0) >= LINE_PROMINENCE
@@ -836,8 +837,11 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
             continue
         constant = power.max() / power.min() <= LINE_CONSTANCY
         spread = mean_square[compared].max() / mean_square[compared].min()
-        if constant and spread >= POWER_SPREAD:
-            peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
+        # Where the line stands must be above ``lowest`` too, not only the bins that flagged it: the bins around
+        # them reach one below, where orders of neighbouring speeds share bins (resonance 295 of the fresh random
+        # study: orders 1 and 3.3 of two speeds read as a line at 3.9 Hz, 1.95 Hz bins, ``lowest`` 5.9 Hz).
+        peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
+        if constant and spread >= POWER_SPREAD and freqs[peak] >= lowest:
             result.frequencies.append(float(freqs[peak]))
             result.powers.append(float(np.median(power)))
     result.total_power = float(sum(result.powers))

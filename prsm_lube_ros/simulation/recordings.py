@@ -11,6 +11,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from ..estimation.conditioning import DEFAULT_BAND
 from ..physics.effects import effect_ids
 from ..recording.writer import bag_path, check_storage, ContractBagWriter
 from ..validation import as_number, require
@@ -98,7 +99,7 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
 
     The ranges refer to the plan: stroke, lowest load, top speed, one session's
     revolutions and the thread-contact amplitude at the lowest speed, highest
-    load and theta = 1.
+    load and theta = 1; background tones lie in the analysis band at the rig's sample rate.
     """
     rig, plan = rig or RigConfig(), plan or ExperimentPlan()
     unknown = sorted(set(names) - set(effect_ids()))
@@ -120,7 +121,8 @@ def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None =
             rng, session_revolutions=session_revolutions(plan, rig)),
         'background_vibration': lambda rng: draw_background_vibration(
             rng, reference_amplitude=float(thread_contact_amplitude(min(plan.speeds), max(plan.loads),
-                                                                    1.0, rig))),
+                                                                    1.0, rig)),
+            highest_frequency=DEFAULT_BAND.resolved(rig.vibration_rate).high),
     }
     return Effects(**{name: makers[name](rngs[name]) for name in names})
 

@@ -397,3 +397,36 @@ def test_a_peak_that_follows_a_rotation_order_across_the_window_is_no_mode_band(
     ringing = SpectralLines(testable=True)
     _mode_bands(ringing, medians([4, 5, 4, 4, 5]), freqs, mean_square, edges, df)
     assert len(ringing.mode_frequencies) == 1
+
+
+def coarse_order_table(line_hz=None):
+    """Two speeds (11.1 and 19.2 rad/s) on 1.95 Hz bins, orders 1 and 3.3 of constant power over a floor that moves.
+
+    At the slower speed order 3.3 falls in the bin at 5.9 Hz, at the faster order 1 in the bin at 3.9 Hz: two
+    orders one bin apart, which the bins around a line reach (resonance 295 of the fresh random study).
+    ``line_hz``: a line of constant power fixed there as well.
+    """
+    df, bins, per_level = 1.953125, 200, 20
+    levels = (11.12, 19.2)
+    speeds = np.repeat(levels, per_level)
+    floors = {11.12: 1e-3, 19.2: 3e-3}
+    spectra = np.empty((speeds.size, bins))
+    for row, speed in enumerate(speeds):
+        psd = np.full(bins, floors[speed])
+        for order, power in ((1.0, 0.06), (3.3, 0.05)):
+            psd[int(round(order * speed / (2 * np.pi) / df))] += power / df
+        if line_hz is not None:
+            psd[int(round(line_hz / df))] += 0.05 / df
+        spectra[row] = psd
+    n = speeds.size
+    mean_square = np.array([floors[s] * bins * df for s in speeds])
+    return WindowTable(speed=speeds, load=np.full(n, 100.0), rms=np.sqrt(mean_square), position=np.zeros(n),
+                       revolutions=np.arange(n) * 1.0, time=np.arange(n) * 1.0, temperature=np.full(n, np.nan),
+                       run=np.repeat(np.arange(2), per_level), recording=np.zeros(n), spectra=spectra,
+                       spectrum_resolution=df)
+
+
+def test_orders_of_two_speeds_one_bin_apart_below_the_lowest_line_frequency_are_no_fixed_line():
+    assert spectral_lines(coarse_order_table()).frequencies == []
+    found = spectral_lines(coarse_order_table(line_hz=60.0)).frequencies     # the test can find a line here
+    assert len(found) == 1 and abs(found[0] - 60.0) <= 2 * 1.953125

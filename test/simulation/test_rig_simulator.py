@@ -5,6 +5,7 @@
 Expected values are worked out here from closed forms (Eq. 22 written out by
 hand, trapezoidal ramps, first-order heating), not taken from the simulator.
 """
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -454,6 +455,17 @@ def test_drawn_effects_stay_in_their_physical_ranges():
     assert draw_effects(['resonance'], seed=1) == draw_effects(['resonance'], seed=1)
     with pytest.raises(InputError, match='unknown effect'):
         draw_effects(['gremlins'])
+
+
+def test_background_tones_are_drawn_inside_the_band_the_recording_holds():
+    """At 1 kHz the window RMS holds 0.5-400 Hz: tones drawn above it would be concealed where nothing sees them."""
+    slow = dataclasses.replace(RIG, vibration_rate=1000.0, vibration_block=0.2, contact_mode_frequency=300.0)
+    tones = [f for seed in range(40)
+             for f in draw_effects(['background_vibration'], seed=seed, rig=slow).background_vibration.tone_frequencies]
+    assert tones and max(tones) < 400.0
+    fast = [f for seed in range(40)
+            for f in draw_effects(['background_vibration'], seed=seed, rig=RIG).background_vibration.tone_frequencies]
+    assert max(fast) > 600.0            # at the default 4 kHz the whole drawn range lies in the band
 
 
 def test_effects_leave_no_trace_in_the_bag_but_in_truth(tmp_path):
