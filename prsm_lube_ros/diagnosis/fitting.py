@@ -271,8 +271,8 @@ def _run_deviations(values: np.ndarray, run: np.ndarray) -> np.ndarray:
 
 def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, float]:
     """:func:`within_run_residual` on the windows' ``run`` and ``time`` columns."""
-    labels, sizes = np.unique(run, return_counts=True)
-    within = _run_deviations(residual, run)
+    means, inverse, sizes = _group_means(residual, run)
+    within = residual - means[inverse]
     order = np.lexsort((time, run))
     ordered, runs = within[order], run[order]
     same = runs[1:] == runs[:-1]
@@ -280,7 +280,7 @@ def _deviations(residual: np.ndarray, run: np.ndarray, time: np.ndarray) -> tupl
     raw = float(ordered[1:][same] @ ordered[:-1][same]) / power if same.any() and power > 0 else 0.0
     m = max(float(sizes.mean()), 4.0)
     rho = min(max((raw + 1.0 / m) / (1.0 - 3.0 / m), 0.0), 0.95)
-    return within, max((residual.size - labels.size) * (1.0 - rho) / (1.0 + rho), 2.0)
+    return within, max((residual.size - sizes.size) * (1.0 - rho) / (1.0 + rho), 2.0)
 
 
 def within_run_delta_bic(table: WindowTable, candidate: npt.ArrayLike, reference: npt.ArrayLike,
