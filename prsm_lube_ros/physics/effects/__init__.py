@@ -180,9 +180,12 @@ class ContactState:
 
 @dataclass(frozen=True)
 class SampleState:
-    """The rig at each sample of a chunk: ``times`` s, screw ``angles`` rad, ``speeds`` rad/s, applied ``loads`` N,
-    ``revolutions`` since the last lubrication (either direction) and ``contact_amplitude`` the thread-contact
-    RMS (m/s^2) the samples are scaled to."""
+    """The rig at each sample of a chunk.
+
+    ``times`` s, screw ``angles`` rad, ``speeds`` rad/s, applied ``loads`` N,
+    ``revolutions`` since the last lubrication (either direction) and
+    ``contact_amplitude`` the thread-contact RMS (m/s^2) the samples are scaled to.
+    """
 
     times: np.ndarray
     angles: np.ndarray
@@ -280,6 +283,13 @@ class Simulation:
         where the effect changes them; empty (the default) when it does not.
         """
         return {}
+
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """Words for the drawn law's physical form beyond its text-valued parameters (for study rows).
+
+        ``params`` is the law as ``truth.json`` holds it, ``speeds`` the plan's (rad/s).  Default: none.
+        """
+        return []
 
     def extension_params(self, law: Any, context: SimulationContext) -> dict[str, float]:
         """The law as the parameters of its module's ``Extension`` (for window-level simulation), SI."""

@@ -33,7 +33,7 @@ from . import choose, Extension as EffectExtension, Simulation as EffectSimulati
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Mapping, Sequence
 
     import numpy.typing as npt
 
@@ -72,8 +72,8 @@ def log_gain(ln_contact_amplitude: npt.ArrayLike, background_rms: npt.ArrayLike)
 
 def contact_amplitude(total_rms: npt.ArrayLike, background_rms: npt.ArrayLike) -> np.ndarray:
     """``sqrt(A^2 - B^2)``: the thread-contact part of a measured RMS; NaN where A does not exceed B."""
-    total_rms = np.asarray(total_rms, dtype=float)
-    power = total_rms ** 2 - background_rms ** 2
+    total = np.asarray(total_rms, dtype=float)
+    power = total ** 2 - np.asarray(background_rms, dtype=float) ** 2
     return np.where(power > 0, np.sqrt(np.maximum(power, 0.0)), np.nan)
 
 
@@ -185,6 +185,11 @@ class Simulation(EffectSimulation):
     def added_power(self, law: BackgroundVibration, state: ContactState) -> float:
         """``B^2``."""
         return law.rms ** 2
+
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """``lines`` or ``floor``."""
+        lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
+        return ['lines' if lines else 'floor']
 
     def waveform(self, law: BackgroundVibration, sample_rate: float, random: StreamRandom) -> Waveform:
         """The tones and the floor (:class:`_Background`)."""

@@ -29,7 +29,7 @@ from . import choose, Extension as EffectExtension, Simulation as EffectSimulati
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Mapping, Sequence
 
     import numpy.typing as npt
 
@@ -186,3 +186,7 @@ class Simulation(EffectSimulation):
     def film_factor(self, law: LubricantDepletion, state: ContactState) -> np.ndarray | float:
         """The supply factor at the revolutions since the last lubrication."""
         return law.theta_factor(state.revolutions)
+
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """``recovery at rest`` when the drawn law recovers."""
+        return ['recovery at rest'] if params.get('recovery_time') else []

@@ -196,8 +196,10 @@ class Simulation(EffectSimulation):
     id = 'resonance'
 
     def draw(self, rng: np.random.Generator, context: SimulationContext) -> Resonance:
-        """:func:`draw` against the plan's speed band; the exciting order one of 1, 2, 3, the roller pass
-        order n_p (Eq. 1), 6, 3 n_p and 6 n_p."""
+        """:func:`draw` against the plan's speed band.
+
+        The exciting order is one of 1, 2, 3, the roller pass order n_p (Eq. 1), 6, 3 n_p and 6 n_p.
+        """
         from ..kinematics import roller_revolution_speed
         actuator = context.actuator
         roller_pass = float(actuator.roller_count * roller_revolution_speed(
@@ -209,9 +211,20 @@ class Simulation(EffectSimulation):
         """``|H(r)|`` at the screw speed."""
         return law.amplitude_factor(state.speed)
 
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """Where the mode lies against the plan's ``speeds`` (rad/s), and its order."""
+        if not (params.get('natural_frequency') and params.get('order')):
+            return []
+        resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
+        band = band_position(resonant, min(speeds), max(speeds)).replace('speed band', 'band')
+        return [f'mode {band}, order {params["order"]:.3g}']
+
     def waveform(self, law: Resonance, sample_rate: float, random: StreamRandom) -> Waveform | None:
-        """The mode ringing in the contact signal (:class:`_Mode`); None when f_r is not below
-        :data:`HIGHEST_RINGING` times the sample rate (its gain then scales the whole contact signal)."""
+        """The mode ringing in the contact signal (:class:`_Mode`), or None.
+
+        None when f_r is not below :data:`HIGHEST_RINGING` times the sample
+        rate (its gain then scales the whole contact signal).
+        """
         if law.natural_frequency >= HIGHEST_RINGING * sample_rate:
             return None
         return _Mode(law, sample_rate, random)
