@@ -50,7 +50,7 @@ if TYPE_CHECKING:
 
     from ..physics.defect_orders import DefectOrder
 
-__all__ = ['ConditionBaseline', 'DEFAULT_RULES', 'DefectFinding', 'DefectRules', 'RunCondition',
+__all__ = ['ConditionBaseline', 'DEFAULT_RULES', 'DefectFinding', 'DefectRules', 'NOT_SUSPECTED', 'RunCondition',
            'STRIKE_COMPONENTS', 'run_condition', 'screen', 'strike_orders']
 
 #: Components whose defect is struck by passing contacts (their order is a strike rate).
@@ -171,6 +171,8 @@ class ConditionBaseline:
         crest = np.array([r.crest_factor for r in usable])
         levels = []
         for item in strike_orders(orders):
+            if any(abs(known - item.order) <= ORDER_TOLERANCE * known for known, _ in levels):
+                continue   # an order two components share is one line
             values = [r.level_at(item.order) for r in usable]
             finite = [v for v in values if math.isfinite(v)]
             if finite:

@@ -55,7 +55,7 @@ if TYPE_CHECKING:
 __all__ = ['AT_REST', 'BLOCKS_LOST', 'DEFAULT_DEFECT_ORDERS',
            'GATING_STREAMS', 'MIN_AXIAL_LOAD', 'NO_LOAD', 'NO_SPEED', 'NO_VIBRATION',
            'SPANS_RUNS', 'SPEED_CHANGING', 'UNSTEADY_KINDS', 'Window', 'WindowBuilder', 'WindowSettings',
-           'assessable', 'not_assessable_reason', 'usable_windows']
+           'assessable', 'not_assessable_reason', 'runs_of', 'usable_windows']
 
 #: Defect orders of the contract's default actuator (:mod:`..physics.defect_orders`).
 DEFAULT_DEFECT_ORDERS: tuple[DefectOrder, ...] = actuator_defect_orders(Actuator())
@@ -147,6 +147,15 @@ def usable_windows(windows: Iterable[Window], min_axial_load: float = MIN_AXIAL_
     keep = assessable([w.screw_speed for w in windows], [w.axial_load for w in windows],
                       [w.vibration_rms for w in windows], min_axial_load)
     return [w for w, ok in zip(windows, keep.tolist()) if ok]
+
+
+def runs_of(windows: Iterable[Window]) -> dict[int, list[Window]]:
+    """Steady windows grouped by run index, in run order."""
+    by_run: dict[int, list[Window]] = {}
+    for window in windows:
+        if window.steady:
+            by_run.setdefault(window.run_index, []).append(window)
+    return dict(sorted(by_run.items()))
 
 
 @dataclass(frozen=True)
