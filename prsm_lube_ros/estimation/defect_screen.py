@@ -169,7 +169,7 @@ class ConditionBaseline:
             return None
         kurt = np.array([r.kurtosis for r in usable])
         crest = np.array([r.crest_factor for r in usable])
-        levels = []
+        levels: list[tuple[float, float]] = []
         for item in strike_orders(orders):
             if any(abs(known - item.order) <= ORDER_TOLERANCE * known for known, _ in levels):
                 continue   # an order two components share is one line
