@@ -51,18 +51,23 @@ def run(args: argparse.Namespace) -> int:
     calibration's band (:mod:`..estimation.conditioning`); a recording whose
     sample rate cannot cover it is such a line.  The table is printed only when
     some recording was assessed; ``!`` marks a theta_oil outside its physical
-    range, ``~`` a run outside the calibration's domain (extrapolated).
+    range, ``~`` a run outside the calibration's domain (extrapolated), ``D`` a
+    run whose vibration shows a surface defect (:mod:`..estimation.defect_screen`):
+    its theta_oil is then no lubrication measure.
     """
     from ..estimation.calibration_file import load_calibration
     from ..estimation.pipeline import assessment_json
     from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import assess_bags, BagJob
     from ..physics.actuator import load_actuator
+    from ..physics.defect_orders import defect_orders
     from ..validation import require_positive
     from .common import progress_bar, warn, write_json
     calibration = load_calibration(args.calibration)
-    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band)
-    job = BagJob(calibration, load_actuator(args.actuator).lead, settings, args.namespace,
+    actuator = load_actuator(args.actuator)
+    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
+                              defect_orders=defect_orders(actuator))
+    job = BagJob(calibration, actuator.lead, settings, args.namespace,
                  hash_content=bool(args.history))
     to_history = None
     if args.history:
@@ -104,17 +109,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:
-    """The calibration's band and flags, then one line per run; ``!`` and ``~`` runs explained below it."""
+    """The calibration's band and flags, then one line per run; ``!``, ``~`` and ``D`` runs explained below it."""
     import math
     from pathlib import Path
-    from ..estimation.calibration_file import band_note
+    from ..estimation.calibration_file import band_note, baseline_note
     for flag in calibration.flags:
         print(f'warning: calibration {calibration_path}: {flag}')
+    if baseline_note(calibration):
+        print(f'warning: calibration {calibration_path}: {baseline_note(calibration)}')
     print(f'calibration {calibration_path}: {band_note(calibration)}'
           + (f'; domain {calibration.domain.text}' if calibration.domain is not None else ''))
     print(f'{"recording":<28} {"run":>4} {"speed r/min":>11} {"load N":>8} {"RMS m/s^2":>10} '
-          f'{"theta_oil":>9} {"+/-":>6}')
-    flagged, extrapolated = [], []
+          f'{"kurtosis":>8} {"theta_oil":>9} {"+/-":>6}')
+    flagged, extrapolated, defects = [], [], []
     for rec in results:
         for run_result in rec.runs:
             theta = (f'{run_result.theta_oil:9.3f} {run_result.theta_oil_std:6.3f}' if not run_result.reason
@@ -125,13 +132,20 @@ def _print_table(results: Sequence[RecordingAssessment], calibration: Calibratio
             if run_result.domain_flag:
                 extrapolated.append((Path(rec.path).name, run_result.run_index, run_result.domain_flag))
                 theta += ' ~'
+            if run_result.defect.suspected:
+                defects.append((Path(rec.path).name, run_result.run_index, run_result.defect.evidence))
+                theta += ' D'
+            kurtosis = run_result.condition.kurtosis if run_result.condition is not None else math.nan
             print(f'{Path(rec.path).name[:28]:<28} {run_result.run_index:>4} '
                   f'{run_result.screw_speed * 60 / (2 * math.pi):>11.1f} '
-                  f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {theta}')
+                  f'{run_result.axial_load:>8.1f} {run_result.vibration_rms:>10.4f} {kurtosis:>8.2f} {theta}')
     for name, run_index, flag in flagged:
         print(f'! {name} run {run_index}: {flag}')
     for name, run_index, flag in extrapolated:
         print(f'~ {name} run {run_index}: {flag}')
+    for name, run_index, evidence in defects:
+        print(f'D {name} run {run_index}: surface defect suspected: {evidence}; theta_oil is not a lubrication '
+              'measure while it lasts')
 
 
 def _actuator_id(args: argparse.Namespace) -> str:
