@@ -287,14 +287,11 @@ class _Synthesis:
         """The window table of the windows so far."""
         plan = self.plan
         resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-        table = WindowTable(theta=plan.theta, direction=cast(Any, self.directions),  # __post_init__ makes arrays
-                            spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
-                            **cast(dict[str, Any], self.rows))
-        if plan.condition_indicators:
-            # TODO: pass them to WindowTable once its indicator columns are on main (diagnosis/table.py).
-            for key, values in self.indicators.items():
-                object.__setattr__(table, key, np.array(values, dtype=float))
-        return table
+        indicators = ({key: np.array(values, dtype=float) for key, values in self.indicators.items()}
+                      if plan.condition_indicators else {})
+        return WindowTable(theta=plan.theta, direction=cast(Any, self.directions),  # __post_init__ makes arrays
+                           spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
+                           **cast(dict[str, Any], self.rows), **indicators)
 
 
 def synthetic_table(rng: np.random.Generator, effect: str | tuple[str, ...] | None = None,

@@ -43,7 +43,8 @@ import numpy as np
 
 from . import choose, Extension as EffectExtension, resonator_energy, Simulation as EffectSimulation, Waveform
 from .background_vibration import contact_amplitude, log_gain as added_power_log_gain
-from ..kinematics import roller_revolution_speed, roller_rotation_speed
+from ..defect_orders import prsm_defect_orders
+from ..kinematics import roller_revolution_speed
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
@@ -94,12 +95,9 @@ DEFECT_STREAM_KEY = 6
 def defect_orders(actuator: Actuator) -> dict[str, float]:
     """Strike orders per screw revolution of each of :data:`COMPONENTS` (Eq. 1-2): N (1 - K_P), N K_P, 2 K_R.
 
-    TODO: take them from ``physics.defect_orders.prsm_defect_orders`` when it is on main (same formulas).
+    From :func:`..defect_orders.prsm_defect_orders` (the carrier order K_P modulates, it does not strike).
     """
-    carrier = float(roller_revolution_speed(1.0, actuator.screw_mean_diameter, actuator.roller_mean_diameter))
-    spin = float(roller_rotation_speed(1.0, actuator.screw_mean_diameter, actuator.roller_mean_diameter))
-    count = actuator.roller_count
-    return {'screw raceway': count * (1.0 - carrier), 'nut raceway': count * carrier, 'roller': 2.0 * spin}
+    return {item.component: item.order for item in prsm_defect_orders(actuator) if item.component in COMPONENTS}
 
 
 def growth_factor(revolutions: npt.ArrayLike, growth_per_revolution: float, linear: bool = False
