@@ -287,11 +287,13 @@ class _Synthesis:
         """The window table of the windows so far."""
         plan = self.plan
         resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
-        indicators = ({key: np.array(values, dtype=float) for key, values in self.indicators.items()}
-                      if plan.condition_indicators else {})
+        columns = {key: np.array(values, dtype=float) if plan.condition_indicators else None
+                   for key, values in self.indicators.items()}
         return WindowTable(theta=plan.theta, direction=cast(Any, self.directions),  # __post_init__ makes arrays
                            spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
-                           **cast(dict[str, Any], self.rows), **indicators)
+                           kurtosis=columns['kurtosis'], crest_factor=columns['crest_factor'],
+                           defect_db=columns['defect_db'], defect_order=columns['defect_order'],
+                           **cast(dict[str, Any], self.rows))
 
 
 def synthetic_table(rng: np.random.Generator, effect: str | tuple[str, ...] | None = None,
