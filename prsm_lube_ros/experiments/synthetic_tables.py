@@ -20,7 +20,7 @@ gain) and, with ``condition_indicators``, changing the windows' indicators
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, is_dataclass
 import math
 from collections.abc import Sequence
 from types import SimpleNamespace
@@ -127,6 +127,12 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
     raise ValueError(effect)
 
 
+def _plain(params: dict) -> dict:
+    """An effect's drawn parameters for the truth: a hooked effect's law as a plain mapping (JSON-ready)."""
+    law = params.get('law')
+    return {**params, 'law': asdict(law)} if is_dataclass(law) and not isinstance(law, type) else params
+
+
 def _context(plan: SyntheticPlan) -> SimulationContext:
     """What a hooked effect is drawn against: the plan's conditions, one session's revolutions, 4 kHz sampling."""
     conditions = len(plan.speeds_rpm) * len(plan.loads) * plan.repeats
@@ -181,6 +187,8 @@ class _Synthesis:
         self.turns = 0.0      # revolutions run over all sessions (a spall does not heal at relubrication)
         self.indicators: dict[str, list[float]] = {k: [] for k in ('kurtosis', 'crest_factor', 'defect_db',
                                                                    'defect_order')}
+        # The indicators' own stream (spawned, not drawn from rng): with or without them, the other columns agree.
+        self.indicator_rng = rng.spawn(1)[0]
         self.depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
 
     def pause(self, number: int, way: int, per_session: int) -> None:
@@ -256,7 +264,7 @@ class _Synthesis:
         ``Simulation.window_indicators`` replaces what it changes (its kurtosis
         excess with a 10 % scatter).
         """
-        rng = self.rng
+        rng = self.indicator_rng
         columns = {'kurtosis': 3.0 + HEALTHY_KURTOSIS_SCATTER * rng.standard_normal(),
                    'crest_factor': 4.0 + 0.3 * rng.standard_normal(),
                    'defect_db': 10.0 * math.log10(1.0 + rng.chisquare(2) / 2.0), 'defect_order': math.nan}
@@ -330,10 +338,11 @@ def synthetic_table(rng: np.random.Generator, effect: str | tuple[str, ...] | No
         synthesis.run(run, session, way, factor, *conditions[index])
         synthesis.rest()
     table = synthesis.table()
+    plain = {name: _plain(params) for name, params in laws.items()}
     if effect is None or isinstance(effect, str):
-        drawn = laws.get(effect, {}) if effect else {}       # no effect: no laws
+        drawn = plain.get(effect, {}) if effect else {}       # no effect: no laws
     else:
-        drawn = laws
+        drawn = plain
     truth = {'effect': effect, 'params': drawn,
              'theta_effective': np.array(synthesis.theta_eff), 'amplitude_eq22': np.array(synthesis.a22_list)}
     return table, truth

@@ -83,7 +83,7 @@ def _verdict(kind, seed):
 
 def test_the_engine_names_a_growing_defect_where_the_windows_are_impulsive_not_depletion():
     diagnosis, truth = _verdict('surface_defect', 2)
-    assert truth['params']['law'].growth != 'steady'
+    assert truth['params']['law']['growth'] != 'steady'
     assert diagnosis.verdict == 'surface_defect'
     depletion = next(c for c in diagnosis.candidates if c.effect.id == 'lubricant_depletion')
     assert depletion.status.value != 'earns' or diagnosis.verdict != 'lubricant_depletion'
