@@ -94,3 +94,12 @@ def test_the_engine_keeps_naming_depletion_where_nothing_is_impulsive():
     assert diagnosis.verdict == 'lubricant_depletion'
     defect = next(c for c in diagnosis.candidates if c.effect.id == 'surface_defect')
     assert defect.status.value != 'earns'
+
+
+def test_window_indicators_leave_the_other_columns_of_a_synthetic_table_as_they_were():
+    plain, _ = synthetic_table(np.random.default_rng(4), 'lubricant_depletion', plan=SyntheticPlan(sessions=2))
+    marked, _ = synthetic_table(np.random.default_rng(4), 'lubricant_depletion',
+                                plan=SyntheticPlan(sessions=2, condition_indicators=True))
+    assert np.array_equal(plain.rms, marked.rms) and np.array_equal(plain.speed, marked.speed)
+    assert not plain.has_indicators and marked.has_indicators
+    assert abs(np.median(marked.kurtosis) - 3.0) < 0.05          # Gaussian contact vibration
