@@ -171,10 +171,8 @@ def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float
     if not (shaft_hz > 0 and math.isfinite(shaft_hz)):
         return ConditionIndicators(kurt, crest, (), math.nan, (math.nan, math.nan), math.nan)
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
-    sk, (low, high) = _demodulation_band(signal, rate, (lo_bin * df, hi_bin * df), highest * shaft_hz,
-                                         ENVELOPE_HARMONICS * highest * shaft_hz)
-    first = max(lo_bin, int(math.ceil(low / df)))
-    last = min(hi_bin, max(int(math.floor(high / df)), first + 8))
+    min_bins = max(int(math.ceil(ENVELOPE_HARMONICS * highest * shaft_hz / df)), 8)
+    sk, (first, last) = _demodulation_band(spec, lo_bin, hi_bin, min_bins)
     envelope = np.abs(_complex_envelope(spec, first, last, n))
     duration = n / rate
     grid, resolution = _order_spectrum(envelope, duration, shaft_hz, angle_times, angles)
@@ -182,48 +180,35 @@ def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float
     return ConditionIndicators(kurt, crest, peaks, sk, (first * df, last * df), resolution, grid.astype(np.float32))
 
 
-def _demodulation_band(x: np.ndarray, rate: float, band: tuple[float, float], strike_hz: float,
-                       min_width: float) -> tuple[float, tuple[float, float]]:
-    """The band of the dyadic tree over ``band`` (Hz) with the largest spectral kurtosis, and that SK.
+def _demodulation_band(spec: np.ndarray, lo_bin: int, hi_bin: int, min_bins: int) -> tuple[float, tuple[int, int]]:
+    """The band of the dyadic tree over bins ``[lo_bin, hi_bin]`` with the largest spectral kurtosis, and that SK.
 
-    The STFT form of the kurtogram (Antoni 2007): the window is cut into
-    segments short enough to separate strikes ``strike_hz`` apart (at most half
-    a strike period, 16-512 samples), each segment transformed (rectangular, no
-    overlap: one ``rfft`` of a 2-D array), and each frequency bin's spectral
-    kurtosis ``SK(f) = <|X|^4> / <|X|^2>^2 - 2`` taken over the segments (0
-    for Gaussian vibration, -1 for a steady tone, large where impulses ring).
-    A band's SK is the mean of its bins'.  Bands: the analysis band and its
-    halves, quarters, ... down to :data:`MAX_TREE_LEVEL` or to ``min_width``
-    Hz, all evaluated at once from cumulative sums.
+    The fast kurtogram's dyadic tree (Antoni 2007) on the window's own FFT:
+    level k splits the analysis band into 2^k bands of equal width (down to
+    :data:`MAX_TREE_LEVEL` or to ``min_bins`` bins); each band's complex
+    envelope is its bins shifted to 0 Hz and inverse-transformed (all bands of
+    a level in one 2-D inverse FFT), and its spectral kurtosis is
+    ``E|z|^4 / E^2|z|^2 - 2`` (0 for Gaussian vibration whatever the width,
+    -1 for a steady tone, large where impulses ring).
     """
-    segment = 1 << int(math.floor(math.log2(max(rate / (2.0 * max(strike_hz, 1e-9)), 16.0))))
-    segment = int(min(max(segment, 16), 512, x.size // 8))
-    count = x.size // segment
-    if segment < 16 or count < 8:
-        return math.nan, band
-    power = np.abs(np.fft.rfft(x[:count * segment].reshape(count, segment), axis=1)) ** 2
-    df = rate / segment
-    lo = max(1, int(math.ceil(band[0] / df)))
-    hi = min(power.shape[1] - 1, int(math.floor(band[1] / df)))
-    width = hi - lo + 1
-    if width < 1:
-        return math.nan, band
-    mean = power[:, lo:hi + 1].mean(axis=0)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        per_bin = np.where(mean > 0, (power[:, lo:hi + 1] ** 2).mean(axis=0) / mean ** 2 - 2.0, 0.0)
-    cumulative = np.concatenate(([0.0], np.cumsum(per_bin)))
-    edges_lo, edges_hi = [], []
+    best_sk, best = -math.inf, (lo_bin, hi_bin)
+    width = hi_bin - lo_bin + 1
     for level in range(MAX_TREE_LEVEL + 1):
         parts = 2 ** level
-        if parts > width or (level and (width // parts) * df < min_width):
+        bins = width // parts
+        if bins < min_bins:
             break
-        edges = np.round(np.linspace(0, width, parts + 1)).astype(int)
-        edges_lo.extend(edges[:-1].tolist())
-        edges_hi.extend(edges[1:].tolist())
-    first, stop = np.array(edges_lo), np.array(edges_hi)
-    sk = (cumulative[stop] - cumulative[first]) / (stop - first)
-    best = int(np.argmax(sk))
-    return float(sk[best]), (max(band[0], (lo + first[best] - 0.5) * df), min(band[1], (lo + stop[best] - 0.5) * df))
+        size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
+        shifted = np.zeros((parts, size), dtype=complex)
+        shifted[:, :bins] = spec[lo_bin:lo_bin + parts * bins].reshape(parts, bins)
+        power = np.abs(np.fft.ifft(shifted, axis=1)) ** 2
+        mean = power.mean(axis=1)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            sk = np.where(mean > 0, (power ** 2).mean(axis=1) / mean ** 2 - 2.0, -np.inf)
+        k = int(np.argmax(sk))
+        if sk[k] > best_sk + 1e-12:
+            best_sk, best = float(sk[k]), (lo_bin + k * bins, lo_bin + (k + 1) * bins - 1)
+    return best_sk, best
 
 
 def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
