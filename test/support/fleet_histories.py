@@ -1,14 +1,18 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""Assessed recordings built by hand for history and trend tests (defects too)."""
+"""Assessed recordings and recording points built by hand for history and trend tests (defects too)."""
 import dataclasses
 import datetime
+import math
+
+import numpy as np
 
 from prsm_lube_ros.estimation.assessment import RunAssessment, WindowAssessment
 from prsm_lube_ros.estimation.condition_indicators import ConditionIndicators, EnvelopePeak
 from prsm_lube_ros.estimation.defect_screen import DefectFinding, RunCondition
 from prsm_lube_ros.estimation.pipeline import RecordingAssessment
 from prsm_lube_ros.estimation.windowing import Window
+from prsm_lube_ros.fleet.forecast import DAY, RecordingPoint
 from prsm_lube_ros.fleet.history import add_assessment, content_hash
 
 START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.UTC).timestamp()
@@ -65,3 +69,16 @@ def write(history, path, found, actuator='A01'):
     """Add an assessment of the recording at ``path`` to ``history``; its folder."""
     return add_assessment(history, found, actuator_id=actuator, content=content_hash(path), calibration='c0ffee')
 
+
+def exponential_points(tau_days=40.0, days=10, relubricate_at=None, noise=0.0, seed=0):
+    """One recording a day of theta = a exp(-t / tau); relubricated to 0.98 at ``relubricate_at`` days."""
+    rng = np.random.default_rng(seed)
+    points = []
+    for day in range(days):
+        t = day + 0.5
+        if relubricate_at is not None and t > relubricate_at:
+            theta = 0.98 * math.exp(-(t - relubricate_at) / tau_days)
+        else:
+            theta = 0.95 * math.exp(-t / tau_days)
+        points.append(RecordingPoint(t * DAY, theta + noise * rng.standard_normal(), max(noise, 1e-4)))
+    return points
