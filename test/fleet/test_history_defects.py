@@ -76,3 +76,16 @@ def test_a_history_written_before_the_screen_reads_with_the_columns_filled_and_s
     notes = []
     read_table(history, 'runs', actuator='other', on_note=notes.append)
     assert notes == []
+
+
+def test_plain_duckdb_reads_a_history_of_both_layouts_by_name(tmp_path):
+    duckdb = pytest.importorskip('duckdb')
+    history = tmp_path / 'history'
+    old_bag, new_bag = recording(tmp_path, 'old.mcap', b'old'), recording(tmp_path, 'new.mcap', b'new')
+    as_layout_2(write(history, old_bag, screened(old_bag)))
+    write(history, new_bag, screened(new_bag, days=1.0))
+    rows = duckdb.sql(f"select recording_path, defect_suspected, defect_component from read_parquet("
+                      f"'{history}/recordings/*/*/runs.parquet', hive_partitioning = true, union_by_name = true) "
+                      "order by start").fetchall()
+    assert rows == [(str(old_bag), None, None), (str(old_bag), None, None),
+                    (str(new_bag), False, ''), (str(new_bag), True, 'screw raceway')]
