@@ -55,7 +55,9 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
         description='Fit theta_oil = a exp(-t/tau) per lubrication cycle to each actuator\'s history (written '
         'by assess --history), relubrications found as jumps up or given, and forecast when theta_oil crosses '
         'the warn and error levels, with an interval. Table most urgent first, JSON and dated plots, as of a '
-        'date; --backtest scores the forecast against later recordings.')
+        'date; --backtest scores the forecast against later recordings. An actuator with a run the surface '
+        'defect screen of assess flagged gets no forecast from then on (theta_oil is no lubrication measure) '
+        'and comes first: it needs an inspection.')
     parser.add_argument('history', metavar='HISTORY', help='history folder written by prsm-lube assess --history')
     parser.add_argument('--actuator', default=None, metavar='ID', help='only this actuator')
     parser.add_argument('--report', required=True, metavar='DIR', help='folder for trend.json, trend.md, plots')
