@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
     from ..estimation.calibration import Calibration
     from ..estimation.pipeline import RecordingAssessment
-    from ..fleet.parallel import BagOutcome
+    from ..fleet.parallel import BagJob, BagOutcome
 
 
 __all__ = ['add_command', 'run']
@@ -57,18 +57,10 @@ def run(args: argparse.Namespace) -> int:
     """
     from ..estimation.calibration_file import load_calibration
     from ..estimation.pipeline import assessment_json
-    from ..estimation.windowing import WindowSettings
-    from ..fleet.parallel import assess_bags, BagJob
-    from ..physics.actuator import load_actuator
-    from ..physics.defect_orders import defect_orders
-    from ..validation import require_positive
+    from ..fleet.parallel import assess_bags
     from .common import progress_bar, warn, write_json
     calibration = load_calibration(args.calibration)
-    actuator = load_actuator(args.actuator)
-    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
-                              defect_orders=defect_orders(actuator))
-    job = BagJob(calibration, actuator.lead, settings, args.namespace,
-                 hash_content=bool(args.history))
+    job = _job(args, calibration)
     to_history = None
     if args.history:
         from ..fleet.history import history_writer
@@ -106,6 +98,19 @@ def run(args: argparse.Namespace) -> int:
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
     return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _job(args: argparse.Namespace, calibration: Calibration) -> BagJob:
+    """What each recording is assessed with: the calibration, the actuator's lead and defect orders, the window."""
+    from ..estimation.windowing import WindowSettings
+    from ..fleet.parallel import BagJob
+    from ..physics.actuator import load_actuator
+    from ..physics.defect_orders import defect_orders
+    from ..validation import require_positive
+    actuator = load_actuator(args.actuator)
+    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
+                              defect_orders=defect_orders(actuator))
+    return BagJob(calibration, actuator.lead, settings, args.namespace, hash_content=bool(args.history))
 
 
 def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:

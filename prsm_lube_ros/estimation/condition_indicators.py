@@ -46,9 +46,10 @@ long as its band), a few ms for a 1 s window at 25.6 kHz.  Pure numpy.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
-from typing import Any, TYPE_CHECKING
+from typing import Any, cast, TYPE_CHECKING
+import warnings
 
 import numpy as np
 
@@ -61,9 +62,10 @@ if TYPE_CHECKING:
 
     from ..physics.defect_orders import DefectOrder
 
-__all__ = ['ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER', 'MAX_ORDER',
-           'MAX_PEAKS', 'MAX_TREE_LEVEL', 'ORDER_GRID', 'ORDER_STEP', 'REPORT_DB', 'condition_indicators',
-           'envelope_floor', 'envelope_peaks', 'kurtosis', 'order_spectrum_db']
+__all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
+           'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
+           'REPORT_DB', 'condition_indicators', 'condition_indicators_batch', 'envelope_floor', 'envelope_peaks',
+           'kurtosis', 'order_spectrum_db']
 
 #: Highest screw order the envelope spectrum is kept to (3 harmonics of the default screw raceway order 6.25,
 #: 3 of a support bearing's BPFI near 7.4).
@@ -82,6 +84,8 @@ FLOOR_LOWEST_ORDER = 1.0
 REPORT_DB = 6.0
 #: Envelope peaks reported per window (the largest).
 MAX_PEAKS = 5
+#: Samples of the windows :func:`condition_indicators_batch` transforms together (arrays that stay in cache).
+BATCH_SAMPLES = 1 << 18
 #: Fewest samples an indicator is computed on.
 MIN_SAMPLES = 64
 
@@ -142,64 +146,117 @@ def kurtosis(values: npt.ArrayLike) -> float:
 
 def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float, band: tuple[float, float],
                          orders: Sequence[DefectOrder], *, angle_times: npt.ArrayLike | None = None,
-                         angles: npt.ArrayLike | None = None, spectrum: np.ndarray | None = None
-                         ) -> ConditionIndicators:
+                         angles: npt.ArrayLike | None = None) -> ConditionIndicators:
     """Indicators of one window's ``samples`` (m/s^2 at ``rate`` Hz, screw at ``screw_speed`` rad/s).
 
     ``band`` (Hz) is the analysis band; ``orders`` the actuator's defect
     orders.  ``angle_times`` (s from the first sample) and ``angles`` (rad)
-    give the screw angle through the window for order tracking.  ``spectrum``
-    is ``numpy.fft.rfft`` of the mean-free samples when the caller has it.
+    give the screw angle through the window for order tracking.  The same
+    numbers as :func:`condition_indicators_batch` gives this window among others.
     """
     x = np.asarray(samples, dtype=float)
-    n = x.size
+    return condition_indicators_batch(x.reshape(1, -1), rate, [screw_speed], band, orders,
+                                      [(angle_times, angles)])[0]
+
+
+def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: Sequence[float],
+                               band: tuple[float, float], orders: Sequence[DefectOrder],
+                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None
+                               ) -> list[ConditionIndicators]:
+    """Indicators of windows of one length and rate at once: ``samples`` is (windows x samples), m/s^2.
+
+    ``screw_speeds`` rad/s per window; ``tracks`` per window the
+    ``(angle_times, angles)`` of order tracking (None: none).  The FFTs run
+    over the whole array (the cost is the numpy calls, not the windows).
+    """
+    x = np.asarray(samples, dtype=float)
+    count, n = x.shape
     if n < MIN_SAMPLES or not rate > 0:
-        return NO_INDICATORS
-    spec = np.fft.rfft(x - x.mean()) if spectrum is None else spectrum
+        return [NO_INDICATORS] * count
+    tracks = tracks if tracks is not None else [(None, None)] * count
+    chunk = max(1, BATCH_SAMPLES // n)
+    if count > chunk:    # arrays that stay in cache: a few hundred thousand samples at a time
+        return [item for start in range(0, count, chunk)
+                for item in condition_indicators_batch(x[start:start + chunk], rate,
+                                                       screw_speeds[start:start + chunk], band, orders,
+                                                       tracks[start:start + chunk])]
+    spec = np.fft.rfft(x, axis=1)
+    spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
-    hi_bin = min(spec.size - 1, int(math.floor(band[1] / df)))
+    hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
     if hi_bin - lo_bin < 8:
-        return NO_INDICATORS
-    in_band = np.zeros(spec.size, dtype=complex)
-    in_band[lo_bin:hi_bin + 1] = spec[lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n)
-    rms = math.sqrt(float(np.mean(signal * signal)))
-    kurt = kurtosis(signal)
-    crest = float(np.max(np.abs(signal)) / rms) if rms > 0 else math.nan
-    shaft_hz = abs(screw_speed) / (2.0 * math.pi)
-    if not (shaft_hz > 0 and math.isfinite(shaft_hz)):
-        return ConditionIndicators(kurt, crest, (), math.nan, (math.nan, math.nan), math.nan)
+        return [NO_INDICATORS] * count
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
+    signal = np.fft.irfft(in_band, n, axis=1)
+    squares = signal * signal
+    power = squares.mean(axis=1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    shaft_hz = np.abs(np.asarray(screw_speeds, dtype=float)) / (2.0 * math.pi)
+    moving = np.isfinite(shaft_hz) & (shaft_hz > 0)
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
-    min_bins = int(math.ceil(ENVELOPE_HARMONICS * highest * shaft_hz / df))
-    sk, (first, last) = _demodulation_band(spec, n, lo_bin, hi_bin, max(min_bins, 8))
-    envelope = np.abs(_complex_envelope(spec, first, last, n))
-    duration = n / rate
-    grid, resolution = _order_spectrum(envelope, duration, shaft_hz, angle_times, angles)
-    peaks = envelope_peaks(grid, resolution, orders)
-    return ConditionIndicators(kurt, crest, peaks, sk, (first * df, last * df), resolution, grid.astype(np.float32))
+    min_bins = np.maximum(np.ceil(ENVELOPE_HARMONICS * highest * np.where(moving, shaft_hz, 0.0) / df), 8)
+    sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
+    out = []
+    for k in range(count):
+        if not moving[k] or not math.isfinite(sk[k]):
+            out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
+                                           math.nan))
+            continue
+        envelope = np.abs(_complex_envelope(spec[k], int(first[k]), int(last[k]), n))
+        grid, resolution = _order_spectrum(envelope, n / rate, float(shaft_hz[k]), *tracks[k])
+        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
+                                       (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
+    spectral = [k for k, item in enumerate(out) if item.envelope is not None]
+    if spectral:
+        grids = np.vstack([cast(np.ndarray, out[k].envelope) for k in spectral]).astype(float)
+        for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
+            out[k] = replace(out[k], envelope_peaks=peaks)
+    return out
 
 
-def _demodulation_band(spec: np.ndarray, n: int, lo_bin: int, hi_bin: int,
-                       min_bins: int) -> tuple[float, tuple[int, int]]:
-    """The band of the dyadic tree over ``[lo_bin, hi_bin]`` with the largest spectral kurtosis, and that SK."""
-    best_sk, best = -math.inf, (lo_bin, hi_bin)
+def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
+                        min_bins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per window (row of ``spec``), the band of the dyadic tree with the largest spectral kurtosis.
+
+    The fast kurtogram's dyadic tree (Antoni 2007) on the window's own FFT:
+    level k splits the analysis band ``[lo_bin, hi_bin]`` into 2^k bands of
+    equal width (down to :data:`MAX_TREE_LEVEL`, or to ``min_bins`` bins of
+    that window); each band's complex envelope is its bins shifted to 0 Hz and
+    inverse-transformed (every band of every window of a level in one
+    inverse FFT), and its spectral kurtosis is ``E|z|^4 / E^2|z|^2 - 2`` (0 for
+    Gaussian vibration whatever the width, -1 for a steady tone, large where
+    impulses ring).  Returns SK, first and last bin of each window's band.
+    """
+    count = spec.shape[0]
+    best_sk = np.full(count, -np.inf)
+    first = np.full(count, lo_bin)
+    last = np.full(count, hi_bin)
     width = hi_bin - lo_bin + 1
     for level in range(MAX_TREE_LEVEL + 1):
         parts = 2 ** level
-        if width / parts < min_bins:
+        bins = width // parts
+        allowed = bins >= min_bins
+        if not allowed.any():
             break
-        edges = lo_bin + np.round(np.linspace(0, width, parts + 1)).astype(int)
-        for first, stop in zip(edges[:-1].tolist(), edges[1:].tolist()):
-            z = _complex_envelope(spec, first, stop - 1, n)
-            power = np.abs(z) ** 2
-            mean = float(power.mean())
-            if mean <= 0:
-                continue
-            sk = float(np.mean(power ** 2) / mean ** 2 - 2.0)
-            if sk > best_sk + 1e-12:
-                best_sk, best = sk, (first, stop - 1)
-    return best_sk, best
+        size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
+        shifted = np.zeros((count, parts, size), dtype=complex)
+        shifted[:, :, :bins] = spec[:, lo_bin:lo_bin + parts * bins].reshape(count, parts, bins)
+        power = np.abs(np.fft.ifft(shifted, axis=2)) ** 2
+        mean = power.mean(axis=2)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        part = np.argmax(sk, axis=1)
+        value = sk[np.arange(count), part]
+        better = allowed & (value > best_sk + 1e-12)
+        best_sk = np.where(better, value, best_sk)
+        first = np.where(better, lo_bin + part * bins, first)
+        last = np.where(better, lo_bin + (part + 1) * bins - 1, last)
+    best_sk[~np.isfinite(best_sk)] = math.nan
+    return best_sk, first, last
 
 
 def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
@@ -242,15 +299,27 @@ def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angl
 
 def envelope_floor(grid: np.ndarray) -> float:
     """Floor of an order spectrum on :data:`ORDER_GRID`: its median above :data:`FLOOR_LOWEST_ORDER`."""
-    part = grid[(ORDER_GRID >= FLOOR_LOWEST_ORDER) & np.isfinite(grid)]
-    return float(np.median(part)) if part.size else math.nan
+    return float(_floors(np.asarray(grid, dtype=float).reshape(1, -1))[0])
+
+
+def _floors(grids: np.ndarray) -> np.ndarray:
+    """:func:`envelope_floor` of each row."""
+    part = grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER]
+    with np.errstate(invalid='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
+        return np.nanmedian(part, axis=1)
 
 
 def order_spectrum_db(grid: np.ndarray) -> np.ndarray:
     """An order spectrum in dB over its floor (NaN where it holds nothing)."""
-    floor = envelope_floor(grid)
+    grids = np.asarray(grid, dtype=float)
+    return _db(grids.reshape(1, -1)).reshape(grids.shape)
+
+
+def _db(grids: np.ndarray) -> np.ndarray:
+    """:func:`order_spectrum_db` of each row."""
     with np.errstate(divide='ignore', invalid='ignore'):
-        return 10.0 * np.log10(np.asarray(grid, dtype=float) / floor)
+        return 10.0 * np.log10(grids / _floors(grids)[:, None])
 
 
 def envelope_peaks(grid: np.ndarray, resolution: float, orders: Sequence[DefectOrder],
@@ -263,25 +332,53 @@ def envelope_peaks(grid: np.ndarray, resolution: float, orders: Sequence[DefectO
     larger lines elsewhere fill the ``count``.  Maxima closer than the
     resolution to a larger one are the same line.
     """
-    db = order_spectrum_db(grid)
-    valid = np.isfinite(db) & (ORDER_GRID >= 0.5 * min((o.order for o in orders), default=1.0))
-    if not valid.any():
-        return ()
-    padded = np.where(valid, db, -np.inf)
-    local = np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] > padded[2:]) & (padded[1:-1] >= min_db)) + 1
-    separation = max(resolution, 2 * ORDER_STEP)
-    chosen: list[int] = []
-    for k in sorted(local.tolist(), key=lambda k: -padded[k]):
-        if all(abs(ORDER_GRID[k] - ORDER_GRID[j]) > separation for j in chosen):
-            chosen.append(k)
-        if len(chosen) == count:
-            break
-    for item in orders:
-        near = np.flatnonzero(np.abs(ORDER_GRID - item.order) <= max(ORDER_TOLERANCE * item.order, resolution / 2))
-        if near.size:
-            k = int(near[np.argmax(padded[near])])
-            if padded[k] >= min_db and all(abs(ORDER_GRID[k] - ORDER_GRID[j]) > ORDER_STEP / 2 for j in chosen):
+    return _peaks(np.asarray(grid, dtype=float).reshape(1, -1), [resolution], orders, min_db, count)[0]
+
+
+def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[DefectOrder],
+           min_db: float = REPORT_DB, count: int = MAX_PEAKS) -> list[tuple[EnvelopePeak, ...]]:
+    """:func:`envelope_peaks` of each row (dB, maxima and defect-order levels for all rows at once)."""
+    db = _db(grids)
+    lowest = 0.5 * min((o.order for o in orders), default=1.0)
+    padded = np.where(np.isfinite(db) & (ORDER_GRID >= lowest), db, -np.inf)
+    local = np.zeros(padded.shape, dtype=bool)
+    local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
+        padded[:, 1:-1] >= min_db)
+    labels: dict[tuple[int, float], str] = {}
+    out = []
+    for row, resolution in enumerate(resolutions):
+        levels = padded[row]
+        candidates = np.flatnonzero(local[row])
+        if candidates.size > 4 * count:
+            candidates = candidates[np.argpartition(-levels[candidates], 4 * count)[:4 * count]]
+        separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
+        chosen: list[int] = []
+        for k in sorted(candidates.tolist(), key=lambda k: -levels[k]):
+            if all(abs(k - j) > separation for j in chosen):
                 chosen.append(k)
-    return tuple(EnvelopePeak(float(ORDER_GRID[k]), float(padded[k]),
-                              label_order(float(ORDER_GRID[k]), orders, resolution / 2))
-                 for k in sorted(chosen))
+            if len(chosen) == count:
+                break
+        for first, stop in _order_windows(orders, resolution):
+            if stop > first:
+                k = first + int(np.argmax(levels[first:stop]))
+                if levels[k] >= min_db and k not in chosen:
+                    chosen.append(k)
+        peaks = []
+        for k in sorted(chosen):
+            key = (k, round(resolution, 6))
+            if key not in labels:
+                labels[key] = label_order(float(ORDER_GRID[k]), orders, resolution / 2)
+            peaks.append(EnvelopePeak(float(ORDER_GRID[k]), float(levels[k]), labels[key]))
+        out.append(tuple(peaks))
+    return out
+
+
+def _order_windows(orders: Sequence[DefectOrder], resolution: float) -> list[tuple[int, int]]:
+    """Grid index ranges within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's fundamental."""
+    spans = []
+    for item in orders:
+        reach = max(ORDER_TOLERANCE * item.order, resolution / 2)
+        first = max(int(math.ceil((item.order - reach) / ORDER_STEP - 1e-9)), 0)
+        stop = min(int(math.floor((item.order + reach) / ORDER_STEP + 1e-9)) + 1, ORDER_GRID.size)
+        spans.append((first, stop))
+    return spans

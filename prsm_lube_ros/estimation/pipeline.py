@@ -29,7 +29,8 @@ from .windowing import (DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_w
                         WindowSettings)
 
 __all__ = ['ASSESSMENT_SLICE_SECONDS', 'RecordingAssessment', 'RecordingWindows', 'analysis_settings',
-           'assess_recording', 'assessment_json', 'calibrate_recordings', 'recording_windows', 'require_usable',
+           'assess_recording', 'assessment_json', 'calibrate_recordings', 'condition_baseline', 'recording_windows',
+           'require_usable',
            'with_band_and_domain']
 
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
