@@ -35,7 +35,8 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     import numpy.typing as npt
 
-__all__ = ['MARKED_HARMONICS', 'STACKED_ROWS', 'Mark', 'envelope_spectrum', 'indicator_trends', 'order_spectrum', 'waterfall']
+__all__ = ['MARKED_HARMONICS', 'STACKED_ROWS', 'Mark', 'envelope_spectrum', 'indicator_trends', 'order_spectrum',
+           'waterfall']
 
 #: A marked order: (order in multiples of the screw speed, label).
 Mark = tuple[float, str]
@@ -189,7 +190,8 @@ def waterfall(path: Path, orders: npt.ArrayLike, rows: npt.ArrayLike, row_labels
                      else (0.0, 1.0))
         mesh = ax.pcolormesh(x[shown], np.arange(count), data[:, shown], shading='nearest', cmap='viridis',
                              vmin=low, vmax=high)
-        fig.colorbar(mesh, ax=ax, pad=0.01, label=unit)
+        fig.colorbar(mesh, ax=ax, orientation='horizontal', location='bottom', pad=0.14, fraction=0.04, aspect=50,
+                     label=unit)     # below, so the legend to the right stays clear of it
         ax.set_yticks(list(ticks), [row_labels[k] for k in ticks], fontsize=7)
         rows_flagged = [k for k in range(count) if flagged[k]]
         if rows_flagged:
