@@ -324,8 +324,8 @@ class ConditionReport:
 
     # -- figures --------------------------------------------------------------------------------
     def _section(self, folder: Path, prefix: str, runs: Sequence[RunSummary], budget: int,
-                 heading: str) -> tuple[list[str], int]:
-        """Figures and words of one recording's runs; returns the lines and the per-run figures drawn."""
+                 heading: str) -> list[str]:
+        """Figures and words of one recording's runs, with at most ``budget`` per-run envelope spectra."""
         lines = [heading, '', f'{len(runs)} run{"s" if len(runs) != 1 else ""}, '
                  f'{sum(r.suspected for r in runs)} with a defect suspected.', '']
         lines += [line for text in self._resolution_words(runs) for line in (text, '')]
@@ -335,8 +335,7 @@ class ConditionReport:
                            'indicator trends')):
             if name:
                 lines += [f'![{alt}]({name})', '']
-        run_lines, drawn = self._run_figures(folder, prefix, runs, budget)
-        return lines + run_lines, drawn
+        return lines + self._run_figures(folder, prefix, runs, budget)
 
     def _order_spectrum(self, path: Path, runs: Sequence[RunSummary]) -> str:
         """The order spectrum, the runs of each speed averaged, band edges marked where in range; '' if none."""
@@ -386,16 +385,16 @@ class ConditionReport:
             drawn.append((name, 'order waterfall'))
         return drawn
 
-    def _run_figures(self, folder: Path, prefix: str, runs: Sequence[RunSummary], budget: int) -> tuple[list[str], int]:
+    def _run_figures(self, folder: Path, prefix: str, runs: Sequence[RunSummary], budget: int) -> list[str]:
         """Envelope spectra of the most telling runs (suspected first, then the strongest line), at most ``budget``."""
         from .. import condition_figures as figures
         marks = defect_marks(self.orders)
         candidates = [(r, r.envelope_db) for r in runs if r.envelope_db is not None]
         if not candidates:
-            return [], 0
+            return []
         candidates.sort(key=lambda item: (not item[0].suspected,
                                           -(item[0].line_db if math.isfinite(item[0].line_db) else -math.inf)))
-        chosen = candidates[:max(0, min(MAX_RUN_FIGURES_PER_SECTION, budget))]
+        chosen = candidates[:max(0, budget)]
         lines = [f'Envelope spectra of {len(chosen)} of {len(candidates)} runs drawn (defect suspected first, then '
                  'the strongest line at a strike order); every run is in the waterfalls, the trends and the table.', '']
         for run, db in sorted(chosen, key=lambda item: item[0].start):
@@ -414,7 +413,7 @@ class ConditionReport:
                      f'**{run.name}:** no defect suspected; strongest line at a strike order '
                      f'{_fmt(run.line_db, 1)} dB ({run.line_component or "—"}, {_fmt(run.line_order)}x).')
             lines += [words, '', f'![envelope spectrum, run {run.run_index}]({name})', '']
-        return lines, len(chosen)
+        return lines
 
     def _trends(self, path: Path, runs: Sequence[RunSummary]) -> str:
         """Indicator trends of ``runs`` (in time order) with the screen's limits; the file's name."""
@@ -482,14 +481,15 @@ class ConditionReport:
             lines += [f'Figures drawn for {MAX_SECTIONS} of {len(order)} recordings (those with a defect suspected '
                       f'first); not drawn: {", ".join(left[:20])}{", ..." if len(left) > 20 else ""} (their runs are '
                       'in the table' + (' and the trends above' if len(order) > 1 else '') + ').', '']
-        budget = MAX_RUN_FIGURES
+        allotted, budget = {}, MAX_RUN_FIGURES     # per-run figures, handed out in the order of priority
+        for path in ranked[:MAX_SECTIONS]:
+            allotted[path] = min(MAX_RUN_FIGURES_PER_SECTION, budget,
+                                 sum(r.envelope_db is not None for r in self.recordings[path]))
+            budget -= allotted[path]
         for number, path in enumerate(order):
-            if path not in sectioned:
-                continue
-            section, drawn = self._section(folder, f'{prefix}rec{number}_', self.recordings[path], budget,
-                                           f'{h}# {path}')
-            budget -= drawn
-            lines += section
+            if path in sectioned:
+                lines += self._section(folder, f'{prefix}rec{number}_', self.recordings[path], allotted[path],
+                                       f'{h}# {path}')
         return lines
 
     def write(self, folder: str | Path) -> Path:
@@ -499,11 +499,13 @@ class ConditionReport:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(f'{folder}: cannot create report folder ({exc.strerror or exc})') from None
-        lines = [f'# {self.title}', ''] + self.markdown(folder)
-        text = '\n'.join(lines)
-        write_atomically(folder / 'index.md', lambda stream: stream.write(text), binary=False)
-        page = markdown_html(text, self.title)
-        write_atomically(folder / 'index.html', lambda stream: stream.write(page), binary=False)
+        try:
+            text = '\n'.join([f'# {self.title}', ''] + self.markdown(folder))
+            write_atomically(folder / 'index.md', lambda stream: stream.write(text), binary=False)
+            page = markdown_html(text, self.title)
+            write_atomically(folder / 'index.html', lambda stream: stream.write(page), binary=False)
+        except OSError as exc:
+            raise InputError(f'{folder}: cannot write the report ({exc.strerror or exc})') from None
         return folder / 'index.html'
 
 
