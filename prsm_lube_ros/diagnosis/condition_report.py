@@ -426,11 +426,13 @@ class ConditionReport:
             impulsive = max(impulsive, rules.kurtosis_ratio * baseline.kurtosis_median)
             strong = max(impulsive, baseline.kurtosis_max + rules.kurtosis_margin)
             crest = max(rules.healthy_crest, rules.crest_ratio * baseline.crest_max)
-            limits += [(0, strong, f'strongly impulsive from {strong:.2f}'),
-                       (1, crest, f'strongly impulsive from {crest:.2f}')]
+            limits.append((1, crest, f'strongly impulsive from {crest:.2f}'))
+            if strong > impulsive + 0.005:
+                limits.append((0, strong, f'strongly impulsive from {strong:.2f}'))
         else:
             limits.append((1, rules.healthy_crest, f'healthy crest factor up to {rules.healthy_crest:g}'))
-        limits.append((0, impulsive, f'impulsive from {impulsive:.2f}'))
+        limits.append((0, impulsive, f'impulsive from {impulsive:.2f}'
+                       + (' (strongly too)' if baseline is not None and strong <= impulsive + 0.005 else '')))
         figures.indicator_trends(path, x, label, [r.kurtosis for r in runs], [r.crest for r in runs],
                                  [r.line_db for r in runs], [r.theta for r in runs], [r.theta_std for r in runs],
                                  [r.suspected for r in runs],
