@@ -89,6 +89,24 @@ def test_assess_report_points_at_the_spall_and_not_at_the_healthy_bearing(femto_
     assert 'no defect suspected' in healthy and 'defect suspected:' not in healthy
 
 
+def test_the_report_changes_no_number_of_the_assessment(femto_like):
+    """Spectra are kept for the report only: the JSON is the same without --report."""
+    folder, _ = femto_like
+    plain = prsm_lube('assess', folder / 'healthy_b', folder / 'spalled', '--calibration', folder / 'cal.yaml',
+                      '--actuator', FEMTO_ACTUATOR, '--json', folder / 'plain.json')
+    assert plain.returncode == 0, plain.stderr
+    assert json.loads((folder / 'plain.json').read_text()) == json.loads((folder / 'out.json').read_text())
+
+
+def test_the_report_is_the_same_from_worker_processes(femto_like):
+    """With --jobs the recordings are summarised in the main process as they come back: the same page."""
+    folder, _ = femto_like
+    result = prsm_lube('assess', folder / 'healthy_b', folder / 'spalled', '--calibration', folder / 'cal.yaml',
+                       '--actuator', FEMTO_ACTUATOR, '--jobs', '2', '--report', folder / 'report_jobs')
+    assert result.returncode == 0, result.stderr
+    assert (folder / 'report_jobs' / 'index.md').read_text() == (folder / 'report' / 'index.md').read_text()
+
+
 def test_assess_report_loads_every_figure_in_chromium(femto_like, tmp_path):
     if browser.chromium() is None:
         pytest.skip('chromium is not installed: run tools/install-browser to check the report in a real browser')
