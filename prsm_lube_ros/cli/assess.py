@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from ..estimation.pipeline import RecordingAssessment
     from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import BagOutcome
+    from ..physics.actuator import Actuator
 
 
 __all__ = ['add_command', 'run']
@@ -61,20 +62,13 @@ def run(args: argparse.Namespace) -> int:
     its theta_oil is then no lubrication measure.
     """
     from ..estimation.calibration_file import load_calibration
-    from ..estimation.conditioning import LOWEST_ORDER_FREQUENCY
-    from ..estimation.pipeline import assessment_json
-    from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import assess_bags, BagJob
     from ..physics.actuator import load_actuator
-    from ..physics.defect_orders import defect_orders
-    from ..validation import require_positive
-    from .common import progress_bar, warn, write_json
+    from .common import progress_bar, warn
     calibration = load_calibration(args.calibration)
     actuator = load_actuator(args.actuator)
-    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
-                              defect_orders=defect_orders(actuator),
-                              spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if args.report else 0.0)
-    report = _condition_report(calibration, settings) if args.report else None
+    settings = _window_settings(args, calibration, actuator)
+    report = _condition_report(calibration, settings, args.bags) if args.report else None
     job = BagJob(calibration, actuator.lead, settings, args.namespace,
                  hash_content=bool(args.history))
     to_history = None
@@ -109,15 +103,34 @@ def run(args: argparse.Namespace) -> int:
     if not results:
         return EXIT_USER_ERROR
     _print_table(results, calibration, args.calibration)
-    if args.history and results:
-        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
-    if args.json and results:
+    _write_outputs(args, results, calibration, report, len(results) - len(refused))
+    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _window_settings(args: argparse.Namespace, calibration: Calibration, actuator: Actuator) -> WindowSettings:
+    """Windows in the calibration's band, envelope lines labelled by the actuator; spectra kept for ``--report``."""
+    from ..estimation.conditioning import LOWEST_ORDER_FREQUENCY
+    from ..estimation.windowing import WindowSettings
+    from ..physics.defect_orders import defect_orders
+    from ..validation import require_positive
+    return WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
+                          defect_orders=defect_orders(actuator),
+                          spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if args.report else 0.0)
+
+
+def _write_outputs(args: argparse.Namespace, results: Sequence[RecordingAssessment], calibration: Calibration,
+                   report: ConditionReport | None, added: int) -> None:
+    """The history's count, the JSON and the condition report, each said in one line."""
+    from ..estimation.pipeline import assessment_json
+    from .common import write_json
+    if args.history:
+        print(f'history {args.history}: {added} recordings added or replaced')
+    if args.json:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
     if report is not None:
         print(f'wrote {report.write(args.report)}: condition figures of {len(report.runs)} runs')
-    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
 
 
 def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:
@@ -160,8 +173,8 @@ def _print_table(results: Sequence[RecordingAssessment], calibration: Calibratio
               'measure while it lasts')
 
 
-def _condition_report(calibration: Calibration, settings: WindowSettings) -> ConditionReport:
-    """The ``--report`` page's collector, with the calibration's band, baseline and flags."""
+def _condition_report(calibration: Calibration, settings: WindowSettings, bags: Sequence[str]) -> ConditionReport:
+    """The ``--report`` page's collector, with the calibration's band, baseline and flags; recordings as given."""
     from ..diagnosis.condition_report import ConditionReport
     from ..estimation.calibration_file import band_note, baseline_note
     band = calibration.band
@@ -170,7 +183,7 @@ def _condition_report(calibration: Calibration, settings: WindowSettings) -> Con
                            notes=[f'Calibration: {band_note(calibration)}'
                                   + (f'; domain {calibration.domain.text}' if calibration.domain is not None else '')
                                   + ''.join(f'; {note}' for note in (*calibration.flags, baseline_note(calibration))
-                                            if note) + '.'])
+                                            if note) + '.'], paths=bags)
 
 
 def _actuator_id(args: argparse.Namespace) -> str:

@@ -234,12 +234,16 @@ class ConditionReport:
 
     ``orders`` are the actuator's defect orders; ``band`` (Hz) the analysis
     band; ``baseline`` and ``rules`` the screen's; ``notes`` lines said on
-    the page before the figures (what theta_Oil and the screen were judged against).
+    the page before the figures (what theta_Oil and the screen were judged
+    against); ``paths`` the recordings in the order the page shows them
+    (recordings may be added as they finish, in any order; others follow).
     """
 
     def __init__(self, orders: Sequence[DefectOrder], *, band: tuple[float, float] | None = None,
                  baseline: ConditionBaseline | None = None, rules: DefectRules = DEFAULT_RULES,
-                 notes: Sequence[str] = (), title: str = 'prsm-lube assess: condition report'):
+                 notes: Sequence[str] = (), title: str = 'prsm-lube assess: condition report',
+                 paths: Sequence[str] = ()):
+        self.paths = [str(p) for p in paths]
         self.orders = tuple(orders)
         self.band = band
         self.baseline = baseline
@@ -260,10 +264,15 @@ class ConditionReport:
             assessment.windows[:] = [replace(item, window=replace(item.window, spectrum=None))
                                      if item.window.spectrum is not None else item for item in assessment.windows]
 
+    def _order(self) -> list[str]:
+        """The recordings summarised, in the order of ``paths`` (the others after them, as added)."""
+        rank = {path: i for i, path in enumerate(self.paths)}
+        return sorted(self.recordings, key=lambda path: rank.get(path, len(rank)))
+
     @property
     def runs(self) -> list[RunSummary]:
-        """Every run summarised, in the order the recordings were added."""
-        return [run for runs in self.recordings.values() for run in runs]
+        """Every run summarised, recordings in the page's order."""
+        return [run for path in self._order() for run in self.recordings[path]]
 
     # -- words ----------------------------------------------------------------------------------
     def _orders_words(self) -> str:
@@ -475,7 +484,7 @@ class ConditionReport:
             self._trends(folder / name, sorted(runs, key=lambda r: r.start))
             lines += [f'![indicator trends of every run]({name})', '']
         lines += self._table(runs) + ['']
-        order = list(self.recordings)
+        order = self._order()
         ranked = sorted(order, key=lambda p: (not any(r.suspected for r in self.recordings[p]), order.index(p)))
         sectioned = set(ranked[:MAX_SECTIONS])
         if len(order) > MAX_SECTIONS:
