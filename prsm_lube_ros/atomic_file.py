@@ -9,9 +9,15 @@ before the rename leaves its temporary; :func:`remove_stale` (called by the
 next writer of the same target) removes the temporaries whose writer process
 no longer runs, and leaves those of a writer still at work.  Temporaries of
 the earlier format (no pid) are removed once older than :data:`LEGACY_AGE`.
+
+Writers that must not interleave across processes (the history's commits)
+hold a :func:`file_lock`, which the kernel releases when its holder dies.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+import errno
+import fcntl
 import os
 from pathlib import Path
 import re
@@ -19,12 +25,15 @@ import shutil
 import tempfile
 import time
 from typing import Any
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
-__all__ = ['LEGACY_AGE', 'is_stale', 'process_alive', 'remove_stale', 'temporary_prefix', 'write_atomically']
+__all__ = ['LEGACY_AGE', 'LOCK_TIMEOUT', 'file_lock', 'is_stale', 'process_alive', 'remove_stale', 'temporary_prefix',
+           'write_atomically']
 
 #: s after which a temporary without a writer pid is taken as stale
 LEGACY_AGE = 600.0
+#: s a writer waits for another one's :func:`file_lock` before giving up with an OSError
+LOCK_TIMEOUT = 120.0
 _OWNED = re.compile(r'\.(\d+)\.[^.]+\.tmp$')
 
 
@@ -91,3 +100,28 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+@contextmanager
+def file_lock(path: Path, timeout: float = LOCK_TIMEOUT) -> Iterator[None]:
+    """Hold an exclusive ``flock`` on ``path`` (created if missing, never through a link) across processes.
+
+    Waits up to ``timeout`` s for another holder, then raises ``OSError``
+    (``ETIMEDOUT``); the kernel drops the lock of a killed holder.
+    """
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC | os.O_NOFOLLOW, 0o644)
+    try:
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    raise OSError(errno.ETIMEDOUT, f'another writer held {path.name} for {timeout:g} s',
+                                  str(path)) from None
+                time.sleep(0.01)
+        yield
+    finally:
+        os.close(handle)

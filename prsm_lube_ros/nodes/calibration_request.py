@@ -100,6 +100,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
     """
     theta = reference_theta(theta)
     paths = resolve_bag_paths(bag_paths, folder)
+    root = recordings_folder(str(folder))
     try:
         from ..estimation.pipeline import calibrate_recordings, recording_windows, require_usable
     except ImportError as exc:    # the bag reader is not installed with this build
@@ -117,7 +118,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
         if on_progress:
             on_progress('reading', read, len(paths), steady)
         recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
-                                      on_problem=report)
+                                      on_problem=report, root=root)   # its files inside the folder too
         try:
             require_usable(recording, settings)     # the command line's words for the same lack
         except InputError as exc:
