@@ -23,7 +23,8 @@ if TYPE_CHECKING:
     from _typeshed import DataclassInstance
 
 
-__all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'read_section', 'read_yaml']
+__all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'parse_yaml',
+           'read_section', 'read_yaml']
 
 #: Largest YAML file read, bytes, and deepest nesting of mappings and lists it may have: configuration and
 #: calibration files are a few kB and a few levels deep; these bounds keep a hostile file from costing
@@ -43,9 +44,12 @@ def read_yaml(path: str | Path, what: str) -> Any:
     :data:`MAX_YAML_NESTING` each give one line; nothing beyond the bound is
     read (:mod:`.input_file`).
     """
+    return parse_yaml(read_text(path, what, max_bytes=MAX_YAML_BYTES, error=ConfigError), path, what)
+
+
+def parse_yaml(text: str, path: str | Path, what: str) -> Any:
+    """The parsed document of ``text`` read from ``path``: :func:`read_yaml` for text already read."""
     import yaml
-    path = Path(path)
-    text = read_text(path, what, max_bytes=MAX_YAML_BYTES, error=ConfigError)
     try:
         document = yaml.safe_load(text)
     except RecursionError:

@@ -427,7 +427,7 @@ def _bounded(file: str, history: Path, report: Callable[[str], None]) -> bool:
 
 
 def path_text(path: str | Path) -> str:
-    """A path as valid UTF-8 text: bytes the file system allows but UTF-8 lacks become ``\\xNN``."""
+    """A path as valid UTF-8 text: bytes the file system allows but UTF-8 lacks become backslash-x escapes."""
     return os.fsencode(path).decode('utf-8', 'backslashreplace')
 
 
