@@ -51,6 +51,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f'prsm-lube {args.command}: error: {exc}', file=sys.stderr)
         return EXIT_USER_ERROR
+    except OSError as exc:      # the file system refused (disk full, ulimit -f, permissions): outputs stay whole
+        where = f'{exc.filename}: ' if exc.filename else ''
+        print(f'prsm-lube {args.command}: error: {where}cannot write or read ({exc.strerror or exc})', file=sys.stderr)
+        return EXIT_USER_ERROR
     except KeyboardInterrupt:
         print(f'prsm-lube {args.command}: interrupted', file=sys.stderr)
         return 130

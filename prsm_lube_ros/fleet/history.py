@@ -51,7 +51,6 @@ and ``nut_position`` (m).  The partition columns ``actuator`` and
 """
 from __future__ import annotations
 
-import ctypes
 import datetime
 import hashlib
 import json
@@ -67,7 +66,7 @@ import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 
-from ..atomic_file import file_lock, remove_stale, temporary_prefix, write_atomically
+from ..atomic_file import exchange, file_lock, remove_stale, temporary_prefix, write_atomically
 from ..config_file import MAX_YAML_BYTES
 from ..errors import ConfigError, InputError, RecordingError
 from ..input_file import confine, MAX_RECORDING_BYTES, open_regular, read_bytes
@@ -334,34 +333,12 @@ def _commit(staged: Path, target: Path) -> None:
     if elsewhere and not target.exists():
         os.rename(elsewhere.pop(), target)               # moves to its new actuator: never in two places
     if target.exists():
-        _exchange(staged, target)                         # staged now holds the old folder (removed by the caller)
+        exchange(staged, target)                         # staged now holds the old folder (removed by the caller)
     else:
         os.rename(staged, target)
     for stale in elsewhere:                               # only after a crash of an earlier layout's writer
         shutil.rmtree(stale, ignore_errors=True)
     _fsync_folder(target.parent)
-
-
-_RENAME_EXCHANGE = 2
-_AT_FDCWD = -100
-
-
-def _exchange(first: Path, second: Path) -> None:
-    """Swap two folders atomically (Linux ``renameat2``); else move ``second`` aside to ``first``'s place first."""
-    try:
-        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
-    except (AttributeError, OSError):
-        renameat2 = None
-    if renameat2 is not None:
-        if renameat2(_AT_FDCWD, os.fsencode(first), _AT_FDCWD, os.fsencode(second), _RENAME_EXCHANGE) == 0:
-            return
-        error = ctypes.get_errno()
-        if error not in (22, 38, 95):                     # EINVAL, ENOSYS, EOPNOTSUPP: no exchange here
-            raise OSError(error, os.strerror(error), str(second))
-    aside = first.with_name(first.name + '.old.tmp')
-    os.rename(second, aside)
-    os.rename(first, second)
-    os.rename(aside, first)
 
 
 def _fsync_folder(folder: Path) -> None:

@@ -71,11 +71,11 @@ EDITS = {
     'background negative': lambda d: d.__setitem__(
         'extension', {'effect': 'background_vibration', 'params': {'background_rms': -0.2}}),
     'thermal slope negative': lambda d: d.__setitem__(
-        'extension', {'effect': 'thermal_viscosity', 'params': {'viscosity_temperature_coefficient': -0.03,
-                                                               'reference_temperature': 25.0}}),
+        'extension', {'effect': 'thermal_viscosity',
+                      'params': {'viscosity_temperature_coefficient': -0.03, 'reference_temperature': 25.0}}),
     'thermal reference below absolute zero': lambda d: d.__setitem__(
-        'extension', {'effect': 'thermal_viscosity', 'params': {'viscosity_temperature_coefficient': 0.03,
-                                                               'reference_temperature': -500.0}}),
+        'extension', {'effect': 'thermal_viscosity',
+                      'params': {'viscosity_temperature_coefficient': 0.03, 'reference_temperature': -500.0}}),
     'second effect negative': lambda d: d.__setitem__('extension', {
         'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': 0.05},
         'effects': [{'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': 0.05}},
@@ -130,8 +130,8 @@ def test_a_written_calibration_cut_short_anywhere_is_refused(tmp_path):
     from prsm_lube_ros.estimation.calibration_file import SEAL_HEAD
     data = seed_calibration(tmp_path / 'seed.yaml').read_bytes()
     assert data.startswith(SEAL_HEAD.encode()) and load_calibration(tmp_path / 'seed.yaml')
-    cuts = sorted({i + 1 for i, byte in enumerate(data) if byte == ord('\n')} | set(range(len(SEAL_HEAD), len(data),
-                                                                                             97)))
+    lines = {i + 1 for i, byte in enumerate(data) if byte == ord('\n')}
+    cuts = sorted(lines | set(range(len(SEAL_HEAD), len(data), 97)))
     loaded = []
     for cut in cuts[:-1]:
         path = tmp_path / 'cut.yaml'
