@@ -103,8 +103,7 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
     if path.is_symlink():
         path = path.resolve()
     if path.exists() and not path.is_file() and not path.is_dir():
-        with open(path, 'wb' if binary else 'w') as stream:
-            write(stream)
+        _write_stream(path, write, binary)
         return
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(path.parent, path.name)
@@ -145,6 +144,14 @@ def file_lock(path: Path, timeout: float = LOCK_TIMEOUT) -> Iterator[None]:
         yield
     finally:
         os.close(handle)
+
+
+def _write_stream(path: Path, write: Callable[[Any], object], binary: bool) -> None:
+    """Write into a stream (a terminal, a FIFO): a FIFO nobody reads is an OSError (ENXIO), not a wait forever."""
+    handle = os.open(path, os.O_WRONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
+    os.set_blocking(handle, True)
+    with os.fdopen(handle, 'wb' if binary else 'w') as stream:
+        write(stream)
 
 
 def write_text_atomically(path: Path, text: str) -> None:

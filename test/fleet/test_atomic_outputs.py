@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -48,8 +49,15 @@ def test_a_text_write_that_fails_leaves_the_old_file_and_a_stream_target_is_writ
     assert path.read_text() == 'old' and sorted(p.name for p in tmp_path.iterdir()) == ['trend.md']
     fifo = tmp_path / 'pipe'
     os.mkfifo(fifo)
+    with pytest.raises(OSError):                    # nobody reads: refused at once, not a wait forever
+        write_text_atomically(fifo, 'to nobody\n')
     reader = subprocess.Popen(['cat', str(fifo)], stdout=subprocess.PIPE)
-    write_text_atomically(fifo, 'through a pipe\n')
+    for _ in range(500):                            # until cat has opened its end
+        try:
+            write_text_atomically(fifo, 'through a pipe\n')
+            break
+        except OSError:
+            time.sleep(0.01)
     assert reader.communicate(timeout=10)[0] == b'through a pipe\n'
 
 

@@ -715,6 +715,23 @@ def test_a_bag_file_linked_from_outside_the_recordings_folder_is_not_read(graph,
     assert response.windows_used == 0
 
 
+@pytest.mark.parametrize('special', ['/dev/zero', 'fifo'])
+def test_a_special_file_as_calibration_file_is_one_line_and_persist_never_blocks(graph, tmp_path, special):
+    """Issue 36: calibration_file:=/dev/zero died at 2.4 GB; a FIFO nobody reads must not wedge persist."""
+    if special == 'fifo':
+        special = str(tmp_path / 'calibration.fifo')
+        os.mkfifo(special)
+    node = graph.estimator(tmp_path, calibration_file=special)
+    note = node.channels[0].calibration_note
+    assert node.channels[0].assessor is None and special in note and 'not a regular file' in note, note
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95, persist=True)
+    if special == '/dev/zero':      # a stream takes what is written to it
+        assert response.success, response.message
+    else:
+        assert not response.success and special in response.message, response.message
+
+
 def test_a_calibration_past_its_deadline_stops_and_the_service_answers_on(graph, tmp_path, monkeypatch):
     from prsm_lube_ros.nodes import lubrication_estimator as module
     real, slow = module.calibrate_from_request, threading.Event()
