@@ -205,3 +205,11 @@ def test_path_text_keeps_any_name_as_valid_text():
     name = os.fsdecode(b'/bags/run\xff.mcap')
     assert path_text(name) == '/bags/run\\xff.mcap'
     assert path_text(Path('/bags/plain.mcap')) == '/bags/plain.mcap'
+
+
+def test_a_fifo_as_a_service_log_is_one_line(tmp_path):
+    from prsm_lube_ros.fleet.service_log import read_relubrications
+    fifo = tmp_path / 'relubrications.csv'
+    os.mkfifo(fifo)
+    with pytest.raises(ConfigError, match='FIFO'):
+        within(10, lambda: read_relubrications(fifo))
