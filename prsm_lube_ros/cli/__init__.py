@@ -50,6 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status (128 + the signal's number after SIGINT or SIGTERM: 130, 143)."""
     command = ''
+    _names_in_any_encoding()
     with StopSignals() as stop:
         try:
             args = build_parser().parse_args(argv)
@@ -63,6 +64,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             # A signal's exception turned into another on its way (an extension module that was initialising
             # reports ImportError): it is still the interruption.
         return stop.status(command, status if stop.signum is None else 0)
+
+
+def _names_in_any_encoding() -> None:
+    """stdout and stderr print any file name the file system allows (its bytes back, not UnicodeEncodeError)."""
+    for stream in (sys.stdout, sys.stderr):
+        if getattr(stream, 'errors', None) == 'strict' and hasattr(stream, 'reconfigure'):
+            stream.reconfigure(errors='surrogateescape' if stream.encoding.lower().replace('-', '') == 'utf8'
+                               else 'backslashreplace')
 
 
 def _run(args: argparse.Namespace) -> int:
