@@ -69,14 +69,19 @@ from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBat
 from .cdr import check_layout, decode_messages, Decoded, KINDS, ragged_take
 from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
-__all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'Recording', 'SQLITE_MAGIC', 'TopicInfo', 'bare_read',
-           'find_actuators', 'iter_batches', 'list_topics', 'open_recording', 'raw_messages', 'topic_messages']
+__all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'MAX_STORAGE_FILES', 'Recording', 'SQLITE_MAGIC', 'TopicInfo',
+           'bare_read', 'find_actuators', 'iter_batches', 'list_topics', 'open_recording', 'raw_messages',
+           'topic_messages']
 
 #: default length of one time slice, s of log time (the offline pipeline streams longer ones:
 #: :data:`prsm_lube_ros.estimation.pipeline.ASSESSMENT_SLICE_SECONDS`)
 DEFAULT_SLICE_SECONDS = 10.0
 #: log time a file read in file order may go back before that is reported (memory held), s
 HELD_BACK_SECONDS = 60.0
+#: most storage files a bag's metadata.yaml may list (a split bag of a day in 1-minute parts has 1440)
+MAX_STORAGE_FILES = 10_000
+#: libyaml's safe loader where installed (a few MB of metadata.yaml in a second, not ten)
+_YAML_LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 #: the first 16 bytes of every sqlite3 database file
 SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
@@ -484,15 +489,19 @@ def _bag_folder(path: Path, root: Path) -> _Source:
     text = read_text(metadata_path, 'rosbag2 metadata', max_bytes=MAX_METADATA_BYTES, root=root,
                      error=RecordingError)
     try:
-        info = yaml.safe_load(text)['rosbag2_bagfile_information']
+        info = yaml.load(text, Loader=_YAML_LOADER)['rosbag2_bagfile_information']
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
         compression_format = (info.get('compression_format') or '').lower()
     except Exception as err:   # what the file holds is not repeated: it may be anything a link led to
         raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({type(err).__name__})') from None
+    if len(files) > MAX_STORAGE_FILES or len(set(files)) != len(files):
+        raise RecordingError(f'{metadata_path}: lists {len(files)} storage files ({len(set(files))} different; at most '
+                             f'{MAX_STORAGE_FILES}, each once)')
     if missing := [str(f) for f in files if not f.exists()]:
-        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
+        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing[:5])}'
+                             + (f' and {len(missing) - 5} more' if len(missing) > 5 else ''))
     files = [_storage_file(f, root) for f in files]
     if compression in ('', 'none'):
         if storage == 'mcap':

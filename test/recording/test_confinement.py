@@ -213,3 +213,13 @@ def test_a_fifo_as_a_service_log_is_one_line(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(ConfigError, match='FIFO'):
         within(10, lambda: read_relubrications(fifo))
+
+
+def test_metadata_listing_a_storage_file_many_times_is_refused_before_any_is_opened(bag, tmp_path):
+    import yaml
+    folder, storage = copy_bag(bag, tmp_path / 'bag')
+    metadata = yaml.safe_load((folder / 'metadata.yaml').read_text())
+    metadata['rosbag2_bagfile_information']['relative_file_paths'] = [storage.name] * 20_000
+    (folder / 'metadata.yaml').write_text(yaml.safe_dump(metadata))
+    with pytest.raises(RecordingError, match='lists 20000 storage files'):
+        within(10, lambda: open_recording(folder))
