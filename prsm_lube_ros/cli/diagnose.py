@@ -74,8 +74,11 @@ def run(args: argparse.Namespace) -> int:
         save_calibration(with_band_and_domain(result.calibration(), recordings[0].band, used), args.calibration_out)
         print(f'wrote {args.calibration_out}')
     if args.report:
+        from ..atomic_file import staged_folder
         from ..diagnosis import write_report
-        page = write_report(result, args.report, recordings)
+        from pathlib import Path
+        with staged_folder(Path(args.report)) as staged:     # each file of the report moved into place whole
+            page = Path(args.report) / write_report(result, staged, recordings).relative_to(staged)
         print(f'wrote {page}')
     print(f'wrote {args.json}')
     return 0
