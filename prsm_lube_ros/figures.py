@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .atomic_file import save_figure
+
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping, Sequence
     import datetime
@@ -36,7 +38,7 @@ def _save(fig: Figure, ax: Axes, path: Path, title: str, plt: ModuleType) -> Pat
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -64,7 +66,7 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
     ax.grid(axis='y', alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -123,7 +125,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     fig.autofmt_xdate()
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 

@@ -169,6 +169,7 @@ def _forecast(args: argparse.Namespace, options: TrendOptions, records: FleetRec
               report: Path) -> None:
     """Forecast, plan, print the table and write trend.json, trend.md and the plots."""
     from ..fleet.forecast import forecast_points
+    from ..atomic_file import write_text_atomically
     from ..fleet.planner import plan
     from .common import write_json
     from ..errors import InputError
@@ -187,8 +188,8 @@ def _forecast(args: argparse.Namespace, options: TrendOptions, records: FleetRec
     for forecast in forecasts:
         _plot(report, forecast, options)
     write_json(report / 'trend.json', _document(args, options, forecasts, plans, records.notes))
-    (report / 'trend.md').write_text(f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent first\n\n'
-                                     f'{text}\n')
+    write_text_atomically(report / 'trend.md', f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent '
+                          f'first\n\n{text}\n')
     print(f'wrote {report}: trend.json, trend.md and {len(forecasts)} plots')
 
 
@@ -319,6 +320,7 @@ def _backtest(args: argparse.Namespace, options: TrendOptions, records: FleetRec
               relubrications: _Relubrications, report: Path) -> None:
     """Forecast from the history cut ``--backtest`` days earlier; print and write its scores."""
     from ..errors import InputError
+    from ..atomic_file import write_text_atomically
     from ..fleet.backtest import backtest
     from .common import write_json
     if not args.backtest > 0:
@@ -341,7 +343,7 @@ def _backtest(args: argparse.Namespace, options: TrendOptions, records: FleetRec
     text = '\n'.join(lines)
     print(text)
     write_json(report / 'backtest.json', document)
-    (report / 'backtest.md').write_text(text + '\n')
+    write_text_atomically(report / 'backtest.md', text + '\n')
 
 
 def _share(value: float | None) -> str:

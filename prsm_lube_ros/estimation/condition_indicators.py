@@ -17,8 +17,8 @@ Per window, from its samples (already in the window builder for the band RMS):
   kurtosis is Pearson's ``E[x^4] / E[x^2]^2`` (3 for Gaussian vibration, 1.5
   for a pure tone), crest factor ``max |x| / RMS``;
 * the **demodulation band**, chosen from the data by spectral kurtosis (Antoni
-  2006-2007; the fast kurtogram's dyadic tree): the analysis band and its
-  halves, quarters, ... down to bands still wide enough to carry the envelope
+  2006-2007; the fast kurtogram's 1/3-binary tree): the analysis band and its
+  halves, thirds, quarters, sixths, ... down to bands still wide enough to carry the envelope
   up to :data:`ENVELOPE_HARMONICS` times the highest defect order; each band's
   complex envelope is taken from the window's FFT (bins of the band shifted
   to 0 Hz, inverse FFT: the decimated analytic signal, a Hilbert envelope), its
@@ -64,7 +64,8 @@ if TYPE_CHECKING:
 
 __all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
            'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
-           'REPORT_DB', 'condition_indicators', 'condition_indicators_batch', 'envelope_floor', 'envelope_peaks',
+           'REPORT_DB', 'RUN_REPORT_DB', 'SK_SIGMAS', 'TREE_PARTS', 'condition_indicators',
+           'condition_indicators_batch', 'envelope_floor', 'envelope_peaks',
            'kurtosis', 'order_spectrum_db']
 
 #: Highest screw order the envelope spectrum is kept to (3 harmonics of the default screw raceway order 6.25,
@@ -76,14 +77,23 @@ ORDER_STEP = 0.025
 ORDER_GRID = np.arange(0.0, MAX_ORDER + ORDER_STEP / 2, ORDER_STEP)
 #: Harmonics of the highest defect order a demodulation band must be wide enough to carry.
 ENVELOPE_HARMONICS = 2.5
-#: Deepest level of the dyadic band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
+#: Deepest level of the band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
 MAX_TREE_LEVEL = 5
+#: Bands the analysis band is split into, level by level: the 1/3-binary tree of the fast kurtogram (the thirds
+#: put a band's centre where the halves put an edge).
+TREE_PARTS = tuple(sorted({2 ** k for k in range(MAX_TREE_LEVEL + 1)}
+                          | {3 * 2 ** (k - 1) for k in range(1, MAX_TREE_LEVEL)}))
 #: Lowest order of the floor's median (below it the envelope holds the run's slow amplitude changes).
 FLOOR_LOWEST_ORDER = 1.0
-#: dB over the floor a local maximum needs to be reported as an envelope peak.
-REPORT_DB = 6.0
+#: dB over the floor a local maximum of one window's envelope spectrum needs to be reported (its bins scatter
+#: as exponentials: 10 dB over the median is 6.9 times the mean, reached by chance in 0.1 % of the bins).
+REPORT_DB = 10.0
+#: The same for a spectrum averaged over a run's windows (10 or more: 6 dB is beyond chance).
+RUN_REPORT_DB = 6.0
 #: Envelope peaks reported per window (the largest).
 MAX_PEAKS = 5
+#: Standard deviations of Gaussian SK a band's SK is discounted by before bands are compared.
+SK_SIGMAS = 3.0
 #: Samples of the windows :func:`condition_indicators_batch` transforms together (arrays that stay in cache).
 BATCH_SAMPLES = 1 << 18
 #: Fewest samples an indicator is computed on.
@@ -222,22 +232,26 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
                         min_bins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per window (row of ``spec``), the band of the dyadic tree with the largest spectral kurtosis.
 
-    The fast kurtogram's dyadic tree (Antoni 2007) on the window's own FFT:
-    level k splits the analysis band ``[lo_bin, hi_bin]`` into 2^k bands of
-    equal width (down to :data:`MAX_TREE_LEVEL`, or to ``min_bins`` bins of
+    The fast kurtogram's 1/3-binary tree (Antoni 2007) on the window's own FFT:
+    the analysis band ``[lo_bin, hi_bin]`` split into 1, 2, 3, 4, 6, 8, ...
+    bands of equal width (:data:`TREE_PARTS`, or down to ``min_bins`` bins of
     that window); each band's complex envelope is its bins shifted to 0 Hz and
     inverse-transformed (every band of every window of a level in one
     inverse FFT), and its spectral kurtosis is ``E|z|^4 / E^2|z|^2 - 2`` (0 for
     Gaussian vibration whatever the width, -1 for a steady tone, large where
-    impulses ring).  Returns SK, first and last bin of each window's band.
+    impulses ring).  A band is scored by its SK less :data:`SK_SIGMAS` times
+    the scatter the SK of Gaussian vibration has on its ``M`` complex samples,
+    ``2 / sqrt(M)``: a narrow band is chosen for impulses that ring in it, not
+    for the chance scatter of its few samples (on pure noise the widest band
+    wins, and its envelope spectrum is flat).  Returns that score, first and
+    last bin of each window's band.
     """
     count = spec.shape[0]
     best_sk = np.full(count, -np.inf)
     first = np.full(count, lo_bin)
     last = np.full(count, hi_bin)
     width = hi_bin - lo_bin + 1
-    for level in range(MAX_TREE_LEVEL + 1):
-        parts = 2 ** level
+    for parts in TREE_PARTS:
         bins = width // parts
         allowed = bins >= min_bins
         if not allowed.any():
@@ -249,6 +263,7 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         mean = power.mean(axis=2)
         with np.errstate(divide='ignore', invalid='ignore'):
             sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        sk -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
         part = np.argmax(sk, axis=1)
         value = sk[np.arange(count), part]
         better = allowed & (value > best_sk + 1e-12)
