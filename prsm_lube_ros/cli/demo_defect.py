@@ -65,7 +65,7 @@ def defect_step(out: Path, seed: int, say: Callable[[str], None]) -> StepResult:
         lines = text.rstrip().splitlines()
         evidence = [line for line in lines if line.startswith('D ')]
         for line in lines:
-            if not line.startswith(('D ', 'warning', 'calibration', '!', '~', 'wrote')):
+            if not line.startswith(('D ', 'warning', 'calibration', '!', '~', 'wrote')) and ' NaN ' not in line:
                 say(f'    | {line}')
         for line in evidence[:2]:
             say(f'    | {line}')
