@@ -79,11 +79,13 @@ def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
     from dataclasses import replace
     from ..estimation.pipeline import analysis_settings, recording_windows, require_usable
     from ..physics.actuator import load_actuator
+    from ..physics.defect_orders import defect_orders
     from ..validation import require_positive
     actuator = load_actuator(args.actuator)
     band_high = getattr(args, 'band_high', None)
     settings = analysis_settings(require_positive('--window', args.window), spectra=spectra,
-                                 band_high=None if band_high is None else require_positive('--band-high', band_high))
+                                 band_high=None if band_high is None else require_positive('--band-high', band_high),
+                                 defect_orders=defect_orders(actuator))
     recordings = []
     for path in paths:
         bar = progress_bar(100, Path(path).name)

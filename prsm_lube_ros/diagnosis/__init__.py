@@ -9,11 +9,12 @@ Public API::
     result.named_effects()                    # (effect, form, params) of each named effect (0, 1 or 2)
     result.as_json()                          # the contract's diagnose document (plus ``effects``, ``form``)
     result.calibration()                      # Calibration with the first named effect in ``extension``
-    write_report(result, 'out/report')        # PNG figures and index.md / index.html
+    write_report(result, 'out/report', recordings)   # PNG figures and index.md / index.html
 
 Owns: the window table (``table``), locating the mismatch (``locate``), fitting
 the model with candidate effects (``fitting``, ``combined``), the verdict
-(``engine``), the report (``report``) and the candidates (``effects/``, one per
+(``engine``), the reports (``report``; ``condition_report``, also
+``assess --report``'s page) and the candidates (``effects/``, one per
 law of :mod:`prsm_lube_ros.physics.effects`).  May import the base layer,
 :mod:`..physics`, :mod:`..recording` and :mod:`..estimation`; no ROS.
 """
@@ -22,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..estimation.windowing import MIN_AXIAL_LOAD
+from ..estimation.windowing import DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD
 from .effects import Effect, effect_ids, get_effect, register, registered
 from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
 from .table import band_high_of, table_from_windows, WindowTable
@@ -47,13 +48,18 @@ def diagnose_recordings(recordings: Sequence[RecordingWindows], theta: float = 1
     from ..estimation.pipeline import calibrate_recordings
     calibration = calibrate_recordings(recordings, theta, min_axial_load)
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
-                               sources=[rec.path for rec in recordings], band_high=band_high_of(recordings))
+                               sources=[rec.path for rec in recordings], band_high=band_high_of(recordings),
+                               defect_orders=recordings[0].defect_orders if recordings else DEFAULT_DEFECT_ORDERS)
     result = diagnose_table(table)
     result.calibration_flags = list(calibration.flags)
     return result
 
 
-def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
-    """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`)."""
+def write_report(diagnosis: Diagnosis, folder: str | Path,
+                 recordings: Sequence[RecordingWindows] | None = None) -> Path:
+    """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`).
+
+    Given the diagnosed ``recordings``, the page holds their condition figures too (:mod:`.condition_report`).
+    """
     from .report import write_report as _write
-    return _write(diagnosis, folder)
+    return _write(diagnosis, folder, recordings)

@@ -60,16 +60,21 @@ import numpy as np
 from ..physics.vibration_model import film_speed_load_term, lubrication_index
 from ..validation import finite_or_none
 from .calibration import Calibration
+from .condition_indicators import ConditionIndicators
+from .defect_screen import DEFAULT_RULES, DefectFinding, DefectRules, NOT_SUSPECTED, run_condition, RunCondition, screen
 from .domain import domain_flag
-from .windowing import assessable, MIN_AXIAL_LOAD, not_assessable_reason, Window
+from .windowing import assessable, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, not_assessable_reason, runs_of, Window
 
 if TYPE_CHECKING:
     from typing import TypeAlias
 
+    from ..physics.defect_orders import DefectOrder
+
     #: One run pooled over its windows: ``(rms, amplitude, factor, speed, load, temperature, ln_var, reason)``.
     _PooledRun: TypeAlias = tuple[float, float, float, float, float, float, float, str]
 
-__all__ = ['Assessor', 'RunAssessment', 'THETA_PLAUSIBLE_MAX', 'WindowAssessment', 'theta_range_flag']
+__all__ = ['Assessor', 'RunAssessment', 'THETA_PLAUSIBLE_MAX', 'WindowAssessment', 'condition_json',
+           'theta_range_flag']
 
 #: Highest theta_Oil taken as a lubrication state (1 = reference; the paper's stages span 0.72-1).
 THETA_PLAUSIBLE_MAX = 1.5
@@ -100,6 +105,7 @@ class WindowAssessment:
     theta_oil_std: float
     reason: str = ''
     domain_flag: str = ''   # :func:`.domain.domain_flag` of an assessed window outside the calibration's domain
+    defect: DefectFinding = NOT_SUSPECTED   # surface defect screen of the window (:mod:`.defect_screen`)
 
     @property
     def flag(self) -> str:
@@ -124,6 +130,8 @@ class RunAssessment:
     temperature: float = math.nan
     reason: str = ''
     domain_flag: str = ''   # :func:`.domain.domain_flag` of an assessed run outside the calibration's domain
+    condition: RunCondition | None = None   # the run's pooled condition indicators
+    defect: DefectFinding = NOT_SUSPECTED   # surface defect screen of the run (:mod:`.defect_screen`)
 
     @property
     def flag(self) -> str:
@@ -137,15 +145,35 @@ class RunAssessment:
                 'vibration_rms': self.vibration_rms, 'theta_oil': self.theta_oil,
                 'theta_oil_std': self.theta_oil_std, 'theta_oil_flag': self.flag, 'run_index': self.run_index,
                 'windows': self.windows, 'temperature': finite_or_none(self.temperature),
-                'reason': self.reason, 'domain_flag': self.domain_flag}
+                'reason': self.reason, 'domain_flag': self.domain_flag,
+                'condition_indicators': condition_json(self.condition), **self.defect.as_dict()}
+
+
+def condition_json(condition: RunCondition | ConditionIndicators | None) -> dict:
+    """The contract's ``condition_indicators`` of a run or window (nulls and no peaks where none were computed)."""
+    if condition is None:
+        return {'kurtosis': None, 'crest_factor': None, 'envelope_peaks': []}
+    return condition.as_dict()
 
 
 class Assessor:
     """Evaluates Eq. 23 with a calibration, for windows and for runs."""
 
-    def __init__(self, calibration: Calibration, min_axial_load: float = MIN_AXIAL_LOAD):
+    def __init__(self, calibration: Calibration, min_axial_load: float = MIN_AXIAL_LOAD,
+                 defect_orders: Sequence[DefectOrder] = DEFAULT_DEFECT_ORDERS,
+                 defect_rules: DefectRules = DEFAULT_RULES):
         self.calibration = calibration
         self.min_axial_load = float(min_axial_load)
+        self.defect_orders = tuple(defect_orders)
+        self.defect_rules = defect_rules
+
+    def screen(self, conditions: Sequence[ConditionIndicators | None]) -> tuple[RunCondition | None, DefectFinding]:
+        """Pooled indicators of windows (a run, or a window alone) and the surface defect screen on them."""
+        present = [c for c in conditions if c is not None]
+        if not present:
+            return None, NOT_SUSPECTED
+        pooled = run_condition(present, self.defect_orders)
+        return pooled, screen(pooled, self.defect_orders, self.calibration.condition_baseline, self.defect_rules)
 
     def theta(self, rms: float, speed: float, load: float, ln_rms_var: float) -> tuple[float, float]:
         """theta_Oil (Eq. 23) and its one-sigma uncertainty for one amplitude, speed and load.
@@ -219,16 +247,13 @@ class Assessor:
                     reasons[rows[j]] = 'Eq. 23 has no finite value for this window'
         domain = self.calibration.domain
         return [WindowAssessment(w, t, s, r, domain_flag(domain, w.screw_speed, w.axial_load, w.temperature)
-                                 if domain is not None and t == t else '')
+                                 if domain is not None and t == t else '',
+                                 self.screen([w.condition])[1] if w.condition is not None else NOT_SUSPECTED)
                 for w, t, s, r in zip(windows, theta.tolist(), std.tolist(), reasons)]
 
     def assess_runs(self, assessed: Sequence[WindowAssessment], bag: str = '') -> list[RunAssessment]:
         """One :class:`RunAssessment` per run that has steady windows, in run order."""
-        by_run: dict[int, list[Window]] = {}
-        for item in assessed:
-            if item.window.steady:
-                by_run.setdefault(item.window.run_index, []).append(item.window)
-        return self._assess_runs([windows for _, windows in sorted(by_run.items())], bag)
+        return self._assess_runs(list(runs_of(item.window for item in assessed).values()), bag)
 
     def assess_run(self, windows: Sequence[Window], bag: str = '') -> RunAssessment:
         """theta_Oil of a run from its steady windows' pooled RMS, mean speed and load."""
@@ -249,12 +274,14 @@ class Assessor:
             theta_i, std_i = (math.nan, math.nan) if reason else (float(theta[i]), float(std[i]))
             if not reason and not math.isfinite(theta_i):
                 reason = 'Eq. 23 has no finite value for this run'
+            condition, defect = self.screen([w.condition for w in windows])
             results.append(RunAssessment(bag=bag, run_index=windows[0].run_index, start=windows[0].start,
                                          end=windows[-1].end, screw_speed=speed[i], axial_load=load[i],
                                          vibration_rms=rms[i], theta_oil=theta_i, theta_oil_std=std_i,
                                          windows=len(windows), temperature=temperature[i], reason=reason,
                                          domain_flag='' if reason else domain_flag(
-                                             self.calibration.domain, speed[i], load[i], temperature[i])))
+                                             self.calibration.domain, speed[i], load[i], temperature[i]),
+                                         condition=condition, defect=defect))
         return results
 
     def _pooled(self, runs: Sequence[Sequence[Window]]) -> list[_PooledRun]:

@@ -42,6 +42,7 @@ import numpy.typing as npt
 from ..errors import InputError
 from ..physics.vibration_model import acceleration_amplitude, design_matrix, ModelConstants, reduced_log_amplitude
 from .conditioning import AnalysisBand
+from .defect_screen import ConditionBaseline
 from .domain import CalibrationDomain
 from .run_scatter import estimate_run_scatter, ols_covariance, RunScatter
 from .windowing import MIN_AXIAL_LOAD, usable_windows
@@ -89,6 +90,8 @@ class Calibration:
     scatter: RunScatter | None = None   # run-to-run and window scatter (None: a file from before they were kept)
     band: AnalysisBand | None = None      # band of the window RMS fitted (conditioning); None: raw RMS (old files)
     domain: CalibrationDomain | None = None  # speed, load, temperature and sample-rate ranges fitted in
+    #: Healthy distribution of the condition indicators over the calibration runs (None: an older file)
+    condition_baseline: ConditionBaseline | None = None
 
     @property
     def run_scatter(self) -> RunScatter:

@@ -29,11 +29,12 @@ from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
 from .calibration_checks import check_calibration, check_document
 from .conditioning import AnalysisBand, RAW_BAND_TEXT
+from .defect_screen import ConditionBaseline
 from .domain import CalibrationDomain
 from .run_scatter import RunScatter
 
-__all__ = ['FORMAT', 'SEAL_HEAD', 'SEAL_TAIL', 'VERSION', 'band_note', 'calibration_from_dict', 'calibration_to_dict',
-           'load_calibration', 'save_calibration']
+__all__ = ['FORMAT', 'SEAL_HEAD', 'SEAL_TAIL', 'VERSION', 'band_note', 'baseline_note', 'calibration_from_dict',
+           'calibration_to_dict', 'load_calibration', 'save_calibration']
 
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
@@ -68,6 +69,9 @@ def calibration_to_dict(calibration: Calibration) -> dict:
         # Band of the window RMS the constants fit (absent: raw RMS, as files before bands; see band_note).
         **({'band': calibration.band.as_dict()} if calibration.band is not None else {}),
         'domain': calibration.domain.as_dict() if calibration.domain is not None else None,
+        # Healthy condition indicators of the calibration runs (absent: a file from before; see baseline_note).
+        **({'condition_baseline': calibration.condition_baseline.as_dict()}
+           if calibration.condition_baseline is not None else {}),
     }
 
 
@@ -98,7 +102,9 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
             band=AnalysisBand.from_dict(data['band']) if data.get('band') else None,
             domain=(CalibrationDomain.from_dict(data['domain']) if data.get('domain')
                     else CalibrationDomain.of_levels(fit.get('speed_levels_rad_s', ()),
-                                                     fit.get('load_levels_n', ()))))
+                                                     fit.get('load_levels_n', ()))),
+            condition_baseline=(ConditionBaseline.from_dict(data['condition_baseline'], origin)
+                                if data.get('condition_baseline') is not None else None))
     except InputError as exc:
         raise exc if origin in str(exc) else ConfigError(f'{origin}: {exc}') from None
     except (KeyError, IndexError, TypeError, ValueError, AttributeError, OverflowError) as exc:
@@ -127,6 +133,14 @@ def _scatter_from_dict(fit: dict) -> RunScatter | None:
         if not (math.isfinite(value) and 0 <= value < 1):
             raise ValueError(f'fit: {name} must be a number in [0, 1), got {value!r}')
     return scatter
+
+
+def baseline_note(calibration: Calibration) -> str:
+    """'' for a calibration with a healthy condition baseline; else what a defect screen without one can judge."""
+    if calibration.condition_baseline is not None:
+        return ''
+    return ('the calibration holds no healthy condition baseline (written before it was kept): surface defects '
+            'are screened against the absolute limits only; calibrate again to keep one')
 
 
 def band_note(calibration: Calibration) -> str:

@@ -18,14 +18,19 @@ import numpy as np
 from ..errors import InputError, NotIdentifiable, ProblemSink
 from ..recording import reader as recording_reader
 from ..validation import finite_or_none
-from .assessment import Assessor, RunAssessment, WindowAssessment
+from .assessment import Assessor, condition_json, RunAssessment, WindowAssessment
 from .calibration import Calibration, fit_windows
+from .calibration_file import baseline_note
 from .conditioning import AnalysisBand, band_text
 from .domain import CalibrationDomain
-from .windowing import MIN_AXIAL_LOAD, usable_windows, Window, WindowBuilder, WindowSettings
+from ..physics.defect_orders import DefectOrder
+from .defect_screen import ConditionBaseline, run_condition
+from .windowing import (DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_windows, Window, WindowBuilder,
+                        WindowSettings)
 
 __all__ = ['ASSESSMENT_SLICE_SECONDS', 'RecordingAssessment', 'RecordingWindows', 'analysis_settings',
-           'assess_recording', 'assessment_json', 'calibrate_recordings', 'recording_windows', 'require_usable',
+           'assess_recording', 'assessment_json', 'calibrate_recordings', 'condition_baseline', 'recording_windows',
+           'require_usable',
            'with_band_and_domain']
 
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
@@ -46,6 +51,8 @@ class RecordingWindows:
     max_speed: float = 0.0
     #: band of the window RMS (upper edge chosen at the first block); None: raw RMS
     band: AnalysisBand | None = None
+    #: defect orders that labelled the windows' envelope lines (the settings')
+    defect_orders: tuple[DefectOrder, ...] = DEFAULT_DEFECT_ORDERS
 
     def why_no_window(self, settings: WindowSettings | None = None) -> str:
         """Why the recording gave no window, in a few words (for a recording with messages on its topics)."""
@@ -68,19 +75,22 @@ class RecordingWindows:
         return reason + (f'; {self.problems[-1]}' if self.problems else '')
 
 
-def analysis_settings(window_length: float = 1.0, *, spectra: bool = False,
-                      band_high: float | None = None) -> WindowSettings:
+def analysis_settings(window_length: float = 1.0, *, spectra: bool = False, band_high: float | None = None,
+                      defect_orders: Sequence[DefectOrder] | None = None) -> WindowSettings:
     """The window settings ``calibrate``, ``assess`` and ``diagnose`` use (the studies too).
 
     window_length s; ``spectra`` keeps each window's spectrum at a resolution
     that separates the lowest rotation orders (:data:`.conditioning.LOWEST_ORDER_FREQUENCY`);
-    ``band_high`` (Hz) the analysis band's upper edge (default: from the first recording).
+    ``band_high`` (Hz) the analysis band's upper edge (default: from the first recording);
+    ``defect_orders`` the actuator's (default: the contract's default actuator's).
     """
     from .conditioning import LOWEST_ORDER_FREQUENCY
     settings = WindowSettings(window_length=window_length,
                               spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if spectra else 0.0)
     if band_high is not None:
         settings = replace(settings, band=AnalysisBand(high=band_high))
+    if defect_orders is not None:
+        settings = replace(settings, defect_orders=tuple(defect_orders))
     return settings
 
 
@@ -129,7 +139,8 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
         report(line)
     if builder.band_refusal:
         raise InputError(f'{path}: {builder.band_refusal}')
-    return RecordingWindows(str(path), windows, problems, messages_read, max_speed, builder.band)
+    return RecordingWindows(str(path), windows, problems, messages_read, max_speed, builder.band,
+                            builder.settings.defect_orders)
 
 
 def require_usable(recording: RecordingWindows, settings: WindowSettings | None = None) -> RecordingWindows:
@@ -156,8 +167,18 @@ def calibrate_recordings(recordings: Sequence[RecordingWindows], theta: float = 
     labels = [index for index, rec in enumerate(recordings) for _ in rec.windows]
     calibration = fit_windows(windows, theta, min_axial_load=min_axial_load,
                               sources=[rec.path for rec in recordings], recordings=labels)
+    calibration = replace(calibration, condition_baseline=condition_baseline(recordings, min_axial_load))
     return with_band_and_domain(calibration, bands.pop() if bands else None,
                                 usable_windows(windows, min_axial_load))
+
+
+def condition_baseline(recordings: Sequence[RecordingWindows],
+                       min_axial_load: float = MIN_AXIAL_LOAD) -> ConditionBaseline | None:
+    """The healthy condition baseline of calibration recordings: their runs' pooled indicators."""
+    runs = [run_condition([w.condition for w in windows if w.condition is not None], rec.defect_orders)
+            for rec in recordings for windows in runs_of(usable_windows(rec.windows, min_axial_load)).values()]
+    orders = recordings[0].defect_orders if recordings else DEFAULT_DEFECT_ORDERS
+    return ConditionBaseline.from_runs(runs, orders)
 
 
 def with_band_and_domain(calibration: Calibration, band: AnalysisBand | None, windows: Iterable[Window]) -> Calibration:
@@ -178,7 +199,7 @@ class RecordingAssessment:
 def assess_recording(recording: RecordingWindows, calibration: Calibration,
                      min_axial_load: float = MIN_AXIAL_LOAD) -> RecordingAssessment:
     """theta_Oil of every window and every run of one recording."""
-    assessor = Assessor(calibration, min_axial_load=min_axial_load)
+    assessor = Assessor(calibration, min_axial_load=min_axial_load, defect_orders=recording.defect_orders)
     windows = assessor.assess_windows(recording.windows)
     return RecordingAssessment(recording.path, windows, assessor.assess_runs(windows, recording.path),
                                list(recording.problems))
@@ -209,7 +230,8 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
                             'theta_oil': finite_or_none(item.theta_oil),
                             'theta_oil_std': finite_or_none(item.theta_oil_std), 'theta_oil_flag': item.flag,
                             'reason': item.reason, 'domain_flag': item.domain_flag,
-                            'sample_rate': finite_or_none(w.sample_rate)})
+                            'sample_rate': finite_or_none(w.sample_rate),
+                            'condition_indicators': condition_json(w.condition), **item.defect.as_dict()})
     for run in unassessed:
         run['theta_oil'] = None
         run['theta_oil_std'] = None
@@ -219,5 +241,7 @@ def assessment_json(assessments: Iterable[RecordingAssessment], calibration: Cal
                             'flags': list(calibration.flags), 'band': band_text(calibration.band),
                             'domain': calibration.domain.text if calibration.domain is not None else None},
             'runs_flagged': sum(bool(run['theta_oil_flag']) for run in runs),
+            'runs_defect_suspected': sum(bool(run['defect_suspected']) for run in runs),
+            'condition_baseline': baseline_note(calibration) or 'from the calibration runs',
             'runs_extrapolated': sum(bool(run['domain_flag']) for run in runs),
             'problems': problems}

@@ -37,6 +37,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from ..physics.actuator import Actuator
+from ..physics.defect_orders import defect_orders as actuator_defect_orders, DefectOrder
+from .condition_indicators import condition_indicators_batch, ConditionIndicators
 from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
 from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED,
                                       plausible_durations, plausible_magnitudes, plausible_rates,
@@ -49,9 +52,13 @@ if TYPE_CHECKING:
 
     from ..recording.batches import InputBatch
 
-__all__ = ['AT_REST', 'BLOCKS_LOST', 'GATING_STREAMS', 'MIN_AXIAL_LOAD', 'NO_LOAD', 'NO_SPEED', 'NO_VIBRATION',
+__all__ = ['AT_REST', 'BLOCKS_LOST', 'DEFAULT_DEFECT_ORDERS',
+           'GATING_STREAMS', 'MIN_AXIAL_LOAD', 'NO_LOAD', 'NO_SPEED', 'NO_VIBRATION',
            'SPANS_RUNS', 'SPEED_CHANGING', 'UNSTEADY_KINDS', 'Window', 'WindowBuilder', 'WindowSettings',
-           'assessable', 'not_assessable_reason', 'usable_windows']
+           'assessable', 'not_assessable_reason', 'runs_of', 'usable_windows']
+
+#: Defect orders of the contract's default actuator (:mod:`..physics.defect_orders`).
+DEFAULT_DEFECT_ORDERS: tuple[DefectOrder, ...] = actuator_defect_orders(Actuator())
 
 #: Streams whose progress closes windows.
 GATING_STREAMS = ('vibration', 'screw', 'load')
@@ -74,6 +81,10 @@ class WindowSettings:
     #: Hz; > 0: spectra resolve this frequency (lowest order at the lowest speed), segment from
     #: :func:`.conditioning.spectrum_segment` (overrides ``spectrum_segment``'s length).
     spectrum_lowest_frequency: float = 0.0
+    #: Compute each window's :class:`~.condition_indicators.ConditionIndicators` (needs the band's samples).
+    condition_indicators: bool = True
+    #: Defect orders that label the envelope lines (the actuator's, :func:`~..physics.defect_orders.defect_orders`).
+    defect_orders: tuple[DefectOrder, ...] = DEFAULT_DEFECT_ORDERS
 
     def __post_init__(self) -> None:
         """Reject settings that cannot cut windows."""
@@ -138,6 +149,15 @@ def usable_windows(windows: Iterable[Window], min_axial_load: float = MIN_AXIAL_
     return [w for w, ok in zip(windows, keep.tolist()) if ok]
 
 
+def runs_of(windows: Iterable[Window]) -> dict[int, list[Window]]:
+    """Steady windows grouped by run index, in run order."""
+    by_run: dict[int, list[Window]] = {}
+    for window in windows:
+        if window.steady:
+            by_run.setdefault(window.run_index, []).append(window)
+    return dict(sorted(by_run.items()))
+
+
 @dataclass(frozen=True)
 class Window:
     """One closed window of the inputs.
@@ -164,6 +184,8 @@ class Window:
     spectrum: np.ndarray | None = field(default=None, compare=False, repr=False)
     spectrum_resolution: float = math.nan  # Hz per spectrum bin
     sample_rate: float = math.nan          # Hz, vibration sample rate in the window (highest if several)
+    #: Kurtosis, crest factor and envelope spectrum of the window (None where not computed or no samples).
+    condition: ConditionIndicators | None = field(default=None, compare=False, repr=False)
 
     @property
     def steady(self) -> bool:
@@ -283,6 +305,8 @@ class WindowBuilder:
         self._open = _OpenWindows()
         #: (time s, samples) per open window key, for the band and spectra
         self._chunks: dict[int, list[tuple[float, np.ndarray]]] = {}
+        #: (stamps s, unsigned screw angle rad) per open window key, for order tracking of the envelope
+        self._angle_chunks: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -606,6 +630,13 @@ class WindowBuilder:
         tsum = np.add.reduceat(np.where(tr_ok, tr, 0.0), seg)
         tn = np.add.reduceat(tr_ok.astype(np.int64), seg)
         rev_last = revolutions[order][seg + n - 1]
+        if self.settings.condition_indicators and self.band is not None:
+            # The turned angle (monotonic in either direction) through each window, for order tracking.
+            turned = 2 * math.pi * revolutions[order]
+            stamps_sorted = stamps[order]
+            for k, first, count in zip(unique.tolist(), seg.tolist(), n.tolist()):
+                self._angle_chunks.setdefault(k, []).append((stamps_sorted[first:first + count],
+                                                             turned[first:first + count]))
         rows = self._open.rows(unique)
         table = self._open.table
         table[rows, _SPEED_N] += n
@@ -710,7 +741,11 @@ class WindowBuilder:
                         & (table[:, _LOAD_N] > 0))
         run_index = np.where(speed_n > 0, table[:, _RUN_MAX], self._run_index).astype(np.int64)
         spectra: list[tuple[np.ndarray | None, float]] = [(None, math.nan)] * keys.size
+        conditions: list[ConditionIndicators | None] = [None] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
+        indicators = s.condition_indicators and self.band is not None
+        #: windows whose indicators are computed together, by (sample count, rate): (row, samples, speed, track)
+        jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]] = {}
         row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
@@ -719,25 +754,54 @@ class WindowBuilder:
                     continue
                 chunks.sort(key=lambda chunk: chunk[0])   # blocks may arrive out of order
                 samples = np.concatenate([c for _, c in chunks]) if len(chunks) > 1 else chunks[0][1]
+                first_time = chunks[0][0]
                 if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
                     rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
+                if indicators and count[row] > 0 and maybe_steady[row]:
+                    jobs.setdefault((samples.size, rate_k), []).append(
+                        (row, samples, float(speed[row]), self._window_angles(k, first_time)))
                 if spectral:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
                     spectra[row] = _power_spectrum(samples, rate_k, segment)
+        self._conditions(jobs, conditions)
+        for k in keys.tolist():
+            self._angle_chunks.pop(k, None)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
                       count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
                       load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
-                      run_index.tolist(), maybe_steady.tolist(), table, spectra, rate.tolist())
+                      run_index.tolist(), maybe_steady.tolist(), table, spectra, rate.tolist(), conditions)
         windows = []
         for (start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k, position_k,
-             revolutions_k, run_k, steady_k, row, (spectrum, resolution), rate_k) in columns:
+             revolutions_k, run_k, steady_k, row, (spectrum, resolution), rate_k, condition) in columns:
             kind, reason = ('', '') if steady_k else _unsteady_reason(s, row, coverage_k, speed_k, spread_k)
             # Positional, in field order (start ... sample_rate): a third cheaper than keywords.
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
                                   position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
-                                  rate_k if rate_k > 0 else math.nan))
+                                  rate_k if rate_k > 0 else math.nan, condition))
         return windows
+
+    def _conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]],
+                    conditions: list[ConditionIndicators | None]) -> None:
+        """Indicators of the windows in ``jobs`` (by sample count and rate), a size at once, into ``conditions``."""
+        if not jobs or self.band is None:
+            return
+        band = (self.band.low, self.band.high)
+        for (_, rate), group in jobs.items():
+            found = condition_indicators_batch(np.vstack([job[1] for job in group]), rate, [job[2] for job in group],
+                                               band, self.settings.defect_orders, [job[3] for job in group])
+            for job, condition in zip(group, found):
+                conditions[job[0]] = condition
+
+    def _window_angles(self, key: int, first_time: float) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Stamps (s from ``first_time``, the window's first sample) and turned screw angle (rad) in window ``key``."""
+        chunks = self._angle_chunks.get(key)
+        if not chunks:
+            return None, None
+        stamps = np.concatenate([c[0] for c in chunks]) if len(chunks) > 1 else chunks[0][0]
+        angles = np.concatenate([c[1] for c in chunks]) if len(chunks) > 1 else chunks[0][1]
+        order = np.argsort(stamps, kind='stable')
+        return stamps[order] - first_time, angles[order]
 
 
 def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -46,8 +46,22 @@ Columns of both tables: ``recording_path``, ``content_hash``,
 assessable), ``reason``, ``date``; runs add ``windows``, ``temperature``
 (degC) and ``theta_oil_std_calibration`` (the calibration's share of the
 one-sigma, common to all recordings assessed with it), windows add ``steady``
-and ``nut_position`` (m).  The partition columns ``actuator`` and
+and ``nut_position`` (m).  Both carry the surface defect screen
+(:mod:`prsm_lube_ros.estimation.defect_screen`, the contract's
+``defect_suspected`` and ``condition_indicators``): ``defect_suspected``,
+``kurtosis`` and ``crest_factor`` (the run's medians over its windows, or the
+window's; null where not computed), ``defect_component``, ``defect_order``
+(envelope line in multiples of the screw speed, null without one) and
+``defect_evidence`` (in words).  The partition columns ``actuator`` and
 ``recording`` come from the folder names.
+
+Layouts.  ``3`` added the defect columns; files of layout ``2`` (written
+before the screen) still read: :func:`read_table` gives them
+``defect_suspected`` false, ``defect_component`` and ``defect_evidence`` ''
+and the three numbers null, and tells ``on_note`` once how many recordings
+were never screened.  Plain readers that mix both layouts need to unify by
+name (``union_by_name = true`` in DuckDB, ``how='diagonal_relaxed'`` in
+polars' ``concat``).
 """
 from __future__ import annotations
 
@@ -75,14 +89,16 @@ from ..validation import finite_or_none as _finite, utc_or_none as _utc
 if TYPE_CHECKING:
     from ..estimation.assessment import RunAssessment
     from ..estimation.calibration import Calibration
+    from ..estimation.condition_indicators import ConditionIndicators
+    from ..estimation.defect_screen import DefectFinding, RunCondition
     from ..estimation.pipeline import RecordingAssessment
     from .identity import Span
     from .parallel import BagOutcome
 
-__all__ = ['CALIBRATIONS', 'LAYOUT_VERSION', 'LOCK', 'MAX_PARQUET_BYTES', 'MAX_PARQUET_FOOTER', 'MAX_PARQUET_ROWS',
-           'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS', 'UTC_TIME', 'actuator_key',
-           'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash', 'history_calibration',
-           'history_writer', 'path_text', 'read_table', 'register_calibration']
+__all__ = ['CALIBRATIONS', 'DEFECT_COLUMNS', 'LAYOUT_VERSION', 'LOCK', 'MAX_PARQUET_BYTES', 'MAX_PARQUET_FOOTER',
+           'MAX_PARQUET_ROWS', 'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS', 'UTC_TIME',
+           'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
+           'history_calibration', 'history_writer', 'path_text', 'read_table', 'register_calibration']
 
 TABLES = ('runs', 'windows')
 RECORDINGS, CALIBRATIONS, STAGING = 'recordings', 'calibrations', '.staging'
@@ -91,12 +107,14 @@ LOCK = '.commit.lock'
 #: Bounds on one Parquet file of the history, checked on its footer before its rows are loaded: bytes, rows
 #: (a recording of a month of 1 s windows has 2.6 million), and the footer's own bytes.
 MAX_PARQUET_BYTES, MAX_PARQUET_ROWS, MAX_PARQUET_FOOTER = 1 << 30, 5_000_000, 16 << 20
-LAYOUT_VERSION = '2'
+#: '3': the defect screen's columns (:data:`DEFECT_COLUMNS`) added to both tables; '2' files still read
+LAYOUT_VERSION = '3'
 UTC_TIME = pa.timestamp('us', tz='UTC')
 #: unit of each column that has one
 UNITS = {'start': 'UTC', 'end': 'UTC', 'assessed_at': 'UTC', 'screw_speed': 'rad/s', 'axial_load': 'N',
          'vibration_rms': 'm/s^2', 'temperature': 'degC', 'nut_position': 'm', 'theta_oil': '1',
-         'theta_oil_std': '1', 'theta_oil_std_calibration': '1', 'date': 'UTC day'}
+         'theta_oil_std': '1', 'theta_oil_std_calibration': '1', 'date': 'UTC day', 'kurtosis': '1',
+         'crest_factor': '1', 'defect_order': 'x screw speed'}
 _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('calibration_id', pa.string()),
            ('assessed_at', UTC_TIME), ('namespace', pa.string()), ('run_index', pa.int64()),
            ('start', UTC_TIME), ('end', UTC_TIME), ('screw_speed', pa.float64()), ('axial_load', pa.float64()),
@@ -104,7 +122,12 @@ _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('cal
            ('reason', pa.string())]
 _RUN_ONLY = [('windows', pa.int64()), ('temperature', pa.float64()), ('theta_oil_std_calibration', pa.float64())]
 _WINDOW_ONLY = [('steady', pa.bool_()), ('nut_position', pa.float64())]
+_DEFECT = [('defect_suspected', pa.bool_()), ('kurtosis', pa.float64()), ('crest_factor', pa.float64()),
+           ('defect_component', pa.string()), ('defect_order', pa.float64()), ('defect_evidence', pa.string())]
 _DATE = [('date', pa.date32())]
+#: the surface defect screen's columns and what a file written before them (layout 2) reads as
+DEFECT_COLUMNS = {'defect_suspected': False, 'kurtosis': None, 'crest_factor': None, 'defect_component': '',
+                  'defect_order': None, 'defect_evidence': ''}
 
 
 def _schema(columns: Iterable[tuple[str, pa.DataType]]) -> pa.Schema:
@@ -112,7 +135,8 @@ def _schema(columns: Iterable[tuple[str, pa.DataType]]) -> pa.Schema:
                       for name, kind in columns])
 
 
-SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DATE), 'windows': _schema(_COMMON + _WINDOW_ONLY + _DATE)}
+SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DEFECT + _DATE),
+           'windows': _schema(_COMMON + _WINDOW_ONLY + _DEFECT + _DATE)}
 PARTITIONING = ds.partitioning(pa.schema([('actuator', pa.string()), ('recording', pa.string())]), flavor='hive')
 _HASH_BLOCK = 1 << 20
 _KEY = re.compile(r'^[0-9a-f]{16}$')
@@ -201,19 +225,30 @@ def assessment_tables(assessment: RecordingAssessment, *, content: str, calibrat
                  theta_oil=None if run.reason else _finite(run.theta_oil),
                  theta_oil_std=None if run.reason else _finite(run.theta_oil_std), reason=run.reason,
                  windows=run.windows, temperature=_finite(run.temperature),
-                 theta_oil_std_calibration=None if run.reason else _finite(std))
+                 theta_oil_std_calibration=None if run.reason else _finite(std),
+                 **_defect_columns(run.defect, run.condition))
             for run, std in zip(assessment.runs, shared)]
     windows = [dict(common, run_index=item.window.run_index, start=_utc(item.window.start),
                     end=_utc(item.window.end), screw_speed=_finite(item.window.screw_speed),
                     axial_load=_finite(item.window.axial_load), vibration_rms=_finite(item.window.vibration_rms),
                     theta_oil=_finite(item.theta_oil), theta_oil_std=_finite(item.theta_oil_std),
                     reason=item.reason, steady=bool(item.window.steady),
-                    nut_position=_finite(item.window.nut_position)) for item in assessment.windows]
+                    nut_position=_finite(item.window.nut_position),
+                    **_defect_columns(item.defect, item.window.condition)) for item in assessment.windows]
     day = _first_start([*runs, *windows], assessed_at).date()
     for row in (*runs, *windows):
         row['date'] = day
     return {name: pa.Table.from_pylist(rows, schema=_described(name, actuator_id))
             for name, rows in (('runs', runs), ('windows', windows))}
+
+
+def _defect_columns(defect: DefectFinding, condition: RunCondition | ConditionIndicators | None) -> dict:
+    """The defect screen's columns of a run or window (numbers null where the indicators were not computed)."""
+    return {'defect_suspected': bool(defect.suspected),
+            'kurtosis': None if condition is None else _finite(condition.kurtosis),
+            'crest_factor': None if condition is None else _finite(condition.crest_factor),
+            'defect_component': defect.component, 'defect_order': _finite(defect.order),
+            'defect_evidence': defect.evidence}
 
 
 def _described(table: str, actuator_id: str) -> pa.Schema:
@@ -350,14 +385,18 @@ def _fsync_folder(folder: Path) -> None:
 
 
 def read_table(history: str | Path, table: str = 'runs', actuator: str | None = None,
-               on_problem: Callable[[str], None] | None = None) -> pa.Table:
+               on_problem: Callable[[str], None] | None = None,
+               on_note: Callable[[str], None] | None = None) -> pa.Table:
     """One table of the history with ``actuator`` and ``recording`` (from the folders).
 
     ``actuator`` keeps one actuator (its id or partition key).  A file that
     cannot be read, or one that is not part of the layout, is a line passed
     to ``on_problem`` and skipped (without ``on_problem``: a
-    :class:`ConfigError`).  An empty table (with the schema) when the history
-    has no recording; :class:`ConfigError` when ``history`` is not a history.
+    :class:`ConfigError`).  Files of layout 2 (before the defect screen) get
+    the :data:`DEFECT_COLUMNS` values, and ``on_note`` one line saying how
+    many recordings that is.  An empty table (with the schema) when the
+    history has no recording; :class:`ConfigError` when ``history`` is not a
+    history.
     """
     if table not in TABLES:
         raise InputError(f'history table must be one of {", ".join(TABLES)}, got {table!r}')
@@ -372,9 +411,30 @@ def read_table(history: str | Path, table: str = 'runs', actuator: str | None = 
     if not files:
         return schema.empty_table()
     try:
-        return _dataset(files, schema, root).to_table()
+        found = _dataset(files, schema, root).to_table()
     except (pa.ArrowException, OSError):
-        return _read_each(files, schema, root, report)
+        found = _read_each(files, schema, root, report)
+    return _screen_columns_filled(found, Path(history), on_note)
+
+
+def _screen_columns_filled(found: pa.Table, history: Path, on_note: Callable[[str], None] | None) -> pa.Table:
+    """Rows of files written before the defect screen (``defect_suspected`` null) with :data:`DEFECT_COLUMNS`."""
+    import pyarrow.compute as pc
+    unscreened = pc.is_null(found.column('defect_suspected'))
+    if not pc.any(unscreened).as_py():
+        return found
+    if on_note is not None:
+        old = found.filter(unscreened)
+        recordings = len(set(zip(old.column('actuator').to_pylist(), old.column('recording').to_pylist())))
+        actuators = len(set(old.column('actuator').to_pylist()))
+        on_note(f'{history}: {recordings} recording(s) of {actuators} actuator(s) were assessed before the surface '
+                f'defect screen (history layout 2): read as no defect suspected, kurtosis and crest factor unknown; '
+                f'assess them again to screen them')
+    for name, value in DEFECT_COLUMNS.items():
+        if value is not None:
+            index = found.schema.get_field_index(name)
+            found = found.set_column(index, found.schema.field(name), pc.fill_null(found.column(name), value))
+    return found
 
 
 def _bounded(file: str, history: Path, report: Callable[[str], None]) -> bool:

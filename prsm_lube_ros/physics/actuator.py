@@ -46,6 +46,14 @@ class Actuator:
     composite_roughness: float = 4.0e-7
     shaft_root_diameter: float = 0.0215
     shaft_fixed_end_offset: float = 0.03
+    #: Support bearing of the screw (for its defect orders, :mod:`.defect_orders`): rolling elements (0: not
+    #: configured), their diameter and pitch diameter in m, contact angle in rad.
+    support_bearing_elements: int = 0
+    support_bearing_element_diameter: float = 0.0
+    support_bearing_pitch_diameter: float = 0.0
+    support_bearing_contact_angle: float = 0.0
+    #: Whether the roller screw's own defect orders label envelope lines (False: a bearing test rig without one).
+    screw_defect_orders: bool = True
 
     def __post_init__(self) -> None:
         """Reject geometry that no roller screw has."""
@@ -59,6 +67,12 @@ class Actuator:
         if not 0.0 < self.flank_angle < math.pi / 2:
             raise InputError(
                 f'actuator flank_angle must lie between 0 and pi/2 rad, got {self.flank_angle!r}')
+        if self.support_bearing_elements < 0 or (self.support_bearing_elements > 0 and not (
+                0.0 < self.support_bearing_element_diameter < self.support_bearing_pitch_diameter
+                and 0.0 <= self.support_bearing_contact_angle < math.pi / 2)):
+            raise InputError('actuator support bearing needs support_bearing_elements >= 0 and, when > 0, '
+                             '0 < support_bearing_element_diameter < support_bearing_pitch_diameter and '
+                             'support_bearing_contact_angle in [0, pi/2) rad')
         if not 0.0 <= self.poisson_ratio < 0.5:
             raise InputError(
                 f'actuator poisson_ratio must lie in [0, 0.5), got {self.poisson_ratio!r}')

@@ -13,31 +13,10 @@ import sys
 import pyarrow.parquet as pq
 import pytest
 
-from prsm_lube_ros.estimation.assessment import RunAssessment, WindowAssessment
-from prsm_lube_ros.estimation.pipeline import RecordingAssessment
-from prsm_lube_ros.estimation.windowing import Window
+from prsm_lube_ros.estimation.assessment import RunAssessment
 from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, RECORDINGS, STAGING
 
-START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.UTC).timestamp()
-
-
-def assessment(path, theta, runs=2):
-    """A recording's assessment with ``runs`` runs of three windows each at ``theta``."""
-    windows, run_list = [], []
-    for run in range(1, runs + 1):
-        for k in range(3):
-            t = START + 10 * run + k
-            window = Window(t, t + 1, 1.5, 4000, 1.0, 20.9, 0.01, 200.0, 30.0, 0.05, 1.0, run)
-            windows.append(WindowAssessment(window, theta, 0.01))
-        run_list.append(RunAssessment(str(path), run, START + 10 * run, START + 10 * run + 3, 20.9, 200.0, 1.5,
-                                      theta, 0.005, 3, 30.0))
-    return RecordingAssessment(str(path), windows, run_list)
-
-
-def recording(tmp_path, name, content=b'bag bytes'):
-    path = tmp_path / name
-    path.write_bytes(content)
-    return path
+from fleet_histories import assessment, recording, START
 
 
 def add(history, path, theta, actuator='/ema_left/prsm', **options):
@@ -110,7 +89,7 @@ def test_an_exception_between_staging_and_commit_leaves_the_old_rows(tmp_path):
 
 KILLED = '''
 import os, signal, sys
-sys.path.insert(0, {here!r})
+sys.path[:0] = [{here!r}, {support!r}]
 from test_history import add
 from pathlib import Path
 def die(staged):
@@ -121,7 +100,8 @@ add(Path({history!r}), Path({bag!r}), 0.1, before_commit=die, actuator={actuator
 
 def killed_writer(history, bag, actuator='/ema_left/prsm'):
     """A writer killed (SIGKILL) with both tables staged, before its commit."""
-    script = KILLED.format(here=str(Path(__file__).parent), history=str(history), bag=str(bag), actuator=actuator)
+    script = KILLED.format(here=str(Path(__file__).parent), support=str(Path(__file__).parents[1] / 'support'),
+                           history=str(history), bag=str(bag), actuator=actuator)
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
     assert done.returncode == -9, done.stderr.decode()
 

@@ -1,0 +1,399 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Condition indicators of one window: impulsiveness and the envelope spectrum in screw orders.
+
+theta_Oil follows the band RMS, and a surface defect raises the RMS as oil
+loss does.  What tells them apart (envelope analysis, spectral kurtosis,
+ISO 13373-3) is the *form* of the vibration: a spall is struck once per
+passing contact, so the signal carries short impulses (kurtosis far above the
+3 of Gaussian vibration, a high crest factor) repeating at a defect order
+(:mod:`prsm_lube_ros.physics.defect_orders`); oil loss raises the smooth,
+Gaussian-like contact vibration and leaves its form alone.
+
+Per window, from its samples (already in the window builder for the band RMS):
+
+* ``kurtosis`` and ``crest_factor`` of the signal in the analysis band
+  (:mod:`.conditioning`: DC, gravity and everything above the band out);
+  kurtosis is Pearson's ``E[x^4] / E[x^2]^2`` (3 for Gaussian vibration, 1.5
+  for a pure tone), crest factor ``max |x| / RMS``;
+* the **demodulation band**, chosen from the data by spectral kurtosis (Antoni
+  2006-2007; the fast kurtogram's 1/3-binary tree): the analysis band and its
+  halves, thirds, quarters, sixths, ... down to bands still wide enough to carry the envelope
+  up to :data:`ENVELOPE_HARMONICS` times the highest defect order; each band's
+  complex envelope is taken from the window's FFT (bins of the band shifted
+  to 0 Hz, inverse FFT: the decimated analytic signal, a Hilbert envelope), its
+  spectral kurtosis ``E|z|^4 / E^2|z|^2 - 2`` (0 for Gaussian noise, -1 for a
+  tone, large for impulses), and the band of the largest is kept;
+* the **envelope spectrum** of that band, ``|FFT(|z| - mean)|^2``, in screw
+  orders.  Where the screw angle is known through the window (``angle_times``
+  and ``angles``) the envelope is resampled to uniform screw angle before the
+  FFT (order tracking), so the orders stay sharp while the speed varies;
+  otherwise orders are Hz over the window's mean shaft frequency.  The
+  resolution is one over the revolutions in the window (0.6 orders at
+  100 r/min in 1 s windows, 0.033 at 1800 r/min);
+* **envelope peaks**: local maxima of the order spectrum at least
+  :data:`REPORT_DB` over its floor (the median of the spectrum between order
+  :data:`FLOOR_LOWEST_ORDER` and the highest order it holds), the largest
+  :data:`MAX_PEAKS`, each labelled with the component whose defect order (or a
+  harmonic) it points at (:func:`~prsm_lube_ros.physics.defect_orders.label_order`).
+
+The envelope spectrum is also kept on the fixed order grid :data:`ORDER_GRID`
+(float32), so windows of different speeds average into one run spectrum
+(:mod:`.defect_screen` does it) and a report can draw a waterfall.
+
+Costs about a band-RMS FFT plus one inverse FFT per band of the tree (each as
+long as its band), a few ms for a 1 s window at 25.6 kHz.  Pure numpy.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+import math
+from typing import Any, cast, TYPE_CHECKING
+import warnings
+
+import numpy as np
+
+from ..physics.defect_orders import label_order, ORDER_TOLERANCE
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import numpy.typing as npt
+
+    from ..physics.defect_orders import DefectOrder
+
+__all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
+           'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
+           'REPORT_DB', 'RUN_REPORT_DB', 'SK_SIGMAS', 'TREE_PARTS', 'condition_indicators',
+           'condition_indicators_batch', 'envelope_floor', 'envelope_peaks',
+           'kurtosis', 'order_spectrum_db']
+
+#: Highest screw order the envelope spectrum is kept to (3 harmonics of the default screw raceway order 6.25,
+#: 3 of a support bearing's BPFI near 7.4).
+MAX_ORDER = 24.0
+#: Step of the fixed order grid, orders.
+ORDER_STEP = 0.025
+#: The fixed order grid the envelope spectra are kept on (0 to :data:`MAX_ORDER`).
+ORDER_GRID = np.arange(0.0, MAX_ORDER + ORDER_STEP / 2, ORDER_STEP)
+#: Harmonics of the highest defect order a demodulation band must be wide enough to carry.
+ENVELOPE_HARMONICS = 2.5
+#: Deepest level of the band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
+MAX_TREE_LEVEL = 5
+#: Bands the analysis band is split into, level by level: the 1/3-binary tree of the fast kurtogram (the thirds
+#: put a band's centre where the halves put an edge).
+TREE_PARTS = tuple(sorted({2 ** k for k in range(MAX_TREE_LEVEL + 1)}
+                          | {3 * 2 ** (k - 1) for k in range(1, MAX_TREE_LEVEL)}))
+#: Lowest order of the floor's median (below it the envelope holds the run's slow amplitude changes).
+FLOOR_LOWEST_ORDER = 1.0
+#: dB over the floor a local maximum of one window's envelope spectrum needs to be reported (its bins scatter
+#: as exponentials: 10 dB over the median is 6.9 times the mean, reached by chance in 0.1 % of the bins).
+REPORT_DB = 10.0
+#: The same for a spectrum averaged over a run's windows (10 or more: 6 dB is beyond chance).
+RUN_REPORT_DB = 6.0
+#: Envelope peaks reported per window (the largest).
+MAX_PEAKS = 5
+#: Standard deviations of Gaussian SK a band's SK is discounted by before bands are compared.
+SK_SIGMAS = 3.0
+#: Samples of the windows :func:`condition_indicators_batch` transforms together (arrays that stay in cache).
+BATCH_SAMPLES = 1 << 18
+#: Fewest samples an indicator is computed on.
+MIN_SAMPLES = 64
+
+
+@dataclass(frozen=True)
+class EnvelopePeak:
+    """A line of the envelope spectrum: its order (multiples of the screw speed), dB over the floor, component."""
+
+    order: float
+    db: float
+    component: str      # '' when it points at no defect order
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (CONTRACT.md: order, db, component)."""
+        return {'order': round(self.order, 4), 'db': round(self.db, 2), 'component': self.component}
+
+
+@dataclass(frozen=True)
+class ConditionIndicators:
+    """Impulsiveness and envelope of one window (see module doc); NaN where a value cannot be had."""
+
+    kurtosis: float                        # Pearson, 3 for Gaussian vibration
+    crest_factor: float                    # max |x| / RMS in the analysis band
+    envelope_peaks: tuple[EnvelopePeak, ...]
+    spectral_kurtosis: float               # of the chosen demodulation band (0 Gaussian)
+    demodulation_band: tuple[float, float]  # Hz
+    order_resolution: float                # orders per envelope-spectrum bin
+    #: Envelope power on :data:`ORDER_GRID` (float32, (m/s^2)^2 per bin); None when the window has none.
+    envelope: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    def defect_peak(self) -> EnvelopePeak | None:
+        """The largest peak that points at a defect order, or None."""
+        labelled = [p for p in self.envelope_peaks if p.component]
+        return max(labelled, key=lambda p: p.db) if labelled else None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping with the contract's fields (kurtosis, crest_factor, envelope_peaks) and the band."""
+        return {'kurtosis': _finite_or_none(self.kurtosis, 4), 'crest_factor': _finite_or_none(self.crest_factor, 4),
+                'envelope_peaks': [p.as_dict() for p in self.envelope_peaks],
+                'spectral_kurtosis': _finite_or_none(self.spectral_kurtosis, 4),
+                'demodulation_band': [round(self.demodulation_band[0], 1), round(self.demodulation_band[1], 1)],
+                'order_resolution': _finite_or_none(self.order_resolution, 4)}
+
+
+def _finite_or_none(value: float, digits: int) -> float | None:
+    return round(float(value), digits) if math.isfinite(value) else None
+
+
+NO_INDICATORS = ConditionIndicators(math.nan, math.nan, (), math.nan, (math.nan, math.nan), math.nan)
+
+
+def kurtosis(values: npt.ArrayLike) -> float:
+    """Pearson's kurtosis ``E[x^4] / E[x^2]^2`` of a zero-mean signal (NaN when it is all zero)."""
+    x = np.asarray(values, dtype=float)
+    power = float(np.mean(x * x))
+    return float(np.mean(x ** 4) / power ** 2) if power > 0 else math.nan
+
+
+def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float, band: tuple[float, float],
+                         orders: Sequence[DefectOrder], *, angle_times: npt.ArrayLike | None = None,
+                         angles: npt.ArrayLike | None = None) -> ConditionIndicators:
+    """Indicators of one window's ``samples`` (m/s^2 at ``rate`` Hz, screw at ``screw_speed`` rad/s).
+
+    ``band`` (Hz) is the analysis band; ``orders`` the actuator's defect
+    orders.  ``angle_times`` (s from the first sample) and ``angles`` (rad)
+    give the screw angle through the window for order tracking.  The same
+    numbers as :func:`condition_indicators_batch` gives this window among others.
+    """
+    x = np.asarray(samples, dtype=float)
+    return condition_indicators_batch(x.reshape(1, -1), rate, [screw_speed], band, orders,
+                                      [(angle_times, angles)])[0]
+
+
+def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: Sequence[float],
+                               band: tuple[float, float], orders: Sequence[DefectOrder],
+                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None
+                               ) -> list[ConditionIndicators]:
+    """Indicators of windows of one length and rate at once: ``samples`` is (windows x samples), m/s^2.
+
+    ``screw_speeds`` rad/s per window; ``tracks`` per window the
+    ``(angle_times, angles)`` of order tracking (None: none).  The FFTs run
+    over the whole array (the cost is the numpy calls, not the windows).
+    """
+    x = np.asarray(samples, dtype=float)
+    count, n = x.shape
+    if n < MIN_SAMPLES or not rate > 0:
+        return [NO_INDICATORS] * count
+    tracks = tracks if tracks is not None else [(None, None)] * count
+    chunk = max(1, BATCH_SAMPLES // n)
+    if count > chunk:    # arrays that stay in cache: a few hundred thousand samples at a time
+        return [item for start in range(0, count, chunk)
+                for item in condition_indicators_batch(x[start:start + chunk], rate,
+                                                       screw_speeds[start:start + chunk], band, orders,
+                                                       tracks[start:start + chunk])]
+    spec = np.fft.rfft(x, axis=1)
+    spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
+    df = rate / n
+    lo_bin = max(1, int(math.ceil(band[0] / df)))
+    hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
+    if hi_bin - lo_bin < 8:
+        return [NO_INDICATORS] * count
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
+    signal = np.fft.irfft(in_band, n, axis=1)
+    squares = signal * signal
+    power = squares.mean(axis=1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    shaft_hz = np.abs(np.asarray(screw_speeds, dtype=float)) / (2.0 * math.pi)
+    moving = np.isfinite(shaft_hz) & (shaft_hz > 0)
+    highest = max((o.order for o in orders), default=MAX_ORDER / 3)
+    min_bins = np.maximum(np.ceil(ENVELOPE_HARMONICS * highest * np.where(moving, shaft_hz, 0.0) / df), 8)
+    sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
+    out = []
+    for k in range(count):
+        if not moving[k] or not math.isfinite(sk[k]):
+            out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
+                                           math.nan))
+            continue
+        envelope = np.abs(_complex_envelope(spec[k], int(first[k]), int(last[k]), n))
+        grid, resolution = _order_spectrum(envelope, n / rate, float(shaft_hz[k]), *tracks[k])
+        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
+                                       (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
+    spectral = [k for k, item in enumerate(out) if item.envelope is not None]
+    if spectral:
+        grids = np.vstack([cast(np.ndarray, out[k].envelope) for k in spectral]).astype(float)
+        for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
+            out[k] = replace(out[k], envelope_peaks=peaks)
+    return out
+
+
+def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
+                        min_bins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per window (row of ``spec``), the band of the dyadic tree with the largest spectral kurtosis.
+
+    The fast kurtogram's 1/3-binary tree (Antoni 2007) on the window's own FFT:
+    the analysis band ``[lo_bin, hi_bin]`` split into 1, 2, 3, 4, 6, 8, ...
+    bands of equal width (:data:`TREE_PARTS`, or down to ``min_bins`` bins of
+    that window); each band's complex envelope is its bins shifted to 0 Hz and
+    inverse-transformed (every band of every window of a level in one
+    inverse FFT), and its spectral kurtosis is ``E|z|^4 / E^2|z|^2 - 2`` (0 for
+    Gaussian vibration whatever the width, -1 for a steady tone, large where
+    impulses ring).  A band is scored by its SK less :data:`SK_SIGMAS` times
+    the scatter the SK of Gaussian vibration has on its ``M`` complex samples,
+    ``2 / sqrt(M)``: a narrow band is chosen for impulses that ring in it, not
+    for the chance scatter of its few samples (on pure noise the widest band
+    wins, and its envelope spectrum is flat).  Returns that score, first and
+    last bin of each window's band.
+    """
+    count = spec.shape[0]
+    best_sk = np.full(count, -np.inf)
+    first = np.full(count, lo_bin)
+    last = np.full(count, hi_bin)
+    width = hi_bin - lo_bin + 1
+    for parts in TREE_PARTS:
+        bins = width // parts
+        allowed = bins >= min_bins
+        if not allowed.any():
+            break
+        size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
+        shifted = np.zeros((count, parts, size), dtype=complex)
+        shifted[:, :, :bins] = spec[:, lo_bin:lo_bin + parts * bins].reshape(count, parts, bins)
+        power = np.abs(np.fft.ifft(shifted, axis=2)) ** 2
+        mean = power.mean(axis=2)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        sk -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+        part = np.argmax(sk, axis=1)
+        value = sk[np.arange(count), part]
+        better = allowed & (value > best_sk + 1e-12)
+        best_sk = np.where(better, value, best_sk)
+        first = np.where(better, lo_bin + part * bins, first)
+        last = np.where(better, lo_bin + (part + 1) * bins - 1, last)
+    best_sk[~np.isfinite(best_sk)] = math.nan
+    return best_sk, first, last
+
+
+def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
+    """The band's analytic signal shifted to 0 Hz and decimated, m/s^2: bins ``first..last`` inverse-transformed.
+
+    ``spec`` is the rfft of ``n`` samples; ``|z|`` is the band's Hilbert envelope.
+    """
+    count = last - first + 1
+    size = 1 << int(math.ceil(math.log2(max(2 * count, 8))))
+    shifted = np.zeros(size, dtype=complex)
+    shifted[:count] = spec[first:last + 1]
+    return np.fft.ifft(shifted) * (2.0 * size / n)
+
+
+def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
+                    angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
+    """Envelope power spectrum on :data:`ORDER_GRID` and its resolution in orders.
+
+    With the screw angle through the window the envelope is first resampled
+    to uniform angle (order tracking); otherwise orders are Hz / ``shaft_hz``.
+    """
+    m = envelope.size
+    times = np.arange(m) * (duration / m)
+    revolutions = duration * shaft_hz
+    values = envelope
+    if angle_times is not None and angles is not None:
+        t, a = np.asarray(angle_times, dtype=float), np.asarray(angles, dtype=float)
+        if t.size >= 2 and np.all(np.diff(t) > 0) and t[0] <= times[0] + 0.1 * duration \
+                and t[-1] >= times[-1] - 0.1 * duration:
+            angle = np.abs(np.interp(times, t, a) - np.interp(0.0, t, a))
+            if np.all(np.diff(angle) > 0):
+                uniform = np.linspace(angle[0], angle[-1], m)
+                values = np.interp(uniform, angle, envelope)
+                revolutions = (angle[-1] - angle[0]) / (2.0 * math.pi) * m / max(m - 1, 1)
+    power = np.abs(np.fft.rfft(values - values.mean())) ** 2 / m ** 2
+    bin_orders = np.arange(power.size) / revolutions
+    grid = np.interp(ORDER_GRID, bin_orders, power, right=math.nan)
+    return grid, 1.0 / revolutions
+
+
+def envelope_floor(grid: np.ndarray) -> float:
+    """Floor of an order spectrum on :data:`ORDER_GRID`: its median above :data:`FLOOR_LOWEST_ORDER`."""
+    return float(_floors(np.asarray(grid, dtype=float).reshape(1, -1))[0])
+
+
+def _floors(grids: np.ndarray) -> np.ndarray:
+    """:func:`envelope_floor` of each row."""
+    part = grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER]
+    with np.errstate(invalid='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
+        return np.nanmedian(part, axis=1)
+
+
+def order_spectrum_db(grid: np.ndarray) -> np.ndarray:
+    """An order spectrum in dB over its floor (NaN where it holds nothing)."""
+    grids = np.asarray(grid, dtype=float)
+    return _db(grids.reshape(1, -1)).reshape(grids.shape)
+
+
+def _db(grids: np.ndarray) -> np.ndarray:
+    """:func:`order_spectrum_db` of each row."""
+    with np.errstate(divide='ignore', invalid='ignore'):
+        return 10.0 * np.log10(grids / _floors(grids)[:, None])
+
+
+def envelope_peaks(grid: np.ndarray, resolution: float, orders: Sequence[DefectOrder],
+                   min_db: float = REPORT_DB, count: int = MAX_PEAKS) -> tuple[EnvelopePeak, ...]:
+    """Lines of an order spectrum at least ``min_db`` over its floor, labelled, in order of their order.
+
+    The largest ``count`` local maxima, and the largest level near each
+    defect order's fundamental (within ``max(ORDER_TOLERANCE o, resolution / 2)``)
+    when it reaches ``min_db``: a line at a defect order is reported even where
+    larger lines elsewhere fill the ``count``.  Maxima closer than the
+    resolution to a larger one are the same line.
+    """
+    return _peaks(np.asarray(grid, dtype=float).reshape(1, -1), [resolution], orders, min_db, count)[0]
+
+
+def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[DefectOrder],
+           min_db: float = REPORT_DB, count: int = MAX_PEAKS) -> list[tuple[EnvelopePeak, ...]]:
+    """:func:`envelope_peaks` of each row (dB, maxima and defect-order levels for all rows at once)."""
+    db = _db(grids)
+    lowest = 0.5 * min((o.order for o in orders), default=1.0)
+    padded = np.where(np.isfinite(db) & (ORDER_GRID >= lowest), db, -np.inf)
+    local = np.zeros(padded.shape, dtype=bool)
+    local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
+        padded[:, 1:-1] >= min_db)
+    labels: dict[tuple[int, float], str] = {}
+    out = []
+    for row, resolution in enumerate(resolutions):
+        levels = padded[row]
+        candidates = np.flatnonzero(local[row])
+        if candidates.size > 4 * count:
+            candidates = candidates[np.argpartition(-levels[candidates], 4 * count)[:4 * count]]
+        separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
+        chosen: list[int] = []
+        for k in sorted(candidates.tolist(), key=lambda k: -levels[k]):
+            if all(abs(k - j) > separation for j in chosen):
+                chosen.append(k)
+            if len(chosen) == count:
+                break
+        for first, stop in _order_windows(orders, resolution):
+            if stop > first:
+                k = first + int(np.argmax(levels[first:stop]))
+                if levels[k] >= min_db and k not in chosen:
+                    chosen.append(k)
+        peaks = []
+        for k in sorted(chosen):
+            key = (k, round(resolution, 6))
+            if key not in labels:
+                labels[key] = label_order(float(ORDER_GRID[k]), orders, resolution / 2)
+            peaks.append(EnvelopePeak(float(ORDER_GRID[k]), float(levels[k]), labels[key]))
+        out.append(tuple(peaks))
+    return out
+
+
+def _order_windows(orders: Sequence[DefectOrder], resolution: float) -> list[tuple[int, int]]:
+    """Grid index ranges within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's fundamental."""
+    spans = []
+    for item in orders:
+        reach = max(ORDER_TOLERANCE * item.order, resolution / 2)
+        first = max(int(math.ceil((item.order - reach) / ORDER_STEP - 1e-9)), 0)
+        stop = min(int(math.floor((item.order + reach) / ORDER_STEP + 1e-9)) + 1, ORDER_GRID.size)
+        spans.append((first, stop))
+    return spans
