@@ -100,11 +100,11 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
     terminal, FIFO, ``/dev/stdout``) is written directly.  OSError propagates.
     """
     path = Path(path)
-    if path.is_symlink():
-        path = path.resolve()
-    if path.exists() and not path.is_file() and not path.is_dir():
+    if path.exists() and not path.is_file() and not path.is_dir():     # links followed: /dev/stdout, a FIFO
         _write_stream(path, write, binary)
         return
+    if path.is_symlink():
+        path = path.resolve()
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(path.parent, path.name)
     handle, temporary = tempfile.mkstemp(prefix=temporary_prefix(path.name), suffix='.tmp', dir=path.parent)

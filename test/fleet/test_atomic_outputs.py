@@ -103,3 +103,14 @@ def test_the_commit_lock_is_exclusive_across_processes(tmp_path):
         assert other.returncode != 0 and 'held .lock' in other.stderr
     with file_lock(lock, timeout=0.3):
         pass
+
+
+def test_json_to_dev_stdout_goes_to_the_pipe_and_a_link_is_written_through(tmp_path):
+    code = 'from prsm_lube_ros.cli.common import write_json\nwrite_json("/dev/stdout", {"runs": [1]})\n'
+    result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0 and json.loads(result.stdout) == {'runs': [1]}, result.stderr
+    target = tmp_path / 'real.md'
+    target.write_text('old')
+    (tmp_path / 'link.md').symlink_to(target)
+    write_text_atomically(tmp_path / 'link.md', 'new')
+    assert target.read_text() == 'new' and (tmp_path / 'link.md').is_symlink()
