@@ -12,8 +12,6 @@ and the defect orders in words.
 import json
 from pathlib import Path
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -21,15 +19,11 @@ import pytest
 import browser
 from bearing_bags import BPFO, write_bearing_recording
 
+from installed_command import prsm_lube
+
 ROOT = Path(__file__).resolve().parents[2]
 FEMTO_ACTUATOR = ROOT / 'config' / 'femto_pronostia_bearing.yaml'
 PNG = b'\x89PNG\r\n\x1a\n'
-
-
-def prsm_lube(*args):
-    command = shutil.which('prsm-lube')
-    assert command, 'the installed prsm-lube command is not on PATH'
-    return subprocess.run([command, *map(str, args)], capture_output=True, text=True, timeout=600)
 
 
 def page_figures(page):

@@ -11,20 +11,14 @@ window.  ``benchmarks/femto_defects.py`` prints the table of the README.
 """
 import json
 from pathlib import Path
-import shutil
-import subprocess
 
 import pytest
+
+from installed_command import prsm_lube
 
 ROOT = Path(__file__).resolve().parents[2]
 FEMTO = ROOT / 'test' / 'data' / 'realdata' / 'femto'
 ACTUATOR = ROOT / 'config' / 'femto_pronostia_bearing.yaml'
-
-
-def prsm_lube(*args):
-    command = shutil.which('prsm-lube')
-    assert command, 'the installed prsm-lube command is not on PATH'
-    return subprocess.run([command, *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
 @pytest.fixture(scope='module')

@@ -11,20 +11,14 @@ sigma of 0.
 import json
 import math
 from pathlib import Path
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
+from installed_command import prsm_lube
+
 FEMTO = Path(__file__).resolve().parents[1] / 'data' / 'realdata' / 'femto'
 SUBSETS = ('learn_early', 'test_early')
-
-
-def prsm_lube(*args):
-    command = shutil.which('prsm-lube')
-    assert command, 'the installed prsm-lube command is not on PATH'
-    return subprocess.run([command, *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
 @pytest.fixture(scope='module')
