@@ -40,7 +40,8 @@ than 90 % of the windows published.  Results go to
 ``benchmarks/results/live_latency.{json,md}``.
 
 Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,16,24,32,40,48,56,64] [--raw-band]
-[--name live_latency]`` (run after ``source .env-jazzy.sh``; results to ``benchmarks/results/<name>.{json,md}``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
+[--name live_latency]`` (run after ``source .env-jazzy.sh``; results to
+``benchmarks/results/<name>.{json,md}``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
 shows where the estimator's time goes (cProfile slows it; the shares are what counts).
 """
 from __future__ import annotations
