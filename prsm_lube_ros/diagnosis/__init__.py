@@ -22,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..estimation.windowing import MIN_AXIAL_LOAD
+from ..estimation.windowing import DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD
 from .effects import Effect, effect_ids, get_effect, register, registered
 from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
 from .table import band_high_of, table_from_windows, WindowTable
@@ -47,7 +47,8 @@ def diagnose_recordings(recordings: Sequence[RecordingWindows], theta: float = 1
     from ..estimation.pipeline import calibrate_recordings
     calibration = calibrate_recordings(recordings, theta, min_axial_load)
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
-                               sources=[rec.path for rec in recordings], band_high=band_high_of(recordings))
+                               sources=[rec.path for rec in recordings], band_high=band_high_of(recordings),
+                               defect_orders=recordings[0].defect_orders if recordings else DEFAULT_DEFECT_ORDERS)
     result = diagnose_table(table)
     result.calibration_flags = list(calibration.flags)
     return result

@@ -27,20 +27,25 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import InputError
-from ..estimation.windowing import AT_REST, MIN_AXIAL_LOAD, usable_windows
+from ..estimation.defect_screen import strike_line
+from ..estimation.windowing import AT_REST, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 if TYPE_CHECKING:
     from ..estimation.pipeline import RecordingWindows
     from ..estimation.windowing import Window
+    from ..physics.defect_orders import DefectOrder
 
-__all__ = ['COLUMNS', 'Columns', 'REST_SPEED', 'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP',
-           'WindowTable', 'band_high_of', 'table_from_windows']
+__all__ = ['COLUMNS', 'Columns', 'INDICATOR_COLUMNS', 'REST_SPEED', 'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED',
+           'TEMPERATURE_GAP', 'WindowTable', 'band_high_of', 'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
 #: Columns every table has, in SI units (temperature in degC, time in s).
 COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
+
+#: Optional columns of condition indicators (NaN where a window has none).
+INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order')
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
@@ -145,6 +150,15 @@ class WindowTable:
     band_high: float = math.nan
     rest_rms: float = math.nan
     rest_windows: int = 0
+    #: Condition indicators per window (:mod:`prsm_lube_ros.estimation.condition_indicators`), NaN where not
+    #: computed: kurtosis of the band signal (3 Gaussian), crest factor, and the strongest envelope line at a
+    #: strike order (:func:`~prsm_lube_ros.estimation.defect_screen.strike_line`): dB over the floor and its order.
+    kurtosis: np.ndarray | None = field(default=None, compare=False, repr=False)
+    crest_factor: np.ndarray | None = field(default=None, compare=False, repr=False)
+    defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
+    defect_order: np.ndarray | None = field(default=None, compare=False, repr=False)
+    #: The actuator's defect orders the envelope lines were labelled with.
+    defect_orders: tuple[DefectOrder, ...] = ()
 
     def __post_init__(self) -> None:
         """Coerce the columns to arrays of one length."""
@@ -162,6 +176,18 @@ class WindowTable:
         if direction.size != n:
             raise InputError(f'window table: column direction has {direction.size} rows, expected {n}')
         object.__setattr__(self, 'direction', direction)
+        for name in INDICATOR_COLUMNS:
+            value = getattr(self, name)
+            value = np.full(n or 0, math.nan) if value is None else np.atleast_1d(np.asarray(value, dtype=float))
+            if value.size != n:
+                raise InputError(f'window table: column {name} has {value.size} rows, expected {n}')
+            object.__setattr__(self, name, value)
+
+    @property
+    def has_indicators(self) -> bool:
+        """True when most windows carry condition indicators."""
+        assert self.kurtosis is not None  # __post_init__ fills it
+        return bool(np.isfinite(self.kurtosis).mean() >= 0.8) if len(self) else False
 
     def __len__(self) -> int:
         """Number of windows."""
@@ -203,7 +229,7 @@ class WindowTable:
         """Rows where ``mask`` is true (a boolean array or indices)."""
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None
-        values = {name: getattr(self, name)[mask] for name in COLUMNS}
+        values = {name: getattr(self, name)[mask] for name in COLUMNS + INDICATOR_COLUMNS}
         assert self.direction is not None  # __post_init__ fills it
         return replace(self, spectra=spectra, direction=self.direction[mask], **values)
 
@@ -228,15 +254,18 @@ def band_high_of(recordings: Sequence[RecordingWindows]) -> float:
 
 def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, theta: float = 1.0,
                        min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = (),
-                       band_high: float = math.nan) -> WindowTable:
+                       band_high: float = math.nan,
+                       defect_orders: Sequence[DefectOrder] = DEFAULT_DEFECT_ORDERS) -> WindowTable:
     """Build a :class:`WindowTable` from lists of windows (``estimation.windowing.Window``), one per recording.
 
     Keeps steady windows with a finite positive RMS, speed and load of at least
     ``min_axial_load``; raises :class:`InputError` when none is left.
-    ``band_high``: the upper edge (Hz) of the RMS's analysis band, if any.
+    ``band_high``: the upper edge (Hz) of the RMS's analysis band, if any;
+    ``defect_orders`` the actuator's, which labelled the windows' envelope lines.
     """
-    rows: dict[str, list] = {name: [] for name in COLUMNS}
+    rows: dict[str, list] = {name: [] for name in COLUMNS + INDICATOR_COLUMNS}
     directions: list[float] = []
+    orders: tuple[DefectOrder, ...] = tuple(defect_orders)
     spectra, resolution = [], math.nan
     run_offset = 0
     for rec_index, windows in enumerate(windows_per_recording):
@@ -260,6 +289,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         back = {r for r in np.unique(run_ids) if np.nanmedian(travel[run_ids == r]) < 0}
         directions.extend(-1.0 if r in back else 1.0 for r in run_ids)
         run_offset += int(local_run.max()) + 1
+        for name, values in zip(INDICATOR_COLUMNS, zip(*(_indicators(w, orders) for w in chosen))):
+            rows[name].extend(values)
         for w in chosen:
             spectra.append(w.spectrum)
             if math.isfinite(w.spectrum_resolution):
@@ -277,7 +308,17 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
                        band_high=float(band_high), rest_windows=int(rest.size),
                        rest_rms=float(np.median(rest)) if rest.size >= REST_WINDOWS_NEEDED else math.nan,
-                       **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+                       defect_orders=orders, **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+
+
+def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float]:
+    """(kurtosis, crest factor, strike line dB, its order) of a window; NaN where it has no indicators."""
+    condition = window.condition
+    if condition is None:
+        return math.nan, math.nan, math.nan, math.nan
+    line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
+    return (condition.kurtosis, condition.crest_factor, line.db if line else math.nan,
+            line.order if line else math.nan)
 
 
 def _rest_rms_values(windows_per_recording: Sequence[Sequence[Window]]) -> np.ndarray:

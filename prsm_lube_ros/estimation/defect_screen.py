@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ConditionBaseline', 'DEFAULT_RULES', 'DefectFinding', 'DefectRules', 'NOT_SUSPECTED', 'RunCondition',
-           'STRIKE_COMPONENTS', 'run_condition', 'screen', 'strike_orders']
+           'STRIKE_COMPONENTS', 'run_condition', 'screen', 'strike_line', 'strike_orders']
 
 #: Components whose defect is struck by passing contacts (their order is a strike rate).
 STRIKE_COMPONENTS = ('screw raceway', 'nut raceway', 'roller', 'support bearing outer race',
@@ -258,7 +258,7 @@ def screen(condition: RunCondition, orders: Sequence[DefectOrder], baseline: Con
         strong_crest_limit = max(rules.healthy_crest, rules.crest_ratio * baseline.crest_max)
     impulsive = kurt >= kurt_limit
     strongly_impulsive = kurt >= strong_kurt_limit or (math.isfinite(crest) and crest >= strong_crest_limit)
-    line = _strike_line(condition, orders)
+    line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
     periodic = line is not None and line.db >= rules.envelope_db
     strongly_periodic = False
     if periodic and baseline is not None and line is not None:
@@ -276,12 +276,13 @@ def screen(condition: RunCondition, orders: Sequence[DefectOrder], baseline: Con
     return DefectFinding(True, '; '.join(parts), component, line.order if periodic and line is not None else math.nan)
 
 
-def _strike_line(condition: RunCondition, orders: Sequence[DefectOrder]) -> EnvelopePeak | None:
-    """The strongest line of the run's envelope spectrum at a strike order's fundamental, with its component(s)."""
+def strike_line(peaks: Sequence[EnvelopePeak], orders: Sequence[DefectOrder],
+                resolution: float) -> EnvelopePeak | None:
+    """The strongest of ``peaks`` at a strike order's fundamental, labelled with its component(s); None if none."""
     strikes = strike_orders(orders)
     best: EnvelopePeak | None = None
-    for peak in condition.envelope_peaks:
-        label = label_order(peak.order, strikes, condition.order_resolution / 2, harmonics=1)
+    for peak in peaks:
+        label = label_order(peak.order, strikes, resolution / 2 if math.isfinite(resolution) else 0.0, harmonics=1)
         if label and (best is None or peak.db > best.db):
             best = EnvelopePeak(peak.order, peak.db, label)
     return best

@@ -305,6 +305,8 @@ class WindowBuilder:
         self._open = _OpenWindows()
         #: (time s, samples) per open window key, for the band and spectra
         self._chunks: dict[int, list[tuple[float, np.ndarray]]] = {}
+        #: (stamps s, unsigned screw angle rad) per open window key, for order tracking of the envelope
+        self._angle_chunks: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
         self._progress = {name: -math.inf for name in GATING_STREAMS}
         self._closed_before = -math.inf   # every window ending at or before this is closed
         self._moving = False
@@ -628,6 +630,13 @@ class WindowBuilder:
         tsum = np.add.reduceat(np.where(tr_ok, tr, 0.0), seg)
         tn = np.add.reduceat(tr_ok.astype(np.int64), seg)
         rev_last = revolutions[order][seg + n - 1]
+        if self.settings.condition_indicators and self.band is not None:
+            # The turned angle (monotonic in either direction) through each window, for order tracking.
+            turned = 2 * math.pi * revolutions[order]
+            stamps_sorted = stamps[order]
+            for k, first, count in zip(unique.tolist(), seg.tolist(), n.tolist()):
+                self._angle_chunks.setdefault(k, []).append((stamps_sorted[first:first + count],
+                                                             turned[first:first + count]))
         rows = self._open.rows(unique)
         table = self._open.table
         table[rows, _SPEED_N] += n
@@ -743,15 +752,20 @@ class WindowBuilder:
                     continue
                 chunks.sort(key=lambda chunk: chunk[0])   # blocks may arrive out of order
                 samples = np.concatenate([c for _, c in chunks]) if len(chunks) > 1 else chunks[0][1]
+                first_time = chunks[0][0]
                 if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
                     rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
                 if indicators and count[row] > 0 and maybe_steady[row] and self.band is not None:
+                    angle_times, angles = self._window_angles(k, first_time)
                     conditions[row] = condition_indicators(samples, rate_k, float(speed[row]),
-                                                           (self.band.low, self.band.high), s.defect_orders)
+                                                           (self.band.low, self.band.high), s.defect_orders,
+                                                           angle_times=angle_times, angles=angles)
                 if spectral:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
                     spectra[row] = _power_spectrum(samples, rate_k, segment)
+        for k in keys.tolist():
+            self._angle_chunks.pop(k, None)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
                       count.astype(np.int64).tolist(), coverage.tolist(), speed.tolist(), spread.tolist(),
                       load.tolist(), temperature.tolist(), position.tolist(), table[:, _REVOLUTIONS].tolist(),
@@ -765,6 +779,16 @@ class WindowBuilder:
                                   position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
                                   rate_k if rate_k > 0 else math.nan, condition))
         return windows
+
+    def _window_angles(self, key: int, first_time: float) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Stamps (s from ``first_time``, the window's first sample) and turned screw angle (rad) in window ``key``."""
+        chunks = self._angle_chunks.get(key)
+        if not chunks:
+            return None, None
+        stamps = np.concatenate([c[0] for c in chunks]) if len(chunks) > 1 else chunks[0][0]
+        angles = np.concatenate([c[1] for c in chunks]) if len(chunks) > 1 else chunks[0][1]
+        order = np.argsort(stamps, kind='stable')
+        return stamps[order] - first_time, angles[order]
 
 
 def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -1,0 +1,83 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""Condition indicators of one window: Gaussian vibration, tones and defect strikes tell themselves apart."""
+import math
+
+import numpy as np
+import pytest
+
+from prsm_lube_ros.estimation.condition_indicators import condition_indicators, kurtosis
+from prsm_lube_ros.physics.actuator import Actuator
+from prsm_lube_ros.physics.defect_orders import prsm_defect_orders
+
+ORDERS = prsm_defect_orders(Actuator())
+RATE = 8000.0
+BAND = (0.5, 3200.0)
+
+
+def strikes(times, angles, order, mode_hz=1500.0, damping=0.04, scatter=0.3, rng=None):
+    """Decaying rings of a mode, one per passing contact (``order`` strikes per screw revolution)."""
+    rng = rng or np.random.default_rng(0)
+    count = int(angles[-1] / (2 * math.pi) * order)
+    hits = np.interp(2 * math.pi * np.arange(1, count + 1) / order, angles, times)
+    signal = np.zeros(times.size)
+    decay = 2 * math.pi * mode_hz * damping
+    for t0, amplitude in zip(hits, np.exp(scatter * rng.standard_normal(hits.size))):
+        after = times >= t0
+        dt = times[after] - t0
+        signal[after] += amplitude * np.exp(-decay * dt) * np.sin(2 * math.pi * mode_hz * dt)
+    return signal
+
+
+def window(speed=20.0, ramp=0.0, rng=None):
+    times = np.arange(int(RATE)) / RATE
+    speeds = speed * (1 + ramp * (times - 0.5))
+    angles = np.cumsum(speeds) / RATE
+    return times, speeds, angles
+
+
+def test_gaussian_vibration_reads_kurtosis_three_and_no_defect_line():
+    rng = np.random.default_rng(1)
+    found = [condition_indicators(rng.standard_normal(int(RATE)), RATE, 20.0, BAND, ORDERS) for _ in range(20)]
+    assert np.median([c.kurtosis for c in found]) == pytest.approx(3.0, abs=0.15)
+    assert max(c.crest_factor for c in found) < 5.5
+    lines = [c.defect_peak() for c in found]
+    assert sum(line is not None and line.db > 12 for line in lines) <= 1
+
+
+def test_a_tone_reads_kurtosis_one_and_a_half():
+    times = np.arange(int(RATE)) / RATE
+    assert kurtosis(np.sin(2 * math.pi * 100 * times)) == pytest.approx(1.5, abs=0.01)
+    found = condition_indicators(np.sin(2 * math.pi * 100 * times), RATE, 20.0, BAND, ORDERS)
+    assert found.crest_factor == pytest.approx(math.sqrt(2), rel=0.02)
+
+
+@pytest.mark.parametrize('order, component', [(6.25, 'screw raceway'), (3.75, 'nut raceway or roller')])
+def test_strikes_at_a_defect_order_are_impulsive_and_labelled(order, component):
+    rng = np.random.default_rng(2)
+    times, _, angles = window()
+    signal = 0.1 * rng.standard_normal(times.size) + strikes(times, angles, order, rng=rng)
+    found = condition_indicators(signal, RATE, 20.0, BAND, ORDERS)
+    assert found.kurtosis > 5
+    line = found.defect_peak()
+    assert line is not None and line.component == component
+    assert line.order == pytest.approx(order, rel=0.03) and line.db > 10
+    assert found.demodulation_band[0] < 1500 < found.demodulation_band[1]   # the band the strikes ring in
+
+
+def test_order_tracking_keeps_the_line_sharp_while_the_speed_changes():
+    rng = np.random.default_rng(3)
+    times, speeds, angles = window(speed=60.0, ramp=0.3)
+    signal = 0.2 * rng.standard_normal(times.size) + strikes(times, angles, 6.25, rng=rng)
+    mean_speed = float(speeds.mean())
+    tracked = condition_indicators(signal, RATE, mean_speed, BAND, ORDERS, angle_times=times, angles=angles)
+    plain = condition_indicators(signal, RATE, mean_speed, BAND, ORDERS)
+    assert tracked.defect_peak() is not None
+    assert tracked.defect_peak().db > (plain.defect_peak().db if plain.defect_peak() else 0.0) + 3
+
+
+def test_too_few_samples_or_no_speed_give_nan_not_an_error():
+    assert math.isnan(condition_indicators(np.ones(10), RATE, 20.0, BAND, ORDERS).kurtosis)
+    found = condition_indicators(np.random.default_rng(0).standard_normal(4000), RATE, 0.0, BAND, ORDERS)
+    assert math.isfinite(found.kurtosis) and found.envelope_peaks == ()
+    assert found.as_dict()['envelope_peaks'] == []
