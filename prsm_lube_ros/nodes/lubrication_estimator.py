@@ -767,14 +767,17 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             ('last_vibration_age', channel.monitor.stale_for(now)),
         ] + channel.forecast
         if status.level != channel.last_level:
-            line = f'{channel.name}: {LEVEL_NAMES[status.level]}: {status.message}'
-            if status.level == 0:
-                self.get_logger().info(line)
-            else:
-                self.get_logger().warning(line)
+            self._log_level(f'{channel.name}: {LEVEL_NAMES[status.level]}: {status.message}', status.level)
             channel.last_level = status.level
         return ros_convert.diagnostic_status(channel.status_name, channel.hardware_id, status.level,
                                              status.message, values)
+
+    def _log_level(self, line: str, level: int) -> None:
+        """Log a status's change of level: info for OK, warning otherwise."""
+        if level == 0:      # two call sites: rclpy refuses a second severity at one line
+            self.get_logger().info(line)
+        else:
+            self.get_logger().warning(line)
 
     def _surface_status(self, channel: ActuatorChannel, now: float):
         """The actuator's surface condition ``DiagnosticStatus``: the defect screen, its numbers in KeyValues."""
@@ -809,11 +812,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             ('defect_orders', defect_orders_text(self._defect_orders)),
         ]
         if surface.level != channel.last_surface_level:
-            line = f'{channel.name}: surface condition {LEVEL_NAMES[surface.level]}: {surface.message}'
-            if surface.level == 0:      # one severity per call site: rclpy refuses another at the same line
-                self.get_logger().info(line)
-            else:
-                self.get_logger().warning(line)
+            self._log_level(f'{channel.name}: surface condition {LEVEL_NAMES[surface.level]}: {surface.message}',
+                            surface.level)
             channel.last_surface_level = surface.level
         return ros_convert.diagnostic_status(channel.surface_status_name, channel.hardware_id, surface.level,
                                              surface.message, values)

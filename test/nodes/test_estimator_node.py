@@ -75,21 +75,28 @@ def rms_for(theta, constants=START, speed=SPEED, load=LOAD):
 
 
 # -- synthetic inputs ------------------------------------------------------------------------------
-def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, load_rate=20.0, freq=100.0):
+def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, load_rate=20.0, freq=100.0,
+                    vibration=None):
     """Messages ``(stamp, kind, msg)`` in stamp order for segments ``(seconds, rms, speed, load)``.
 
     The vibration is a sine of ``freq`` Hz with the segment's RMS; 100 Hz puts
     whole periods in every 0.05 s block, so any window of whole blocks has that RMS.
+    ``vibration(times, rms, speed, index)``, given, makes the samples of segment
+    ``index`` instead (``times`` in s from the segment's start).
     """
     events = []
     t = 0.0
     angle = 0.0
     n = int(round(block * rate))
-    for seconds, rms, speed, load in segments:
-        for b in range(int(round(seconds / block))):
+    for index, (seconds, rms, speed, load) in enumerate(segments):
+        blocks = int(round(seconds / block))
+        if vibration is not None:
+            samples = vibration(np.arange(blocks * n) / rate, rms, speed, index)
+        for b in range(blocks):
             start = t + b * block
-            samples = math.sqrt(2) * rms * np.sin(2 * math.pi * freq * (np.arange(n) / rate))
-            events.append((t0 + start, 'vibration', ros_convert.vibration_block_msg(t0 + start, rate, samples)))
+            chunk = (samples[b * n:(b + 1) * n] if vibration is not None
+                     else math.sqrt(2) * rms * np.sin(2 * math.pi * freq * (np.arange(n) / rate)))
+            events.append((t0 + start, 'vibration', ros_convert.vibration_block_msg(t0 + start, rate, chunk)))
         for j in range(int(round(seconds * joint_rate))):
             stamp = t + j / joint_rate
             events.append((t0 + stamp, 'joint_states', ros_convert.joint_state_msg(t0 + stamp, angle, speed)))
@@ -969,33 +976,14 @@ def screened_estimator(graph, tmp_path, baseline=HEALTHY_BASELINE, **params):
                                         **params})
 
 
-def defect_stream(segments, t0=T0, rate=4000.0, block=0.1, joint_rate=50.0, load_rate=20.0, strike=0.0,
-                  seed=1):
-    """Like :func:`segments_stream`, with Gaussian vibration of the segment's RMS and, when ``strike`` > 0, a
-    screw raceway spall: ``strike`` x RMS peak strikes at 6.25 per screw revolution ringing a 1 kHz mode.
-
-    The angle (and so the strikes) is continuous over segments of one speed.
-    """
-    events = []
-    t = 0.0
-    n = int(round(block * rate))
-    for index, (seconds, rms, speed, load) in enumerate(segments):
-        times = t + np.arange(int(round(seconds * rate))) / rate
-        samples = synthetic_inputs.defect_vibration(times, max(speed, 1e-3), rms=rms, strike=strike * rms,
-                                                    seed=seed + index)
-        for b in range(int(round(seconds / block))):
-            start = t + b * block
-            events.append((t0 + start, 'vibration',
-                           ros_convert.vibration_block_msg(t0 + start, rate, samples[b * n:(b + 1) * n])))
-        for j in range(int(round(seconds * joint_rate))):
-            stamp = t + j / joint_rate
-            events.append((t0 + stamp, 'joint_states', ros_convert.joint_state_msg(t0 + stamp, speed * stamp, speed)))
-        for k in range(int(round(seconds * load_rate))):
-            stamp = t + k / load_rate
-            events.append((t0 + stamp, 'axial_load', ros_convert.wrench_msg(t0 + stamp, -load)))
-        t += seconds
-    events.sort(key=lambda e: e[0])
-    return events
+def defect_stream(segments, strike=0.0, seed=1):
+    """:func:`segments_stream` at 4 kHz in 0.1 s blocks with Gaussian vibration of the segment's RMS and, when
+    ``strike`` > 0, a screw raceway spall: ``strike`` x RMS peak strikes at 6.25 per screw revolution ringing
+    a 1 kHz mode (the angle is continuous over segments of one speed, as the strikes assume)."""
+    def vibration(times, rms, speed, index):
+        return synthetic_inputs.defect_vibration(times, max(speed, 1e-3), rms=rms, strike=strike * rms,
+                                                 seed=seed + index)
+    return segments_stream(segments, rate=4000.0, block=0.1, vibration=vibration)
 
 
 def last_status(arrays, name_part):
