@@ -1104,3 +1104,19 @@ def test_recalibration_keeps_the_baseline_and_the_node_judges_with_it(graph, tmp
     wait_for(lambda: last_status(arrays, 'surface condition').message.startswith('no surface defect'), 10,
              'OK on /diagnostics')
     assert values_by_key(last_status(arrays, 'surface condition'))['baseline'].startswith('6 calibration run(s)')
+
+
+def test_the_actuator_file_gives_the_defect_orders_screened(graph, tmp_path, repo_root):
+    """A rig whose actuator file configures a support bearing (and no roller screw): its orders label the lines."""
+    from prsm_lube_ros.physics.actuator import load_actuator
+    from prsm_lube_ros.physics.defect_orders import defect_orders
+    file = repo_root / 'config' / 'femto_pronostia_bearing.yaml'
+    node = screened_estimator(graph, tmp_path, actuator_file=str(file))
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    expected = defect_orders(load_actuator(file))
+    assert [o.component for o in expected][:2] == ['support bearing outer race', 'support bearing inner race']
+    assert node.channels[0].builder.settings.defect_orders == expected
+    assert node.channels[0].surface.orders == expected and node.channels[0].assessor.defect_orders == expected
+    wait_for(lambda: last_status(arrays, 'surface condition') is not None, 10, 'a surface status')
+    orders = values_by_key(last_status(arrays, 'surface condition'))['defect_orders']
+    assert orders.startswith('support bearing outer race 5.61') and 'screw raceway' not in orders
