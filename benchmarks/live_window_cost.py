@@ -111,8 +111,9 @@ def main(argv=None) -> int:
     commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=ROOT, capture_output=True, text=True)
     results = {'python': f'Python {platform.python_version()}', 'commit': commit.stdout.strip() or '?',
                'seconds': args.seconds, 'repeat': args.repeat, 'rows': rows}
-    words = {'raw': 'raw RMS (no indicators)', 'indicators': 'band: condition indicators per window',
-             'screen': 'band and baseline: indicators and the surface screen of the last 10 windows'}
+    words = {'raw': 'raw RMS (no indicators)',
+             'indicators': "band: condition indicators per window, each window screened alone (main's node)",
+             'screen': 'band and baseline: indicators, the pooled screen of the last 10 windows (the node now)'}
     lines = ['# Live estimator window path: CPU per actuator-second (`python benchmarks/live_window_cost.py`)', '',
              f'{results["python"]}, commit {results["commit"]}; one 4 kHz actuator, {args.seconds:g} s of stream as '
              'in live_latency.py, process CPU time, best of '
