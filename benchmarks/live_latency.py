@@ -81,7 +81,7 @@ def _percentiles(values, *qs):
 
 
 # -- the estimator process --------------------------------------------------------------------------------
-def run_estimator(count: int, duration: float, folder: str, profile: bool = False) -> dict:
+def run_estimator(count: int, duration: float, folder: str, profile: bool = False, condition_every: int = 1) -> dict:
     """Spin a timed LubricationEstimator for ``count`` actuators; return what was measured."""
     os.sched_setaffinity(0, {ESTIMATOR_CPU})
     sys.path.insert(0, str(ROOT))
@@ -144,7 +144,7 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
         Parameter('actuators', value=actuator_names(count)),
         Parameter('calibration_file', value=os.path.join(folder, 'calibration_{actuator}.yaml')),
         Parameter('recordings_dir', value=folder), Parameter('qos_depth', value=2000),
-        Parameter('stale_timeout', value=60.0)])
+        Parameter('stale_timeout', value=60.0), Parameter('condition_every', value=condition_every)])
     for channel in node.channels:
         channel.publisher = Publisher(channel.publisher)
     for subscription in node.subscriptions:        # every callback the executor runs marks an arrival
@@ -296,7 +296,8 @@ def benchmark_calibration(raw_band: bool = False):
     return replace(calibration, band=DEFAULT_BAND.resolved(RATE), condition_baseline=baseline)
 
 
-def measure(count: int, duration: float, profile: bool = False, raw_band: bool = False) -> dict:
+def measure(count: int, duration: float, profile: bool = False, raw_band: bool = False,
+            condition_every: int = 1) -> dict:
     """One level: N actuators for ``duration`` s of measurement; a summary dict."""
     sys.path.insert(0, str(ROOT))
     import numpy as np
@@ -312,7 +313,8 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
             save_calibration(calibration, os.path.join(folder, f'calibration_{actuator_label(name)}.yaml'))
         out = os.path.join(folder, 'estimator.json')
         estimator = subprocess.Popen([sys.executable, __file__, '--role', 'estimator', '--count', str(count),
-                                      '--duration', str(duration), '--folder', folder, '--out', out]
+                                      '--duration', str(duration), '--folder', folder, '--out', out,
+                                      '--condition-every', str(condition_every)]
                                      + (['--profile'] if profile else []),
                                      env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         assert estimator.stdout.readline().strip() == 'ready', estimator.stderr.read()
@@ -378,8 +380,9 @@ def markdown(results: dict) -> str:
              'load 50 Hz, temperature 1 Hz; 1 s windows, each published with a theta_Oil. Calibrations: '
              + ('raw RMS (no analysis band): no condition indicators, no surface defect screen.'
                 if results.get('raw_band') else
-                'analysis band and healthy baseline: condition indicators on every window, surface defect screen '
-                'on.') + f' Commit {results.get("commit", "?")}.', '',
+                'analysis band and healthy baseline: condition indicators on every '
+                f'{results.get("condition_every", 1)}. window, surface defect screen on.')
+             + f' Commit {results.get("commit", "?")}.', '',
              'Latency: entry of the executor callback that closes a window (after rclpy took and deserialized '
              'its message; any queues the callback drains are inside the latency) to the return of the '
              'LubricationState `publish()`. Close delay: wall time at that return minus (window end + '
@@ -434,6 +437,8 @@ def main(argv=None) -> int:
     parser.add_argument('--raw-band', action='store_true',
                         help='calibrations of the raw RMS: no condition indicators (the load before issue 34)')
     parser.add_argument('--name', default='live_latency', help='results file name in benchmarks/results')
+    parser.add_argument('--condition-every', type=int, default=1,
+                        help="the estimator's condition_every: indicators on every k-th window only")
     parser.add_argument('--profile', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--role', choices=('estimator', 'generator'), help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, help=argparse.SUPPRESS)
@@ -441,7 +446,7 @@ def main(argv=None) -> int:
     parser.add_argument('--out', help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == 'estimator':
-        record = run_estimator(args.count, args.duration, args.folder, args.profile)
+        record = run_estimator(args.count, args.duration, args.folder, args.profile, args.condition_every)
         Path(args.out).write_text(json.dumps(record))
         return 0
     if args.role == 'generator':
@@ -452,7 +457,7 @@ def main(argv=None) -> int:
         return 2
     levels = []
     for count in (int(n) for n in args.levels.split(',')):
-        summary = measure(count, args.duration, raw_band=args.raw_band)
+        summary = measure(count, args.duration, raw_band=args.raw_band, condition_every=args.condition_every)
         levels.append(summary)
         print(f'N={count}: CPU {100 * summary["cpu_utilisation"]:.0f} %, latency p99 '
               f'{summary["latency_p99_ms"]:.2f} ms, lag p99 {summary["lag_p99_s"]:.3f} s, '
@@ -463,7 +468,8 @@ def main(argv=None) -> int:
     first = levels[0]
     commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=ROOT, capture_output=True, text=True)
     results = {'python': f'Python {platform.python_version()}', 'cpus': os.cpu_count(), 'duration': args.duration,
-               'raw_band': args.raw_band, 'commit': commit.stdout.strip() or '?',
+               'raw_band': args.raw_band, 'condition_every': args.condition_every,
+               'commit': commit.stdout.strip() or '?',
                'levels': levels, 'max_actuators_real_time': max(served) if served else 0,
                'latency_single_actuator_ms': {'p50': first['latency_p50_ms'], 'p99': first['latency_p99_ms']}}
     results['goals'] = {
@@ -474,7 +480,8 @@ def main(argv=None) -> int:
     if args.profile_at:
         results['profile'] = {'actuators': args.profile_at,
                               'functions': measure(args.profile_at, args.duration, profile=True,
-                                                   raw_band=args.raw_band)['profile']}
+                                                   raw_band=args.raw_band,
+                                                   condition_every=args.condition_every)['profile']}
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
     (RESULTS / f'{args.name}.md').write_text(markdown(results))

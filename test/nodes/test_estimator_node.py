@@ -1120,3 +1120,19 @@ def test_the_actuator_file_gives_the_defect_orders_screened(graph, tmp_path, rep
     wait_for(lambda: last_status(arrays, 'surface condition') is not None, 10, 'a surface status')
     orders = values_by_key(last_status(arrays, 'surface condition'))['defect_orders']
     assert orders.startswith('support bearing outer race 5.61') and 'screw raceway' not in orders
+
+
+def test_indicators_on_every_second_window_still_find_the_spall(graph, tmp_path):
+    """condition_every 2: half the indicator CPU; the screen pools 4 screened windows, over 8 s."""
+    node = screened_estimator(graph, tmp_path, condition_every=2)
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    graph.publish(graph.publishers(), defect_stream([(11.0, rms_for(0.9, speed=DEFECT_SPEED), DEFECT_SPEED, LOAD)],
+                                                    strike=8.0))
+    wait_for(lambda: len(states) >= 10, 15, 'ten windows')
+    wait_for(lambda: node.channels[0].surface.suspected, 5, 'the spall suspected')
+    wait_for(lambda: ros_convert.status_level(last_status(arrays, 'surface condition')) == ERROR, 5, 'ERROR')
+    status = last_status(arrays, 'surface condition')
+    assert status.message.startswith('impulsive at 6.25x screw speed: screw raceway defect suspected')
+    assert values_by_key(status)['windows_pooled'] == '4'
+    assert node.channels[0].surface.status().since - T0 >= 7.0      # the fourth screened window ends at 8 s
