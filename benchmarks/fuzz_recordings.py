@@ -36,6 +36,14 @@ Peak resident memory of each worker is measured.
 
 Usage: ``python benchmarks/fuzz_recordings.py [--mutations 10000] [--seed 1] [--jobs 1]``;
 results in ``benchmarks/results/fuzz_recordings.{json,md}``.
+
+``--hostile N`` runs N cases of the hostile kinds instead (issue 36,
+``benchmarks/hostile_cases.py``: special files, links out of the allowed root
+inside bag folders, size bounds, truncated calibrations, concurrent history
+writers, full disks, a FIFO sent to the calibrate service's request path),
+each in a worker with the same time and address-space limits; results in
+``benchmarks/results/fuzz_hostile.{json,md}`` (0 tracebacks, 0 escapes, 0
+wedged, peak memory).
 """
 from __future__ import annotations
 
@@ -55,6 +63,7 @@ import warnings
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / 'test' / 'support'))
+sys.path.insert(0, str(ROOT / 'benchmarks'))
 RESULTS = ROOT / 'benchmarks' / 'results'
 CONFORMANCE = ROOT / 'test' / 'data' / 'conformance' / 'mcap'
 #: Per-mutation limits: seconds and address space (bytes).
@@ -181,6 +190,91 @@ def run_one(job: tuple[str, str, int, int, str]) -> tuple[str, str, str, int]:
     return outcome, how, detail, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
+def hostile_seeds(folder: Path) -> dict:
+    """What the hostile cases copy: a contract bag, a calibratable bag, a calibration, a 300 M-row Parquet file."""
+    import bagfactory as bf
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from fuzzing import seed_calibration, seed_simulated
+    folder.mkdir(parents=True, exist_ok=True)
+    bag = bf.write_rosbag2(folder / 'bag', bf.contract_entries(seconds=2.0, block=100))
+    simulated = next(path for path, kind in seed_simulated(folder / 'simulated') if kind.startswith('bag:')).parent
+    pq.write_table(pa.table({'x': pa.nulls(300_000_000)}), folder / 'huge_rows.parquet')
+    return {'bag': str(bag), 'calibratable': str(simulated), 'calibration': str(seed_calibration(folder / 'c.yaml')),
+            'huge_parquet': str(folder / 'huge_rows.parquet')}
+
+
+def run_hostile(job: tuple[dict, str, int, int]) -> tuple[str, str, str, int]:
+    """One hostile case in this worker: (outcome, kind, detail, peak RSS of the worker and its children)."""
+    import hostile_cases
+    seeds, kind, seed, index = job
+    work = Path(tempfile.mkdtemp(prefix='hostile_'))
+    signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(TIME_LIMIT * 4)
+    try:
+        outcome, detail = hostile_cases.CASES[kind](work, seeds, random.Random(seed * 1_000_003 + index))
+    except TimeoutError:
+        outcome, detail = 'wedged', 'past the time limit'
+    except MemoryError:
+        outcome, detail = 'memory', ''
+    except Exception as err:  # the bug this benchmark looks for
+        outcome, detail = 'traceback', f'{type(err).__name__}: {err}'[:300]
+    finally:
+        signal.alarm(0)
+        shutil.rmtree(work, ignore_errors=True)
+    peak = max(resource.getrusage(who).ru_maxrss for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+    return outcome, kind, f'{kind} #{index}: {detail}' if detail else '', peak * 1024
+
+
+def hostile_main(args: argparse.Namespace) -> int:
+    """Run ``args.hostile`` hostile cases, write fuzz_hostile.{json,md}; exit 1 on a failure or memory over goal."""
+    import hostile_cases
+    folder = Path(tempfile.mkdtemp(prefix='hostile_seeds_'))
+    seeds = hostile_seeds(folder)
+    kinds = hostile_cases.KINDS
+    jobs = [(seeds, kinds[i % len(kinds)], args.seed, i) for i in range(args.hostile)]
+    counts: dict[str, int] = {}
+    by_kind: dict[str, dict[str, int]] = {}
+    examples: dict[str, list[str]] = {}
+    peak = 0
+    start = time.perf_counter()
+    with ProcessPoolExecutor(args.jobs, initializer=_limit_memory) as pool:
+        for outcome, kind, detail, rss in pool.map(run_hostile, jobs):
+            counts[outcome] = counts.get(outcome, 0) + 1
+            by_kind.setdefault(kind, {})[outcome] = by_kind.get(kind, {}).get(outcome, 0) + 1
+            peak = max(peak, rss)
+            if detail and len(examples.setdefault(outcome, [])) < 10:
+                examples[outcome].append(detail)
+    elapsed = time.perf_counter() - start
+    shutil.rmtree(folder, ignore_errors=True)
+    failures = ('traceback', 'escape', 'silent', 'damaged_output', 'unnamed_refusal', 'wedged', 'memory')
+    document = {'benchmark': 'fuzz_hostile', 'command': f'python benchmarks/fuzz_recordings.py --hostile '
+                f'{args.hostile} --seed {args.seed} --jobs {args.jobs}', 'cases': args.hostile, 'seconds': elapsed,
+                'limits': {'seconds_per_case': TIME_LIMIT * 4, 'address_space_bytes': MEMORY_LIMIT,
+                           'request_seconds': hostile_cases.WEDGE_SECONDS},
+                'peak_rss_bytes': peak, 'memory_goal_bytes': MEMORY_GOAL, 'counts': counts, 'by_kind': by_kind,
+                'examples': examples}
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / 'fuzz_hostile.json').write_text(json.dumps(document, indent=1))
+    outcomes = ('refused', 'ok') + failures
+    lines = [f'# Hostile inputs (`{document["command"]}`)', '',
+             f'{args.hostile} cases of {len(kinds)} kinds (benchmarks/hostile_cases.py), {elapsed:.0f} s; a request '
+             f'that takes over {hostile_cases.WEDGE_SECONDS:g} s counts as wedged; peak resident memory of a worker '
+             f'or a process it started {peak / 2**20:.0f} MiB (goal < {MEMORY_GOAL >> 20} MiB).', '',
+             '| outcome | count | ' + ' | '.join(kinds) + ' |', '|---|---|' + '---|' * len(kinds)]
+    lines += [f'| {k} | {counts.get(k, 0)} | ' + ' | '.join(str(by_kind.get(h, {}).get(k, 0)) for h in kinds) + ' |'
+              for k in outcomes]
+    for outcome, items in examples.items():
+        lines += ['', f'{outcome}:'] + [f'- {item}' for item in items]
+    (RESULTS / 'fuzz_hostile.md').write_text('\n'.join(lines) + '\n')
+    print('\n'.join(lines))
+    return 1 if any(counts.get(k) for k in failures) or peak > MEMORY_GOAL else 0
+
+
+def _limit_memory() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+
+
 def jobs_for(files: list[tuple[Path, str]], mutations: int, seed: int) -> list[tuple]:
     """Mutation ``i`` of seed file ``i mod n``, of the kinds that file type takes in turn."""
     from fuzzing import CALIBRATION_KINDS, RECORDING_KINDS
@@ -198,7 +292,11 @@ def main() -> int:
     parser.add_argument('--mutations', type=int, default=10000)
     parser.add_argument('--seed', type=int, default=1)
     parser.add_argument('--jobs', type=int, default=1, help='worker processes (default 1)')
+    parser.add_argument('--hostile', type=int, default=0, metavar='N',
+                        help='run N cases of the hostile kinds (benchmarks/hostile_cases.py) instead of mutations')
     args = parser.parse_args()
+    if args.hostile:
+        return hostile_main(args)
     folder = Path(tempfile.mkdtemp(prefix='fuzz_seeds_'))
     files = seeds(folder)
     calibration = next(str(path) for path, kind in files if kind == 'calibration')

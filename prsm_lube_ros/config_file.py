@@ -6,7 +6,7 @@
 (``actuator:``, ``rig_simulator: rig:``), and :func:`coerce_fields` turns that
 mapping into keyword arguments of a dataclass, typed by the fields' defaults.
 Every failure is a :class:`~prsm_lube_ros.errors.ConfigError` naming the file.
-Imports only :mod:`.errors` and :mod:`.validation`.
+Imports only :mod:`.errors`, :mod:`.input_file` and :mod:`.validation`.
 """
 from __future__ import annotations
 
@@ -16,13 +16,15 @@ from typing import Any, cast, TYPE_CHECKING, TypeVar
 from collections.abc import Callable, Iterable
 
 from .errors import ConfigError, InputError
+from .input_file import read_text
 from .validation import as_number
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
 
 
-__all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'read_section', 'read_yaml']
+__all__ = ['MAX_YAML_BYTES', 'MAX_YAML_NESTING', 'build', 'coerce_fields', 'nesting_depth', 'parse_yaml',
+           'read_section', 'read_yaml']
 
 #: Largest YAML file read, bytes, and deepest nesting of mappings and lists it may have: configuration and
 #: calibration files are a few kB and a few levels deep; these bounds keep a hostile file from costing
@@ -36,27 +38,22 @@ _T = TypeVar('_T')
 def read_yaml(path: str | Path, what: str) -> Any:
     """The parsed document of ``path``; :class:`ConfigError` naming the file (``what`` says which kind).
 
-    A missing file, an unreadable one, invalid YAML, text that is not UTF-8, a
-    file over :data:`MAX_YAML_BYTES` and nesting deeper than
-    :data:`MAX_YAML_NESTING` each give one line.
+    A missing file, an unreadable one, one that is not a regular file (a FIFO,
+    a device, ``/dev/stdin``), invalid YAML, text that is not UTF-8, a file
+    over :data:`MAX_YAML_BYTES` and nesting deeper than
+    :data:`MAX_YAML_NESTING` each give one line; nothing beyond the bound is
+    read (:mod:`.input_file`).
     """
+    return parse_yaml(read_text(path, what, max_bytes=MAX_YAML_BYTES, error=ConfigError), path, what)
+
+
+def parse_yaml(text: str, path: str | Path, what: str) -> Any:
+    """The parsed document of ``text`` read from ``path``: :func:`read_yaml` for text already read."""
     import yaml
-    path = Path(path)
     try:
-        if path.is_file() and path.stat().st_size > MAX_YAML_BYTES:
-            raise ConfigError(f'{path}: {what} is {path.stat().st_size} bytes, more than {MAX_YAML_BYTES} '
-                              '(not a configuration file?)')
-        document = yaml.safe_load(path.read_text())
+        document = yaml.safe_load(text)
     except RecursionError:
         raise ConfigError(f'{path}: {what} is nested too deeply (more than {MAX_YAML_NESTING} levels)') from None
-    except FileNotFoundError:
-        raise ConfigError(f'{path}: {what} not found') from None
-    except IsADirectoryError:
-        raise ConfigError(f'{path}: {what} is a folder, not a file') from None
-    except OSError as exc:
-        raise ConfigError(f'{path}: cannot read {what} ({exc.strerror or exc})') from None
-    except UnicodeDecodeError:
-        raise ConfigError(f'{path}: {what} is not text (not UTF-8)') from None
     except yaml.YAMLError as exc:
         raise ConfigError(f'{path}: not valid YAML ({exc.__class__.__name__})') from None
     if nesting_depth(document) > MAX_YAML_NESTING:

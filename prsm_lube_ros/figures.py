@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .atomic_file import save_figure
+
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping, Sequence
     import datetime
@@ -36,7 +38,7 @@ def _save(fig: Figure, ax: Axes, path: Path, title: str, plt: ModuleType) -> Pat
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -64,7 +66,7 @@ def grouped_bars(path: Path, conditions: Sequence[str], stages: Sequence[str],
     ax.grid(axis='y', alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -74,7 +76,8 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
                           band: tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
                           levels: Mapping[str, float], events: Sequence[float], title: str,
                           ylabel: str = 'theta_Oil', *, crossings: Sequence[tuple] = (),
-                          as_of: float | None = None, confidence: float = 0.95) -> Path:
+                          as_of: float | None = None, confidence: float = 0.95,
+                          marked_since: tuple[str, float] | None = None) -> Path:
     """Values with one-sigma bars over UTC dates, a forecast (centre and band), levels, crossings and the as-of date.
 
     ``times``, ``band_times``, ``events`` (vertical dotted lines, e.g.
@@ -82,6 +85,9 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     label to a value; ``crossings`` are ``(label, level, estimate, low,
     high)`` (s since the epoch, None where unknown), drawn as a marker at the
     estimate and a bar over the interval on the level's line.
+    ``marked_since`` ``(label, time)`` shades from that time (s since the
+    epoch) to the right edge (a suspected defect: the values there are no
+    lubrication measure).
     """
     import datetime
     plt = _pyplot()
@@ -105,6 +111,12 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
                    label='relubrication' if j == 0 else None)
     if as_of is not None:
         ax.axvline(dates(as_of)[0], color='k', linewidth=1, label='as of')
+    if marked_since is not None:
+        from matplotlib.dates import date2num
+        left, right = ax.get_xlim()
+        start = float(date2num(dates(marked_since[1])[0]))
+        ax.axvspan(start, max(right, start), color='C3', alpha=0.12, hatch='//', label=marked_since[0])
+        ax.set_xlim(left, max(right, start))
     ax.set_xlabel('date (UTC)')
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
@@ -113,7 +125,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     fig.autofmt_xdate()
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 

@@ -10,17 +10,21 @@ at once and ``assess`` does not pay for the diagnosis engine.
 
 User errors (a missing or broken recording, data that cannot calibrate, a bad
 option) end with one line on stderr naming the input and a non-zero status;
-there is no traceback for them.  This package may import every other one.
+there is no traceback for them.  SIGINT and SIGTERM, at any point of a
+command, end it with one line and status 130 or 143
+(:mod:`prsm_lube_ros.stopping`).  This package may import every other one.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
 from .common import EXIT_USER_ERROR
+from ..stopping import stop_at_once, STOP_SIGNALS, StopSignals, Terminated
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -28,7 +32,8 @@ if TYPE_CHECKING:
 #: Command modules, in the order ``--help`` lists them.
 COMMAND_MODULES = ('simulate', 'calibrate', 'assess', 'trend', 'diagnose', 'demo', 'run')
 
-__all__ = ['build_parser', 'COMMAND_MODULES', 'EXIT_USER_ERROR', 'main']
+__all__ = ['build_parser', 'COMMAND_MODULES', 'EXIT_USER_ERROR', 'main', 'stop_at_once', 'STOP_SIGNALS',
+           'Terminated']
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -43,14 +48,40 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Entry point; returns the exit status (128 + the signal's number after SIGINT or SIGTERM: 130, 143)."""
+    command = ''
+    _names_in_any_encoding()
+    with StopSignals() as stop:
+        try:
+            args = build_parser().parse_args(argv)
+            command = stop.command = args.command
+            status = _run(args)
+        except (Terminated, KeyboardInterrupt) as exc:
+            stop.arrived(getattr(exc, 'signum', signal.SIGINT))
+        except BaseException:
+            if stop.signum is None:
+                raise
+            # A signal's exception turned into another on its way (an extension module that was initialising
+            # reports ImportError): it is still the interruption.
+        return stop.status(command, status if stop.signum is None else 0)
+
+
+def _names_in_any_encoding() -> None:
+    """stdout and stderr print any file name the file system allows (its bytes back, not UnicodeEncodeError)."""
+    for stream in (sys.stdout, sys.stderr):
+        if getattr(stream, 'errors', None) == 'strict' and hasattr(stream, 'reconfigure'):
+            stream.reconfigure(errors='surrogateescape' if stream.encoding.lower().replace('-', '') == 'utf8'
+                               else 'backslashreplace')
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command; a user error or a refused file operation is one line on stderr."""
     try:
         return args.func(args)
     except InputError as exc:
         print(f'prsm-lube {args.command}: error: {exc}', file=sys.stderr)
         return EXIT_USER_ERROR
-    except KeyboardInterrupt:
-        print(f'prsm-lube {args.command}: interrupted', file=sys.stderr)
-        return 130
+    except OSError as exc:      # the file system refused (disk full, ulimit -f, permissions): outputs stay whole
+        where = f'{exc.filename}: ' if exc.filename else ''
+        print(f'prsm-lube {args.command}: error: {where}cannot write or read ({exc.strerror or exc})', file=sys.stderr)
+        return EXIT_USER_ERROR

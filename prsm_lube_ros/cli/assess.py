@@ -12,9 +12,12 @@ if TYPE_CHECKING:
     import argparse
     from collections.abc import Sequence
 
+    from ..diagnosis.condition_report import ConditionReport
     from ..estimation.calibration import Calibration
     from ..estimation.pipeline import RecordingAssessment
+    from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import BagOutcome
+    from ..physics.actuator import Actuator
 
 
 __all__ = ['add_command', 'run']
@@ -29,6 +32,9 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
     parser.add_argument('--calibration', required=True, metavar='CALIB.yaml')
     parser.add_argument('--json', metavar='OUT.json', help='write runs and windows as JSON')
     add_recording_options(parser)
+    parser.add_argument('--report', metavar='DIR',
+                        help='write DIR/index.html with the condition figures of every recording: order and envelope '
+                        'spectra with the defect orders, waterfalls, indicator trends and theta_oil per run')
     parser.add_argument('--history', metavar='DIR',
                         help='add runs and windows to this Parquet history (re-assessed recordings replace theirs)')
     parser.add_argument('--actuator-id', default=None, metavar='ID',
@@ -56,17 +62,13 @@ def run(args: argparse.Namespace) -> int:
     its theta_oil is then no lubrication measure.
     """
     from ..estimation.calibration_file import load_calibration
-    from ..estimation.pipeline import assessment_json
-    from ..estimation.windowing import WindowSettings
     from ..fleet.parallel import assess_bags, BagJob
     from ..physics.actuator import load_actuator
-    from ..physics.defect_orders import defect_orders
-    from ..validation import require_positive
-    from .common import progress_bar, warn, write_json
+    from .common import progress_bar, warn
     calibration = load_calibration(args.calibration)
     actuator = load_actuator(args.actuator)
-    settings = WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
-                              defect_orders=defect_orders(actuator))
+    settings = _window_settings(args, calibration, actuator)
+    report = _condition_report(calibration, settings, args.bags) if args.report else None
     job = BagJob(calibration, actuator.lead, settings, args.namespace,
                  hash_content=bool(args.history))
     to_history = None
@@ -81,6 +83,8 @@ def run(args: argparse.Namespace) -> int:
         """Write each finished recording into the history at once (this process), so a killed run keeps it."""
         if to_history is not None:
             refused.append(to_history(outcome))
+        if report is not None and outcome.assessment is not None:
+            report.add(outcome.assessment)      # summarised now, the windows' spectra let go
         bar.update(1)
 
     try:
@@ -99,13 +103,34 @@ def run(args: argparse.Namespace) -> int:
     if not results:
         return EXIT_USER_ERROR
     _print_table(results, calibration, args.calibration)
-    if args.history and results:
-        print(f'history {args.history}: {len(results) - len(refused)} recordings added or replaced')
-    if args.json and results:
+    _write_outputs(args, results, calibration, report, len(results) - len(refused))
+    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _window_settings(args: argparse.Namespace, calibration: Calibration, actuator: Actuator) -> WindowSettings:
+    """Windows in the calibration's band, envelope lines labelled by the actuator; spectra kept for ``--report``."""
+    from ..estimation.conditioning import LOWEST_ORDER_FREQUENCY
+    from ..estimation.windowing import WindowSettings
+    from ..physics.defect_orders import defect_orders
+    from ..validation import require_positive
+    return WindowSettings(window_length=require_positive('--window', args.window), band=calibration.band,
+                          defect_orders=defect_orders(actuator),
+                          spectrum_lowest_frequency=LOWEST_ORDER_FREQUENCY if args.report else 0.0)
+
+
+def _write_outputs(args: argparse.Namespace, results: Sequence[RecordingAssessment], calibration: Calibration,
+                   report: ConditionReport | None, added: int) -> None:
+    """The history's count, the JSON and the condition report, each said in one line."""
+    from ..estimation.pipeline import assessment_json
+    from .common import write_json
+    if args.history:
+        print(f'history {args.history}: {added} recordings added or replaced')
+    if args.json:
         document = assessment_json(results, calibration)
         write_json(args.json, document)
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
-    return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+    if report is not None:
+        print(f'wrote {report.write(args.report)}: condition figures of {len(report.runs)} runs')
 
 
 def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:
@@ -146,6 +171,19 @@ def _print_table(results: Sequence[RecordingAssessment], calibration: Calibratio
     for name, run_index, evidence in defects:
         print(f'D {name} run {run_index}: surface defect suspected: {evidence}; theta_oil is not a lubrication '
               'measure while it lasts')
+
+
+def _condition_report(calibration: Calibration, settings: WindowSettings, bags: Sequence[str]) -> ConditionReport:
+    """The ``--report`` page's collector, with the calibration's band, baseline and flags; recordings as given."""
+    from ..diagnosis.condition_report import ConditionReport
+    from ..estimation.calibration_file import band_note, baseline_note
+    band = calibration.band
+    return ConditionReport(settings.defect_orders, band=(band.low, band.high) if band is not None else None,
+                           baseline=calibration.condition_baseline,
+                           notes=[f'Calibration: {band_note(calibration)}'
+                                  + (f'; domain {calibration.domain.text}' if calibration.domain is not None else '')
+                                  + ''.join(f'; {note}' for note in (*calibration.flags, baseline_note(calibration))
+                                            if note) + '.'], paths=bags)
 
 
 def _actuator_id(args: argparse.Namespace) -> str:

@@ -11,6 +11,7 @@ from pathlib import Path
 import sys
 from typing import TYPE_CHECKING
 
+from ..atomic_file import write_text_atomically
 from ..errors import ConfigError
 from ..validation import finite_or_none
 
@@ -100,7 +101,7 @@ def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
 
 
 def write_json(path: str | Path, document: object) -> None:
-    """``document`` as indented JSON at ``path`` (folders made); NaN and infinities are never written.
+    """``document`` as indented JSON at ``path`` (folders made, written atomically); no NaN or infinity.
 
     JSON has no NaN: a non-finite number that reached the document (the
     builders give ``None`` for them already) is written as ``null``, not a traceback.
@@ -110,8 +111,7 @@ def write_json(path: str | Path, document: object) -> None:
     except ValueError:      # "Out of range float values are not JSON compliant"
         text = json.dumps(_finite_or_null(document), indent=1, allow_nan=False)
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(text)
+        write_text_atomically(Path(path), text)    # a full disk leaves the earlier file whole
     except OSError as exc:
         raise ConfigError(f'{path}: cannot write ({exc.strerror or exc})') from None
 

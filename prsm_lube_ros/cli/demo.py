@@ -1,12 +1,13 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""``prsm-lube demo``: the whole product in four steps, each checked against the simulator's truth.
+"""``prsm-lube demo``: the whole product in five steps, each checked against the simulator's truth.
 
 1. the paper's experiment (:mod:`prsm_lube_ros.experiments.paper_demo`);
 2. both nodes on a live graph, the calibrate service called
    (:func:`.demo_steps.live_step`);
 3. a concealed physical effect found by ``diagnose`` (:func:`.demo_steps.diagnosis_step`);
-4. a small fleet's history, trend and forecast (:func:`.demo_steps.fleet_step`).
+4. a small fleet's history, trend and forecast (:func:`.demo_steps.fleet_step`);
+5. a surface defect told from an oil loss (:func:`.demo_defect.defect_step`).
 
 ``--quick`` runs step 1 only.  ``<out>/index.html`` ties the figures and
 tables together; the exit status is 0 only when every step's check passes.
@@ -30,11 +31,13 @@ __all__ = ['add_command', 'run']
 def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``demo`` to the ``prsm-lube`` subcommands."""
     parser = subparsers.add_parser(
-        'demo', help='the whole product in four checked steps: paper, live graph, concealed physics, fleet',
+        'demo', help='the whole product in five checked steps: paper, live graph, concealed physics, fleet, '
+        'surface defect',
         description='1: simulate the paper\'s experiment, calibrate on the third lubrication stage, assess the '
         'first two (table and figures like the paper\'s Fig. 5); 2: the sensor bridge and the estimator live, '
         'the calibrate service called; 3: an effect concealed in a recording found by diagnose; 4: a small '
-        'fleet\'s history, trend and forecast. Each step is checked against the simulator\'s truth; '
+        'fleet\'s history, trend and forecast; 5: a surface defect told from an oil loss. Each step is checked '
+        'against the simulator\'s truth; '
         '<out>/index.html shows them all.')
     parser.add_argument('--out', default='out/demo', help='output folder (default out/demo)')
     parser.add_argument('--seed', type=int, default=7)
@@ -104,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the steps, print what each shows and its checks, write index.html; 0 when every check passes."""
     from pathlib import Path
     from .demo_page import write_page
+    from .demo_defect import defect_step
     from .demo_steps import diagnosis_step, fleet_step, live_step
 
     def say(text: str = '') -> None:
@@ -111,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    total = 1 if args.quick else 4
+    total = 1 if args.quick else 5
     steps = []
 
     def header(number: int, title: str) -> None:
@@ -130,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         header(4, f'a small fleet ({args.actuators} actuators x {args.days} days): history, trend, the most '
                'urgent actuators and their forecast crossing')
         steps.append(fleet_step(out, args.seed, say, actuators=args.actuators, days=args.days))
+        header(5, 'a spalled screw is not a dry one: a surface defect beside an oil loss')
+        steps.append(defect_step(out, args.seed, say))
     sizes = (f' --actuators {args.actuators} --days {args.days} --playback-rate {args.playback_rate:g} '
              f'--live-windows {args.live_windows}')
     command = f'prsm-lube demo --out {args.out} --seed {args.seed}' + (' --quick' if args.quick else sizes)

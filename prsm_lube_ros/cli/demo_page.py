@@ -12,6 +12,8 @@ import html
 import os
 from pathlib import Path
 
+from ..atomic_file import write_text_atomically
+
 __all__ = ['STYLE', 'write_page']
 
 STYLE = """
@@ -74,5 +76,5 @@ def write_page(folder: Path, steps: list, command: str) -> Path:
                                                   for path, text in step.links) + '</p>')
     parts.append('</body></html>\n')
     page = folder / 'index.html'
-    page.write_text('\n'.join(parts))
+    write_text_atomically(page, '\n'.join(parts))
     return page

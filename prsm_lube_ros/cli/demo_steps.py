@@ -176,9 +176,12 @@ def live_step(out: Path, bags_dir: Path, stages: Sequence[float], *, playback_ra
 
 # -- step 3 ----------------------------------------------------------------------------------------
 def concealed_effect(seed: int) -> str:
-    """The effect hidden in step 3: one of the diagnosis's effect IDs, drawn from ``seed``."""
+    """The effect hidden in step 3: one of the diagnosis's effect IDs, drawn from ``seed``.
+
+    ``surface_defect`` has its own step (5, :mod:`.demo_defect`), so step 3 draws among the others.
+    """
     from ..physics.effects import effect_ids
-    ids = sorted(effect_ids())
+    ids = sorted(set(effect_ids()) - {'surface_defect'})
     return ids[int(np.random.default_rng([seed, 3]).integers(len(ids)))]
 
 

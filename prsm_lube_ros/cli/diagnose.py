@@ -24,7 +24,8 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
     parser.add_argument('bags', nargs='+', metavar='BAG', help='rosbag2 folder or .mcap file')
     parser.add_argument('--theta', type=float, default=1.0, help='theta_oil of the recordings (default 1.0)')
     parser.add_argument('--json', required=True, metavar='OUT.json', help='write the diagnosis as JSON')
-    parser.add_argument('--report', metavar='DIR', help='write figures and a one-page report to DIR')
+    parser.add_argument('--report', metavar='DIR', help='write figures and a one-page report to DIR, with the '
+                        'condition figures (order and envelope spectra, waterfalls, indicator trends)')
     parser.add_argument('--calibration-out', metavar='CALIB.yaml',
                         help='write the calibration of the chosen model (effect in its extension)')
     add_recording_options(parser)
@@ -73,8 +74,11 @@ def run(args: argparse.Namespace) -> int:
         save_calibration(with_band_and_domain(result.calibration(), recordings[0].band, used), args.calibration_out)
         print(f'wrote {args.calibration_out}')
     if args.report:
+        from ..atomic_file import staged_folder
         from ..diagnosis import write_report
-        page = write_report(result, args.report)
+        from pathlib import Path
+        with staged_folder(Path(args.report)) as staged:     # each file of the report moved into place whole
+            page = Path(args.report) / write_report(result, staged, recordings).relative_to(staged)
         print(f'wrote {page}')
     print(f'wrote {args.json}')
     return 0

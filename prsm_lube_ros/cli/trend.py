@@ -8,6 +8,11 @@ overdue, "may have crossed" with its probability, and the probability of
 crossing by a chosen date (``--by``).  ``--backtest DAYS`` forecasts from the
 history cut DAYS earlier and scores it against what was measured since.
 
+An actuator whose history holds a run the defect screen flagged (from the
+first such run on: the damage does not heal, :mod:`~prsm_lube_ros.fleet.defects`)
+gets no lubrication forecast: its row, JSON entry and plot say since when and
+which component, and it comes first (it needs an inspection, not oil).
+
 Bad input never stops the report for the others: an unreadable file of the
 history, a stray file in it, an odometer that goes backwards or names an
 actuator the history does not have are each one line on stderr (``file`` or
@@ -27,7 +32,7 @@ if TYPE_CHECKING:
 
     import numpy.typing as npt
 
-    from ..fleet.forecast import ActuatorForecast, RecordingPoint
+    from ..fleet.forecast import ActuatorForecast, FleetRecords, RecordingPoint
     from ..fleet.planner import PlannedCrossing
 
     #: Each actuator's recording points.
@@ -50,7 +55,9 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
         description='Fit theta_oil = a exp(-t/tau) per lubrication cycle to each actuator\'s history (written '
         'by assess --history), relubrications found as jumps up or given, and forecast when theta_oil crosses '
         'the warn and error levels, with an interval. Table most urgent first, JSON and dated plots, as of a '
-        'date; --backtest scores the forecast against later recordings.')
+        'date; --backtest scores the forecast against later recordings. An actuator with a run the surface '
+        'defect screen of assess flagged gets no forecast from then on (theta_oil is no lubrication measure) '
+        'and comes first: it needs an inspection.')
     parser.add_argument('history', metavar='HISTORY', help='history folder written by prsm-lube assess --history')
     parser.add_argument('--actuator', default=None, metavar='ID', help='only this actuator')
     parser.add_argument('--report', required=True, metavar='DIR', help='folder for trend.json, trend.md, plots')
@@ -122,19 +129,19 @@ def run(args: argparse.Namespace) -> int:
     """Forecast every actuator of the history; table on stdout, JSON, Markdown and one plot each."""
     from pathlib import Path
     from ..errors import ConfigError
-    from ..fleet.forecast import history_points
+    from ..fleet.forecast import history_records
     from .common import warn
     options = _options(args)
     report = Path(args.report)
     if report.exists() and not report.is_dir():
         raise ConfigError(f'--report {report}: exists and is not a folder')
     problems: list[str] = []
-    points = history_points(args.history, on_problem=problems.append, actuator=args.actuator)
-    relubrications, odometers, odometer_reasons = _service_logs(args, points, problems)
+    records = history_records(args.history, on_problem=problems.append, actuator=args.actuator)
+    relubrications, odometers, odometer_reasons = _service_logs(args, records.points, problems)
     if args.backtest is not None:
-        _backtest(args, options, points, relubrications, report)
+        _backtest(args, options, records, relubrications, report)
     else:
-        _forecast(args, options, points, relubrications, odometers, odometer_reasons, report)
+        _forecast(args, options, records, relubrications, odometers, odometer_reasons, report)
     for line in problems:
         warn(line)
     return EXIT_USER_ERROR if problems else 0
@@ -157,29 +164,57 @@ def _service_logs(args: argparse.Namespace, points: _Points,
                                        if actuator_key(name) in points}
 
 
-def _forecast(args: argparse.Namespace, options: TrendOptions, points: _Points, relubrications: _Relubrications,
-              odometers: _Odometers, odometer_reasons: dict[str, str], report: Path) -> None:
+def _forecast(args: argparse.Namespace, options: TrendOptions, records: FleetRecords,
+              relubrications: _Relubrications, odometers: _Odometers, odometer_reasons: dict[str, str],
+              report: Path) -> None:
     """Forecast, plan, print the table and write trend.json, trend.md and the plots."""
     from ..fleet.forecast import forecast_points
+    from ..atomic_file import write_text_atomically
     from ..fleet.planner import plan
     from .common import write_json
     from ..errors import InputError
-    forecasts = forecast_points(points, relubrications=relubrications, levels=options.levels,
+    forecasts = forecast_points(records.points, relubrications=relubrications, levels=options.levels,
                                 only=args.actuator, odometers=odometers, confidence=options.confidence,
-                                as_of=options.as_of)
+                                as_of=options.as_of, defects=records.defects)
     if not forecasts:
         raise InputError(f'{args.history}: no assessed recording made by --as-of {_utc(options.as_of)}')
     for forecast in forecasts:
         forecast.revolutions_reason = odometer_reasons.get(forecast.actuator, '')
     plans = {forecast.actuator: plan(forecast, options.as_of, options.by) for forecast in forecasts}
-    table = _table(forecasts, plans, options, bool(args.odometer))
-    print(table)
+    parts = (_table(forecasts, plans, options, bool(args.odometer)), _defect_lines(forecasts),
+             _note_lines(records.notes))
+    text = '\n\n'.join(part for part in parts if part)
+    print(text)
     for forecast in forecasts:
         _plot(report, forecast, options)
-    write_json(report / 'trend.json', _document(args, options, forecasts, plans))
-    (report / 'trend.md').write_text(f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent first\n\n'
-                                     f'{table}\n')
+    write_json(report / 'trend.json', _document(args, options, forecasts, plans, records.notes))
+    write_text_atomically(report / 'trend.md', f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent '
+                          f'first\n\n{text}\n')
     print(f'wrote {report}: trend.json, trend.md and {len(forecasts)} plots')
+
+
+def _defect_lines(forecasts: Sequence[ActuatorForecast]) -> str:
+    """The evidence of each suspected surface defect, under the table ('' when there is none)."""
+    suspected = [f for f in forecasts if f.defect is not None]
+    if not suspected:
+        return ''
+    lines = ['Surface defect suspected: inspect the screw and its bearings (oil does not mend a spall). theta_Oil '
+             'reads the damage as if it were oil loss, so it is no lubrication measure. Suspected from the first '
+             'flagged run on: the damage does not heal, so neither a relubrication nor a later run the screen '
+             'passes ends it.', '']
+    for forecast in suspected:
+        defect = forecast.defect
+        assert defect is not None  # kept above
+        since = sum(p.time >= defect.since_recording for p in forecast.points)
+        lines.append(f'- {forecast.actuator}: since {defect.since_utc} ({defect.recording_path}), flagged in '
+                     f'{defect.recordings} of {max(since, defect.recordings)} recordings since: '
+                     f'{defect.evidence or "no evidence recorded"}')
+    return '\n'.join(lines)
+
+
+def _note_lines(notes: Sequence[str]) -> str:
+    """Notes on the history (recordings never screened for a defect), '' without any."""
+    return '\n'.join(f'Note: {line}' for line in notes)
 
 
 def _utc(seconds: float | None) -> str:
@@ -189,8 +224,8 @@ def _utc(seconds: float | None) -> str:
 
 
 def _document(args: argparse.Namespace, options: TrendOptions, forecasts: Sequence[ActuatorForecast],
-              plans: Mapping[str, list[PlannedCrossing]]) -> dict:
-    """trend.json: options, and per actuator the forecast with its planner view."""
+              plans: Mapping[str, list[PlannedCrossing]], notes: Sequence[str]) -> dict:
+    """trend.json: options, notes, and per actuator the forecast with its planner view."""
     actuators = []
     for forecast in forecasts:
         entry = forecast.as_json()
@@ -199,7 +234,7 @@ def _document(args: argparse.Namespace, options: TrendOptions, forecasts: Sequen
         actuators.append(entry)
     return {'history': str(args.history), 'levels': {'warn': options.levels[0], 'error': options.levels[1]},
             'confidence': options.confidence, 'as_of': options.as_of, 'as_of_utc': _utc(options.as_of),
-            'by': options.by, 'by_utc': _utc(options.by), 'actuators': actuators}
+            'by': options.by, 'by_utc': _utc(options.by), 'notes': list(notes), 'actuators': actuators}
 
 
 def _table(forecasts: Sequence[ActuatorForecast], plans: Mapping[str, list[PlannedCrossing]], options: TrendOptions,
@@ -223,6 +258,9 @@ def _row(forecast: ActuatorForecast, planned: Sequence[PlannedCrossing], with_od
     """The cells of one actuator's row."""
     from ..fleet.forecast_summary import crossing_interval_text
     from ..fleet.planner import planner_text
+    if forecast.defect is not None:
+        return [forecast.actuator, str(len(forecast.points)), str(len(forecast.relubrications)), '–', '–',
+                forecast.reason]
     if forecast.reason:
         return [forecast.actuator, str(len(forecast.points)), '–', '–', '–', forecast.reason]
     cells = [forecast.actuator, str(len(forecast.points)), str(len(forecast.relubrications)),
@@ -262,25 +300,35 @@ def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> No
     band: tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike] = ([], [], [])
     if len(future):
         band = forecast.band(future)
+    title = f'{forecast.actuator}: theta_Oil and forecast'
+    since = None
+    if forecast.defect is not None:
+        title = (f'{forecast.actuator}: theta_Oil; no lubrication forecast (surface defect suspected since '
+                 f'{forecast.defect.since_utc[:10]})')
+        since = (f'surface defect suspected ({forecast.defect.component or "impulsive"}): theta_Oil no lubrication '
+                 'measure', forecast.defect.since)
     history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
                           [p.theta_oil for p in points], [p.theta_oil_std for p in points], future, band,
                           {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
-                          forecast.relubrications, f'{forecast.actuator}: theta_Oil and forecast',
+                          forecast.relubrications, title,
                           crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
                                      for name, c in zip(names, forecast.crossings)],
-                          as_of=options.as_of, confidence=options.confidence)
+                          as_of=options.as_of, confidence=options.confidence, marked_since=since)
 
 
-def _backtest(args: argparse.Namespace, options: TrendOptions, points: _Points, relubrications: _Relubrications,
-              report: Path) -> None:
+def _backtest(args: argparse.Namespace, options: TrendOptions, records: FleetRecords,
+              relubrications: _Relubrications, report: Path) -> None:
     """Forecast from the history cut ``--backtest`` days earlier; print and write its scores."""
     from ..errors import InputError
+    from ..atomic_file import write_text_atomically
     from ..fleet.backtest import backtest
     from .common import write_json
     if not args.backtest > 0:
         raise InputError(f'--backtest DAYS must be > 0, got {args.backtest:g}')
-    result = backtest(points, args.backtest, relubrications=relubrications, levels=options.levels,
-                      confidence=options.confidence)
+    if not records.points:
+        raise InputError(f'{args.history}: no recording with a theta_Oil to backtest')
+    result = backtest(records.points, args.backtest, relubrications=relubrications, levels=options.levels,
+                      confidence=options.confidence, defects=records.defects)
     document = result.as_json()
     lines = [f'# Backtest: forecast as of {_utc(result.cut)} ({args.backtest:g} d before the newest recording)', '',
              '| actuator | later recordings | inside band | crossings seen | inside interval |',
@@ -295,7 +343,7 @@ def _backtest(args: argparse.Namespace, options: TrendOptions, points: _Points, 
     text = '\n'.join(lines)
     print(text)
     write_json(report / 'backtest.json', document)
-    (report / 'backtest.md').write_text(text + '\n')
+    write_text_atomically(report / 'backtest.md', text + '\n')
 
 
 def _share(value: float | None) -> str:

@@ -9,11 +9,12 @@ Public API::
     result.named_effects()                    # (effect, form, params) of each named effect (0, 1 or 2)
     result.as_json()                          # the contract's diagnose document (plus ``effects``, ``form``)
     result.calibration()                      # Calibration with the first named effect in ``extension``
-    write_report(result, 'out/report')        # PNG figures and index.md / index.html
+    write_report(result, 'out/report', recordings)   # PNG figures and index.md / index.html
 
 Owns: the window table (``table``), locating the mismatch (``locate``), fitting
 the model with candidate effects (``fitting``, ``combined``), the verdict
-(``engine``), the report (``report``) and the candidates (``effects/``, one per
+(``engine``), the reports (``report``; ``condition_report``, also
+``assess --report``'s page) and the candidates (``effects/``, one per
 law of :mod:`prsm_lube_ros.physics.effects`).  May import the base layer,
 :mod:`..physics`, :mod:`..recording` and :mod:`..estimation`; no ROS.
 """
@@ -54,7 +55,11 @@ def diagnose_recordings(recordings: Sequence[RecordingWindows], theta: float = 1
     return result
 
 
-def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
-    """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`)."""
+def write_report(diagnosis: Diagnosis, folder: str | Path,
+                 recordings: Sequence[RecordingWindows] | None = None) -> Path:
+    """Figures and a one-page report of ``diagnosis`` in ``folder`` (see :mod:`.report`).
+
+    Given the diagnosed ``recordings``, the page holds their condition figures too (:mod:`.condition_report`).
+    """
     from .report import write_report as _write
-    return _write(diagnosis, folder)
+    return _write(diagnosis, folder, recordings)

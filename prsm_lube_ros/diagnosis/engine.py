@@ -31,7 +31,11 @@ A candidate *earns its extra parameters* when, with physical constants
 error by :data:`MIN_GAIN` or more; or when evidence from outside the
 amplitude fit (the spectrum's fixed lines or the vibration at standstill for
 background vibration, a mode band for a resonance) shows it
-and it does not predict held-out runs worse.  Earning candidates rank by
+and it does not predict held-out runs worse.  A candidate whose law can mimic
+others in the amplitudes (:attr:`.effects.Effect.requires_evidence`: a surface
+defect's added power with free exponents) is fitted only where its evidence
+shows (impulsive windows); elsewhere it is rejected unfitted, with what argues
+against it.  Earning candidates rank by
 held-out error.  When the runner-up comes close (half the leader's gain or
 more) both are fitted together and each is tested for what it adds given the
 other: the one that adds nothing is dropped.  If neither adds anything, the
@@ -561,6 +565,12 @@ def _evaluate(table: WindowTable, effect: Effect, baseline: ModelFit, location: 
     reason = effect.applicable(table) or _too_few_conditions(table, effect, location)
     if reason:
         return Candidate(effect, None, Status.NOT_TESTABLE, reason, form=effect.form, family=family)
+    if effect.requires_evidence and not effect.independent_evidence(table, location):
+        against = effect.contrary_evidence(table, location)
+        return Candidate(effect, None, Status.REJECTED, 'named only where its signature shows outside the '
+                         'amplitudes (its law can mimic other effects there), and the recording shows none'
+                         + (f': {against}' if against else ''), evidence_against=against, form=effect.form,
+                         family=family)
     testable = [form for form in effect.variants() if not form.applicable(table)]
     effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan

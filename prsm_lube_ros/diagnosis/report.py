@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""A one-minute report of a diagnosis: up to five figures and a page (Markdown and HTML).
+"""A one-minute report of a diagnosis: its figures, the condition figures, and a page (Markdown and HTML).
 
 * ``residual.png`` — model error against the covariate that carries the
   mismatch, the paper's model beside the chosen one;
@@ -9,25 +9,31 @@
 * ``spectrum.png`` — median spectrum per screw speed with fixed lines marked
   (when spectra were kept);
 * ``empirical.png`` — for physics outside the catalogue: run amplitudes against
-  the paper's model over the located covariate, with the empirical term.
+  the paper's model over the located covariate, with the empirical term;
+* ``condition_*.png`` — given the recordings, the condition report of
+  :mod:`.condition_report` (order and envelope spectra with the defect orders,
+  waterfalls, indicator trends per run) in a section of its own.
 """
 from __future__ import annotations
 
-import html
 import math
 from pathlib import Path
 from typing import Any, cast, TYPE_CHECKING
 
 import numpy as np
 
+from ..atomic_file import write_atomically
 from ..errors import InputError
+from .condition_report import ConditionReport, markdown_html
 from .empirical import causes
 from .engine import Diagnosis, Status
 from .fitting import ModelFit, predict_log
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
     from types import ModuleType
 
+    from ..estimation.pipeline import RecordingWindows
     from .table import WindowTable
 
 __all__ = ['LABELS', 'write_report']
@@ -272,43 +278,42 @@ def _page(diagnosis: Diagnosis, figures: list[str]) -> str:
 
 
 def _html(markdown: str) -> str:
-    """Minimal Markdown-to-HTML for the report page (headings, bold, tables, images, lists)."""
-    import re
-    body, in_table = [], False
-    for line in markdown.split('\n'):
-        text = html.escape(line)
-        text = re.sub(r'\*\*(.+?)\*\*', r'<b>\1</b>', text)
-        text = re.sub(r'`(.+?)`', r'<code>\1</code>', text)
-        if line.startswith('|'):
-            cells = [c.strip() for c in text.strip('|').split('|')]
-            if set(line.replace('|', '').strip()) <= {'-'}:
-                continue
-            tag = 'th' if not in_table else 'td'
-            if not in_table:
-                body.append('<table border="1" cellspacing="0" cellpadding="3">')
-                in_table = True
-            body.append('<tr>' + ''.join(f'<{tag}>{c}</{tag}>' for c in cells) + '</tr>')
-            continue
-        if in_table:
-            body.append('</table>')
-            in_table = False
-        image = re.match(r'!\[(.*)\]\((.*)\)', line)
-        if image:
-            body.append(f'<p><img src="{html.escape(image.group(2))}" alt="{html.escape(image.group(1))}"></p>')
-        elif line.startswith('# '):
-            body.append(f'<h1>{text[2:]}</h1>')
-        elif line.startswith('- '):
-            body.append(f'<li>{text[2:]}</li>')
-        elif line:
-            body.append(f'<p>{text}</p>')
-    if in_table:
-        body.append('</table>')
-    return ('<!DOCTYPE html><html><head><meta charset="utf-8"><title>prsm-lube diagnose</title></head>'
-            '<body style="font-family: sans-serif; max-width: 1100px">' + '\n'.join(body) + '</body></html>')
+    """The report page as HTML (:func:`.condition_report.markdown_html`)."""
+    return markdown_html(markdown, 'prsm-lube diagnose')
 
 
-def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
-    """Write the figures, ``index.md`` and ``index.html`` into ``folder``; returns the HTML page's path."""
+def _condition_section(diagnosis: Diagnosis, recordings: Sequence[RecordingWindows], folder: Path) -> list[str]:
+    """The condition report of the diagnosed recordings (figures ``condition_*.png``), as Markdown lines.
+
+    theta_Oil per run is what ``calibrate`` then ``assess`` on these same
+    recordings reads (the paper's model); the defect screen has no healthy
+    reference here (a baseline of the recordings themselves would hide a
+    defect they all carry), so only its absolute limits apply.
+    """
+    from dataclasses import replace
+    from ..estimation.pipeline import assess_recording, calibrate_recordings
+    table = diagnosis.table
+    theta = table.theta if table is not None else 1.0
+    calibration = replace(calibrate_recordings(recordings, theta), condition_baseline=None)
+    band = recordings[0].band
+    report = ConditionReport(
+        recordings[0].defect_orders, band=(band.low, band.high) if band is not None and band.chosen else None,
+        notes=[f'theta_Oil per run: the paper\'s model calibrated on these recordings at theta_Oil = {theta:g} and '
+               'read back (what `calibrate` then `assess` give); the screen has no healthy reference here, so only '
+               'its absolute limits apply.'])
+    for recording in recordings:
+        report.add(assess_recording(recording, calibration), release=False)
+    return report.markdown(folder, prefix='condition_')
+
+
+def write_report(diagnosis: Diagnosis, folder: str | Path,
+                 recordings: Sequence[RecordingWindows] | None = None) -> Path:
+    """Write the figures, ``index.md`` and ``index.html`` into ``folder``; returns the HTML page's path.
+
+    With the diagnosed ``recordings`` the page also holds their condition
+    report (:mod:`.condition_report`: order and envelope spectra, waterfalls,
+    indicator trends).  The page is written last, each file atomically.
+    """
     folder = Path(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -328,7 +333,10 @@ def write_report(diagnosis: Diagnosis, folder: str | Path) -> Path:
     if _empirical_figure(diagnosis, folder / 'empirical.png', plt):
         figures.append('empirical.png')
     markdown = _page(diagnosis, figures)
-    (folder / 'index.md').write_text(markdown)
+    if recordings:
+        markdown += '\n' + '\n'.join(_condition_section(diagnosis, recordings, folder))
+    write_atomically(folder / 'index.md', lambda stream: stream.write(markdown), binary=False)
     page = folder / 'index.html'
-    page.write_text(_html(markdown))
+    text = _html(markdown)
+    write_atomically(page, lambda stream: stream.write(text), binary=False)
     return page

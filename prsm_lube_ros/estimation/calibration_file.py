@@ -5,10 +5,16 @@
 Writes are atomic: the new content goes to a temporary file in the same folder,
 is flushed to disk, then replaces the old file in one rename, so a crash in the
 middle leaves the old calibration whole.
+
+A file ends where it was meant to: its first line (:data:`SEAL_HEAD`) says the
+last line holds the SHA-256 of every line before it, whatever sections the
+file holds, so a file cut short or damaged after writing is refused instead of
+read as an older format.  Files written before (no first line) load as ever.
 """
 from __future__ import annotations
 
 import datetime
+import hashlib
 import math
 from pathlib import Path
 
@@ -16,8 +22,9 @@ import numpy as np
 import yaml
 
 from ..atomic_file import write_atomically
-from ..config_file import read_yaml
+from ..config_file import MAX_YAML_BYTES, parse_yaml
 from ..errors import ConfigError, InputError
+from ..input_file import read_text
 from ..physics.vibration_model import ModelConstants
 from .calibration import Calibration
 from .calibration_checks import check_calibration, check_document
@@ -26,12 +33,14 @@ from .defect_screen import ConditionBaseline
 from .domain import CalibrationDomain
 from .run_scatter import RunScatter
 
-__all__ = ['FORMAT', 'VERSION', 'band_note', 'baseline_note', 'calibration_from_dict', 'calibration_to_dict',
-           'load_calibration',
-           'save_calibration']
+__all__ = ['FORMAT', 'SEAL_HEAD', 'SEAL_TAIL', 'VERSION', 'band_note', 'baseline_note', 'calibration_from_dict',
+           'calibration_to_dict', 'load_calibration', 'save_calibration']
 
 FORMAT = 'prsm_lube_ros/calibration'
 VERSION = 1
+#: First line of a sealed file, and the start of its last line (followed by 64 hex digits)
+SEAL_HEAD = '# prsm_lube_ros calibration: its last line is the SHA-256 of the lines before it\n'
+SEAL_TAIL = '# end sha256 '
 
 
 def calibration_to_dict(calibration: Calibration) -> dict:
@@ -98,7 +107,7 @@ def calibration_from_dict(data: dict, origin: str = 'calibration') -> Calibratio
                                 if data.get('condition_baseline') is not None else None))
     except InputError as exc:
         raise exc if origin in str(exc) else ConfigError(f'{origin}: {exc}') from None
-    except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise ConfigError(f'{origin}: malformed calibration ({exc.__class__.__name__}: {exc})') from None
     check_document(data, origin)
     check_calibration(calibration, origin)
@@ -146,7 +155,8 @@ def save_calibration(calibration: Calibration, path: str | Path) -> Path:
     (:func:`~prsm_lube_ros.atomic_file.remove_stale`).
     """
     path = Path(path)
-    text = yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False)
+    text = SEAL_HEAD + yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False)
+    text += f'{SEAL_TAIL}{hashlib.sha256(text.encode()).hexdigest()}\n'
     try:
         write_atomically(path, lambda stream: stream.write(text), binary=False)
     except OSError as exc:
@@ -157,7 +167,24 @@ def save_calibration(calibration: Calibration, path: str | Path) -> Path:
 def load_calibration(path: str | Path) -> Calibration:
     """Read a calibration file; one-line :class:`ConfigError` naming the file for anything wrong."""
     path = Path(path)
-    data = read_yaml(path, 'calibration file')
+    text = read_text(path, 'calibration file', max_bytes=MAX_YAML_BYTES, error=ConfigError)
+    _check_seal(text, path)
+    data = parse_yaml(text, path, 'calibration file')
     if not isinstance(data, dict):
         raise ConfigError(f'{path}: not a prsm_lube_ros calibration (expected a mapping)')
     return calibration_from_dict(data, str(path))
+
+
+def _check_seal(text: str, path: Path) -> None:
+    """A sealed file (first line :data:`SEAL_HEAD`) must end in its checksum line; older files pass as they are."""
+    if not text.startswith(SEAL_HEAD):
+        return
+    cut = text.rfind('\n', 0, len(text) - 1) + 1
+    body, last = text[:cut], text[cut:]
+    if not (last.startswith(SEAL_TAIL) and last.endswith('\n') and len(last) == len(SEAL_TAIL) + 65):
+        raise ConfigError(f'{path}: calibration file ends early (its last line is not the "{SEAL_TAIL.strip()}" line '
+                          'its first line promises): cut short while written or copied; write it again')
+    if hashlib.sha256(body.encode()).hexdigest() != last[len(SEAL_TAIL):-1]:
+        raise ConfigError(f'{path}: calibration file changed after it was written (the SHA-256 of its lines differs '
+                          'from its end line): damaged; if edited on purpose, delete its first line to load it '
+                          'unchecked')

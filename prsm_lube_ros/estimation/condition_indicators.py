@@ -17,8 +17,8 @@ Per window, from its samples (already in the window builder for the band RMS):
   kurtosis is Pearson's ``E[x^4] / E[x^2]^2`` (3 for Gaussian vibration, 1.5
   for a pure tone), crest factor ``max |x| / RMS``;
 * the **demodulation band**, chosen from the data by spectral kurtosis (Antoni
-  2006-2007; the fast kurtogram's dyadic tree): the analysis band and its
-  halves, quarters, ... down to bands still wide enough to carry the envelope
+  2006-2007; the fast kurtogram's 1/3-binary tree): the analysis band and its
+  halves, thirds, quarters, sixths, ... down to bands still wide enough to carry the envelope
   up to :data:`ENVELOPE_HARMONICS` times the highest defect order; each band's
   complex envelope is taken from the window's FFT (bins of the band shifted
   to 0 Hz, inverse FFT: the decimated analytic signal, a Hilbert envelope), its
@@ -46,9 +46,10 @@ long as its band), a few ms for a 1 s window at 25.6 kHz.  Pure numpy.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
-from typing import Any, TYPE_CHECKING
+from typing import Any, cast, TYPE_CHECKING
+import warnings
 
 import numpy as np
 
@@ -61,9 +62,11 @@ if TYPE_CHECKING:
 
     from ..physics.defect_orders import DefectOrder
 
-__all__ = ['ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER', 'MAX_ORDER',
-           'MAX_PEAKS', 'MAX_TREE_LEVEL', 'ORDER_GRID', 'ORDER_STEP', 'REPORT_DB', 'condition_indicators',
-           'envelope_floor', 'envelope_peaks', 'kurtosis', 'order_spectrum_db']
+__all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
+           'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
+           'REPORT_DB', 'RUN_REPORT_DB', 'SK_SIGMAS', 'TREE_PARTS', 'condition_indicators',
+           'condition_indicators_batch', 'envelope_floor', 'envelope_peaks',
+           'kurtosis', 'order_spectrum_db']
 
 #: Highest screw order the envelope spectrum is kept to (3 harmonics of the default screw raceway order 6.25,
 #: 3 of a support bearing's BPFI near 7.4).
@@ -74,14 +77,25 @@ ORDER_STEP = 0.025
 ORDER_GRID = np.arange(0.0, MAX_ORDER + ORDER_STEP / 2, ORDER_STEP)
 #: Harmonics of the highest defect order a demodulation band must be wide enough to carry.
 ENVELOPE_HARMONICS = 2.5
-#: Deepest level of the dyadic band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
+#: Deepest level of the band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
 MAX_TREE_LEVEL = 5
+#: Bands the analysis band is split into, level by level: the 1/3-binary tree of the fast kurtogram (the thirds
+#: put a band's centre where the halves put an edge).
+TREE_PARTS = tuple(sorted({2 ** k for k in range(MAX_TREE_LEVEL + 1)}
+                          | {3 * 2 ** (k - 1) for k in range(1, MAX_TREE_LEVEL)}))
 #: Lowest order of the floor's median (below it the envelope holds the run's slow amplitude changes).
 FLOOR_LOWEST_ORDER = 1.0
-#: dB over the floor a local maximum needs to be reported as an envelope peak.
-REPORT_DB = 6.0
+#: dB over the floor a local maximum of one window's envelope spectrum needs to be reported (its bins scatter
+#: as exponentials: 10 dB over the median is 6.9 times the mean, reached by chance in 0.1 % of the bins).
+REPORT_DB = 10.0
+#: The same for a spectrum averaged over a run's windows (10 or more: 6 dB is beyond chance).
+RUN_REPORT_DB = 6.0
 #: Envelope peaks reported per window (the largest).
 MAX_PEAKS = 5
+#: Standard deviations of Gaussian SK a band's SK is discounted by before bands are compared.
+SK_SIGMAS = 3.0
+#: Samples of the windows :func:`condition_indicators_batch` transforms together (arrays that stay in cache).
+BATCH_SAMPLES = 1 << 18
 #: Fewest samples an indicator is computed on.
 MIN_SAMPLES = 64
 
@@ -142,73 +156,122 @@ def kurtosis(values: npt.ArrayLike) -> float:
 
 def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float, band: tuple[float, float],
                          orders: Sequence[DefectOrder], *, angle_times: npt.ArrayLike | None = None,
-                         angles: npt.ArrayLike | None = None, spectrum: np.ndarray | None = None
-                         ) -> ConditionIndicators:
+                         angles: npt.ArrayLike | None = None) -> ConditionIndicators:
     """Indicators of one window's ``samples`` (m/s^2 at ``rate`` Hz, screw at ``screw_speed`` rad/s).
 
     ``band`` (Hz) is the analysis band; ``orders`` the actuator's defect
     orders.  ``angle_times`` (s from the first sample) and ``angles`` (rad)
-    give the screw angle through the window for order tracking.  ``spectrum``
-    is ``numpy.fft.rfft`` of the mean-free samples when the caller has it.
+    give the screw angle through the window for order tracking.  The same
+    numbers as :func:`condition_indicators_batch` gives this window among others.
     """
     x = np.asarray(samples, dtype=float)
-    n = x.size
+    return condition_indicators_batch(x.reshape(1, -1), rate, [screw_speed], band, orders,
+                                      [(angle_times, angles)])[0]
+
+
+def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: Sequence[float],
+                               band: tuple[float, float], orders: Sequence[DefectOrder],
+                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None
+                               ) -> list[ConditionIndicators]:
+    """Indicators of windows of one length and rate at once: ``samples`` is (windows x samples), m/s^2.
+
+    ``screw_speeds`` rad/s per window; ``tracks`` per window the
+    ``(angle_times, angles)`` of order tracking (None: none).  The FFTs run
+    over the whole array (the cost is the numpy calls, not the windows).
+    """
+    x = np.asarray(samples, dtype=float)
+    count, n = x.shape
     if n < MIN_SAMPLES or not rate > 0:
-        return NO_INDICATORS
-    spec = np.fft.rfft(x - x.mean()) if spectrum is None else spectrum
+        return [NO_INDICATORS] * count
+    tracks = tracks if tracks is not None else [(None, None)] * count
+    chunk = max(1, BATCH_SAMPLES // n)
+    if count > chunk:    # arrays that stay in cache: a few hundred thousand samples at a time
+        return [item for start in range(0, count, chunk)
+                for item in condition_indicators_batch(x[start:start + chunk], rate,
+                                                       screw_speeds[start:start + chunk], band, orders,
+                                                       tracks[start:start + chunk])]
+    spec = np.fft.rfft(x, axis=1)
+    spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
-    hi_bin = min(spec.size - 1, int(math.floor(band[1] / df)))
+    hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
     if hi_bin - lo_bin < 8:
-        return NO_INDICATORS
-    in_band = np.zeros(spec.size, dtype=complex)
-    in_band[lo_bin:hi_bin + 1] = spec[lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n)
-    rms = math.sqrt(float(np.mean(signal * signal)))
-    kurt = kurtosis(signal)
-    crest = float(np.max(np.abs(signal)) / rms) if rms > 0 else math.nan
-    shaft_hz = abs(screw_speed) / (2.0 * math.pi)
-    if not (shaft_hz > 0 and math.isfinite(shaft_hz)):
-        return ConditionIndicators(kurt, crest, (), math.nan, (math.nan, math.nan), math.nan)
+        return [NO_INDICATORS] * count
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
+    signal = np.fft.irfft(in_band, n, axis=1)
+    squares = signal * signal
+    power = squares.mean(axis=1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    shaft_hz = np.abs(np.asarray(screw_speeds, dtype=float)) / (2.0 * math.pi)
+    moving = np.isfinite(shaft_hz) & (shaft_hz > 0)
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
-    min_bins = max(int(math.ceil(ENVELOPE_HARMONICS * highest * shaft_hz / df)), 8)
-    sk, (first, last) = _demodulation_band(spec, lo_bin, hi_bin, min_bins)
-    envelope = np.abs(_complex_envelope(spec, first, last, n))
-    duration = n / rate
-    grid, resolution = _order_spectrum(envelope, duration, shaft_hz, angle_times, angles)
-    peaks = envelope_peaks(grid, resolution, orders)
-    return ConditionIndicators(kurt, crest, peaks, sk, (first * df, last * df), resolution, grid.astype(np.float32))
+    min_bins = np.maximum(np.ceil(ENVELOPE_HARMONICS * highest * np.where(moving, shaft_hz, 0.0) / df), 8)
+    sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
+    out = []
+    for k in range(count):
+        if not moving[k] or not math.isfinite(sk[k]):
+            out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
+                                           math.nan))
+            continue
+        envelope = np.abs(_complex_envelope(spec[k], int(first[k]), int(last[k]), n))
+        grid, resolution = _order_spectrum(envelope, n / rate, float(shaft_hz[k]), *tracks[k])
+        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
+                                       (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
+    spectral = [k for k, item in enumerate(out) if item.envelope is not None]
+    if spectral:
+        grids = np.vstack([cast(np.ndarray, out[k].envelope) for k in spectral]).astype(float)
+        for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
+            out[k] = replace(out[k], envelope_peaks=peaks)
+    return out
 
 
-def _demodulation_band(spec: np.ndarray, lo_bin: int, hi_bin: int, min_bins: int) -> tuple[float, tuple[int, int]]:
-    """The band of the dyadic tree over bins ``[lo_bin, hi_bin]`` with the largest spectral kurtosis, and that SK.
+def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
+                        min_bins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per window (row of ``spec``), the band of the dyadic tree with the largest spectral kurtosis.
 
-    The fast kurtogram's dyadic tree (Antoni 2007) on the window's own FFT:
-    level k splits the analysis band into 2^k bands of equal width (down to
-    :data:`MAX_TREE_LEVEL` or to ``min_bins`` bins); each band's complex
-    envelope is its bins shifted to 0 Hz and inverse-transformed (all bands of
-    a level in one 2-D inverse FFT), and its spectral kurtosis is
-    ``E|z|^4 / E^2|z|^2 - 2`` (0 for Gaussian vibration whatever the width,
-    -1 for a steady tone, large where impulses ring).
+    The fast kurtogram's 1/3-binary tree (Antoni 2007) on the window's own FFT:
+    the analysis band ``[lo_bin, hi_bin]`` split into 1, 2, 3, 4, 6, 8, ...
+    bands of equal width (:data:`TREE_PARTS`, or down to ``min_bins`` bins of
+    that window); each band's complex envelope is its bins shifted to 0 Hz and
+    inverse-transformed (every band of every window of a level in one
+    inverse FFT), and its spectral kurtosis is ``E|z|^4 / E^2|z|^2 - 2`` (0 for
+    Gaussian vibration whatever the width, -1 for a steady tone, large where
+    impulses ring).  A band is scored by its SK less :data:`SK_SIGMAS` times
+    the scatter the SK of Gaussian vibration has on its ``M`` complex samples,
+    ``2 / sqrt(M)``: a narrow band is chosen for impulses that ring in it, not
+    for the chance scatter of its few samples (on pure noise the widest band
+    wins, and its envelope spectrum is flat).  Returns that score, first and
+    last bin of each window's band.
     """
-    best_sk, best = -math.inf, (lo_bin, hi_bin)
+    count = spec.shape[0]
+    best_sk = np.full(count, -np.inf)
+    first = np.full(count, lo_bin)
+    last = np.full(count, hi_bin)
     width = hi_bin - lo_bin + 1
-    for level in range(MAX_TREE_LEVEL + 1):
-        parts = 2 ** level
+    for parts in TREE_PARTS:
         bins = width // parts
-        if bins < min_bins:
+        allowed = bins >= min_bins
+        if not allowed.any():
             break
         size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        shifted = np.zeros((parts, size), dtype=complex)
-        shifted[:, :bins] = spec[lo_bin:lo_bin + parts * bins].reshape(parts, bins)
-        power = np.abs(np.fft.ifft(shifted, axis=1)) ** 2
-        mean = power.mean(axis=1)
+        shifted = np.zeros((count, parts, size), dtype=complex)
+        shifted[:, :, :bins] = spec[:, lo_bin:lo_bin + parts * bins].reshape(count, parts, bins)
+        power = np.abs(np.fft.ifft(shifted, axis=2)) ** 2
+        mean = power.mean(axis=2)
         with np.errstate(divide='ignore', invalid='ignore'):
-            sk = np.where(mean > 0, (power ** 2).mean(axis=1) / mean ** 2 - 2.0, -np.inf)
-        k = int(np.argmax(sk))
-        if sk[k] > best_sk + 1e-12:
-            best_sk, best = float(sk[k]), (lo_bin + k * bins, lo_bin + (k + 1) * bins - 1)
-    return best_sk, best
+            sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        sk -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+        part = np.argmax(sk, axis=1)
+        value = sk[np.arange(count), part]
+        better = allowed & (value > best_sk + 1e-12)
+        best_sk = np.where(better, value, best_sk)
+        first = np.where(better, lo_bin + part * bins, first)
+        last = np.where(better, lo_bin + (part + 1) * bins - 1, last)
+    best_sk[~np.isfinite(best_sk)] = math.nan
+    return best_sk, first, last
 
 
 def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
@@ -251,15 +314,27 @@ def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angl
 
 def envelope_floor(grid: np.ndarray) -> float:
     """Floor of an order spectrum on :data:`ORDER_GRID`: its median above :data:`FLOOR_LOWEST_ORDER`."""
-    part = grid[(ORDER_GRID >= FLOOR_LOWEST_ORDER) & np.isfinite(grid)]
-    return float(np.median(part)) if part.size else math.nan
+    return float(_floors(np.asarray(grid, dtype=float).reshape(1, -1))[0])
+
+
+def _floors(grids: np.ndarray) -> np.ndarray:
+    """:func:`envelope_floor` of each row."""
+    part = grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER]
+    with np.errstate(invalid='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
+        return np.nanmedian(part, axis=1)
 
 
 def order_spectrum_db(grid: np.ndarray) -> np.ndarray:
     """An order spectrum in dB over its floor (NaN where it holds nothing)."""
-    floor = envelope_floor(grid)
+    grids = np.asarray(grid, dtype=float)
+    return _db(grids.reshape(1, -1)).reshape(grids.shape)
+
+
+def _db(grids: np.ndarray) -> np.ndarray:
+    """:func:`order_spectrum_db` of each row."""
     with np.errstate(divide='ignore', invalid='ignore'):
-        return 10.0 * np.log10(np.asarray(grid, dtype=float) / floor)
+        return 10.0 * np.log10(grids / _floors(grids)[:, None])
 
 
 def envelope_peaks(grid: np.ndarray, resolution: float, orders: Sequence[DefectOrder],
@@ -272,25 +347,53 @@ def envelope_peaks(grid: np.ndarray, resolution: float, orders: Sequence[DefectO
     larger lines elsewhere fill the ``count``.  Maxima closer than the
     resolution to a larger one are the same line.
     """
-    db = order_spectrum_db(grid)
-    valid = np.isfinite(db) & (ORDER_GRID >= 0.5 * min((o.order for o in orders), default=1.0))
-    if not valid.any():
-        return ()
-    padded = np.where(valid, db, -np.inf)
-    local = np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] > padded[2:]) & (padded[1:-1] >= min_db)) + 1
-    separation = max(resolution, 2 * ORDER_STEP)
-    chosen: list[int] = []
-    for k in sorted(local.tolist(), key=lambda k: -padded[k]):
-        if all(abs(ORDER_GRID[k] - ORDER_GRID[j]) > separation for j in chosen):
-            chosen.append(k)
-        if len(chosen) == count:
-            break
-    for item in orders:
-        near = np.flatnonzero(np.abs(ORDER_GRID - item.order) <= max(ORDER_TOLERANCE * item.order, resolution / 2))
-        if near.size:
-            k = int(near[np.argmax(padded[near])])
-            if padded[k] >= min_db and all(abs(ORDER_GRID[k] - ORDER_GRID[j]) > ORDER_STEP / 2 for j in chosen):
+    return _peaks(np.asarray(grid, dtype=float).reshape(1, -1), [resolution], orders, min_db, count)[0]
+
+
+def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[DefectOrder],
+           min_db: float = REPORT_DB, count: int = MAX_PEAKS) -> list[tuple[EnvelopePeak, ...]]:
+    """:func:`envelope_peaks` of each row (dB, maxima and defect-order levels for all rows at once)."""
+    db = _db(grids)
+    lowest = 0.5 * min((o.order for o in orders), default=1.0)
+    padded = np.where(np.isfinite(db) & (ORDER_GRID >= lowest), db, -np.inf)
+    local = np.zeros(padded.shape, dtype=bool)
+    local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
+        padded[:, 1:-1] >= min_db)
+    labels: dict[tuple[int, float], str] = {}
+    out = []
+    for row, resolution in enumerate(resolutions):
+        levels = padded[row]
+        candidates = np.flatnonzero(local[row])
+        if candidates.size > 4 * count:
+            candidates = candidates[np.argpartition(-levels[candidates], 4 * count)[:4 * count]]
+        separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
+        chosen: list[int] = []
+        for k in sorted(candidates.tolist(), key=lambda k: -levels[k]):
+            if all(abs(k - j) > separation for j in chosen):
                 chosen.append(k)
-    return tuple(EnvelopePeak(float(ORDER_GRID[k]), float(padded[k]),
-                              label_order(float(ORDER_GRID[k]), orders, resolution / 2))
-                 for k in sorted(chosen))
+            if len(chosen) == count:
+                break
+        for first, stop in _order_windows(orders, resolution):
+            if stop > first:
+                k = first + int(np.argmax(levels[first:stop]))
+                if levels[k] >= min_db and k not in chosen:
+                    chosen.append(k)
+        peaks = []
+        for k in sorted(chosen):
+            key = (k, round(resolution, 6))
+            if key not in labels:
+                labels[key] = label_order(float(ORDER_GRID[k]), orders, resolution / 2)
+            peaks.append(EnvelopePeak(float(ORDER_GRID[k]), float(levels[k]), labels[key]))
+        out.append(tuple(peaks))
+    return out
+
+
+def _order_windows(orders: Sequence[DefectOrder], resolution: float) -> list[tuple[int, int]]:
+    """Grid index ranges within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's fundamental."""
+    spans = []
+    for item in orders:
+        reach = max(ORDER_TOLERANCE * item.order, resolution / 2)
+        first = max(int(math.ceil((item.order - reach) / ORDER_STEP - 1e-9)), 0)
+        stop = min(int(math.floor((item.order + reach) / ORDER_STEP + 1e-9)) + 1, ORDER_GRID.size)
+        spans.append((first, stop))
+    return spans

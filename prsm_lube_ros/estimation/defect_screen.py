@@ -43,7 +43,7 @@ import numpy as np
 from ..errors import InputError
 from ..physics.defect_orders import label_order, ORDER_TOLERANCE
 from .condition_indicators import (ConditionIndicators, envelope_peaks, EnvelopePeak, ORDER_GRID,
-                                   order_spectrum_db)
+                                   order_spectrum_db, REPORT_DB, RUN_REPORT_DB)
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -142,7 +142,8 @@ def run_condition(indicators: Sequence[ConditionIndicators], orders: Sequence[De
     with np.errstate(invalid='ignore'):
         average = np.nanmean(np.vstack(spectra).astype(float), axis=0) if len(spectra) > 1 else spectra[0].astype(float)
     resolution = float(np.nanmedian([c.order_resolution for c in usable]))
-    return RunCondition(kurt, crest, envelope_peaks(average, resolution, orders), len(usable), resolution, average)
+    peaks = envelope_peaks(average, resolution, orders, RUN_REPORT_DB if len(spectra) > 1 else REPORT_DB)
+    return RunCondition(kurt, crest, peaks, len(usable), resolution, average)
 
 
 @dataclass(frozen=True)

@@ -75,10 +75,24 @@ class CalibrationDomain:
 
     @classmethod
     def from_dict(cls, data: dict) -> CalibrationDomain:
-        """Inverse of :meth:`as_dict`."""
+        """Inverse of :meth:`as_dict`; ValueError naming the entry for one that is not ``[low, high]``.
+
+        Each range is null or two finite numbers, the first not above the second.
+        """
+        if not isinstance(data, dict):
+            raise ValueError('domain must be a mapping of ranges')
+
         def pair(key: str) -> tuple[float, float] | None:
             value = data.get(key)
-            return (float(value[0]), float(value[1])) if value else None
+            if value is None:
+                return None
+            if not isinstance(value, (list, tuple)) or len(value) != 2 or \
+                    any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+                raise ValueError(f'domain {key} must be [low, high] (two numbers) or null')
+            low, high = float(value[0]), float(value[1])
+            if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+                raise ValueError(f'domain {key} must be two finite numbers, low <= high')
+            return low, high
         return cls(speed=pair('speed_rad_s'), load=pair('load_n'), temperature=pair('temperature_degc'),
                    sample_rate=pair('sample_rate_hz'))
 

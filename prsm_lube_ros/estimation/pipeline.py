@@ -29,7 +29,8 @@ from .windowing import (DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_w
                         WindowSettings)
 
 __all__ = ['ASSESSMENT_SLICE_SECONDS', 'RecordingAssessment', 'RecordingWindows', 'analysis_settings',
-           'assess_recording', 'assessment_json', 'calibrate_recordings', 'recording_windows', 'require_usable',
+           'assess_recording', 'assessment_json', 'calibrate_recordings', 'condition_baseline', 'recording_windows',
+           'require_usable',
            'with_band_and_domain']
 
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
@@ -96,13 +97,16 @@ def analysis_settings(window_length: float = 1.0, *, spectra: bool = False, band
 def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings | None = None,
                       namespace: str = '/prsm', on_problem: ProblemSink | None = None,
                       progress: Callable[[float], None] | None = None,
-                      slice_seconds: float = ASSESSMENT_SLICE_SECONDS) -> RecordingWindows:
+                      slice_seconds: float = ASSESSMENT_SLICE_SECONDS,
+                      root: str | Path | None = None) -> RecordingWindows:
     """Stream one recording through a :class:`WindowBuilder` and return its windows.
 
     Problems (bad messages, truncation) are collected and, if given, passed to
     ``on_problem`` as one line each, prefixed with the recording's path.
     ``progress`` receives the fraction of the recording read so far.
     ``slice_seconds`` is how much recording is decoded and windowed at a time.
+    Every file read must resolve inside ``root`` (default: a bag folder's
+    files inside the folder; the calibrate service gives ``recordings_dir``).
     Raises :class:`InputError` for a recording that cannot be read at all, or
     whose sample rate cannot cover the analysis band (``settings.band``).
     """
@@ -116,7 +120,7 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
 
     builder = WindowBuilder(settings, lead=lead)
     windows: list[Window] = []
-    recording = recording_reader.open_recording(path, namespace=namespace)
+    recording = recording_reader.open_recording(path, namespace=namespace, root=root)
     messages_read: dict[str, int] = {}
     max_speed = 0.0
     for batches in recording.slices(on_problem=report, progress=progress, slice_seconds=slice_seconds):

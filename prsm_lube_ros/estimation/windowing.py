@@ -39,7 +39,7 @@ from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from ..physics.actuator import Actuator
 from ..physics.defect_orders import defect_orders as actuator_defect_orders, DefectOrder
-from .condition_indicators import condition_indicators, ConditionIndicators
+from .condition_indicators import condition_indicators_batch, ConditionIndicators
 from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
 from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED,
                                       plausible_durations, plausible_magnitudes, plausible_rates,
@@ -748,6 +748,8 @@ class WindowBuilder:
         conditions: list[ConditionIndicators | None] = [None] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
         indicators = s.condition_indicators and self.band is not None
+        #: windows whose indicators are computed together, by (sample count, rate): (row, samples, speed, track)
+        jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]] = {}
         row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
@@ -759,16 +761,14 @@ class WindowBuilder:
                 first_time = chunks[0][0]
                 if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
                     rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
-                if (indicators and count[row] > 0 and maybe_steady[row] and self.band is not None
-                        and k % s.condition_every == 0):
-                    angle_times, angles = self._window_angles(k, first_time)
-                    conditions[row] = condition_indicators(samples, rate_k, float(speed[row]),
-                                                           (self.band.low, self.band.high), s.defect_orders,
-                                                           angle_times=angle_times, angles=angles)
+                if indicators and count[row] > 0 and maybe_steady[row] and k % s.condition_every == 0:
+                    jobs.setdefault((samples.size, rate_k), []).append(
+                        (row, samples, float(speed[row]), self._window_angles(k, first_time)))
                 if spectral:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
                     spectra[row] = _power_spectrum(samples, rate_k, segment)
+        self._conditions(jobs, conditions)
         for k in keys.tolist():
             self._angle_chunks.pop(k, None)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
@@ -784,6 +784,18 @@ class WindowBuilder:
                                   position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
                                   rate_k if rate_k > 0 else math.nan, condition))
         return windows
+
+    def _conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]],
+                    conditions: list[ConditionIndicators | None]) -> None:
+        """Indicators of the windows in ``jobs`` (by sample count and rate), a size at once, into ``conditions``."""
+        if not jobs or self.band is None:
+            return
+        band = (self.band.low, self.band.high)
+        for (_, rate), group in jobs.items():
+            found = condition_indicators_batch(np.vstack([job[1] for job in group]), rate, [job[2] for job in group],
+                                               band, self.settings.defect_orders, [job[3] for job in group])
+            for job, condition in zip(group, found):
+                conditions[job[0]] = condition
 
     def _window_angles(self, key: int, first_time: float) -> tuple[np.ndarray | None, np.ndarray | None]:
         """Stamps (s from ``first_time``, the window's first sample) and turned screw angle (rad) in window ``key``."""

@@ -82,7 +82,8 @@ def _simulate_rig(effect: str, seed: int, order: str, sessions: int) -> tuple[Wi
 def _simulate_synthetic(effect: str, seed: int, order: str, sessions: int) -> tuple[WindowTable, dict]:
     from .synthetic_tables import SyntheticPlan, synthetic_table
     rng = np.random.default_rng(10_000 + seed)
-    plan = SyntheticPlan(repeats=1, sessions=sessions, random_order=order == 'random', spectrum_bins=128)
+    plan = SyntheticPlan(repeats=1, sessions=sessions, random_order=order == 'random', spectrum_bins=128,
+                         condition_indicators=True)
     table, truth = synthetic_table(rng, None if effect == NONE else effect, plan)
     return table, {k: (list(v) if isinstance(v, tuple) else v) for k, v in truth['params'].items()}
 

@@ -32,7 +32,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 from scipy import stats
 
-from ..physics.effects.resonance import band_position
+from ..physics.effects import simulation
 
 if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
@@ -80,23 +80,14 @@ def _forms(params: dict | None) -> str:
 def truth_form(name: str, params: dict | None, speeds: Sequence[float]) -> str:
     """The physical form of a drawn law, in words, for the per-form rows.
 
-    Text-valued parameters (bearing arrangement, viscosity law, depletion form)
-    name it; besides, a resonance is placed against the plan's ``speeds``
-    (rad/s) and its order, a background is a floor or has lines, and depletion
-    says whether oil creeps back at rest.
+    Text-valued parameters (bearing arrangement, viscosity law, depletion form,
+    defect component and growth) name it; besides, the effect's simulation hook
+    adds its own words (``Simulation.form_words``: a resonance placed against
+    the plan's ``speeds`` in rad/s, a background's lines or floor, ...).
     """
     params = params or {}
     words = [_forms(params)] if _forms(params) else []
-    if name == 'resonance' and params.get('natural_frequency') and params.get('order'):
-        resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
-        band = band_position(resonant, min(speeds), max(speeds)).replace('speed band', 'band')
-        words.append(f'mode {band}, order {params["order"]:.3g}')
-    elif name == 'background_vibration':
-        lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
-        words.append('lines' if lines else 'floor')
-    elif name == 'lubricant_depletion' and params.get('recovery_time'):
-        words.append('recovery at rest')
-    return ', '.join(words)
+    return ', '.join(words + simulation(name).form_words(params, speeds))
 
 
 def _named_effects(document: dict) -> list[str | None]:

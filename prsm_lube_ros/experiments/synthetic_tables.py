@@ -10,24 +10,39 @@ effect parametrisations (e.g. the fixed bearing at either end of the shaft,
 background tones at random frequencies).  Spectra, when asked for, are
 synthesised per window: rotation-order lines and broadband from the thread
 contacts, fixed tones and broadband from the background.
+
+Effects other than the first five (:data:`OWN_DRAWS`, kept with their own
+parametrisations so the tables of earlier studies stay as they were) go through
+their module's simulation hook only: drawn by ``Simulation.draw`` over the
+module's ranges, applied through the law's ``Extension`` (film factor and log
+gain) and, with ``condition_indicators``, changing the windows' indicators
+(``Simulation.window_indicators``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, is_dataclass
 import math
 from collections.abc import Sequence
+from types import SimpleNamespace
 from typing import Any, cast
 
 import numpy as np
 
 from ..diagnosis.table import WindowTable
-from ..physics.effects import (background_vibration, lubricant_depletion as depletion,
-                               position_dependent_stiffness as stiffness, resonance, thermal_viscosity as thermal)
+from ..physics.actuator import Actuator
+from ..physics.effects import (background_vibration, ContactState, extension, lubricant_depletion as depletion,
+                               position_dependent_stiffness as stiffness, resonance, simulation, SimulationContext,
+                               thermal_viscosity as thermal)
 from ..physics.vibration_model import acceleration_amplitude, ModelConstants
-from ..simulation.effects import BACKGROUND_FRACTION_RANGE
 
 
-__all__ = ['BACKGROUND_SHARES', 'SyntheticPlan', 'synthetic_table']
+__all__ = ['BACKGROUND_SHARES', 'HEALTHY_KURTOSIS_SCATTER', 'OWN_DRAWS', 'SyntheticPlan', 'synthetic_table']
+
+#: Effects this simulator draws and applies with its own code (the others go through their simulation hook).
+OWN_DRAWS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
+             'background_vibration')
+#: Standard deviation of a healthy window's band kurtosis around 3 (about sqrt(24 / n) for n = 4000 samples).
+HEALTHY_KURTOSIS_SCATTER = 0.08
 
 
 @dataclass(frozen=True)
@@ -59,10 +74,16 @@ class SyntheticPlan:
     warm_start: float = 0.0         # K above ambient at the start (thermal: a warm actuator cooling)
     cool_down_every: int = 0        # runs between cool-down pauses (0: none)
     cool_down_pause: float = 0.0    # s of standstill of each pause (the nut cools, revolutions stand still)
+    condition_indicators: bool = False   # columns kurtosis, crest_factor, defect_db, defect_order per window
 
 
 def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> dict:
     """Effect parameters drawn within physical ranges, the effect's form among its physical forms."""
+    if effect not in OWN_DRAWS:
+        context = _context(plan)
+        hook = simulation(effect)
+        law = hook.draw(rng, context)
+        return {'law': law, 'extension': hook.extension_params(law, context)}
     top = max(plan.speeds_rpm) * math.pi / 30
     bottom = min(plan.speeds_rpm) * math.pi / 30
     if effect == 'position_dependent_stiffness':
@@ -100,9 +121,28 @@ def _draw_effect(effect: str, rng: np.random.Generator, plan: SyntheticPlan) -> 
         return {'fall': rng.uniform(0.08, 0.25), 'form': depletion.FORMS[int(rng.integers(2))],
                 'recovery_time': None if rng.integers(2) else rng.uniform(30.0, 120.0)}
     if effect == 'background_vibration':
-        return {'fraction': rng.uniform(*BACKGROUND_FRACTION_RANGE), 'tones': tuple(rng.uniform(60, 900, size=2)),
+        return {'fraction': rng.uniform(*background_vibration.FRACTION_RANGE),
+                'tones': tuple(rng.uniform(60, 900, size=2)),
                 'form': background_vibration.FORMS[int(rng.integers(3))]}
     raise ValueError(effect)
+
+
+def _plain(params: dict) -> dict:
+    """An effect's drawn parameters for the truth: a hooked effect's law as a plain mapping (JSON-ready)."""
+    law = params.get('law')
+    return {**params, 'law': asdict(law)} if is_dataclass(law) and not isinstance(law, type) else params
+
+
+def _context(plan: SyntheticPlan) -> SimulationContext:
+    """What a hooked effect is drawn against: the plan's conditions, one session's revolutions, 4 kHz sampling."""
+    conditions = len(plan.speeds_rpm) * len(plan.loads) * plan.repeats
+    slow = min(plan.speeds_rpm) * math.pi / 30
+    return SimulationContext(
+        actuator=Actuator(lead=plan.lead), speeds=tuple(s * math.pi / 30 for s in plan.speeds_rpm),
+        loads=tuple(float(f) for f in plan.loads), stroke=plan.stroke,
+        session_revolutions=conditions * plan.stroke / plan.lead,
+        reference_amplitude=float(acceleration_amplitude(slow, max(plan.loads), plan.theta, plan.constants)),
+        sample_rate=4000.0, band_high=1600.0)
 
 
 def _contact_ratio_for(change: float, arrangement: str, stroke: float, before: float, after: float) -> float:
@@ -144,6 +184,11 @@ class _Synthesis:
         self.a22_list: list[float] = []
         self.directions: list[float] = []
         self.clock, self.revs, self.temp = 0.0, 0.0, plan.ambient + plan.warm_start
+        self.turns = 0.0      # revolutions run over all sessions (a spall does not heal at relubrication)
+        self.indicators: dict[str, list[float]] = {k: [] for k in ('kurtosis', 'crest_factor', 'defect_db',
+                                                                   'defect_order')}
+        # The indicators' own stream (spawned, not drawn from rng): with or without them, the other columns agree.
+        self.indicator_rng = rng.spawn(1)[0]
         self.depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
 
     def pause(self, number: int, way: int, per_session: int) -> None:
@@ -167,6 +212,7 @@ class _Synthesis:
         for k in range(n_win):
             self.clock += plan.window
             self.revs += speed * plan.window / (2 * math.pi)
+            self.turns += speed * plan.window / (2 * math.pi)
             self.depleted += speed * plan.window / (2 * math.pi)
             if self.heat:
                 target = plan.ambient + self.heat['rise']
@@ -180,7 +226,8 @@ class _Synthesis:
         """One window's row (with scatter: the run's ``run_gain``, its own, the set-up ``factor``) and truth."""
         plan, rng, noise_floor, rows = self.plan, self.rng, self.noise_floor, self.rows
         theta, film, a22, amplitude = _window_amplitude(plan, self.laws, speed, load, position, self.depleted,
-                                                        self.total_revs, self.temp)
+                                                        self.total_revs, self.temp, self.turns)
+        contact_power = a22 ** 2     # the contacts alone (before the hooked effects add to the amplitude)
         noise = factor * math.exp(run_gain + rng.normal(0.0, plan.window_noise))
         amplitude *= noise
         background = 0.0
@@ -201,10 +248,39 @@ class _Synthesis:
         self.directions.append(float(way))
         self.theta_eff.append(theta * film)
         self.a22_list.append(a22)
+        if plan.condition_indicators:
+            self._indicators(speed, load, position, float(contact_power))
         if plan.spectrum_bins:
             self.spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
                                           (noise_floor or {}).get('tones', ()), rng,
                                           (noise_floor or {}).get('form', '')))
+
+    def _indicators(self, speed: float, load: float, position: float, contact_power: float) -> None:
+        """One window's condition indicators: Gaussian contact vibration, changed by hooked effects.
+
+        Healthy: kurtosis ``3 + N(0, HEALTHY_KURTOSIS_SCATTER)``, crest factor
+        about 4, the largest envelope peak at a defect order 3 dB over the floor
+        (chi-square scatter), no order.  A hooked effect's
+        ``Simulation.window_indicators`` replaces what it changes (its kurtosis
+        excess with a 10 % scatter).
+        """
+        rng = self.indicator_rng
+        columns = {'kurtosis': 3.0 + HEALTHY_KURTOSIS_SCATTER * rng.standard_normal(),
+                   'crest_factor': 4.0 + 0.3 * rng.standard_normal(),
+                   'defect_db': 10.0 * math.log10(1.0 + rng.chisquare(2) / 2.0), 'defect_order': math.nan}
+        state = ContactState(speed=speed, load=load, nut_position=position, temperature=self.temp,
+                             ambient_temperature=self.plan.ambient, revolutions=self.turns)
+        for name, law in self.laws.items():
+            if name in OWN_DRAWS:
+                continue
+            changed = simulation(name).window_indicators(law['law'], state, np.asarray(contact_power))
+            for key, column in changed.items():
+                number = float(column)
+                if key == 'kurtosis':
+                    number = columns['kurtosis'] + (number - 3.0) * math.exp(0.1 * rng.standard_normal())
+                columns[key] = number
+        for key, number in columns.items():
+            self.indicators[key].append(float(number))
 
     def rest(self) -> None:
         """The rest after a run: the clock runs on, oil creeps back (with recovery), the nut cools."""
@@ -219,8 +295,12 @@ class _Synthesis:
         """The window table of the windows so far."""
         plan = self.plan
         resolution = 2000.0 / plan.spectrum_bins if plan.spectrum_bins else math.nan
+        columns = {key: np.array(values, dtype=float) if plan.condition_indicators else None
+                   for key, values in self.indicators.items()}
         return WindowTable(theta=plan.theta, direction=cast(Any, self.directions),  # __post_init__ makes arrays
                            spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
+                           kurtosis=columns['kurtosis'], crest_factor=columns['crest_factor'],
+                           defect_db=columns['defect_db'], defect_order=columns['defect_order'],
                            **cast(dict[str, Any], self.rows))
 
 
@@ -258,10 +338,11 @@ def synthetic_table(rng: np.random.Generator, effect: str | tuple[str, ...] | No
         synthesis.run(run, session, way, factor, *conditions[index])
         synthesis.rest()
     table = synthesis.table()
+    plain = {name: _plain(params) for name, params in laws.items()}
     if effect is None or isinstance(effect, str):
-        drawn = laws.get(effect, {}) if effect else {}       # no effect: no laws
+        drawn = plain.get(effect, {}) if effect else {}       # no effect: no laws
     else:
-        drawn = laws
+        drawn = plain
     truth = {'effect': effect, 'params': drawn,
              'theta_effective': np.array(synthesis.theta_eff), 'amplitude_eq22': np.array(synthesis.a22_list)}
     return table, truth
@@ -295,10 +376,12 @@ def _spectrum(plan: SyntheticPlan, speed: float, contact_power: float, backgroun
 
 
 def _window_amplitude(plan: SyntheticPlan, laws: dict, speed: float, load: float, position: float,
-                      depleted: float, total_revs: float, temp: float) -> tuple[float, float, float, float]:
+                      depleted: float, total_revs: float, temp: float,
+                      turns: float = 0.0) -> tuple[float, float, float, float]:
     """One window's truth before noise: (theta, film factor, Eq. 22 amplitude, amplitude with the laws), m/s^2.
 
-    ``depleted``: effective revolutions of the depletion, of ``total_revs`` in the plan; ``temp`` degC.
+    ``depleted``: effective revolutions of the depletion, of ``total_revs`` in the plan; ``temp`` degC;
+    ``turns`` revolutions run over all sessions (read by hooked effects as their ``revolutions``).
     """
     stiff, res = laws.get('position_dependent_stiffness'), laws.get('resonance')
     heat, loss = laws.get('thermal_viscosity'), laws.get('lubricant_depletion')
@@ -311,6 +394,11 @@ def _window_amplitude(plan: SyntheticPlan, laws: dict, speed: float, load: float
     if heat:
         film = float(thermal.film_factor(temp, plan.ambient, heat['beta'], heat.get('law', 'exponential'),
                                          heat.get('shape', math.nan)))
+    hooked = [(extension(name), law['extension']) for name, law in laws.items() if name not in OWN_DRAWS]
+    window = SimpleNamespace(speed=speed, load=load, position=position, revolutions=turns, temperature=temp,
+                             time=math.nan, recording=None)
+    for ext, params in hooked:
+        film *= float(ext.film_factor(params, window))
     a22 = float(acceleration_amplitude(speed, load, theta * film, plan.constants))
     amplitude = a22
     if stiff and 'contact_ratio' in stiff:
@@ -328,4 +416,6 @@ def _window_amplitude(plan: SyntheticPlan, laws: dict, speed: float, load: float
     if res:
         r = res['top_ratio'] * speed / res['top_speed']
         amplitude *= float(resonance.magnification(r, res['damping_ratio']))
+    for ext, params in hooked:
+        amplitude *= float(np.exp(ext.log_gain(params, window, math.log(amplitude))))
     return theta, film, a22, amplitude

@@ -7,7 +7,8 @@ runs and windows as Parquet, committed in one rename, consistent for plain
 readers after any kill), assessing many recordings serially, in processes or
 on a Dask cluster with the same results (``parallel``; connecting to Dask in
 ``scheduler``), the depletion fit and threshold-crossing forecast per actuator
-(``forecast``; in words: ``forecast_summary``), what a maintenance planner reads off it as of a date
+(``forecast``; in words: ``forecast_summary``; none from a suspected surface defect on: ``defects``), what a
+maintenance planner reads off it as of a date
 (``planner``), scoring a forecast made from an earlier cut of the history
 (``backtest``) and the service logs (``service_log``).
 

@@ -24,6 +24,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .defects import defect_onsets, DefectMark
 from .forecast import (ActuatorForecast, DAY, detect_relubrications, forecast_points, INTERVAL, RecordingPoint,
                        two_sided_quantile)
 
@@ -91,26 +92,35 @@ def _finite(value: float) -> float | None:
 
 
 def backtest(points: Mapping[str, Sequence[RecordingPoint]], days: float, *, relubrications: dict | None = None,
-             levels: Sequence[float], confidence: float = INTERVAL) -> Backtest:
-    """Forecast every actuator from ``points`` up to ``days`` before the newest one; score on the rest."""
+             levels: Sequence[float], confidence: float = INTERVAL,
+             defects: Mapping[str, Sequence[DefectMark]] | None = None) -> Backtest:
+    """Forecast every actuator from ``points`` up to ``days`` before the newest one; score on the rest.
+
+    ``defects`` (:func:`~.forecast.history_records`): an actuator with a
+    suspected surface defect by the cut has no forecast to score; one whose
+    defect is first seen after the cut is scored up to the recording it is
+    first seen in (theta_Oil reads damage from there on).
+    """
     newest = max(p.time for items in points.values() for p in items)
     cut = newest - days * DAY
     forecasts = forecast_points(points, relubrications=relubrications, levels=levels, confidence=confidence,
-                                as_of=cut)
-    scored = {f.actuator: _score(f, points[f.actuator], cut, (relubrications or {}).get(f.actuator))
+                                as_of=cut, defects=defects)
+    onsets = defect_onsets(defects or {})
+    scored = {f.actuator: _score(f, points.get(f.actuator, []), cut, (relubrications or {}).get(f.actuator),
+                                 onsets[f.actuator].since_recording if f.actuator in onsets else math.inf)
               for f in forecasts}
     missing = [ActuatorBacktest(name, reason='no recording before the cut') for name in points if name not in scored]
     return Backtest(days, cut, confidence, sorted(scored.values(), key=lambda a: a.actuator) + missing)
 
 
 def _score(forecast: ActuatorForecast, points: Sequence[RecordingPoint], cut: float,
-           given: Sequence[float] | None) -> ActuatorBacktest:
-    """One actuator's later recordings against its forecast at the cut."""
+           given: Sequence[float] | None, defect_from: float = math.inf) -> ActuatorBacktest:
+    """One actuator's later recordings against its forecast at the cut, up to a relubrication or a defect."""
     result = ActuatorBacktest(forecast.actuator, reason=forecast.reason)
     if forecast.reason:
         return result
     relubricated = [t for t in (given if given is not None else detect_relubrications(points)) if t > cut]
-    end = min(relubricated, default=math.inf)
+    end = min(relubricated + [defect_from])
     later = [p for p in points if cut < p.time < end]
     result.later = len(later)
     result.inside_band = sum(_inside_band(forecast, p) for p in later)

@@ -40,6 +40,12 @@ the estimator's ``warn_below`` and ``error_below``
 (:class:`~prsm_lube_ros.estimation.health.HealthThresholds`).  With an
 odometer the same filter runs against revolutions (:func:`fit_revolutions`).
 
+Surface defects.  An actuator whose history holds a run the defect screen
+flagged gets no forecast from the onset on (:mod:`.defects`: theta_Oil then
+reads damage, not oil); its ``defect`` says since when and where, it ranks
+first (:func:`urgency_key`: it needs an inspection, not oil), and its
+recordings from the onset on stay out of the fleet's usage scatter.
+
 The diagnostics' and the trend table's words for a forecast are in
 :mod:`.forecast_summary`.
 """
@@ -57,15 +63,16 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.health import HealthThresholds
 from ..validation import finite_or_none as _finite, utc_or_none
+from .defects import before_onsets, defect_marks, defect_onsets, DefectMark, DefectOnset
 from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
-__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'INTERVAL', 'KILO', 'ODOMETER_REACH', 'RecordingPoint',
-           'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk', 'forecast_history',
-           'forecast_points', 'history_points', 'history_readers', 'recording_points', 'two_sided_quantile',
-           'urgency_key', 'utc_minutes']
+__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'FleetRecords', 'INTERVAL', 'KILO', 'ODOMETER_REACH',
+           'RecordingPoint', 'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk',
+           'forecast_history', 'forecast_points', 'history_points', 'history_readers', 'history_records',
+           'recording_points', 'two_sided_quantile', 'urgency_key', 'utc_minutes']
 
 DAY = 86400.0            # s
 #: probability inside the stated forecast interval (the default of ``trend --level``)
@@ -152,6 +159,8 @@ class ActuatorForecast:
     passage_days: dict = field(default_factory=dict)
     #: why there is no fit against revolutions although an odometer was given
     revolutions_reason: str = ''
+    #: the suspected surface defect that stops the forecast (:mod:`.defects`), None when none is
+    defect: DefectOnset | None = None
 
     def crossing(self, level: float) -> Crossing | None:
         """The crossing of ``level``, if forecast."""
@@ -189,7 +198,13 @@ class ActuatorForecast:
                                 'crossings': [{'level': c.level, 'odometer': c.time, 'low': c.low, 'high': c.high}
                                               for c in self.revolution_crossings]},
                 'points': [{'time': p.time, 'theta_oil': p.theta_oil, 'theta_oil_std': p.theta_oil_std,
-                            'recording_path': p.recording_path} for p in self.points]}
+                            'recording_path': p.recording_path} for p in self.points],
+                **(self.defect.as_json() if self.defect is not None else _NO_DEFECT)}
+
+
+#: the defect fields of an actuator without a suspected defect in trend.json
+_NO_DEFECT = {'defect_suspected': False, 'defect_since': None, 'defect_since_utc': None, 'defect_component': '',
+              'defect_order': None, 'defect_evidence': '', 'defect_recording': '', 'defect_recordings': 0}
 
 
 def utc_minutes(seconds: float | None) -> str | None:
@@ -486,10 +501,16 @@ def _first_passage(forecast: ActuatorForecast, level: float, rng: np.random.Gene
     return ((x - level) / k if k > 0 else math.inf), low, high, days
 
 
-def urgency_key(forecast: ActuatorForecast) -> tuple[bool, float, float, str]:
-    """Sort key: earliest warn crossing first, then error crossing; no forecast last."""
+def urgency_key(forecast: ActuatorForecast) -> tuple[int, float, float, str]:
+    """Sort key: a suspected surface defect first, then the earliest warn crossing, then error; no forecast last.
+
+    A defect ranks above every crossing (earliest onset first): it needs an
+    inspection, not oil, and its theta_Oil is no lubrication measure.
+    """
+    if forecast.defect is not None:
+        return (0, forecast.defect.since, forecast.defect.since, forecast.actuator)
     times = [c.time if c.time is not None else math.inf for c in forecast.crossings] or [math.inf]
-    return (bool(forecast.reason), times[0], times[-1], forecast.actuator)
+    return (2 if forecast.reason else 1, times[0], times[-1], forecast.actuator)
 
 
 def forecast_history(history: str | Path, *, actuator: str | None = None, relubrications: dict | None = None,
@@ -503,37 +524,69 @@ def forecast_history(history: str | Path, *, actuator: str | None = None, relubr
     an actuator id to ``(times, cumulative revolutions)`` for the fit against
     revolutions.  ``as_of`` (s since the epoch) forecasts from the recordings
     made by then only.  ``on_problem(line)`` hears of history files skipped
-    (without it they raise).
+    (without it they raise).  An actuator with a suspected surface defect
+    has none (:mod:`.defects`).
     """
-    return forecast_points(history_points(history, on_problem=on_problem, actuator=actuator),
-                           relubrications=relubrications, levels=levels, confidence=confidence, as_of=as_of,
-                           only=actuator, odometers=odometers)
+    records = history_records(history, on_problem=on_problem, actuator=actuator)
+    return forecast_points(records.points, relubrications=relubrications, levels=levels, confidence=confidence,
+                           as_of=as_of, only=actuator, odometers=odometers, defects=records.defects)
+
+
+@dataclass(frozen=True)
+class FleetRecords:
+    """What a forecast reads from a history: recording points and defect marks per actuator, and notes.
+
+    ``notes`` are lines worth one mention in a report (recordings assessed
+    before the defect screen).
+    """
+
+    points: dict[str, list[RecordingPoint]]
+    defects: dict[str, list[DefectMark]]
+    notes: list[str]
+
+
+def history_records(history: str | Path, *, on_problem: Callable[[str], None] | None = None,
+                    actuator: str | None = None) -> FleetRecords:
+    """Each actuator's recording points and defect marks from one read of a history's runs.
+
+    :class:`InputError` when the history (or ``actuator``) has no assessed
+    run; a run the defect screen flagged counts as assessed even without a
+    theta_Oil.
+    """
+    actuator_key, read_table = history_readers()
+    notes: list[str] = []
+    runs = read_table(history, 'runs', on_problem=on_problem, on_note=notes.append)
+    points, marks = recording_points(runs), defect_marks(runs)
+    if not points and not marks:
+        raise InputError(f'{history}: no assessed run in the history')
+    if actuator is not None and actuator_key(actuator) not in points.keys() | marks.keys():
+        raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
+    return FleetRecords(points, marks, notes)
 
 
 def history_points(history: str | Path, *, on_problem: Callable[[str], None] | None = None,
                    actuator: str | None = None) -> dict[str, list[RecordingPoint]]:
     """Each actuator's recording points from a history folder; :class:`InputError` when it has none."""
-    actuator_key, read_table = history_readers()
-    points = recording_points(read_table(history, 'runs', on_problem=on_problem))
-    if not points:
-        raise InputError(f'{history}: no assessed run in the history')
-    if actuator is not None and actuator_key(actuator) not in points:
-        raise InputError(f'{history}: no assessed run of actuator {actuator!r}')
-    return points
+    return history_records(history, on_problem=on_problem, actuator=actuator).points
 
 
 def forecast_points(points: Mapping[str, Sequence[RecordingPoint]], *, relubrications: dict | None = None,
                     levels: Sequence[float] = (HealthThresholds.warn_below, HealthThresholds.error_below),
                     only: str | None = None, odometers: dict | None = None, confidence: float = INTERVAL,
-                    as_of: float | None = None) -> list[ActuatorForecast]:
+                    as_of: float | None = None,
+                    defects: Mapping[str, Sequence[DefectMark]] | None = None) -> list[ActuatorForecast]:
     """Forecasts from each actuator's recording points (the fleet's usage scatter pooled), most urgent first.
 
     ``only`` forecasts that actuator alone (the others still inform the
     usage scatter).  ``relubrications`` and ``odometers`` (``(times,
     readings)``: s since the epoch, cumulative revolutions, interpolated at
     the recordings for the fit against revolutions) are keyed by actuator id
-    or partition key.  ``as_of`` keeps the points and relubrications up to
-    that time (s since the epoch) only.
+    or partition key.  ``as_of`` keeps the points, relubrications and defect
+    marks up to that time (s since the epoch) only.  ``defects`` (partition
+    key to :class:`~.defects.DefectMark`, as :func:`history_records` gives
+    them): an actuator with one by then has no forecast, only its
+    ``defect``, and its recordings from the onset on stay out of the usage
+    scatter.
     """
     actuator_key, _ = history_readers()
     given = {actuator_key(k): v for k, v in (relubrications or {}).items()}
@@ -541,10 +594,11 @@ def forecast_points(points: Mapping[str, Sequence[RecordingPoint]], *, relubrica
     if as_of is not None:
         points = {name: kept for name, items in points.items() if (kept := [p for p in items if p.time <= as_of])}
         given = {name: [t for t in times if t <= as_of] for name, times in given.items()}
-    found, scatter = fleet_walk(points, given)
-    names = [actuator_key(only)] if only is not None else list(points)
-    forecasts = [fit_one(name, points.get(name, []), found.get(name, []), levels, scatter, odometers.get(name),
-                         confidence) for name in names]
+    onsets = defect_onsets(defects or {}, as_of)
+    found, scatter = fleet_walk(before_onsets(points, onsets), given)
+    names = [actuator_key(only)] if only is not None else list(dict.fromkeys([*points, *onsets]))
+    forecasts = [fit_one(name, points.get(name, []), found.get(name, sorted(given.get(name, []))), levels, scatter,
+                         odometers.get(name), confidence, defect=onsets.get(name)) for name in names]
     return sorted(forecasts, key=urgency_key)
 
 
@@ -557,8 +611,17 @@ def fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> t
 
 def fit_one(name: str, points: Sequence[RecordingPoint], relubrications: Sequence[float], levels: Sequence[float],
             scatter: float | None, odometer: tuple[Sequence[float], Sequence[float]] | None,
-            confidence: float = INTERVAL) -> ActuatorForecast:
-    """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's."""
+            confidence: float = INTERVAL, *, defect: DefectOnset | None = None) -> ActuatorForecast:
+    """:func:`fit_depletion` of one actuator; a numerical failure is its ``reason``, never the fleet's.
+
+    With a suspected surface ``defect`` no fit at all: the forecast holds the
+    points, relubrications and the defect, its ``reason`` says why.
+    """
+    if defect is not None:
+        result = ActuatorForecast(name, sorted(points, key=lambda p: p.time), list(relubrications),
+                                  confidence=confidence, defect=defect, reason=defect.reason)
+        result.last_recording = max((p.time for p in points), default=math.nan)
+        return result
     try:
         return fit_depletion(name, points, relubrications=relubrications, levels=levels, usage_scatter=scatter,
                              odometer=_odometer_at(points, odometer), confidence=confidence)

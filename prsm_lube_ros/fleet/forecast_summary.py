@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 from ..errors import InputError
 from ..estimation.health import HealthThresholds
+from .defects import before_onsets, defect_marks, defect_onsets
 from .forecast import ActuatorForecast, Crossing, fit_one, fleet_walk, history_readers, recording_points, utc_minutes
 
 if TYPE_CHECKING:
@@ -32,7 +33,10 @@ def forecast_summaries(history: str | Path, actuator_ids: Sequence[str], *,
     ``forecast``, ``tau_days``, ``theta_now``, ``warn_crossing``,
     ``warn_interval``, ``error_crossing``, ``error_interval`` (UTC, minutes);
     ``forecast`` holds ``ok`` or the reason there is none, and is the only key
-    (``none: <reason>``) for an id the history has no assessed run of.
+    (``none: <reason>``) for an id the history has no assessed run of.  An
+    actuator with a suspected surface defect (:mod:`.defects`) has the
+    defect as its ``forecast`` reason and ``defect_since`` (UTC, minutes),
+    ``defect_component`` and ``defect_evidence`` instead of the numbers.
     Raises :class:`InputError` for a history that cannot be read (missing,
     unreadable, pyarrow not installed).
     """
@@ -56,8 +60,9 @@ def _summaries(history: str | Path, actuator_ids: Sequence[str],
                levels: tuple[float, float]) -> dict[str, dict[str, str] | InputError]:
     """Summary of each id, or the :class:`InputError` saying why there is none."""
     actuator_key, read_table = history_readers()
-    points = recording_points(read_table(history, 'runs'))
-    found, scatter = fleet_walk(points, {})
+    runs = read_table(history, 'runs')
+    points, onsets = recording_points(runs), defect_onsets(defect_marks(runs))
+    found, scatter = fleet_walk(before_onsets(points, onsets), {})
     result: dict[str, dict[str, str] | InputError] = {}
     for actuator_id in actuator_ids:
         try:
@@ -65,15 +70,19 @@ def _summaries(history: str | Path, actuator_ids: Sequence[str],
         except InputError as exc:
             result[actuator_id] = exc
             continue
-        if key not in points:
+        if key not in points and key not in onsets:
             result[actuator_id] = InputError(f'{history}: no assessed run of actuator {actuator_id!r}')
             continue
-        result[actuator_id] = _summary(fit_one(key, points[key], found[key], levels, scatter, None))
+        result[actuator_id] = _summary(fit_one(key, points.get(key, []), found.get(key, []), levels, scatter, None,
+                                               defect=onsets.get(key)))
     return result
 
 
 def _summary(forecast: ActuatorForecast) -> dict[str, str]:
     """Short key/value strings of a forecast."""
+    if forecast.defect is not None:
+        return {'forecast': forecast.reason, 'defect_since': forecast.defect.since_utc,
+                'defect_component': forecast.defect.component, 'defect_evidence': forecast.defect.evidence}
     if forecast.reason:
         return {'forecast': forecast.reason}
     summary = {'forecast': 'ok', 'tau_days': f'{forecast.tau_days:.3g}', 'theta_now': f'{forecast.theta_now:.3f}'}

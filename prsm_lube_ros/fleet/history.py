@@ -46,12 +46,25 @@ Columns of both tables: ``recording_path``, ``content_hash``,
 assessable), ``reason``, ``date``; runs add ``windows``, ``temperature``
 (degC) and ``theta_oil_std_calibration`` (the calibration's share of the
 one-sigma, common to all recordings assessed with it), windows add ``steady``
-and ``nut_position`` (m).  The partition columns ``actuator`` and
+and ``nut_position`` (m).  Both carry the surface defect screen
+(:mod:`prsm_lube_ros.estimation.defect_screen`, the contract's
+``defect_suspected`` and ``condition_indicators``): ``defect_suspected``,
+``kurtosis`` and ``crest_factor`` (the run's medians over its windows, or the
+window's; null where not computed), ``defect_component``, ``defect_order``
+(envelope line in multiples of the screw speed, null without one) and
+``defect_evidence`` (in words).  The partition columns ``actuator`` and
 ``recording`` come from the folder names.
+
+Layouts.  ``3`` added the defect columns; files of layout ``2`` (written
+before the screen) still read: :func:`read_table` gives them
+``defect_suspected`` false, ``defect_component`` and ``defect_evidence`` ''
+and the three numbers null, and tells ``on_note`` once how many recordings
+were never screened.  Plain readers that mix both layouts need to unify by
+name (``union_by_name = true`` in DuckDB, ``how='diagonal_relaxed'`` in
+polars' ``concat``).
 """
 from __future__ import annotations
 
-import ctypes
 import datetime
 import hashlib
 import json
@@ -67,29 +80,41 @@ import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 
-from ..atomic_file import remove_stale, temporary_prefix, write_atomically
+from ..atomic_file import exchange, file_lock, remove_stale, temporary_prefix, write_atomically
+from ..config_file import MAX_YAML_BYTES
 from ..errors import ConfigError, InputError, RecordingError
+from ..input_file import confine, MAX_RECORDING_BYTES, open_regular, read_bytes
 from ..validation import finite_or_none as _finite, utc_or_none as _utc
 
 if TYPE_CHECKING:
     from ..estimation.assessment import RunAssessment
     from ..estimation.calibration import Calibration
+    from ..estimation.condition_indicators import ConditionIndicators
+    from ..estimation.defect_screen import DefectFinding, RunCondition
     from ..estimation.pipeline import RecordingAssessment
     from .identity import Span
     from .parallel import BagOutcome
 
-__all__ = ['CALIBRATIONS', 'LAYOUT_VERSION', 'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS',
-           'UTC_TIME', 'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
-           'history_calibration', 'history_writer', 'read_table', 'register_calibration']
+__all__ = ['CALIBRATIONS', 'DEFECT_COLUMNS', 'LAYOUT_VERSION', 'LOCK', 'MAX_PARQUET_BYTES', 'MAX_PARQUET_FOOTER',
+           'MAX_PARQUET_ROWS', 'PARTITIONING', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS', 'UTC_TIME',
+           'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
+           'history_calibration', 'history_writer', 'path_text', 'read_table', 'register_calibration']
 
 TABLES = ('runs', 'windows')
 RECORDINGS, CALIBRATIONS, STAGING = 'recordings', 'calibrations', '.staging'
-LAYOUT_VERSION = '2'
+#: the file whose lock serialises commits (hidden: readers pass it by)
+LOCK = '.commit.lock'
+#: Bounds on one Parquet file of the history, checked on its footer before its rows are loaded: bytes, rows
+#: (a recording of a month of 1 s windows has 2.6 million), and the footer's own bytes.
+MAX_PARQUET_BYTES, MAX_PARQUET_ROWS, MAX_PARQUET_FOOTER = 1 << 30, 5_000_000, 16 << 20
+#: '3': the defect screen's columns (:data:`DEFECT_COLUMNS`) added to both tables; '2' files still read
+LAYOUT_VERSION = '3'
 UTC_TIME = pa.timestamp('us', tz='UTC')
 #: unit of each column that has one
 UNITS = {'start': 'UTC', 'end': 'UTC', 'assessed_at': 'UTC', 'screw_speed': 'rad/s', 'axial_load': 'N',
          'vibration_rms': 'm/s^2', 'temperature': 'degC', 'nut_position': 'm', 'theta_oil': '1',
-         'theta_oil_std': '1', 'theta_oil_std_calibration': '1', 'date': 'UTC day'}
+         'theta_oil_std': '1', 'theta_oil_std_calibration': '1', 'date': 'UTC day', 'kurtosis': '1',
+         'crest_factor': '1', 'defect_order': 'x screw speed'}
 _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('calibration_id', pa.string()),
            ('assessed_at', UTC_TIME), ('namespace', pa.string()), ('run_index', pa.int64()),
            ('start', UTC_TIME), ('end', UTC_TIME), ('screw_speed', pa.float64()), ('axial_load', pa.float64()),
@@ -97,7 +122,12 @@ _COMMON = [('recording_path', pa.string()), ('content_hash', pa.string()), ('cal
            ('reason', pa.string())]
 _RUN_ONLY = [('windows', pa.int64()), ('temperature', pa.float64()), ('theta_oil_std_calibration', pa.float64())]
 _WINDOW_ONLY = [('steady', pa.bool_()), ('nut_position', pa.float64())]
+_DEFECT = [('defect_suspected', pa.bool_()), ('kurtosis', pa.float64()), ('crest_factor', pa.float64()),
+           ('defect_component', pa.string()), ('defect_order', pa.float64()), ('defect_evidence', pa.string())]
 _DATE = [('date', pa.date32())]
+#: the surface defect screen's columns and what a file written before them (layout 2) reads as
+DEFECT_COLUMNS = {'defect_suspected': False, 'kurtosis': None, 'crest_factor': None, 'defect_component': '',
+                  'defect_order': None, 'defect_evidence': ''}
 
 
 def _schema(columns: Iterable[tuple[str, pa.DataType]]) -> pa.Schema:
@@ -105,7 +135,8 @@ def _schema(columns: Iterable[tuple[str, pa.DataType]]) -> pa.Schema:
                       for name, kind in columns])
 
 
-SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DATE), 'windows': _schema(_COMMON + _WINDOW_ONLY + _DATE)}
+SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DEFECT + _DATE),
+           'windows': _schema(_COMMON + _WINDOW_ONLY + _DEFECT + _DATE)}
 PARTITIONING = ds.partitioning(pa.schema([('actuator', pa.string()), ('recording', pa.string())]), flavor='hive')
 _HASH_BLOCK = 1 << 20
 _KEY = re.compile(r'^[0-9a-f]{16}$')
@@ -119,10 +150,12 @@ def content_hash(path: str | Path) -> str:
         files = [path] if path.is_file() else sorted(p for p in path.rglob('*') if p.is_file())
         if not files:
             raise RecordingError(f'{path}: no file to hash')
+        root = path.resolve() if path.is_dir() else None     # a bag folder's files may not link out of it
         for file in files:
             if file is not path:
-                digest.update(file.relative_to(path).as_posix().encode() + b'\0')
-            with open(file, 'rb') as stream:
+                digest.update(os.fsencode(file.relative_to(path).as_posix()) + b'\0')
+            with open_regular(file, 'recording', max_bytes=MAX_RECORDING_BYTES, root=root,
+                              error=RecordingError) as stream:
                 for block in iter(lambda: stream.read(_HASH_BLOCK), b''):
                     digest.update(block)
     except OSError as exc:
@@ -132,18 +165,17 @@ def content_hash(path: str | Path) -> str:
 
 def calibration_id(path: str | Path) -> str:
     """First 16 hex digits of the SHA-256 of a calibration file's bytes."""
-    try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
-    except OSError as exc:
-        raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
+    return hashlib.sha256(_calibration_bytes(path)).hexdigest()[:16]
+
+
+def _calibration_bytes(path: str | Path) -> bytes:
+    """A calibration file's bytes, read as every calibration file is: a regular file, bounded."""
+    return read_bytes(path, 'calibration file', max_bytes=MAX_YAML_BYTES, error=ConfigError)
 
 
 def register_calibration(history: str | Path, path: str | Path) -> str:
     """Keep the calibration file's bytes as ``HISTORY/calibrations/<id>.yaml``; returns its id."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
+    data = _calibration_bytes(path)
     identifier = hashlib.sha256(data).hexdigest()[:16]
     target = Path(history) / CALIBRATIONS / f'{identifier}.yaml'
     if not target.is_file():
@@ -158,8 +190,9 @@ def history_calibration(history: str | Path, identifier: str) -> Calibration:
     """The :class:`~prsm_lube_ros.estimation.calibration.Calibration` a ``calibration_id`` of the history names."""
     from ..estimation.calibration_file import load_calibration
     path = Path(history) / CALIBRATIONS / f'{identifier}.yaml'
-    if not path.is_file():
+    if not _KEY.match(str(identifier)) or not path.is_file():
         raise ConfigError(f'{history}: no calibration {identifier!r} in {CALIBRATIONS}/')
+    confine(path, history, 'kept calibration', ConfigError)
     return load_calibration(path)
 
 
@@ -183,7 +216,7 @@ def assessment_tables(assessment: RecordingAssessment, *, content: str, calibrat
     ``actuator_id`` goes into the schema metadata.
     """
     assessed_at = assessed_at or datetime.datetime.now(datetime.UTC)
-    common = {'recording_path': str(assessment.path), 'content_hash': content, 'calibration_id': calibration,
+    common = {'recording_path': path_text(assessment.path), 'content_hash': content, 'calibration_id': calibration,
               'assessed_at': assessed_at, 'namespace': namespace}
     shared = _calibration_std(fit, assessment.runs)
     runs = [dict(common, run_index=run.run_index, start=_utc(run.start), end=_utc(run.end),
@@ -192,19 +225,30 @@ def assessment_tables(assessment: RecordingAssessment, *, content: str, calibrat
                  theta_oil=None if run.reason else _finite(run.theta_oil),
                  theta_oil_std=None if run.reason else _finite(run.theta_oil_std), reason=run.reason,
                  windows=run.windows, temperature=_finite(run.temperature),
-                 theta_oil_std_calibration=None if run.reason else _finite(std))
+                 theta_oil_std_calibration=None if run.reason else _finite(std),
+                 **_defect_columns(run.defect, run.condition))
             for run, std in zip(assessment.runs, shared)]
     windows = [dict(common, run_index=item.window.run_index, start=_utc(item.window.start),
                     end=_utc(item.window.end), screw_speed=_finite(item.window.screw_speed),
                     axial_load=_finite(item.window.axial_load), vibration_rms=_finite(item.window.vibration_rms),
                     theta_oil=_finite(item.theta_oil), theta_oil_std=_finite(item.theta_oil_std),
                     reason=item.reason, steady=bool(item.window.steady),
-                    nut_position=_finite(item.window.nut_position)) for item in assessment.windows]
+                    nut_position=_finite(item.window.nut_position),
+                    **_defect_columns(item.defect, item.window.condition)) for item in assessment.windows]
     day = _first_start([*runs, *windows], assessed_at).date()
     for row in (*runs, *windows):
         row['date'] = day
     return {name: pa.Table.from_pylist(rows, schema=_described(name, actuator_id))
             for name, rows in (('runs', runs), ('windows', windows))}
+
+
+def _defect_columns(defect: DefectFinding, condition: RunCondition | ConditionIndicators | None) -> dict:
+    """The defect screen's columns of a run or window (numbers null where the indicators were not computed)."""
+    return {'defect_suspected': bool(defect.suspected),
+            'kurtosis': None if condition is None else _finite(condition.kurtosis),
+            'crest_factor': None if condition is None else _finite(condition.crest_factor),
+            'defect_component': defect.component, 'defect_order': _finite(defect.order),
+            'defect_evidence': defect.evidence}
 
 
 def _described(table: str, actuator_id: str) -> pa.Schema:
@@ -291,7 +335,8 @@ def add_assessment(history: str | Path, assessment: RecordingAssessment, *, actu
         try:
             if before_commit is not None:
                 before_commit(staged)
-            _commit(staged, target)
+            with file_lock(history / LOCK):    # one commit at a time, across processes: never split or doubled
+                _commit(staged, target)
         finally:
             shutil.rmtree(staged, ignore_errors=True)     # gone after a commit; the half-done work otherwise
     except OSError as exc:
@@ -323,34 +368,12 @@ def _commit(staged: Path, target: Path) -> None:
     if elsewhere and not target.exists():
         os.rename(elsewhere.pop(), target)               # moves to its new actuator: never in two places
     if target.exists():
-        _exchange(staged, target)                         # staged now holds the old folder (removed by the caller)
+        exchange(staged, target)                         # staged now holds the old folder (removed by the caller)
     else:
         os.rename(staged, target)
     for stale in elsewhere:                               # only after a crash of an earlier layout's writer
         shutil.rmtree(stale, ignore_errors=True)
     _fsync_folder(target.parent)
-
-
-_RENAME_EXCHANGE = 2
-_AT_FDCWD = -100
-
-
-def _exchange(first: Path, second: Path) -> None:
-    """Swap two folders atomically (Linux ``renameat2``); else move ``second`` aside to ``first``'s place first."""
-    try:
-        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
-    except (AttributeError, OSError):
-        renameat2 = None
-    if renameat2 is not None:
-        if renameat2(_AT_FDCWD, os.fsencode(first), _AT_FDCWD, os.fsencode(second), _RENAME_EXCHANGE) == 0:
-            return
-        error = ctypes.get_errno()
-        if error not in (22, 38, 95):                     # EINVAL, ENOSYS, EOPNOTSUPP: no exchange here
-            raise OSError(error, os.strerror(error), str(second))
-    aside = first.with_name(first.name + '.old.tmp')
-    os.rename(second, aside)
-    os.rename(first, second)
-    os.rename(aside, first)
 
 
 def _fsync_folder(folder: Path) -> None:
@@ -362,14 +385,18 @@ def _fsync_folder(folder: Path) -> None:
 
 
 def read_table(history: str | Path, table: str = 'runs', actuator: str | None = None,
-               on_problem: Callable[[str], None] | None = None) -> pa.Table:
+               on_problem: Callable[[str], None] | None = None,
+               on_note: Callable[[str], None] | None = None) -> pa.Table:
     """One table of the history with ``actuator`` and ``recording`` (from the folders).
 
     ``actuator`` keeps one actuator (its id or partition key).  A file that
     cannot be read, or one that is not part of the layout, is a line passed
     to ``on_problem`` and skipped (without ``on_problem``: a
-    :class:`ConfigError`).  An empty table (with the schema) when the history
-    has no recording; :class:`ConfigError` when ``history`` is not a history.
+    :class:`ConfigError`).  Files of layout 2 (before the defect screen) get
+    the :data:`DEFECT_COLUMNS` values, and ``on_note`` one line saying how
+    many recordings that is.  An empty table (with the schema) when the
+    history has no recording; :class:`ConfigError` when ``history`` is not a
+    history.
     """
     if table not in TABLES:
         raise InputError(f'history table must be one of {", ".join(TABLES)}, got {table!r}')
@@ -379,13 +406,66 @@ def read_table(history: str | Path, table: str = 'runs', actuator: str | None = 
     files = sorted(str(p) for p in root.glob(pattern) if _in_layout(p, root))
     for stray in _strays(root):
         report(f'{stray}: not part of the history layout (recordings/actuator=ID/recording=KEY/), skipped')
+    files = [file for file in files if _bounded(file, Path(history), report)]
     schema = SCHEMAS[table].append(pa.field('actuator', pa.string())).append(pa.field('recording', pa.string()))
     if not files:
         return schema.empty_table()
     try:
-        return _dataset(files, schema, root).to_table()
+        found = _dataset(files, schema, root).to_table()
     except (pa.ArrowException, OSError):
-        return _read_each(files, schema, root, report)
+        found = _read_each(files, schema, root, report)
+    return _screen_columns_filled(found, Path(history), on_note)
+
+
+def _screen_columns_filled(found: pa.Table, history: Path, on_note: Callable[[str], None] | None) -> pa.Table:
+    """Rows of files written before the defect screen (``defect_suspected`` null) with :data:`DEFECT_COLUMNS`."""
+    import pyarrow.compute as pc
+    unscreened = pc.is_null(found.column('defect_suspected'))
+    if not pc.any(unscreened).as_py():
+        return found
+    if on_note is not None:
+        old = found.filter(unscreened)
+        recordings = len(set(zip(old.column('actuator').to_pylist(), old.column('recording').to_pylist())))
+        actuators = len(set(old.column('actuator').to_pylist()))
+        on_note(f'{history}: {recordings} recording(s) of {actuators} actuator(s) were assessed before the surface '
+                f'defect screen (history layout 2): read as no defect suspected, kurtosis and crest factor unknown; '
+                f'assess them again to screen them')
+    for name, value in DEFECT_COLUMNS.items():
+        if value is not None:
+            index = found.schema.get_field_index(name)
+            found = found.set_column(index, found.schema.field(name), pc.fill_null(found.column(name), value))
+    return found
+
+
+def _bounded(file: str, history: Path, report: Callable[[str], None]) -> bool:
+    """True for a Parquet file inside ``history``, regular and within the bounds its footer gives; else reported."""
+    try:
+        with open_regular(file, 'history file', max_bytes=MAX_PARQUET_BYTES, root=history,
+                          error=ConfigError) as stream:
+            size = stream.seek(0, os.SEEK_END)
+            stream.seek(max(size - 8, 0))
+            tail = stream.read(8)
+            footer = int.from_bytes(tail[:4], 'little') if len(tail) == 8 and tail[4:] == b'PAR1' else -1
+            if not 0 <= footer <= min(MAX_PARQUET_FOOTER, size - 12):
+                raise ConfigError(f'{file}: not a Parquet file (no footer), skipped')
+            rows = pq.read_metadata(stream).num_rows
+    except InputError as exc:
+        report(str(exc).removesuffix(', skipped').removesuffix('; not read') + ', skipped')
+        return False
+    except (pa.ArrowException, OSError) as exc:
+        report(f'{file}: unreadable Parquet ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}), '
+               'skipped')
+        return False
+    if rows > MAX_PARQUET_ROWS:
+        report(f'{file}: {rows} rows in its footer, more than {MAX_PARQUET_ROWS} (not written by prsm-lube), '
+               'skipped')
+        return False
+    return True
+
+
+def path_text(path: str | Path) -> str:
+    """A path as valid UTF-8 text: bytes the file system allows but UTF-8 lacks become backslash-x escapes."""
+    return os.fsencode(path).decode('utf-8', 'backslashreplace')
 
 
 def _dataset(files: list[str], schema: pa.Schema, root: Path) -> ds.Dataset:

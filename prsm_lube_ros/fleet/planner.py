@@ -94,7 +94,11 @@ def _status(crossed: float | None, low: float | None, high: float | None, tail: 
 
 
 def plan(forecast: ActuatorForecast, as_of: float, by: float) -> list[PlannedCrossing]:
-    """Every level of ``forecast`` as the planner reads it (``NO_FORECAST`` entries when it has none)."""
+    """Every level of ``forecast`` as the planner reads it; none without a forecast.
+
+    An actuator with a suspected surface defect has none either: it needs an
+    inspection, and :func:`~.forecast.urgency_key` puts it first.
+    """
     if forecast.reason:
         return []
     return [plan_crossing(forecast, crossing, as_of, by) for crossing in forecast.crossings]

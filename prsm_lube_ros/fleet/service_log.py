@@ -15,17 +15,23 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 import datetime
+import io
 import math
 from typing import Any, TYPE_CHECKING
 from collections.abc import Callable, Iterator
 
 from ..errors import ConfigError
+from ..input_file import read_bytes
 
 if TYPE_CHECKING:
     from pathlib import Path
 
 
-__all__ = ['OdometerReading', 'odometer_problems', 'odometer_readings', 'read_odometer', 'read_relubrications']
+__all__ = ['MAX_LOG_BYTES', 'OdometerReading', 'odometer_problems', 'odometer_readings', 'read_odometer',
+           'read_relubrications']
+
+#: Largest service log (relubrications, odometer readings) read, bytes: a fleet's decades of entries are a few MB.
+MAX_LOG_BYTES = 64 << 20
 
 
 def read_relubrications(path: str | Path) -> dict[str, list[float]]:
@@ -83,10 +89,8 @@ def odometer_problems(path: str | Path, readings: dict[str, list[OdometerReading
 def _csv_rows(path: str | Path, columns: tuple[str, ...]) -> Iterator[tuple[int, tuple[Any, ...]]]:
     """Rows of ``columns`` (an id, a time as ISO 8601 or s since the epoch, then numbers); one-line errors."""
     try:
-        with open(path, newline='', encoding='utf-8') as stream:
-            lines = list(csv.reader(stream))
-    except OSError as exc:
-        raise ConfigError(f'{path}: cannot read ({exc.strerror or exc})') from None
+        data = read_bytes(path, 'service log', max_bytes=MAX_LOG_BYTES, error=ConfigError)   # a regular file, bounded
+        lines = list(csv.reader(io.StringIO(data.decode('utf-8'), newline='')))
     except UnicodeDecodeError as exc:
         raise ConfigError(f'{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason})') from None
     except csv.Error as exc:

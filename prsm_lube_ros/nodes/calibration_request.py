@@ -90,16 +90,22 @@ class CalibrationOutcome:
 def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: str | Path, lead: float,
                            settings: WindowSettings, namespace: str, min_axial_load: float,
                            on_problem: Callable[[str], None] | None = None,
-                           on_progress: Callable[[str, int, int, int], None] | None = None) -> CalibrationOutcome:
+                           on_progress: Callable[[str, int, int, int], None] | None = None,
+                           check: Callable[[], None] | None = None) -> CalibrationOutcome:
     """Check a request, read its recordings and fit C_sys, C_F, C_lambda (seconds per recording).
 
     ``on_progress(stage, recordings_read, recording_count, steady_windows)``
     is called before each recording is read (stage ``reading``) and before
-    the fit (``fitting``).  Raises :class:`InputError` for anything wrong with
-    the request or the data.
+    the fit (``fitting``).  ``check()`` is called as each piece of a
+    recording is read and before the fit: it raises to stop the calibration
+    there (a deadline, a cancel), before anything was changed.  Every file
+    read lies inside ``folder`` and is a regular file (a FIFO or a link out is
+    refused before it is opened).  Raises :class:`InputError` for anything
+    wrong with the request or the data.
     """
     theta = reference_theta(theta)
     paths = resolve_bag_paths(bag_paths, folder)
+    root = recordings_folder(str(folder))
     try:
         from ..estimation.pipeline import calibrate_recordings, recording_windows, require_usable
     except ImportError as exc:    # the bag reader is not installed with this build
@@ -113,11 +119,14 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
 
     recordings = []
     steady = 0
+    checked = check or (lambda: None)
     for read, path in enumerate(paths):
+        checked()
         if on_progress:
             on_progress('reading', read, len(paths), steady)
         recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
-                                      on_problem=report)
+                                      on_problem=report, root=root,       # its files inside the folder too
+                                      progress=lambda fraction: checked())
         try:
             require_usable(recording, settings)     # the command line's words for the same lack
         except InputError as exc:
@@ -125,6 +134,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
         recordings.append(recording)
         steady += sum(1 for w in recording.windows if w.steady)
         settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
+    checked()
     if on_progress:
         on_progress('fitting', len(paths), len(paths), steady)
     calibration = calibrate_recordings(recordings, theta, min_axial_load=min_axial_load)

@@ -165,6 +165,10 @@ PARAMETERS = {
         '~/prsm_recordings', _STRING,
         'folder the calibrate service may read bags from; relative bag paths are taken from it, paths outside '
         'it are refused (read-only: it decides what the node reads)', read_only=True),
+    'calibration_timeout': ParameterSpec(
+        600.0, _DOUBLE,
+        's a calibration may spend reading its recordings before it stops, changing nothing (the service then '
+        'answers the next request)', bounds=(1.0, 86400.0), read_only=True),
     'actuator_file': ParameterSpec(
         '', _STRING,
         "actuator geometry YAML (config/actuator.yaml layout) for the screw lead and the defect orders (roller "
@@ -267,6 +271,7 @@ HEALTH_PARAMETERS = ('warn_below', 'error_below', 'hysteresis', 'stale_timeout',
 #: Why the parameters that decide what the node reads or writes are fixed after start-up (refusal reasons).
 FIXED_REASONS = {
     'recordings_dir': 'it confines what the calibrate service may read',
+    'calibration_timeout': 'it bounds what one calibrate request may cost',
     'calibration_file': 'it decides where calibrate writes when persist is set',
     'history_dir': 'it decides what the node reads',
     'actuator_file': 'it decides what the node reads',
@@ -356,11 +361,16 @@ class _PooledScreenAssessor(Assessor):
 
 
 class CalibrationWithdrawn(Exception):
-    """A calibration action cancelled while it waited for another calibration: it never started."""
+    """A calibration action cancelled before it changed anything (waiting, or while reading the recordings)."""
 
 
 class CalibrationJob:
-    """Whether one calibration action has started (then a cancel is refused) or was withdrawn before."""
+    """Whether one calibration action has started and whether it was withdrawn (cancelled).
+
+    A cancel is always taken: a waiting calibration never starts, a running
+    one stops at its next check while it reads the recordings (nothing is
+    written or swapped); one already fitting finishes.
+    """
 
     def __init__(self):
         self._lock = threading.Lock()
@@ -368,10 +378,10 @@ class CalibrationJob:
         self.withdrawn = False
 
     def withdraw(self) -> bool:
-        """Cancel: True (withdrawn) if the calibration has not started, else False (it runs on, untouched)."""
+        """Cancel: mark it withdrawn; True."""
         with self._lock:
-            self.withdrawn = self.withdrawn or not self.started
-            return self.withdrawn
+            self.withdrawn = True
+            return True
 
     def start(self) -> bool:
         """Mark it started; False when it was withdrawn first."""
@@ -402,6 +412,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         self._thresholds = health_thresholds(values)
         self._min_axial_load = float(values['min_axial_load'])
         self._recordings_dir = str(values['recordings_dir'])
+        self._calibration_timeout = float(values['calibration_timeout'])
         actuators = [a.strip() for a in values['actuators'] if a.strip()]
         if not actuators:
             raise InputError('parameter actuators: empty; name at least one namespace, e.g. [/prsm]')
@@ -934,12 +945,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         return execute
 
     def _cancel_calibration(self, goal_handle) -> CancelResponse:
-        """Accept a cancel only for a calibration that has not started; a running one is left untouched."""
-        job = self._jobs.setdefault(bytes(goal_handle.goal_id.uuid), CalibrationJob())
-        if job.withdraw():
-            return CancelResponse.ACCEPT
-        self.get_logger().info('calibrate: cancel refused: the calibration is running and will finish')
-        return CancelResponse.REJECT
+        """Accept a cancel: the calibration stops before it starts or at its next check while reading."""
+        self._jobs.setdefault(bytes(goal_handle.goal_id.uuid), CalibrationJob()).withdraw()
+        return CancelResponse.ACCEPT
 
     def _answer(self, channel: ActuatorChannel, response, outcome, persist: bool):
         """Fill a service response or action result (same fields) from a calibration's outcome."""
@@ -984,14 +992,27 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                 if job is not None and not job.start():
                     raise CalibrationWithdrawn('calibrate: cancelled before it started; nothing was read or '
                                                'changed')
-                return self._calibrate_now(channel, paths, theta, persist, namespace, progress)
+                return self._calibrate_now(channel, paths, theta, persist, namespace, progress, job)
             finally:
                 self._fit_lock.release()
         raise CalibrationWithdrawn('calibrate: cancelled while waiting for another calibration; nothing was read '
                                    'or changed')
 
+    def _stop_check(self, job: CalibrationJob | None, started: float) -> Callable[[], None]:
+        """What a running calibration calls as it reads: raises once cancelled or past ``calibration_timeout``."""
+        timeout = self._calibration_timeout
+
+        def check():
+            if job is not None and job.withdrawn:
+                raise CalibrationWithdrawn('calibrate: cancelled while reading the recordings; nothing was '
+                                           'written or changed')
+            if time.monotonic() - started > timeout:
+                raise InputError(f'calibrate: stopped after calibration_timeout ({timeout:g} s) while reading the '
+                                 'recordings; nothing was written or changed (fewer or shorter recordings?)')
+        return check
+
     def _calibrate_now(self, channel: ActuatorChannel, paths, theta: float, persist: bool, namespace: str,
-                       progress: Callable | None):
+                       progress: Callable | None, job: CalibrationJob | None = None):
         """:meth:`_run_calibration` holding the fit lock."""
         with self._lock:
             settings, folder = self._settings, self._recordings_dir
@@ -1006,7 +1027,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         started = time.monotonic()
         outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
                                          namespace=namespace, min_axial_load=min_load,
-                                         on_problem=on_problem, on_progress=progress)
+                                         on_problem=on_problem, on_progress=progress,
+                                         check=self._stop_check(job, started))
         calibration = outcome.calibration
         written = ''
         if persist:

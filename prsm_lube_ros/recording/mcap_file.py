@@ -26,6 +26,9 @@ from collections.abc import Iterator
 import lz4.frame
 import numpy as np
 
+from ..errors import RecordingError
+from ..input_file import open_regular
+
 try:  # ISA-L's CRC-32 (same polynomial as zlib's): 3.3x zlib 1.2's here (benchmarks/crc_speed.py)
     from isal.isal_zlib import crc32
 except ImportError:  # pragma: no cover - an install without the isal wheel checks with zlib
@@ -690,7 +693,7 @@ class McapFile:
         self.path = path
         self.summary_problem = ''     # why the summary section was not used (a problem line), '' when it was
         self.chunk_index: list[int] = []    # chunk offsets an intact summary's ChunkIndex records give
-        with open(path, 'rb') as stream:
+        with open_regular(path, 'MCAP file', error=RecordingError) as stream:
             stream.seek(0, 2)
             self.size = stream.tell()
             stream.seek(0)
@@ -791,7 +794,7 @@ class McapFile:
         summary = summary if summary is not None else Summary()
         on_record = _definitions_into(summary, on_problem)
         gathered = _Gathered(on_record, unchunked_batch, on_problem)
-        with open(self.path, 'rb') as stream:
+        with open_regular(self.path, 'MCAP file', error=RecordingError) as stream:
             stream.seek(len(MAGIC))
             walk = _DataWalk(stream, _CrcReader(stream), gathered, on_record, on_problem)
             yield from self._data_records(walk)
@@ -926,7 +929,7 @@ class McapFile:
         """
         summary = summary if summary is not None else Summary()
         gathered = _Gathered(_definitions_into(summary, on_problem), GATHER_BYTES, on_problem)
-        with open(self.path, 'rb') as stream:
+        with open_regular(self.path, 'MCAP file', error=RecordingError) as stream:
             for pos in offsets:
                 pos = int(pos)
                 stream.seek(pos)
@@ -1042,7 +1045,7 @@ def data_layout(path: str | Path, size: int) -> DataLayout:
     offsets = array('q')          # 8 bytes an entry, not a Python int: files of one message per chunk are long
     times = array('Q')
     only_chunks, complete = True, False
-    with open(path, 'rb') as stream:
+    with open_regular(path, 'MCAP file', error=RecordingError) as stream:
         pos = len(MAGIC)
         stream.seek(pos)
         while True:

@@ -63,18 +63,25 @@ from . import mcap_file, sqlite_file
 from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, DEFAULT_NAMESPACE, JOINT_STATES_TOPIC as JOINT_STATES,
                         namespace_of, topic_name, VIBRATION_TOPIC as VIBRATION)
 from ..errors import ConfigError, exception_text, ProblemSink, RecordingError
+from ..input_file import (check_regular, confine, MAX_METADATA_BYTES, MAX_RECORDING_BYTES, open_regular,
+                          read_text)
 from .batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from .cdr import check_layout, decode_messages, Decoded, KINDS, ragged_take
 from .plausibility import RATE_SPIKE_FRACTION, SpikeCount, STAMP_SPIKE_SECONDS
 
-__all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'Recording', 'SQLITE_MAGIC', 'TopicInfo', 'bare_read',
-           'find_actuators', 'iter_batches', 'list_topics', 'open_recording', 'raw_messages', 'topic_messages']
+__all__ = ['DEFAULT_SLICE_SECONDS', 'HELD_BACK_SECONDS', 'MAX_STORAGE_FILES', 'Recording', 'SQLITE_MAGIC', 'TopicInfo',
+           'bare_read', 'find_actuators', 'iter_batches', 'list_topics', 'open_recording', 'raw_messages',
+           'topic_messages']
 
 #: default length of one time slice, s of log time (the offline pipeline streams longer ones:
 #: :data:`prsm_lube_ros.estimation.pipeline.ASSESSMENT_SLICE_SECONDS`)
 DEFAULT_SLICE_SECONDS = 10.0
 #: log time a file read in file order may go back before that is reported (memory held), s
 HELD_BACK_SECONDS = 60.0
+#: most storage files a bag's metadata.yaml may list (a split bag of a day in 1-minute parts has 1440)
+MAX_STORAGE_FILES = 10_000
+#: libyaml's safe loader where installed (a few MB of metadata.yaml in a second, not ten)
+_YAML_LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 #: the first 16 bytes of every sqlite3 database file
 SQLITE_MAGIC = b'SQLite format 3\x00'
 #: raw bytes gathered per pseudo-chunk when reading through rosbags
@@ -423,7 +430,17 @@ def _split_index(path: Path) -> tuple[str, int]:
     return (stem, int(number)) if stem and number.isdigit() else (path.stem, -1)
 
 
-def _source_without_metadata(path: Path) -> _Source:
+def _storage_file(path: Path, root: Path) -> Path:
+    """A storage file of a bag folder, checked before anything opens it: inside ``root``, a regular file, bounded.
+
+    ``sqlite3`` and rosbags open storage by name: a FIFO there would block the
+    reader for good, a link out of ``root`` would read what was not offered.
+    """
+    check_regular(path, 'storage file', max_bytes=MAX_RECORDING_BYTES, root=root, error=RecordingError)
+    return path
+
+
+def _source_without_metadata(path: Path, root: Path) -> _Source:
     """A bag folder without metadata.yaml (what ``ros2 bag reindex`` repairs): its files in split order.
 
     Taken when it holds one storage file, or only the files of one split bag
@@ -432,7 +449,7 @@ def _source_without_metadata(path: Path) -> _Source:
     for suffix, source in (('.mcap', _McapSource), ('.db3', _SqliteSource)):
         files = sorted(path.glob('*' + suffix), key=_split_index)
         if len(files) == 1 or (files and all(_split_index(f)[0] == path.name for f in files)):
-            return source(str(path), files)
+            return source(str(path), [_storage_file(f, root) for f in files])
         if files:
             names = ', '.join(f.name for f in files)
             raise RecordingError(f'{path}: no metadata.yaml, and its {suffix} files ({names}) are not the parts '
@@ -440,33 +457,52 @@ def _source_without_metadata(path: Path) -> _Source:
     raise RecordingError(f'{path}: not a rosbag2 directory (no metadata.yaml, no .mcap or .db3 file)')
 
 
-def _open_source(path: Path) -> _Source:
-    """The source for a bare ``.mcap`` file or a rosbag2 directory; InputError if neither."""
+def _open_source(path: Path, root: str | Path | None = None) -> _Source:
+    """The source for a bare ``.mcap``/``.db3`` file or a rosbag2 directory; InputError if neither.
+
+    Every file opened (the path itself, ``metadata.yaml``, the storage files a
+    folder holds or its metadata lists) must resolve inside ``root`` (default:
+    the path itself, so a bag folder's files may not link out of it) and be a
+    regular file within :mod:`..input_file`'s bounds.
+    """
     if not path.exists():
         raise RecordingError(f'{path}: no such file or directory')
-    if path.is_file():
-        if path.name == 'metadata.yaml':
-            return _open_source(path.parent)
-        with open(path, 'rb') as stream:
-            magic = stream.read(len(SQLITE_MAGIC))
-        if magic.startswith(mcap_file.MAGIC):
-            return _McapSource(str(path), [path])
-        if magic == SQLITE_MAGIC:    # one storage file of a sqlite3 bag, read as rosbag2 reads a bare .db3
-            return _SqliteSource(str(path), [path])
-        raise RecordingError(f'{path}: not a recording (neither an MCAP or sqlite3 file nor a rosbag2 directory)')
+    if path.is_dir():
+        inside = confine(path, root, 'recording', RecordingError)
+        return _bag_folder(path, inside if root is None else Path(root))
+    if path.name == 'metadata.yaml':
+        return _open_source(path.parent, root)
+    with open_regular(path, 'recording', max_bytes=MAX_RECORDING_BYTES, root=root, error=RecordingError) as stream:
+        magic = stream.read(len(SQLITE_MAGIC))
+    if magic.startswith(mcap_file.MAGIC):
+        return _McapSource(str(path), [path])
+    if magic == SQLITE_MAGIC:    # one storage file of a sqlite3 bag, read as rosbag2 reads a bare .db3
+        return _SqliteSource(str(path), [path])
+    raise RecordingError(f'{path}: not a recording (neither an MCAP or sqlite3 file nor a rosbag2 directory)')
+
+
+def _bag_folder(path: Path, root: Path) -> _Source:
+    """The source of a rosbag2 folder whose files must lie inside ``root``."""
     metadata_path = path / 'metadata.yaml'
-    if not metadata_path.is_file():
-        return _source_without_metadata(path)
+    if not metadata_path.exists() and not metadata_path.is_symlink():
+        return _source_without_metadata(path, root)
+    text = read_text(metadata_path, 'rosbag2 metadata', max_bytes=MAX_METADATA_BYTES, root=root,
+                     error=RecordingError)
     try:
-        info = yaml.safe_load(metadata_path.read_text())['rosbag2_bagfile_information']
+        info = yaml.load(text, Loader=_YAML_LOADER)['rosbag2_bagfile_information']
         storage = info['storage_identifier']
         files = [path / Path(name).name for name in info['relative_file_paths']]
         compression = (info.get('compression_mode') or '').lower()
         compression_format = (info.get('compression_format') or '').lower()
-    except Exception as err:
-        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({exception_text(err)})') from None
+    except Exception as err:   # what the file holds is not repeated: it may be anything a link led to
+        raise RecordingError(f'{metadata_path}: not rosbag2 metadata ({type(err).__name__})') from None
+    if len(files) > MAX_STORAGE_FILES or len(set(files)) != len(files):
+        raise RecordingError(f'{metadata_path}: lists {len(files)} storage files ({len(set(files))} different; at most '
+                             f'{MAX_STORAGE_FILES}, each once)')
     if missing := [str(f) for f in files if not f.exists()]:
-        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing)}')
+        raise RecordingError(f'{path}: storage file(s) listed in metadata.yaml missing: {", ".join(missing[:5])}'
+                             + (f' and {len(missing) - 5} more' if len(missing) > 5 else ''))
+    files = [_storage_file(f, root) for f in files]
     if compression in ('', 'none'):
         if storage == 'mcap':
             return _McapSource(str(path), files)
@@ -475,7 +511,7 @@ def _open_source(path: Path) -> _Source:
     if storage == 'sqlite3' and compression in ('message', 'file') and compression_format == 'zstd':
         return _with_metadata_counts(_SqliteSource(str(path), files, compression), info)
     if storage not in ('mcap', 'sqlite3'):
-        raise RecordingError(f'{path}: storage {storage!r} is not supported (mcap or sqlite3)')
+        raise RecordingError(f'{path}: storage {str(storage)[:40]!r} is not supported (mcap or sqlite3)')
     return _RosbagsSource(path)
 
 
@@ -639,10 +675,10 @@ class _Tally:
 class Recording:
     """An opened recording: what it holds, and its contract topics as a stream of batches."""
 
-    def __init__(self, path: str | Path, namespace: str = DEFAULT_NAMESPACE) -> None:
+    def __init__(self, path: str | Path, namespace: str = DEFAULT_NAMESPACE, root: str | Path | None = None) -> None:
         self.path = Path(path)
         self.namespace = namespace
-        self._source = _open_source(self.path)
+        self._source = _open_source(self.path, root)
         #: every topic of the recording, by name
         self.topics: dict[str, TopicInfo] = self._source.topics
         #: problems noticed while opening (e.g. a missing summary section), one line each
@@ -805,12 +841,14 @@ class Recording:
         return source.raw_chunks(topics, on_problem)
 
 
-def open_recording(path: str | Path, namespace: str = DEFAULT_NAMESPACE) -> Recording:
+def open_recording(path: str | Path, namespace: str = DEFAULT_NAMESPACE, root: str | Path | None = None) -> Recording:
     """Open a rosbag2 directory or bare ``.mcap`` file for the actuator at ``namespace``.
 
-    Raises :class:`InputError` (one line naming the file) when it cannot be used.
+    Every file it opens must resolve inside ``root`` (default: a bag folder's
+    files inside that folder).  Raises :class:`InputError` (one line naming
+    the file) when it cannot be used.
     """
-    return Recording(path, namespace)
+    return Recording(path, namespace, root)
 
 
 def find_actuators(path: str | Path) -> list[str]:

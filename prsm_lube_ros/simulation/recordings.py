@@ -12,18 +12,17 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..estimation.conditioning import DEFAULT_BAND
-from ..physics.effects import effect_ids
+from ..physics.effects import effect_ids, simulation, SimulationContext
 from ..recording.writer import bag_path, check_storage, ContractBagWriter
 from ..validation import as_number, require
 from .drive import DriveProgram, schedule_session, Stroke
-from .effects import (draw_background_vibration, draw_lubricant_depletion, draw_position_dependent_stiffness,
-                      draw_resonance, draw_thermal_viscosity, Effects)
+from .effects import Effects
 from .nuisances import RecordingNuisances
 from .rig_config import CHUNK_DURATION, ExperimentPlan, ProgressCallback, RigConfig
 from .rig_acceleration import RigStream, thread_contact_amplitude
 
 
-__all__ = ['draw_effects', 'session_revolutions', 'simulate_endurance', 'simulate_experiment']
+__all__ = ['draw_effects', 'session_revolutions', 'simulation_context', 'simulate_endurance', 'simulate_experiment']
 
 
 # ---------------------------------------------------------------------------------------------
@@ -93,38 +92,37 @@ def session_revolutions(plan: ExperimentPlan, rig: RigConfig) -> float:
     return 2.0 * len(plan.conditions) * plan.stroke / rig.actuator.lead
 
 
+def simulation_context(rig: RigConfig | None = None, plan: ExperimentPlan | None = None) -> SimulationContext:
+    """What effects are drawn against on this rig and plan (:class:`~prsm_lube_ros.physics.effects.SimulationContext`).
+
+    The plan's conditions, stroke and one session's revolutions; the
+    thread-contact amplitude at the lowest speed, highest load and theta = 1;
+    the rig's sample rate and the upper edge of the default analysis band at it.
+    """
+    rig, plan = rig or RigConfig(), plan or ExperimentPlan()
+    return SimulationContext(
+        actuator=rig.actuator, speeds=tuple(plan.speeds), loads=tuple(plan.loads), stroke=plan.stroke,
+        session_revolutions=session_revolutions(plan, rig),
+        reference_amplitude=float(thread_contact_amplitude(min(plan.speeds), max(plan.loads), 1.0, rig)),
+        sample_rate=rig.vibration_rate, band_high=DEFAULT_BAND.resolved(rig.vibration_rate).high)
+
+
 def draw_effects(names: Sequence[str], *, seed: int = 0, rig: RigConfig | None = None,
                  plan: ExperimentPlan | None = None) -> Effects:
     """Effects ``names`` (see :func:`~prsm_lube_ros.physics.effects.effect_ids`), parameters drawn in physical ranges.
 
-    The ranges refer to the plan: stroke, lowest load, top speed, one session's
-    revolutions and the thread-contact amplitude at the lowest speed, highest
-    load and theta = 1; background tones lie in the analysis band at the rig's sample rate.
+    Each effect's own simulation hook draws it (``Simulation.draw`` of its
+    module, over the ranges documented there) against :func:`simulation_context`,
+    from its own random stream: one ``SeedSequence(seed)`` child per registered
+    effect, by registry index, so adding an effect at the end of the registry
+    leaves the others' draws as they were.
     """
-    rig, plan = rig or RigConfig(), plan or ExperimentPlan()
     unknown = sorted(set(names) - set(effect_ids()))
     require(not unknown, f'effects: unknown effect(s) {", ".join(unknown)}; known: {", ".join(effect_ids())}')
     rngs = dict(zip(effect_ids(), (np.random.default_rng(s) for s in
                                    np.random.SeedSequence(seed).spawn(len(effect_ids())))))
-    actuator = rig.actuator
-    makers: dict[str, Callable[[np.random.Generator], object]] = {
-        'position_dependent_stiffness': lambda rng: draw_position_dependent_stiffness(
-            rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
-            stroke=plan.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
-            reference_load=min(plan.loads)),
-        'resonance': lambda rng: draw_resonance(
-            rng, order=rig.roller_pass_order, top_speed=max(plan.speeds), bottom_speed=min(plan.speeds),
-            orders=(1, 2, 3, rig.roller_pass_order, 6, 3 * rig.roller_pass_order, 6 * rig.roller_pass_order)),
-        'thermal_viscosity': lambda rng: draw_thermal_viscosity(
-            rng, viscosity_temperature_coefficient=actuator.viscosity_temperature_coefficient),
-        'lubricant_depletion': lambda rng: draw_lubricant_depletion(
-            rng, session_revolutions=session_revolutions(plan, rig)),
-        'background_vibration': lambda rng: draw_background_vibration(
-            rng, reference_amplitude=float(thread_contact_amplitude(min(plan.speeds), max(plan.loads),
-                                                                    1.0, rig)),
-            highest_frequency=DEFAULT_BAND.resolved(rig.vibration_rate).high),
-    }
-    return Effects(**{name: makers[name](rngs[name]) for name in names})
+    context = simulation_context(rig, plan)
+    return Effects(**{name: simulation(name).draw(rngs[name], context) for name in names})
 
 
 def _truth(rig: RigConfig, plan: ExperimentPlan | None, seed: int, effects: Effects, storage: str,

@@ -12,6 +12,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.signal import iirpeak, lfilter
 
+from ..physics.effects import ContactState, resonator_energy, SampleState, StreamRandom
 from ..physics.vibration_model import acceleration_amplitude
 from ..validation import as_number, require
 from .drive import DriveProgram
@@ -20,7 +21,7 @@ from .rig_config import RigConfig, STANDSTILL_SPEED
 
 
 __all__ = ['RigBlock', 'RigChunk', 'RigSignalGenerator', 'RigStream', 'WANDER_TERMS', 'effective_load',
-           'expected_rms', 'resonator_energy', 'thread_contact_amplitude']
+           'expected_rms', 'thread_contact_amplitude']
 
 
 # ---------------------------------------------------------------------------------------------
@@ -45,26 +46,35 @@ def thread_contact_amplitude(screw_speed: npt.ArrayLike, applied_load: npt.Array
     """
     effects = effects or Effects()
     load = effective_load(applied_load, rig)
+    state = ContactState(speed=screw_speed, load=load, nut_position=nut_position, temperature=temperature,
+                         ambient_temperature=rig.ambient_temperature, revolutions=revolutions)
+    hooks = list(effects.hooks())
     theta = np.asarray(theta_oil, dtype=float)
-    if effects.lubricant_depletion is not None:
-        theta = theta * effects.lubricant_depletion.theta_factor(revolutions)
-    if effects.thermal_viscosity is not None and temperature is not None:
-        theta = theta * effects.thermal_viscosity.film_factor(temperature, rig.ambient_temperature)
+    for hook, law in sorted(hooks, key=lambda pair: pair[0].film_rank):   # stable: registry order among equals
+        theta = theta * hook.film_factor(law, state)
     amplitude = acceleration_amplitude(np.asarray(screw_speed, dtype=float), load, theta, rig.constants)
-    if effects.position_dependent_stiffness is not None:
-        amplitude = amplitude * effects.position_dependent_stiffness.amplitude_factor(nut_position, load)
-    if effects.resonance is not None:
-        amplitude = amplitude * effects.resonance.amplitude_factor(screw_speed)
+    for hook, law in hooks:
+        amplitude = amplitude * hook.amplitude_factor(law, state)
     return amplitude
+
+
+def _added_power(effects: Effects, state: ContactState) -> np.ndarray | float:
+    """Mean square (m/s^2)^2 the active effects add beside the thread contacts (background, impacts)."""
+    power: np.ndarray | float = 0.0
+    for hook, law in effects.hooks():
+        power = power + hook.added_power(law, state)
+    return power
 
 
 def expected_rms(screw_speed: npt.ArrayLike, applied_load: npt.ArrayLike, theta_oil: npt.ArrayLike,
                  rig: RigConfig, effects: Effects | None = None, **state: Any) -> np.ndarray:
     """RMS the recording should show in steady running, m/s^2: contact, background and sensor noise in power."""
     effects = effects or Effects()
-    background = effects.background_vibration.rms if effects.background_vibration is not None else 0.0
     contact = thread_contact_amplitude(screw_speed, applied_load, theta_oil, rig, effects, **state)
-    return np.sqrt(contact ** 2 + background ** 2 + rig.sensor_noise ** 2)
+    where = ContactState(speed=screw_speed, load=effective_load(applied_load, rig),
+                         nut_position=state.get('nut_position', 0.0), temperature=state.get('temperature'),
+                         ambient_temperature=rig.ambient_temperature, revolutions=state.get('revolutions', 0.0))
+    return np.sqrt(contact ** 2 + _added_power(effects, where) + rig.sensor_noise ** 2)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -135,9 +145,13 @@ class RigStream:
         self._orders = np.array(rig.resolved_harmonic_orders)
         self._harmonic_amplitudes = np.sqrt(2.0 * np.array(rig.harmonic_shares))
         self._harmonic_phases = phase_rng.uniform(0.0, 2.0 * math.pi, self._orders.size)
-        background = self.effects.background_vibration
-        tones = len(background.tone_frequencies) if background is not None else 0
-        self._tone_phases = phase_rng.uniform(0.0, 2.0 * math.pi, tones)
+        # Each effect's own waveform (a ringing mode, added vibration), made in registry order.
+        random = StreamRandom(sequence=sequence, phases=phase_rng, added=self._background_rng)
+        self._waveforms = [waveform for hook, law in self.effects.hooks()
+                           if (waveform := hook.waveform(law, fs, random)) is not None]
+        heating = [h for hook, law in self.effects.hooks() if (h := hook.heating(law)) is not None]
+        #: Temperature rise (K) and time constant (s) of nut and oil while running, or None.
+        self._heating = heating[0] if heating else None
         # Set-up scatter: keyed off the seed without spawning from it (the caller's sequence is left as it was).
         self._set_up_key = (sequence.entropy, tuple(sequence.spawn_key) + (1000,))
         wander_rng = np.random.default_rng(np.random.SeedSequence(sequence.entropy,
@@ -146,64 +160,25 @@ class RigStream:
         self._wander_phases = wander_rng.uniform(0.0, 2.0 * math.pi, WANDER_TERMS)
         self._next_index: int | None = None
         self._last_angle = float(program.motion(0.0)[0])
-        self._mode = self._structural_mode(sequence)
         # A warm (or cooled) actuator at the start: the nut relaxes from there (thermal effect only).
         self.temperature = rig.ambient_temperature + rig.initial_temperature_offset
         self.revolutions = 0.0
-
-    def _structural_mode(self, sequence: np.random.SeedSequence) -> list[Any] | None:
-        """The resonance's mode as a resonator ringing at f_r: (b, a, gain, state, rng), or None.
-
-        None without a resonance, or when f_r is not below 0.45 times the sample
-        rate (the mode cannot show in the recording: its gain then scales the
-        whole thread-contact signal).  The random stream is keyed off the seed
-        without spawning from it, so cases without a resonance are unchanged.
-        """
-        resonance, fs = self.effects.resonance, self.rig.vibration_rate
-        if resonance is None or resonance.natural_frequency >= 0.45 * fs:
-            return None
-        b, a = iirpeak(resonance.natural_frequency, 1.0 / (2.0 * resonance.damping_ratio), fs)
-        rng = np.random.default_rng(np.random.SeedSequence(sequence.entropy,
-                                                           spawn_key=tuple(sequence.spawn_key) + (1000, 3)))
-        decay = 1.0 / (2.0 * math.pi * resonance.natural_frequency * resonance.damping_ratio)
-        _, state = lfilter(b, a, rng.standard_normal(int(math.ceil(10.0 * decay * fs)) + 8), zi=np.zeros(2))
-        return [b, a, math.sqrt(resonator_energy(b, a)), state, rng]
-
-    def _through_mode(self, mix: np.ndarray, speeds: np.ndarray) -> np.ndarray:
-        """The thread-contact signal with the structural mode's response in it, same RMS as ``|H(r)|`` times ``mix``.
-
-        ``thread_contact_amplitude`` already carries the magnification
-        ``g = |H(r)|`` of the order that meets the mode.  Where g > 1 the extra
-        power ``g^2 - 1`` is the mode ringing at its natural frequency f_r
-        (a band fixed in Hz, width 2 zeta f_r, whose power follows the order's
-        approach to f_r and the contact excitation); where g < 1 (mass-controlled,
-        past resonance) the whole signal is attenuated.  Returns the signal to be
-        multiplied by that amplitude (unit mean square where mix has it).
-        """
-        assert self.effects.resonance is not None and self._mode is not None  # only called with the mode
-        gain = self.effects.resonance.amplitude_factor(speeds)
-        b, a, energy, state, rng = self._mode
-        ring, self._mode[3] = lfilter(b, a, rng.standard_normal(mix.size), zi=state)
-        quasi_static = np.minimum(gain, 1.0) / gain
-        ringing = np.sqrt(np.maximum(gain ** 2 - 1.0, 0.0)) / gain
-        return quasi_static * mix + ringing * ring / energy
 
     def relubricate(self) -> None:
         """Oil injected: the revolutions since the last lubrication restart at zero."""
         self.revolutions = 0.0
 
     def _relax_temperature(self, duration: float) -> None:
-        thermal = self.effects.thermal_viscosity
-        if thermal is not None and duration > 0:
-            ambient = self.rig.ambient_temperature
-            self.temperature = ambient + (self.temperature - ambient) * math.exp(-duration / thermal.time_constant)
+        if self._heating is not None and duration > 0:
+            ambient, time_constant = self.rig.ambient_temperature, self._heating[1]
+            self.temperature = ambient + (self.temperature - ambient) * math.exp(-duration / time_constant)
 
     def _temperatures(self, speeds: np.ndarray) -> np.ndarray:
-        thermal = self.effects.thermal_viscosity
-        if thermal is None:
+        if self._heating is None:
             return np.full(speeds.size, self.rig.ambient_temperature)
-        decay = math.exp(-1.0 / (self.rig.vibration_rate * thermal.time_constant))
-        target = self.rig.ambient_temperature + thermal.temperature_rise * (np.abs(speeds) > STANDSTILL_SPEED)
+        rise, time_constant = self._heating
+        decay = math.exp(-1.0 / (self.rig.vibration_rate * time_constant))
+        target = self.rig.ambient_temperature + rise * (np.abs(speeds) > STANDSTILL_SPEED)
         result, _ = lfilter([1.0 - decay], [1.0, -decay], target, zi=[decay * self.temperature])
         self.temperature = float(result[-1])
         return result
@@ -242,8 +217,11 @@ class RigStream:
         return np.exp(log_factor)
 
     def _true_amplitude(self, angles: np.ndarray, speeds: np.ndarray, applied: np.ndarray,
-                        theta_oil: float) -> tuple[np.ndarray, np.ndarray]:
-        """True nut temperatures and thread-contact amplitude per sample; advances revolutions and angle."""
+                        theta_oil: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """True nut temperatures, thread-contact amplitude and revolutions since the last lubrication per sample.
+
+        Advances revolutions and angle.
+        """
         steps = np.abs(np.diff(angles, prepend=self._last_angle)) / (2.0 * math.pi)
         revolutions = self.revolutions + np.cumsum(steps)
         self.revolutions = float(revolutions[-1])
@@ -253,29 +231,21 @@ class RigStream:
         amplitude = thread_contact_amplitude(speeds, applied, theta_oil, self.rig, self.effects,
                                              nut_position=nut_positions, temperature=temperatures,
                                              revolutions=revolutions)
-        return temperatures, amplitude
+        return temperatures, amplitude, revolutions
 
-    def _signal(self, times: np.ndarray, angles: np.ndarray, speeds: np.ndarray,
-                amplitude: np.ndarray) -> np.ndarray:
-        """The recorded acceleration per sample: thread contacts (through the mode), background, set-up, noise."""
-        rig, count = self.rig, times.size
+    def _signal(self, state: SampleState) -> np.ndarray:
+        """The recorded acceleration per sample: thread contacts, the effects' waveforms, set-up, noise."""
+        rig, times, angles, speeds, count = self.rig, state.times, state.angles, state.speeds, state.times.size
         contact, self._contact_state = lfilter(self._b, self._a, self._contact_rng.standard_normal(count),
                                                zi=self._contact_state)
         mix = math.sqrt(rig.contact_share) / self._contact_gain * contact
         for order, scale, phase in zip(self._orders, self._harmonic_amplitudes, self._harmonic_phases):
             mix += scale * np.sin(order * angles + phase)
-        if self._mode is not None:
-            mix = self._through_mode(mix, speeds)
-        signal = amplitude * mix
-        background = self.effects.background_vibration
-        if background is not None:
-            part = np.zeros(count)
-            for frequency, share, phase in zip(background.tone_frequencies, background.tone_shares,
-                                               self._tone_phases):
-                part += math.sqrt(2.0 * share) * np.sin(2.0 * math.pi * frequency * times + phase)
-            if background.broadband_share > 0:
-                part += math.sqrt(background.broadband_share) * self._background_rng.standard_normal(count)
-            signal += background.rms * part
+        for waveform in self._waveforms:
+            mix = waveform.shape(mix, state)
+        signal = state.contact_amplitude * mix
+        for waveform in self._waveforms:
+            signal += waveform.add(state)
         if rig.run_scatter or rig.run_wander or rig.mount_step or rig.return_factor != 1.0:
             signal *= self._set_up_factor(times, speeds)
         signal += rig.sensor_noise * self._sensor_rng.standard_normal(count)
@@ -298,8 +268,9 @@ class RigStream:
         angles, speeds = self.program.motion(times)
         applied = self.program.load(times)
 
-        temperatures, amplitude = self._true_amplitude(angles, speeds, applied, theta_oil)
-        signal = self._signal(times, angles, speeds, amplitude)
+        temperatures, amplitude, revolutions = self._true_amplitude(angles, speeds, applied, theta_oil)
+        signal = self._signal(SampleState(times=times, angles=angles, speeds=speeds, loads=applied,
+                                          revolutions=revolutions, contact_amplitude=amplitude))
 
         start, stop = first / fs, (first + count) / fs
         joint_index = _index_range(start, stop, rig.joint_state_rate)
@@ -323,19 +294,6 @@ class RigStream:
             temperature_stamps=_stamps_ns(self.origin_ns, temperature_index, rig.temperature_rate),
             temperatures=measured_temperatures, block_speeds=speeds[heads], block_angles=angles[heads],
             block_loads=applied[heads], block_temperatures=temperatures[heads])
-
-
-def resonator_energy(b: npt.ArrayLike, a: npt.ArrayLike, tolerance: float = 1e-14) -> float:
-    """Energy sum(h[n]^2) of a stable IIR filter's impulse response: its output variance for unit white input."""
-    length = 1024
-    while True:
-        impulse = np.zeros(length)
-        impulse[0] = 1.0
-        response = lfilter(b, a, impulse)
-        energy = float(np.sum(response ** 2))
-        if np.sum(response[-length // 4:] ** 2) <= tolerance * energy:
-            return energy
-        length *= 2
 
 
 # ---------------------------------------------------------------------------------------------

@@ -84,3 +84,21 @@ def test_recordings_of_several_folders_under_the_default_id_are_refused_in_one_l
     assert run_cli('assess', a01, a02, '--calibration', small_fleet['calibration'], '--history', history,
                    '--actuator-id', 'folder').returncode == 0
     assert sorted(set(read_table(history).column('actuator').to_pylist())) == ['A01', 'A04']
+
+
+def test_a_recording_name_that_is_not_utf8_is_assessed_into_the_history(small_fleet, tmp_path):
+    """Issue 36: a non-UTF-8 byte in a recording name with --history was a traceback (and so was printing it)."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    name = os.fsdecode(str(tmp_path).encode() + b'/run\xff.mcap')
+    shutil.copy(small_fleet['bags'][0], name)
+    history = tmp_path / 'history'
+    result = subprocess.run([sys.executable, '-m', 'prsm_lube_ros.cli', 'assess', name, '--calibration',
+                             str(small_fleet['calibration']), '--history', str(history), '--json',
+                             str(tmp_path / 'out.json')], capture_output=True, timeout=300,
+                            env={**os.environ, 'PYTHONIOENCODING': 'utf-8:strict'})
+    assert result.returncode == 0 and b'Traceback' not in result.stderr, result.stderr[-500:]
+    assert b'run\xff.mcap' in result.stdout
+    assert set(read_table(history).column('recording_path').to_pylist()) == {f'{tmp_path}/run\\xff.mcap'}

@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""``prsm-lube demo`` at a small size: four steps checked against the truth, and its page in a real browser.
+"""``prsm-lube demo`` at a small size: five steps checked against the truth, and its page in a real browser.
 
 The demo runs once per module as a user runs it (a child process on a private
 ROS domain, localhost discovery); the page test opens ``index.html`` in headless
@@ -18,7 +18,7 @@ import pytest
 import browser
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(1200)]
-STEPS = 4
+STEPS = 5
 
 
 def _need_chromium():
@@ -51,6 +51,8 @@ def test_every_step_runs_and_passes_its_check_against_the_truth(demo):
     assert 'theta_Oil before: median' in text and 'after: median' in text          # step 2
     assert 'concealed:' in text and 'held-out gain' in text                        # step 3
     assert 'forecast' in text and 'inside' in text                                 # step 4
+    assert 'runs of the defect recording marked defect_suspected' in text           # step 5
+    assert 'verdict surface_defect' in text
     # The fleet is simulated in the past: days to go as of its newest recording's day, never "overdue by 300 d".
     as_of = re.search(r'trend history --report trend --as-of (\d{4}-\d{2}-\d{2})', text)
     assert as_of and f'days to go as of {as_of.group(1)}' in text, text[-3000:]

@@ -2,6 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """prsm-lube diagnose end to end on small recordings of the rig simulator."""
 import json
+import re
 
 import pytest
 
@@ -32,7 +33,16 @@ def test_diagnose_command_writes_json_report_and_calibration(tmp_path, capsys):
     assert document['location']['located'] == 'position' and document['adequacy']['baseline']['testable']
     # The rests between runs are read too: with the screw still the accelerometer gives its noise (0.003 m/s^2).
     assert document['data']['standstill_windows'] >= 3 and 0.001 < document['data']['standstill_rms'] < 0.006
-    assert 'Lack of fit, paper' in (tmp_path / 'report' / 'index.html').read_text()
+    page = (tmp_path / 'report' / 'index.html').read_text()
+    assert 'Lack of fit, paper' in page
+    # The condition section (issue 34, item 5): every figure shown is a PNG beside the page; orders and resolution said.
+    assert 'Condition indicators: is it lubrication or a surface defect?' in page
+    assert '3.75x nut raceway or roller; 6.25x screw raceway' in page and 'only its absolute limits apply' in page
+    assert 'orders per bin' in page and 'Hz per bin' in page and 'Demodulation band' in page
+    sources = re.findall(r'<img src="([^"]+)"', page)
+    assert all((tmp_path / 'report' / src).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n' for src in sources)
+    for kind in ('condition_trends_all', 'order_spectrum', 'waterfall_envelope', 'waterfall_order', 'envelope_run'):
+        assert any(kind in src for src in sources), kind
 
 
 def test_diagnose_missing_bag_is_one_line_error(tmp_path, capsys):

@@ -7,32 +7,12 @@ planner's figures are stated as of a date; the backtest scores a forecast
 made from the history cut earlier.
 """
 import json
-from pathlib import Path
 import shutil
-import subprocess
 import sys
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-INSTALLED = [sys.executable, str(ROOT / 'scripts' / 'prsm-lube')]
-
-
-def trend(*args, entry=INSTALLED):
-    return subprocess.run(entry + ['trend', *map(str, args)], capture_output=True, text=True, timeout=300)
-
-
-def error_lines(result) -> list[str]:
-    assert 'Traceback' not in result.stderr
-    return [line for line in result.stderr.splitlines() if line.strip()]
-
-
-def table_rows(markdown: str) -> list[str]:
-    return [line for line in markdown.splitlines() if line.startswith('|')]
-
-
-def actuators(report) -> dict:
-    return {a['actuator']: a for a in json.loads((report / 'trend.json').read_text())['actuators']}
+from trend_command import actuators, error_lines, table_rows, trend
 
 
 def test_a_corrupt_file_and_a_stray_file_are_named_and_the_rest_reported(small_fleet, tmp_path):

@@ -56,7 +56,49 @@ EDITS = {
     'extension params a list': lambda d: d.__setitem__('extension', {'effect': 'resonance', 'params': [1, 2]}),
     'covariance 2x2': lambda d: d.__setitem__('covariance_ln_csys_cf_clambda', [[1.0, 0.0], [0.0, 1.0]]),
     'constants a list': lambda d: d.__setitem__('constants', [1, 2, 3]),
+    # Issue 36: values that loaded silently and changed results.
+    'c_f negative': lambda d: scaled(d, 'c_f', -1),
+    'c_f zero': lambda d: d['constants'].__setitem__('c_f', 0.0),
+    'c_f x 1e5': lambda d: scaled(d, 'c_f', 1e5),
+    'c_lambda x 1e-6': lambda d: scaled(d, 'c_lambda', 1e-6),
+    'c_lambda x 1e3': lambda d: scaled(d, 'c_lambda', 1e3),
+    'covariance diagonal 1e300': lambda d: d['covariance_ln_csys_cf_clambda'][0].__setitem__(0, 1e300),
+    'covariance c_lambda variance 1e6': lambda d: d['covariance_ln_csys_cf_clambda'][2].__setitem__(2, 1e6),
+    'resonance speed negative': lambda d: d.__setitem__(
+        'extension', {'effect': 'resonance', 'params': {'resonant_speed': -1.0, 'damping_ratio': 0.05}}),
+    'resonance damping negative': lambda d: d.__setitem__(
+        'extension', {'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': -0.05}}),
+    'background negative': lambda d: d.__setitem__(
+        'extension', {'effect': 'background_vibration', 'params': {'background_rms': -0.2}}),
+    'thermal slope negative': lambda d: d.__setitem__(
+        'extension', {'effect': 'thermal_viscosity',
+                      'params': {'viscosity_temperature_coefficient': -0.03, 'reference_temperature': 25.0}}),
+    'thermal reference below absolute zero': lambda d: d.__setitem__(
+        'extension', {'effect': 'thermal_viscosity',
+                      'params': {'viscosity_temperature_coefficient': 0.03, 'reference_temperature': -500.0}}),
+    'second effect negative': lambda d: d.__setitem__('extension', {
+        'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': 0.05},
+        'effects': [{'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': 0.05}},
+                    {'effect': 'background_vibration', 'params': {'background_rms': -1.0}}]}),
+    'effects not a list': lambda d: d.__setitem__('extension', {
+        'effect': 'resonance', 'params': {'resonant_speed': 30.0, 'damping_ratio': 0.05}, 'effects': 'x'}),
+    'domain of one number': lambda d: d.__setitem__('domain', {'speed_rad_s': [10.0], 'load_n': [100.0, 200.0]}),
+    'domain empty range': lambda d: d.__setitem__('domain', {'speed_rad_s': [], 'load_n': [100.0, 200.0]}),
+    'domain reversed': lambda d: d.__setitem__('domain', {'speed_rad_s': [20.0, 10.0]}),
+    'domain text': lambda d: d.__setitem__('domain', {'load_n': ['a', 'b']}),
+    'domain a list': lambda d: d.__setitem__('domain', [[1.0]]),
 }
+
+#: Words the line of each issue-36 edit holds: the field it names.
+FIELDS = {'c_f negative': 'c_f', 'c_f zero': 'c_f', 'c_f x 1e5': 'c_f', 'c_lambda x 1e-6': 'c_lambda',
+          'c_lambda x 1e3': 'c_lambda', 'covariance diagonal 1e300': 'covariance',
+          'covariance c_lambda variance 1e6': 'covariance', 'resonance speed negative': 'resonant_speed',
+          'resonance damping negative': 'damping_ratio', 'background negative': 'background_rms',
+          'thermal slope negative': 'viscosity_temperature_coefficient',
+          'thermal reference below absolute zero': 'reference_temperature',
+          'second effect negative': 'effects[1] parameter background_rms', 'effects not a list': 'effects',
+          'domain of one number': 'domain speed_rad_s', 'domain empty range': 'domain speed_rad_s',
+          'domain reversed': 'domain speed_rad_s', 'domain text': 'domain load_n', 'domain a list': 'domain'}
 
 
 @pytest.mark.parametrize('edit', sorted(EDITS))
@@ -68,6 +110,50 @@ def test_an_edited_value_is_refused_in_one_line_naming_the_file_without_a_numpy_
         with pytest.raises(ConfigError) as caught:
             load_calibration(path)
     assert str(path) in str(caught.value) and '\n' not in str(caught.value), str(caught.value)
+    assert FIELDS.get(edit, '') in str(caught.value), str(caught.value)
+
+
+def test_a_negative_c_f_the_fit_itself_flagged_still_loads(tmp_path, document):
+    """Real bearings can fit C_F < 0 (FEMTO's test_early); calibrate then says so in fit.flags, and it loads."""
+    from prsm_lube_ros.estimation.calibration import sign_flags
+    from prsm_lube_ros.physics.vibration_model import ModelConstants
+    scaled(document, 'c_f', -0.2)
+    document['fit']['flags'] = sign_flags(ModelConstants(**document['constants']))
+    assert load_calibration(write(tmp_path, document)).constants.c_f < 0
+    document['fit']['flags'] = []
+    with pytest.raises(ConfigError, match='fit.flags'):
+        load_calibration(write(tmp_path, document))
+
+
+def test_a_written_calibration_cut_short_anywhere_is_refused(tmp_path):
+    """Issue 36: a truncated file was read as an older format; now every cut at a line or inside one is refused."""
+    from prsm_lube_ros.estimation.calibration_file import SEAL_HEAD
+    data = seed_calibration(tmp_path / 'seed.yaml').read_bytes()
+    assert data.startswith(SEAL_HEAD.encode()) and load_calibration(tmp_path / 'seed.yaml')
+    lines = {i + 1 for i, byte in enumerate(data) if byte == ord('\n')}
+    cuts = sorted(lines | set(range(len(SEAL_HEAD), len(data), 97)))
+    loaded = []
+    for cut in cuts[:-1]:
+        path = tmp_path / 'cut.yaml'
+        path.write_bytes(data[:cut])
+        try:
+            load_calibration(path)
+            loaded.append(cut)
+        except ConfigError as exc:
+            assert str(path) in str(exc) and '\n' not in str(exc)
+    assert not loaded, f'cut at {loaded} of {len(data)} bytes loaded'
+
+
+def test_a_changed_byte_in_a_written_calibration_is_refused_and_older_files_still_load(tmp_path, repo_root):
+    path = seed_calibration(tmp_path / 'seed.yaml')
+    text = path.read_text()
+    path.write_text(text.replace('windows_used: 60', 'windows_used: 61'))
+    with pytest.raises(ConfigError, match='changed after it was written'):
+        load_calibration(path)
+    path.write_text(text.split('\n', 1)[1])            # its first line deleted: loaded unchecked, as older files
+    assert load_calibration(path).windows_used == 60
+    old = load_calibration(repo_root / 'test' / 'data' / 'calibration' / 'before_band.yaml')
+    assert old.constants.c_f > 0
 
 
 def test_the_seed_and_a_fitted_calibration_still_load(tmp_path, document):

@@ -77,8 +77,8 @@ def test_rules_are_one_typed_object_and_change_the_decision():
         DefectRules(envelope_db=-1.0)
 
 
-def test_the_baseline_round_trips_through_a_calibration_file_and_old_files_load_without_one(tmp_path,
-                                                                                           paper_calibration):
+def test_the_baseline_round_trips_through_a_calibration_file_and_old_files_load_without_one(
+        tmp_path, paper_calibration):
     from dataclasses import replace
     calibration = replace(paper_calibration, condition_baseline=BASELINE)
     path = save_calibration(calibration, tmp_path / 'with.yaml')

@@ -4,7 +4,9 @@
 import numpy as np
 import pytest
 
-from prsm_lube_ros.simulation.effects import draw_background_vibration, draw_lubricant_depletion, draw_resonance
+from prsm_lube_ros.physics.effects.background_vibration import draw as draw_background_vibration
+from prsm_lube_ros.physics.effects.lubricant_depletion import draw as draw_lubricant_depletion
+from prsm_lube_ros.physics.effects.resonance import draw as draw_resonance
 from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 
 PLAN = SyntheticPlan(random_order=False)

@@ -13,19 +13,7 @@ from prsm_lube_ros.fleet.forecast import DAY, detect_relubrications, fit_depleti
 from prsm_lube_ros.fleet.forecast_summary import forecast_summary
 from prsm_lube_ros.simulation.fleet import FleetPlan, simulate_fleet
 
-
-def exponential_points(tau_days=40.0, days=10, relubricate_at=None, noise=0.0, seed=0):
-    """One recording a day of theta = a exp(-t / tau); relubricated to 0.98 at ``relubricate_at`` days."""
-    rng = np.random.default_rng(seed)
-    points = []
-    for day in range(days):
-        t = day + 0.5
-        if relubricate_at is not None and t > relubricate_at:
-            theta = 0.98 * math.exp(-(t - relubricate_at) / tau_days)
-        else:
-            theta = 0.95 * math.exp(-t / tau_days)
-        points.append(RecordingPoint(t * DAY, theta + noise * rng.standard_normal(), max(noise, 1e-4)))
-    return points
+from fleet_histories import exponential_points
 
 
 def test_an_exact_law_gives_its_time_constant_and_crossings():

@@ -1,8 +1,10 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
 """The Parquet history: one folder per recording, re-assessment replaces it, a killed writer leaves it consistent."""
+from concurrent.futures import ProcessPoolExecutor
 import datetime
 import math
+import multiprocessing
 import os
 from pathlib import Path
 import subprocess
@@ -11,31 +13,10 @@ import sys
 import pyarrow.parquet as pq
 import pytest
 
-from prsm_lube_ros.estimation.assessment import RunAssessment, WindowAssessment
-from prsm_lube_ros.estimation.pipeline import RecordingAssessment
-from prsm_lube_ros.estimation.windowing import Window
-from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, STAGING
+from prsm_lube_ros.estimation.assessment import RunAssessment
+from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, RECORDINGS, STAGING
 
-START = datetime.datetime(2026, 3, 4, 10, 0, tzinfo=datetime.UTC).timestamp()
-
-
-def assessment(path, theta, runs=2):
-    """A recording's assessment with ``runs`` runs of three windows each at ``theta``."""
-    windows, run_list = [], []
-    for run in range(1, runs + 1):
-        for k in range(3):
-            t = START + 10 * run + k
-            window = Window(t, t + 1, 1.5, 4000, 1.0, 20.9, 0.01, 200.0, 30.0, 0.05, 1.0, run)
-            windows.append(WindowAssessment(window, theta, 0.01))
-        run_list.append(RunAssessment(str(path), run, START + 10 * run, START + 10 * run + 3, 20.9, 200.0, 1.5,
-                                      theta, 0.005, 3, 30.0))
-    return RecordingAssessment(str(path), windows, run_list)
-
-
-def recording(tmp_path, name, content=b'bag bytes'):
-    path = tmp_path / name
-    path.write_bytes(content)
-    return path
+from fleet_histories import assessment, recording, START
 
 
 def add(history, path, theta, actuator='/ema_left/prsm', **options):
@@ -108,7 +89,7 @@ def test_an_exception_between_staging_and_commit_leaves_the_old_rows(tmp_path):
 
 KILLED = '''
 import os, signal, sys
-sys.path.insert(0, {here!r})
+sys.path[:0] = [{here!r}, {support!r}]
 from test_history import add
 from pathlib import Path
 def die(staged):
@@ -119,7 +100,8 @@ add(Path({history!r}), Path({bag!r}), 0.1, before_commit=die, actuator={actuator
 
 def killed_writer(history, bag, actuator='/ema_left/prsm'):
     """A writer killed (SIGKILL) with both tables staged, before its commit."""
-    script = KILLED.format(here=str(Path(__file__).parent), history=str(history), bag=str(bag), actuator=actuator)
+    script = KILLED.format(here=str(Path(__file__).parent), support=str(Path(__file__).parents[1] / 'support'),
+                           history=str(history), bag=str(bag), actuator=actuator)
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, timeout=120)
     assert done.returncode == -9, done.stderr.decode()
 
@@ -252,3 +234,50 @@ def test_recordings_overlapping_in_time_under_one_id_are_refused_not_merged(tmp_
     assert again(BagOutcome(str(first), assessment(first, 0.85), content_hash(first))) == ''
     assert again(BagOutcome(str(second), shifted, content_hash(second))) != ''
     assert sorted(set(read_table(history).column('recording_path').to_pylist())) == [str(copy), str(first)]
+
+
+# -- issue 36: concurrent writers and any file name ----------------------------------------------
+def _commit_at_once(history, bag, actuator, barrier_path, writers):
+    """One writer: stage, wait until every writer has staged, then commit (the race of issue 36)."""
+    import time
+
+    def gather(staged):
+        Path(barrier_path, f'{os.getpid()}').touch()
+        while len(list(Path(barrier_path).iterdir())) < writers:
+            time.sleep(0.001)
+    try:
+        add_assessment(history, assessment(bag, 0.9), actuator_id=actuator, content=content_hash(bag),
+                       calibration='c0ffee', before_commit=gather)
+        return ''
+    except Exception as exc:      # reported to the test
+        return f'{type(exc).__name__}: {exc}'
+
+
+def test_two_writers_committing_together_never_split_or_double_a_recording(tmp_path):
+    """The issue saw one recording under two actuator ids (1 in 30) and 'No such file or directory'."""
+    bag = recording(tmp_path, 'a.mcap')
+    context = multiprocessing.get_context('fork')
+    with ProcessPoolExecutor(4, mp_context=context) as pool:
+        for attempt in range(12):
+            history, barrier = tmp_path / f'history{attempt}', tmp_path / f'barrier{attempt}'
+            barrier.mkdir()
+            actuators = ['/left/prsm', '/right/prsm', '/left/prsm', '/right/prsm']
+            errors = list(pool.map(_commit_at_once, [history] * 4, [bag] * 4, actuators, [barrier] * 4, [4] * 4))
+            assert errors == [''] * 4, errors
+            folders = list((history / RECORDINGS).glob('actuator=*/recording=*'))
+            assert len(folders) == 1, folders
+            assert read_table(history).num_rows == 2
+
+
+def test_a_recording_name_that_is_not_utf8_goes_into_the_history(tmp_path):
+    """Issue 36: a non-UTF-8 byte in a recording name with --history was a traceback."""
+    name = os.fsdecode(b'run\xff.mcap')
+    bag = recording(tmp_path, name)
+    add_assessment(tmp_path / 'history', assessment(bag, 0.9), actuator_id='a', content=content_hash(bag),
+                   calibration='c0ffee')
+    paths = read_table(tmp_path / 'history').column('recording_path').to_pylist()
+    assert paths == [str(tmp_path).encode().decode() + '/run\\xff.mcap'] * 2
+    folder = tmp_path / 'bag'
+    folder.mkdir()
+    (folder / name).write_bytes(b'x')
+    assert len(content_hash(folder)) == 64

@@ -662,7 +662,8 @@ def test_the_calibrate_action_reports_its_progress_and_fits_as_the_service_does(
     assert status == GoalStatus.STATUS_ABORTED and not result.success and 'bag_paths is empty' in result.message
 
 
-def test_cancel_withdraws_a_waiting_calibration_and_leaves_a_running_one_untouched(graph, tmp_path, monkeypatch):
+def test_cancel_withdraws_a_waiting_calibration_and_stops_a_running_one(graph, tmp_path, monkeypatch):
+    """Issue 36: a calibration is cancellable while it reads; it stops at its next check and changes nothing."""
     from prsm_lube_ros.nodes import lubrication_estimator as module
     real, entered, release = module.calibrate_from_request, threading.Event(), threading.Event()
 
@@ -673,23 +674,96 @@ def test_cancel_withdraws_a_waiting_calibration_and_leaves_a_running_one_untouch
 
     monkeypatch.setattr(module, 'calibrate_from_request', held)
     node = graph.estimator(tmp_path)
+    before = node.channels[0].assessor
     write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
     running = send_goal(graph, '/prsm/calibrate', ['reference'], theta=0.95)
     wait_for(entered.is_set, 10, 'the first calibration running')
     waiting = send_goal(graph, '/prsm/calibrate', ['reference'], theta=0.5)
-    refused = running.cancel_goal_async()
-    wait_for(refused.done, 10, 'the answer to the first cancel')
-    assert not refused.result().goals_canceling                    # rclpy answers a refusal with none canceling
     accepted = waiting.cancel_goal_async()
-    wait_for(accepted.done, 10, 'the answer to the second cancel')
+    wait_for(accepted.done, 10, 'the answer to the cancel of the waiting one')
     assert [bytes(g.goal_id.uuid) for g in accepted.result().goals_canceling] == [bytes(waiting.goal_id.uuid)]
     status, result = outcome_of(waiting)
     assert status == GoalStatus.STATUS_CANCELED and not result.success and 'nothing was read' in result.message
+    stopping = running.cancel_goal_async()
+    wait_for(stopping.done, 10, 'the answer to the cancel of the running one')
+    assert [bytes(g.goal_id.uuid) for g in stopping.result().goals_canceling] == [bytes(running.goal_id.uuid)]
     release.set()
     status, result = outcome_of(running)
-    assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
-    assert node.channels[0].assessor.calibration.constants.c_lambda == pytest.approx(TRUE.c_lambda, rel=0.01)
-    assert node.channels[0].assessor.calibration.reference_theta == pytest.approx(0.95)
+    assert status == GoalStatus.STATUS_CANCELED and not result.success, result.message
+    assert 'cancelled while reading' in result.message
+    assert node.channels[0].assessor is before                       # nothing swapped in
+    answer = call(graph, '/prsm/calibrate', ['reference'], theta=0.95)   # and the next request is served
+    assert answer.success, answer.message
+
+
+def test_a_fifo_in_a_bag_is_refused_and_the_next_request_answered(graph, tmp_path):
+    """Issue 36: a FIFO as a bag's storage file used to wedge the service for good."""
+    node = graph.estimator(tmp_path)
+    before = node.channels[0].assessor
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    write_reference_bag(tmp_path / 'piped', reference_segments(theta=0.95))
+    storage = next((tmp_path / 'piped').glob('*.mcap'))
+    storage.unlink()
+    os.mkfifo(storage)
+    response = call(graph, '/prsm/calibrate', ['piped'], timeout=20)
+    assert not response.success and 'FIFO' in response.message and '\n' not in response.message
+    assert node.channels[0].assessor is before
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95, timeout=30)
+    assert response.success, response.message
+
+
+def test_a_bag_file_linked_from_outside_the_recordings_folder_is_not_read(graph, tmp_path):
+    """Issue 36: the service fitted a bag whose storage file linked to a recording outside recordings_dir."""
+    recordings = tmp_path / 'recordings'
+    recordings.mkdir()
+    graph.estimator(tmp_path, recordings_dir=str(recordings))
+    write_reference_bag(tmp_path / 'outside', reference_segments(theta=0.95))
+    write_reference_bag(recordings / 'linked', reference_segments(theta=0.95))
+    storage = next((recordings / 'linked').glob('*.mcap'))
+    storage.unlink()
+    storage.symlink_to(next((tmp_path / 'outside').glob('*.mcap')))
+    response = call(graph, '/prsm/calibrate', ['linked'])
+    assert not response.success and 'leads outside' in response.message, response.message
+    assert response.windows_used == 0
+
+
+@pytest.mark.parametrize('special', ['/dev/zero', 'fifo'])
+def test_a_special_file_as_calibration_file_is_one_line_and_persist_never_blocks(graph, tmp_path, special):
+    """Issue 36: calibration_file:=/dev/zero died at 2.4 GB; a FIFO nobody reads must not wedge persist."""
+    if special == 'fifo':
+        special = str(tmp_path / 'calibration.fifo')
+        os.mkfifo(special)
+    node = graph.estimator(tmp_path, calibration_file=special)
+    note = node.channels[0].calibration_note
+    assert node.channels[0].assessor is None and special in note and 'not a regular file' in note, note
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95, persist=True)
+    if special == '/dev/zero':      # a stream takes what is written to it
+        assert response.success, response.message
+    else:
+        assert not response.success and special in response.message, response.message
+
+
+def test_a_calibration_past_its_deadline_stops_and_the_service_answers_on(graph, tmp_path, monkeypatch):
+    from prsm_lube_ros.nodes import lubrication_estimator as module
+    real, slow = module.calibrate_from_request, threading.Event()
+    slow.set()
+
+    def delayed(*args, **kwargs):
+        if slow.is_set():
+            time.sleep(1.5)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, 'calibrate_from_request', delayed)
+    node = graph.estimator(tmp_path, calibration_timeout=1.0)
+    before = node.channels[0].assessor
+    write_reference_bag(tmp_path / 'reference', reference_segments(theta=0.95))
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95)
+    assert not response.success and 'calibration_timeout (1 s)' in response.message, response.message
+    assert node.channels[0].assessor is before
+    slow.clear()
+    response = call(graph, '/prsm/calibrate', ['reference'], theta=0.95)
+    assert response.success, response.message
 
 
 # -- diagnostics -----------------------------------------------------------------------------------

@@ -19,8 +19,8 @@ def test_the_default_roller_screw_has_the_orders_the_issue_names():
 
 
 def test_orders_follow_the_geometry():
-    orders = {o.component: o.order for o in prsm_defect_orders(Actuator(roller_mean_diameter=0.006,
-                                                                         roller_count=12))}
+    actuator = Actuator(roller_mean_diameter=0.006, roller_count=12)
+    orders = {o.component: o.order for o in prsm_defect_orders(actuator)}
     k_p = 0.024 / (2 * (0.024 + 0.006))
     assert orders['carrier'] == pytest.approx(k_p)
     assert orders['screw raceway'] == pytest.approx(12 * (1 - k_p))

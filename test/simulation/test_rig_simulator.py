@@ -21,8 +21,12 @@ from prsm_lube_ros.simulation.drive import DriveProgram, schedule_session
 from prsm_lube_ros.simulation.recordings import draw_effects, simulate_endurance, simulate_experiment
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, load_experiment_plan, load_rig_config, RigConfig
 from prsm_lube_ros.simulation.rig_acceleration import RigSignalGenerator, RigStream, thread_contact_amplitude
-from prsm_lube_ros.simulation.effects import (BackgroundVibration, Effects, LubricantDepletion,
-                                              PositionDependentStiffness, Resonance, ThermalViscosity)
+from prsm_lube_ros.simulation.effects import Effects
+from prsm_lube_ros.physics.effects.background_vibration import BackgroundVibration
+from prsm_lube_ros.physics.effects.lubricant_depletion import LubricantDepletion
+from prsm_lube_ros.physics.effects.position_dependent_stiffness import PositionDependentStiffness
+from prsm_lube_ros.physics.effects.resonance import Resonance
+from prsm_lube_ros.physics.effects.thermal_viscosity import ThermalViscosity
 
 ROOT = Path(__file__).resolve().parents[2]
 RPM = 2 * math.pi / 60

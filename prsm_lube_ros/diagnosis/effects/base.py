@@ -62,6 +62,9 @@ class Effect(Extension):
     form: str = ''
     #: The law alone changes the spectrum's shape between speeds (a gain that depends on the frequency in Hz).
     changes_spectral_shape: bool = False
+    #: The law can mimic other effects in the amplitudes (free exponents of speed, load and revolutions), so the
+    #: effect is a candidate only where :meth:`independent_evidence` shows its signature on the recording.
+    requires_evidence: bool = False
 
     def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""

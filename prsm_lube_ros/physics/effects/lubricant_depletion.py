@@ -25,16 +25,18 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from . import Extension as EffectExtension
+from . import choose, Extension as EffectExtension, Simulation as EffectSimulation
 from ...validation import require, require_all_positive
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Mapping, Sequence
 
     import numpy.typing as npt
 
-__all__ = ['Extension', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'effective_revolutions',
-           'rest_durations', 'theta_factor']
+    from . import ContactState, SimulationContext
+
+__all__ = ['Extension', 'FALL_RANGE', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'Simulation',
+           'draw', 'effective_revolutions', 'rest_durations', 'theta_factor']
 
 #: Forms of the loss (see module doc).
 FORMS = ('exponential', 'linear')
@@ -42,6 +44,8 @@ FORMS = ('exponential', 'linear')
 MIN_SUPPLY = 0.05
 #: A gap between windows longer than their own running time by this factor counts as rest, s per s.
 REST_SLACK = 1.5
+#: Drawn range of the fall of theta_Oil over one session (one bag) by depletion (fraction).
+FALL_RANGE = (0.05, 0.25)
 
 
 def theta_factor(revolutions: npt.ArrayLike, depletion_per_revolution: npt.ArrayLike,
@@ -154,3 +158,35 @@ class Extension(EffectExtension):
     def assessment_film_factor(self, params: Mapping[str, float], covariates: Any) -> np.ndarray:
         """1: depletion is a real fall of theta_Oil, which assessment must report."""
         return np.ones_like(np.asarray(covariates.speed, dtype=float))
+
+
+def draw(rng: np.random.Generator, *, session_revolutions: float, form: str | None = None) -> LubricantDepletion:
+    """Random depletion: theta falls by 5-25 % over session_revolutions (one bag), exponentially or linearly.
+
+    ``form`` (default: drawn) is ``exponential`` or ``linear``.  The rig
+    simulator has no recovery at rest (the window-table simulator has).
+    """
+    form = choose(rng, FORMS, form)
+    fall = rng.uniform(*FALL_RANGE)
+    revolutions = session_revolutions / -math.log1p(-fall) if form == 'exponential' else session_revolutions / fall
+    return LubricantDepletion(depletion_revolutions=float(revolutions), form=form)
+
+
+class Simulation(EffectSimulation):
+    """theta_Oil times the supply factor at the revolutions since the last lubrication."""
+
+    id = 'lubricant_depletion'
+    #: The supply factor multiplies theta_Oil before the other film factors (as the rig simulator always did).
+    film_rank = -1
+
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> LubricantDepletion:
+        """:func:`draw` over one session's revolutions."""
+        return draw(rng, session_revolutions=context.session_revolutions)
+
+    def film_factor(self, law: LubricantDepletion, state: ContactState) -> np.ndarray | float:
+        """The supply factor at the revolutions since the last lubrication."""
+        return law.theta_factor(state.revolutions)
+
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """``recovery at rest`` when the drawn law recovers."""
+        return ['recovery at rest'] if params.get('recovery_time') else []

@@ -41,7 +41,8 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from . import Extension as EffectExtension
+from . import choose, Extension as EffectExtension, Simulation as EffectSimulation
+from ...errors import ConfigError
 from ...validation import require, require_all_positive
 from ..vibration_model import STIFFNESS_EXPONENT
 
@@ -50,12 +51,19 @@ if TYPE_CHECKING:
 
     import numpy.typing as npt
 
-__all__ = ['ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law', 'MIN_FREE_LENGTH', 'PositionDependentStiffness',
+    from . import ContactState, SimulationContext
+
+__all__ = ['ARRANGEMENTS', 'CHANGE_RANGE', 'DRAWN_ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law',
+           'MIN_FREE_LENGTH', 'PositionDependentStiffness', 'Simulation', 'draw',
            'arrangement_ratios', 'compliance_ratio_profile', 'contact_stiffness_at', 'fixed_fixed_shaft_stiffness',
            'series_stiffness_amplification', 'shaft_axial_stiffness', 'shaft_stiffness_for']
 
 #: Shortest free shaft length the law is evaluated at, m (the nut cannot sit on the bearing).
 MIN_FREE_LENGTH = 1e-3
+#: Drawn range of the amplitude change over one stroke at the reference load (fraction).
+CHANGE_RANGE = (0.05, 0.30)
+#: Bearing arrangements drawn (fixed-supported has the axial law of fixed-free).
+DRAWN_ARRANGEMENTS = ('fixed-free', 'free-fixed', 'fixed-fixed')
 
 
 def shaft_axial_stiffness(youngs_modulus: float, root_diameter: float,
@@ -210,3 +218,52 @@ class Extension(EffectExtension):
                                          params.get('ratio_arch', 0.0))
         contact_ratio = contact_stiffness_at(covariates.load, 1.0, params['reference_load'])
         return np.log(series_stiffness_amplification(np.maximum(ratio, 0.0) * contact_ratio, 1.0))
+
+
+def draw(rng: np.random.Generator, *, youngs_modulus: float, root_diameter: float, stroke: float,
+         fixed_end_offset: float, reference_load: float, arrangement: str | None = None) -> PositionDependentStiffness:
+    """Random shaft-compliance effect: 5-30 % amplitude change over the stroke at reference_load.
+
+    ``arrangement`` (default: drawn) is one of :data:`DRAWN_ARRANGEMENTS`:
+    the fixed bearing fixed_end_offset (m) beyond the end of the stroke
+    (``fixed-free``: the amplitude falls along the stroke), as far before its
+    start (``free-fixed``: it rises), or both (``fixed-fixed``: an arch,
+    highest mid-travel).  With the shaft compliance q(x) = 1/k_s(x) the
+    amplitude factor is ``1 + k_c q(x)``; its relative change over the stroke
+    ``c = k_c (q_max - q_min) / (1 + k_c q_max)`` is drawn uniformly from
+    :data:`CHANGE_RANGE` and k_c solved from it.  youngs_modulus in Pa,
+    root_diameter, stroke and fixed_end_offset in m, reference_load in N.
+    """
+    arrangement = choose(rng, DRAWN_ARRANGEMENTS, arrangement)
+    change = rng.uniform(*CHANGE_RANGE)
+    shape = PositionDependentStiffness(contact_stiffness=1.0, reference_load=reference_load,
+                                       youngs_modulus=youngs_modulus, root_diameter=root_diameter,
+                                       free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                       near_length_at_start=fixed_end_offset)
+    compliance = 1.0 / shape.shaft_stiffness(np.linspace(0.0, stroke, 201))
+    spread, largest = float(np.ptp(compliance)), float(np.max(compliance))
+    if change >= spread / largest:
+        raise ConfigError(f'position_dependent_stiffness: a {change:.0%} change is impossible with '
+                          f'fixed_end_offset {fixed_end_offset} m ({arrangement})')
+    contact = change / (spread - change * largest)
+    return PositionDependentStiffness(contact_stiffness=float(contact), reference_load=reference_load,
+                                      youngs_modulus=youngs_modulus, root_diameter=root_diameter,
+                                      free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                      near_length_at_start=fixed_end_offset)
+
+
+class Simulation(EffectSimulation):
+    """The rig's contact amplitude times ``1 + k_c(F) / k_s(x)``; drawn against the actuator's shaft and the plan."""
+
+    id = 'position_dependent_stiffness'
+
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> PositionDependentStiffness:
+        """:func:`draw` for the actuator's shaft, the plan's stroke and its lowest load as the reference."""
+        actuator = context.actuator
+        return draw(rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
+                    stroke=context.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
+                    reference_load=min(context.loads))
+
+    def amplitude_factor(self, law: PositionDependentStiffness, state: ContactState) -> np.ndarray | float:
+        """``1 + k_c(F) / k_s(x)`` at the nut position and the contacts' load."""
+        return law.amplitude_factor(state.nut_position, state.load)

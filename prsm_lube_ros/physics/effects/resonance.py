@@ -28,17 +28,37 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from . import Extension as EffectExtension
+from . import (choose, Extension as EffectExtension, resonator_energy, Simulation as EffectSimulation,
+               Waveform)
 from ...validation import require, require_all_positive
 from ..vibration_model import forced_response_amplitude
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Mapping, Sequence
 
     import numpy.typing as npt
 
+    from . import ContactState, SampleState, SimulationContext, StreamRandom
 
-__all__ = ['BAND_POSITIONS', 'Extension', 'Law', 'Resonance', 'band_position', 'magnification', 'natural_frequency']
+__all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension', 'HIGHEST_RINGING',
+           'INSIDE_RANGE', 'Law',
+           'MODE_STREAM_KEY', 'RATIO_RANGE', 'Resonance', 'Simulation', 'band_position', 'draw', 'magnification',
+           'natural_frequency']
+
+#: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).
+RATIO_RANGE = (0.5, 0.9)
+#: Drawn range of r at the lowest speed for a mode below the band.
+BELOW_RATIO_RANGE = (1.3, 3.0)
+#: Drawn position of a mode inside the band, ln(omega_r / omega_min) / ln(omega_max / omega_min).
+INSIDE_RANGE = (0.25, 0.75)
+#: Where the mode lies against the speed band.
+BANDS = ('above', 'inside', 'below')
+#: Drawn range of the damping ratio of the structural mode.
+DAMPING_RANGE = (0.02, 0.20)
+#: Key of the mode's own random stream in a simulated recording (:meth:`.StreamRandom.keyed`).
+MODE_STREAM_KEY = 3
+#: The mode rings in the recording only below this fraction of the sample rate.
+HIGHEST_RINGING = 0.45
 
 
 def magnification(frequency_ratio: npt.ArrayLike, damping_ratio: npt.ArrayLike) -> np.ndarray | float:
@@ -108,3 +128,103 @@ class Extension(EffectExtension):
         """``ln |H(omega_S / omega_r)|``."""
         ratio = np.abs(np.asarray(covariates.speed, dtype=float)) / params['resonant_speed']
         return np.log(magnification(ratio, params['damping_ratio']))
+
+
+def draw(rng: np.random.Generator, *, order: float, top_speed: float, bottom_speed: float | None = None,
+         orders: Sequence[float] | None = None, band: str | None = None) -> Resonance:
+    """Random resonance excited by rotation ``order`` (or one of ``orders`` at random), zeta in its range.
+
+    ``band`` (default: drawn when bottom_speed is given, else ``above``): the
+    mode above the speed band (r at top_speed in :data:`RATIO_RANGE`),
+    inside it (resonant speed log-uniform in the middle of the band) or below it
+    (r at bottom_speed in :data:`BELOW_RATIO_RANGE`); speeds in rad/s.
+    """
+    order = float(choose(rng, tuple(orders))) if orders else float(order)
+    bands = BANDS if bottom_speed is not None else BANDS[:1]
+    band = choose(rng, bands, band)
+    damping = rng.uniform(*DAMPING_RANGE)
+    top = abs(top_speed)
+    if band == 'above':
+        resonant = top / rng.uniform(*RATIO_RANGE)
+    elif band == 'inside':
+        assert bottom_speed is not None  # the band is below or inside only with a bottom speed
+        low = abs(bottom_speed)
+        resonant = low * (top / low) ** rng.uniform(*INSIDE_RANGE)
+    else:
+        assert bottom_speed is not None  # the band is below or inside only with a bottom speed
+        resonant = abs(bottom_speed) / rng.uniform(*BELOW_RATIO_RANGE)
+    natural = order * resonant / (2.0 * math.pi)
+    return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(damping))
+
+
+class _Mode(Waveform):
+    """The mode ringing at f_r in the contact signal: a resonator driven by its own white noise."""
+
+    def __init__(self, law: Resonance, sample_rate: float, random: StreamRandom) -> None:
+        """The resonator at f_r, warmed up over ten decay times from its own stream."""
+        from scipy.signal import iirpeak, lfilter
+        self.law = law
+        self.b, self.a = iirpeak(law.natural_frequency, 1.0 / (2.0 * law.damping_ratio), sample_rate)
+        self.rng = random.keyed(MODE_STREAM_KEY)
+        decay = 1.0 / (2.0 * math.pi * law.natural_frequency * law.damping_ratio)
+        _, self.state = lfilter(self.b, self.a, self.rng.standard_normal(int(math.ceil(10.0 * decay * sample_rate))
+                                                                         + 8), zi=np.zeros(2))
+        self.energy = math.sqrt(resonator_energy(self.b, self.a))
+
+    def shape(self, mix: np.ndarray, state: SampleState) -> np.ndarray:
+        """The contact signal with the mode's response in it, same RMS as ``|H(r)|`` times ``mix``.
+
+        The contact amplitude already carries the magnification ``g = |H(r)|``
+        of the order that meets the mode.  Where g > 1 the extra power
+        ``g^2 - 1`` is the mode ringing at its natural frequency f_r (a band
+        fixed in Hz, width 2 zeta f_r, whose power follows the order's approach
+        to f_r and the contact excitation); where g < 1 (mass-controlled, past
+        resonance) the whole signal is attenuated.  Returns the signal to be
+        multiplied by that amplitude (unit mean square where mix has it).
+        """
+        from scipy.signal import lfilter
+        gain = self.law.amplitude_factor(state.speeds)
+        ring, self.state = lfilter(self.b, self.a, self.rng.standard_normal(mix.size), zi=self.state)
+        quasi_static = np.minimum(gain, 1.0) / gain
+        ringing = np.sqrt(np.maximum(gain ** 2 - 1.0, 0.0)) / gain
+        return quasi_static * mix + ringing * ring / self.energy
+
+
+class Simulation(EffectSimulation):
+    """The contact amplitude times ``|H(r)|``; below 0.45 x the sample rate the mode rings in the samples."""
+
+    id = 'resonance'
+
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> Resonance:
+        """:func:`draw` against the plan's speed band.
+
+        The exciting order is one of 1, 2, 3, the roller pass order n_p (Eq. 1), 6, 3 n_p and 6 n_p.
+        """
+        from ..kinematics import roller_revolution_speed
+        actuator = context.actuator
+        roller_pass = float(actuator.roller_count * roller_revolution_speed(
+            1.0, actuator.screw_mean_diameter, actuator.roller_mean_diameter))
+        return draw(rng, order=roller_pass, top_speed=max(context.speeds), bottom_speed=min(context.speeds),
+                    orders=(1, 2, 3, roller_pass, 6, 3 * roller_pass, 6 * roller_pass))
+
+    def amplitude_factor(self, law: Resonance, state: ContactState) -> np.ndarray | float:
+        """``|H(r)|`` at the screw speed."""
+        return law.amplitude_factor(state.speed)
+
+    def form_words(self, params: Mapping[str, Any], speeds: Sequence[float]) -> list[str]:
+        """Where the mode lies against the plan's ``speeds`` (rad/s), and its order."""
+        if not (params.get('natural_frequency') and params.get('order')):
+            return []
+        resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
+        band = band_position(resonant, min(speeds), max(speeds)).replace('speed band', 'band')
+        return [f'mode {band}, order {params["order"]:.3g}']
+
+    def waveform(self, law: Resonance, sample_rate: float, random: StreamRandom) -> Waveform | None:
+        """The mode ringing in the contact signal (:class:`_Mode`), or None.
+
+        None when f_r is not below :data:`HIGHEST_RINGING` times the sample
+        rate (its gain then scales the whole contact signal).
+        """
+        if law.natural_frequency >= HIGHEST_RINGING * sample_rate:
+            return None
+        return _Mode(law, sample_rate, random)

@@ -38,7 +38,7 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from . import Extension as EffectExtension
+from . import choose, Extension as EffectExtension, Simulation as EffectSimulation
 from ...validation import require, require_all_positive
 from ..vibration_model import VELOCITY_EXPONENT
 
@@ -47,7 +47,11 @@ if TYPE_CHECKING:
 
     import numpy.typing as npt
 
-__all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'ThermalViscosity', 'WALTHER_OFFSET', 'film_factor',
+    from . import ContactState, SimulationContext
+
+__all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'REFERENCE_VISCOSITY_RANGE', 'Simulation', 'TEMPERATURE_RISE_RANGE',
+           'THERMAL_TIME_CONSTANT_RANGE', 'ThermalViscosity', 'VOGEL_DISTANCE_RANGE', 'WALTHER_OFFSET', 'draw',
+           'film_factor',
            'law_viscosity_ratio', 'viscosity_ratio', 'vogel_viscosity_ratio', 'walther_slope',
            'walther_viscosity_ratio']
 
@@ -57,6 +61,14 @@ LAWS = ('exponential', 'vogel', 'walther')
 KELVIN = 273.15
 #: ASTM D341's additive constant, mm^2/s.
 WALTHER_OFFSET = 0.7
+#: Drawn range of Vogel's T0 - T_V, K (mineral oils).
+VOGEL_DISTANCE_RANGE = (90.0, 150.0)
+#: Drawn range of the kinematic viscosity at ambient for the Walther law, mm^2/s (ISO VG 32-320).
+REFERENCE_VISCOSITY_RANGE = (30.0, 300.0)
+#: Drawn range of the steady temperature rise of nut and oil while running, K.
+TEMPERATURE_RISE_RANGE = (5.0, 25.0)
+#: Drawn range of the thermal time constant of nut and oil, s.
+THERMAL_TIME_CONSTANT_RANGE = (120.0, 600.0)
 
 
 def viscosity_ratio(temperature: npt.ArrayLike, reference_temperature: float,
@@ -192,3 +204,39 @@ class Extension(EffectExtension):
         """As :meth:`film_factor`, but NaN (not assessable) without a temperature."""
         temperature = np.asarray(covariates.temperature, dtype=float)
         return np.where(np.isfinite(temperature), self.film_factor(params, covariates), np.nan)
+
+
+def draw(rng: np.random.Generator, *, viscosity_temperature_coefficient: float,
+         law: str | None = None) -> ThermalViscosity:
+    """Random warming: dT and tau uniform in their ranges; beta (1/K) is the oil's slope at ambient.
+
+    ``law`` (default: drawn) is one of :data:`LAWS`; Vogel's distance
+    T0 - T_V and Walther's nu_ref are drawn in :data:`VOGEL_DISTANCE_RANGE` and
+    :data:`REFERENCE_VISCOSITY_RANGE`.
+    """
+    law = choose(rng, LAWS, law)
+    return ThermalViscosity(temperature_rise=float(rng.uniform(*TEMPERATURE_RISE_RANGE)),
+                            time_constant=float(rng.uniform(*THERMAL_TIME_CONSTANT_RANGE)),
+                            viscosity_temperature_coefficient=float(viscosity_temperature_coefficient),
+                            viscosity_law=law, vogel_distance=float(rng.uniform(*VOGEL_DISTANCE_RANGE)),
+                            reference_viscosity=float(rng.uniform(*REFERENCE_VISCOSITY_RANGE)))
+
+
+class Simulation(EffectSimulation):
+    """Nut and oil heat while running (the rig's temperature); theta_Oil times the film factor at that temperature."""
+
+    id = 'thermal_viscosity'
+
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> ThermalViscosity:
+        """:func:`draw` with the actuator oil's viscosity-temperature coefficient."""
+        return draw(rng, viscosity_temperature_coefficient=context.actuator.viscosity_temperature_coefficient)
+
+    def film_factor(self, law: ThermalViscosity, state: ContactState) -> np.ndarray | float:
+        """``(eta(T) / eta_ref)^0.68`` at the simulated temperature (1 when no temperature is simulated)."""
+        if state.temperature is None:
+            return 1.0
+        return law.film_factor(state.temperature, state.ambient_temperature)
+
+    def heating(self, law: ThermalViscosity) -> tuple[float, float]:
+        """The law's temperature rise (K) and time constant (s)."""
+        return law.temperature_rise, law.time_constant

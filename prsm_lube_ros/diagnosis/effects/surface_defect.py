@@ -1,0 +1,205 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""How to fit a surface defect (the law: :mod:`prsm_lube_ros.physics.effects.surface_defect`).
+
+``A = sqrt(A_22^2 + P_imp)``, ``P_imp = A_imp^2 (omega/omega_ref)^(2a) (F/F_ref)^(2b) g(N)^2``.
+Two forms, each fitted: a steady defect (g = 1) and a growing one
+(``g = exp(N / N_g)``, N the revolutions over the recordings in the order given).
+Internally: A_imp over the smallest window RMS, a, b and (growing) N_max / N_g
+with N_max the most revolutions over the recordings; omega_ref is the lowest
+recorded speed and F_ref the highest load.
+
+The amplitudes alone cannot tell impulsive power from other power added at
+speed, or a growing defect from oil lost with the revolutions.  The evidence
+that decides is outside the amplitude fit, in the condition indicators of each
+window (columns of the window table, NaN where unknown): ``kurtosis`` of the
+band-passed signal (3 for Gaussian rolling-contact vibration, whatever the
+lubrication), and ``defect_db``, the largest envelope-spectrum peak at a
+labelled defect order, with ``defect_order``.  Impulsive windows are evidence
+for the defect; indicators that are there and not impulsive are evidence
+against it.  Without the indicators the candidate is not testable.
+"""
+from __future__ import annotations
+
+from typing import Any, TYPE_CHECKING
+
+import numpy as np
+
+from ...estimation.defect_screen import DEFAULT_RULES
+from ...physics.effects import surface_defect as law
+from .base import Effect, register
+
+if TYPE_CHECKING:
+    from ..locate import Location
+    from ..table import WindowTable
+
+__all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefect', 'IMPULSIVE_KURTOSIS',
+           'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SIZE_RANGE', 'SurfaceDefect', 'indicators']
+
+#: Bounds of A_imp over the smallest window RMS.
+SIZE_RANGE = (0.0, 3.0)
+#: Bounds of the exponents a (speed) and b (load).
+EXPONENT_RANGES = ((0.0, 3.0), (0.0, 2.0))
+#: Bounds of N_max / N_g (the impulsive RMS grows by up to e^3 over the recordings).
+GROWTH_RANGE = (0.0, 3.0)
+#: Band kurtosis above which a window counts as impulsive: what healthy rolling contact stays below anywhere plus
+#: the margin of a strongly impulsive run (the defect screen's rules; Gaussian vibration gives 3, healthy
+#: simulated 1 s windows 2.7-3.4).
+IMPULSIVE_KURTOSIS = DEFAULT_RULES.healthy_kurtosis + DEFAULT_RULES.kurtosis_margin
+#: Share of the windows that must be impulsive for evidence (a growing defect shows late in the session).
+IMPULSIVE_SHARE = 0.25
+#: At most this share of impulsive windows (and no envelope peak) for evidence against the defect.
+NOT_IMPULSIVE_SHARE = 0.05
+#: Envelope-spectrum line at a strike order over the envelope floor, dB, that counts as a defect order seen
+#: (the defect screen's rule).
+DEFECT_DB = DEFAULT_RULES.envelope_db
+#: Share of the windows that must carry the indicators for the candidate to be testable.
+INDICATOR_SHARE = 0.8
+
+
+def indicators(table: WindowTable) -> dict[str, np.ndarray] | None:
+    """The table's condition-indicator columns (``kurtosis``, ``defect_db``, ``defect_order``, NaN where unknown).
+
+    None when the table has no kurtosis in :data:`INDICATOR_SHARE` of its windows.
+    """
+    n = len(table)
+
+    def column(name: str) -> np.ndarray:
+        value = getattr(table, name, None)
+        array = np.full(n, np.nan) if value is None else np.asarray(value, dtype=float)
+        return array if array.shape == (n,) else np.full(n, np.nan)
+
+    columns = {name: column(name) for name in ('kurtosis', 'defect_db', 'defect_order')}
+    if n == 0 or np.isfinite(columns['kurtosis']).mean() < INDICATOR_SHARE:
+        return None
+    return columns
+
+
+@register
+class SurfaceDefect(Effect, law.Extension):
+    """A spall or pit struck by every passing contact: impulsive power adding to the contacts' (steady form)."""
+
+    id = 'surface_defect'
+    title = 'surface defect'
+    form = 'steady'
+    physics = ('A spall or pit on a raceway or roller: each passing contact strikes it and the strike rings the '
+               'structure, so impulsive vibration at a defect order adds in power, growing with speed (impact '
+               'velocity) and load; it is not lubrication, and theta_Oil is no lubrication measure while it lasts.')
+    equations = 'A = sqrt(A_22^2 + P_imp), P_imp = A_imp^2 (omega/omega_ref)^(2a) (F/F_ref)^(2b)'
+    parameter_names: tuple[str, ...] = ('impulsive_fraction', 'speed_exponent', 'load_exponent')
+    covariate = 'speed'
+    to_separate = ('condition indicators of each window (band kurtosis, envelope spectrum at the defect orders), '
+                   'several speeds and loads, and repeated conditions early and late in the session')
+    grows = False
+    requires_evidence = True
+
+    def applicable(self, table: WindowTable) -> str:
+        """Needs the condition indicators (impulsiveness is what tells a defect apart) and known revolutions."""
+        if indicators(table) is None:
+            return ('no condition indicators (band kurtosis) in the windows: impulsiveness, which tells a surface '
+                    'defect apart, cannot be tested')
+        if self.grows and (np.isfinite(table.revolutions).mean() < 0.8 or np.nanmax(table.revolutions) < 1.0):
+            return 'revolutions are not known: a defect growing with them cannot be tested'
+        return ''
+
+    def scales(self, table: WindowTable) -> dict[str, float]:
+        """Smallest window RMS (m/s^2), lowest speed (rad/s), highest load (N) and most revolutions run."""
+        revolutions = law.cumulative_revolutions(table.revolutions, table.recording)
+        return {'rms_scale': float(np.min(table.rms)), 'reference_speed': float(np.min(np.abs(table.speed))),
+                'reference_load': float(np.max(np.abs(table.load))),
+                'revolution_scale': float(max(np.max(revolutions), 1.0))}
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """A_imp / min RMS, a, b (and N_max / N_g) in their ranges."""
+        ranges = [SIZE_RANGE, *EXPONENT_RANGES] + ([GROWTH_RANGE] if self.grows else [])
+        return np.array([r[0] for r in ranges]), np.array([r[1] for r in ranges])
+
+    def starts(self) -> list[np.ndarray]:
+        """Small to large defects at mid exponents (growing: slow and fast)."""
+        sizes = (0.2, 0.6, 1.2)
+        if self.grows:
+            return [np.array([s / 2, 1.5, 0.6, g]) for s in sizes for g in (0.5, 1.5)]
+        return [np.array([s, 1.5, 0.6]) for s in sizes]
+
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, Any]:
+        """impulsive_rms (m/s^2), the exponents, growth_per_revolution (1/N_g) and the scales."""
+        growth = float(p[3] / scales['revolution_scale']) if self.grows else 0.0
+        return {'impulsive_rms': float(p[0] * scales['rms_scale']), 'speed_exponent': float(p[1]),
+                'load_exponent': float(p[2]), 'growth_per_revolution': growth, 'linear': 0.0, **scales}
+
+    def variants(self) -> list[Effect]:
+        """Steady and growing with the revolutions."""
+        return [self, GrowingSurfaceDefect()]
+
+    def describe(self, params: dict[str, Any]) -> str:
+        """A_imp at the reference condition, the exponents and the growth over the recordings."""
+        rms = params['impulsive_rms']
+        text = (f'Impulsive vibration of {rms:.3g} m/s^2 RMS at {params["reference_speed"]:.3g} rad/s and '
+                f'{params["reference_load"]:.4g} N ({100 * rms / params["rms_scale"]:.0f} % of the smallest window '
+                f'RMS), growing as speed^{params["speed_exponent"]:.2f} and load^{params["load_exponent"]:.2f}')
+        growth = params.get('growth_per_revolution', 0.0)
+        if growth > 0:
+            text += (f', and with the revolutions run by x{float(np.exp(growth * params["revolution_scale"])):.2f} '
+                     f'over {params["revolution_scale"]:.0f} revolutions (N_g = {1 / growth:.3g})')
+        return text + '. ' + self.physics
+
+    def independent_evidence(self, table: WindowTable, location: Location | None,
+                             params: dict[str, Any] | None = None, beside: Effect | None = None) -> str:
+        """Impulsive windows, read in the condition indicators; empty when none.
+
+        :data:`IMPULSIVE_SHARE` of the windows with band kurtosis over
+        :data:`IMPULSIVE_KURTOSIS`, or envelope peaks of :data:`DEFECT_DB` at a
+        defect order in as many.
+        """
+        columns = indicators(table)
+        if columns is None:
+            return ''
+        kurtosis, peaks = columns['kurtosis'], columns['defect_db']
+        impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
+        peaked = np.isfinite(peaks) & (peaks >= DEFECT_DB)
+        parts = []
+        if impulsive >= IMPULSIVE_SHARE:
+            parts.append(f'{100 * impulsive:.0f} % of the windows impulsive (band kurtosis over '
+                         f'{IMPULSIVE_KURTOSIS:g}, median {float(np.nanmedian(kurtosis)):.1f}; Gaussian contact '
+                         'vibration gives 3)')
+        if peaked.mean() >= IMPULSIVE_SHARE:
+            orders = columns['defect_order'][peaked]
+            order = float(np.nanmedian(orders)) if np.isfinite(orders).any() else float('nan')
+            parts.append(f'envelope peaks {float(np.median(peaks[peaked])):.0f} dB over the floor at order '
+                         f'{order:.3g} in {100 * peaked.mean():.0f} % of the windows')
+        return 'condition indicators: ' + '; '.join(parts) if parts else ''
+
+    def contrary_evidence(self, table: WindowTable, location: Location | None,
+                          params: dict[str, Any] | None = None) -> str:
+        """The indicators are there and nothing is impulsive.
+
+        At most :data:`NOT_IMPULSIVE_SHARE` of the windows over
+        :data:`IMPULSIVE_KURTOSIS`, and envelope lines of :data:`DEFECT_DB` in
+        fewer than :data:`IMPULSIVE_SHARE` of them (one window's envelope line
+        reaches it by chance now and then: 10-15 % of healthy simulated windows at 1 kHz).
+        """
+        columns = indicators(table)
+        if columns is None:
+            return ''
+        kurtosis, peaks = columns['kurtosis'], columns['defect_db']
+        impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
+        if impulsive > NOT_IMPULSIVE_SHARE or np.mean(np.isfinite(peaks) & (peaks >= DEFECT_DB)) >= IMPULSIVE_SHARE:
+            return ''
+        return (f'condition indicators: the windows are not impulsive (band kurtosis median '
+                f'{float(np.nanmedian(kurtosis)):.2f}, {100 * impulsive:.0f} % over {IMPULSIVE_KURTOSIS:g}) and '
+                'the envelope spectra show no defect order')
+
+
+class GrowingSurfaceDefect(SurfaceDefect):
+    """The defect grows with the revolutions run: ``g(N) = exp(N / N_g)``."""
+
+    form = 'growing with revolutions'
+    equations = ('A = sqrt(A_22^2 + P_imp), P_imp = A_imp^2 (omega/omega_ref)^(2a) (F/F_ref)^(2b) '
+                 'exp(2 N_rev / N_g)')
+    parameter_names = ('impulsive_fraction', 'speed_exponent', 'load_exponent', 'growth_fraction')
+    covariate = 'revolutions'
+    grows = True
+
+    def variants(self) -> list[Effect]:
+        """Only itself."""
+        return [self]

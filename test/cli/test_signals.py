@@ -1,0 +1,104 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""SIGINT and SIGTERM end a command with one line and 130/143, never an abort, outputs whole (issue 36, item 5)."""
+import os
+from pathlib import Path
+import shutil
+import signal
+import subprocess
+import time
+
+import pytest
+
+from prsm_lube_ros import cli
+from prsm_lube_ros.estimation.calibration_file import load_calibration
+
+from fuzzing import seed_calibration
+
+
+@pytest.fixture
+def patched(monkeypatch):
+    """``patched(action)``: the argv of a command whose handler is now ``action(args)``."""
+    def use(action):
+        from prsm_lube_ros.cli import simulate
+        monkeypatch.setattr(simulate, 'run', action)
+        return ['simulate', '/nonexistent-never-written']
+    return use
+
+
+@pytest.mark.parametrize('signum, status', [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_a_command_runs_is_one_line_and_its_status(patched, capsys, signum, status):
+    cleaned = []
+
+    def action(args):
+        try:
+            os.kill(os.getpid(), signum)
+            time.sleep(5)
+        finally:
+            cleaned.append(True)       # the command's own clean-up ran
+        return 0
+    assert cli.main(patched(action)) == status
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [f'prsm-lube simulate: interrupted by {signal.Signals(signum).name}; files being written were '
+                     'left as they were']
+    assert cleaned == [True]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler      # handlers restored
+
+
+def test_a_signal_turned_into_another_exception_is_still_the_interruption(patched, capsys):
+    """A signal during an extension module's initialisation comes out as ImportError (pybind11)."""
+    def action(args):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        except BaseException:
+            raise ImportError('initialization failed') from None
+    assert cli.main(patched(action)) == 143
+    assert 'Traceback' not in capsys.readouterr().err
+
+
+def test_a_swallowed_signal_still_ends_with_its_line(patched, capsys):
+    """Python drops an exception raised in a __del__ or weakref callback; the command then ends with the line."""
+    def action(args):
+        class Swallower:
+            def __del__(self):
+                os.kill(os.getpid(), signal.SIGTERM)
+                for _ in range(1000):       # the handler runs in here; its exception is dropped
+                    pass
+        Swallower()
+        return 0
+    assert cli.main(patched(action)) == 143
+    err = capsys.readouterr().err
+    assert 'Exception ignored' not in err and err.count('\n') == 1
+
+
+@pytest.fixture(scope='module')
+def reference_bag(tmp_path_factory):
+    from fuzzing import seed_simulated
+    folder = tmp_path_factory.mktemp('signals')
+    return next(path for path, kind in seed_simulated(folder) if kind == 'contract')
+
+
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_the_installed_command_ends_cleanly_at_any_point_and_leaves_the_calibration_whole(reference_bag, tmp_path,
+                                                                                          signum):
+    command = shutil.which('prsm-lube')
+    assert command, 'the installed prsm-lube command is not on PATH'
+    out = seed_calibration(tmp_path / 'calib.yaml')
+    before = out.read_bytes()
+    seen = set()
+    for delay in (0.5, 0.8, 1.1, 1.4, 1.8, 2.5):        # past the interpreter's own start-up
+        process = subprocess.Popen([command, 'calibrate', str(reference_bag), '--out', str(out)],
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        process.send_signal(signum)
+        err = process.communicate(timeout=60)[1]
+        seen.add(process.returncode)
+        assert process.returncode in (0, 128 + signum), (delay, process.returncode, err)
+        if process.returncode:
+            assert len(err.strip().splitlines()) == 1 and 'interrupted by' in err, err
+            assert out.read_bytes() == before
+        load_calibration(out)                           # whole: the old one or the new one
+        assert [p.name for p in tmp_path.iterdir()] == ['calib.yaml']
+    assert 128 + signum in seen
+    assert Path(out).is_file()

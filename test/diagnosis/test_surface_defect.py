@@ -1,0 +1,105 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""The surface-defect candidate: its law, its evidence in the condition indicators, and the engine's verdicts."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from prsm_lube_ros.diagnosis.effects import get_effect
+from prsm_lube_ros.diagnosis.effects import surface_defect as candidate
+from prsm_lube_ros.diagnosis.engine import diagnose_table
+from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
+from prsm_lube_ros.physics.effects import surface_defect as law
+
+PARAMS = {'impulsive_rms': 0.3, 'reference_speed': 10.0, 'reference_load': 100.0, 'speed_exponent': 1.0,
+          'load_exponent': 0.5, 'growth_per_revolution': 0.0, 'linear': 0.0}
+
+
+class _Table(SimpleNamespace):
+    """A stand-in for a window table with condition-indicator columns (NaN where unknown)."""
+
+    def __len__(self):
+        return len(self.speed)
+
+
+def table_of(kurtosis, defect_db=None, n=40):
+    peaks = np.full(n, np.nan) if defect_db is None else np.broadcast_to(np.asarray(defect_db, dtype=float), (n,))
+    return _Table(kurtosis=np.broadcast_to(np.asarray(kurtosis, dtype=float), (n,)), defect_db=peaks,
+                  defect_order=np.full(n, 6.25), revolutions=np.linspace(0.0, 500.0, n), speed=np.full(n, 10.0),
+                  load=np.full(n, 100.0), rms=np.full(n, 0.5), recording=np.zeros(n, dtype=int))
+
+
+def test_impulsive_power_adds_to_the_contacts_and_is_removed_in_power():
+    effect = get_effect('surface_defect')
+    windows = SimpleNamespace(speed=np.array([10.0, 20.0]), load=np.array([100.0, 400.0]),
+                              revolutions=np.array([0.0, 0.0]))
+    # P_imp = 0.3^2 (2)^2 (4)^1 at the second window: 0.3 x 2 x 2 = 1.2 m/s^2 RMS.
+    assert effect.power(PARAMS, windows) == pytest.approx([0.09, 1.44])
+    ln_a22 = np.log([0.4, 1.6])
+    total = np.exp(ln_a22 + effect.log_gain(PARAMS, windows, ln_a22))
+    assert total == pytest.approx([0.5, 2.0])
+    assert effect.eq22_amplitude(PARAMS, windows, total) == pytest.approx([0.4, 1.6])
+    assert effect.assessment_film_factor(PARAMS, windows) == 1.0      # a defect is no lubrication change
+
+
+def test_growth_counts_the_revolutions_over_the_recordings_in_order():
+    revolutions = np.array([0.0, 100.0, 200.0, 0.0, 150.0])
+    recording = np.array([0, 0, 0, 1, 1])
+    assert law.cumulative_revolutions(revolutions, recording) == pytest.approx([0, 100, 200, 200, 350])
+    grown = dict(PARAMS, growth_per_revolution=1 / 350)
+    windows = SimpleNamespace(speed=np.full(5, 10.0), load=np.full(5, 100.0), revolutions=revolutions,
+                              recording=recording)
+    assert get_effect('surface_defect').power(grown, windows)[-1] == pytest.approx(0.09 * math.e ** 2)
+
+
+def test_without_condition_indicators_the_defect_is_not_testable():
+    table = table_of(np.nan)
+    assert 'condition indicators' in get_effect('surface_defect').applicable(table)
+    assert get_effect('surface_defect').independent_evidence(table, None) == ''
+    assert get_effect('surface_defect').contrary_evidence(table, None) == ''
+    bare = _Table(**{k: v for k, v in vars(table).items() if k not in ('kurtosis', 'defect_db', 'defect_order')})
+    assert candidate.indicators(bare) is None
+
+
+def test_impulsive_windows_are_evidence_and_gaussian_ones_are_evidence_against():
+    effect = get_effect('surface_defect')
+    late = np.where(np.arange(40) >= 25, 8.0, 3.0)          # a growing defect: the last 15 windows impulsive
+    assert effect.independent_evidence(table_of(late), None).startswith('condition indicators: 38 % of the windows')
+    assert effect.contrary_evidence(table_of(late), None) == ''
+    peaks = effect.independent_evidence(table_of(3.0, defect_db=18.0), None)
+    assert 'envelope peaks 18 dB' in peaks and 'order 6.25' in peaks
+    healthy = table_of(3.0 + 0.1 * np.sin(np.arange(40)), defect_db=4.0)
+    assert effect.independent_evidence(healthy, None) == ''
+    assert 'not impulsive' in effect.contrary_evidence(healthy, None)
+
+
+def _verdict(kind, seed):
+    table, truth = synthetic_table(np.random.default_rng(seed), kind,
+                                   plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    return diagnose_table(table), truth
+
+
+def test_the_engine_names_a_growing_defect_where_the_windows_are_impulsive_not_depletion():
+    diagnosis, truth = _verdict('surface_defect', 2)
+    assert truth['params']['law']['growth'] != 'steady'
+    assert diagnosis.verdict == 'surface_defect'
+    depletion = next(c for c in diagnosis.candidates if c.effect.id == 'lubricant_depletion')
+    assert depletion.status.value != 'earns' or diagnosis.verdict != 'lubricant_depletion'
+
+
+def test_the_engine_keeps_naming_depletion_where_nothing_is_impulsive():
+    diagnosis, _ = _verdict('lubricant_depletion', 2)
+    assert diagnosis.verdict == 'lubricant_depletion'
+    defect = next(c for c in diagnosis.candidates if c.effect.id == 'surface_defect')
+    assert defect.status.value != 'earns'
+
+
+def test_window_indicators_leave_the_other_columns_of_a_synthetic_table_as_they_were():
+    plain, _ = synthetic_table(np.random.default_rng(4), 'lubricant_depletion', plan=SyntheticPlan(sessions=2))
+    marked, _ = synthetic_table(np.random.default_rng(4), 'lubricant_depletion',
+                                plan=SyntheticPlan(sessions=2, condition_indicators=True))
+    assert np.array_equal(plain.rms, marked.rms) and np.array_equal(plain.speed, marked.speed)
+    assert not plain.has_indicators and marked.has_indicators
+    assert abs(np.median(marked.kurtosis) - 3.0) < 0.05          # Gaussian contact vibration
