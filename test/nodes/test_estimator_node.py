@@ -1210,3 +1210,58 @@ def test_indicators_on_every_second_window_still_find_the_spall(graph, tmp_path)
     assert status.message.startswith('impulsive at 6.25x screw speed: screw raceway defect suspected')
     assert values_by_key(status)['windows_pooled'] == '4'
     assert node.channels[0].surface.status().since - T0 >= 7.0      # the fourth screened window ends at 8 s
+
+
+def recording_events(path, seconds):
+    """The first ``seconds`` of a recording's contract topics as ``(stamp, kind, msg)``, in stamp order."""
+    from prsm_lube_ros.recording import reader
+    kinds = {'VibrationBatch': 'vibration', 'ScrewStateBatch': 'joint_states', 'AxialLoadBatch': 'axial_load',
+             'TemperatureBatch': 'temperature'}
+    recording = reader.open_recording(path, namespace='/prsm')
+    end = recording.start_time + seconds
+    events = []
+    for batches in recording.slices(slice_seconds=5.0):
+        for batch in batches:
+            events += [(float(stamp), kinds[type(batch).__name__], msg)
+                       for stamp, msg in zip(batch.stamps, ros_convert.batch_messages(batch)) if stamp < end]
+        if batches and min(float(b.stamps[0]) for b in batches if len(b)) >= end:
+            break
+    return sorted(events, key=lambda e: e[0])
+
+
+def test_the_simulators_spall_replayed_live_after_calibrating_on_healthy_recordings(graph, tmp_path):
+    """prsm-lube simulate --effect surface_defect (a steady roller spall, seed 5); calibrate on the same rig
+    healthy; the spalled recording's first 14 s replayed live: ERROR naming the shared 3.75 order."""
+    from prsm_lube_ros.cli import main
+    assert main(['simulate', str(tmp_path / 'healthy'), '--seed', '3']) == 0
+    assert main(['simulate', str(tmp_path / 'spall'), '--effect', 'surface_defect', '--seed', '5']) == 0
+    node = graph.estimator(tmp_path, **{**SCREENED, 'calibration_file': str(tmp_path / 'none_{actuator}.yaml')})
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    response = call(graph, '/prsm/calibrate', ['healthy/stage_3'], theta=1.0)
+    assert response.success, response.message
+    assert node.channels[0].assessor.calibration.condition_baseline.runs == 6
+    graph.publish(graph.publishers(), recording_events(tmp_path / 'spall' / 'stage_3', 14.0))
+    wait_for(lambda: node.channels[0].surface.suspected, 20, 'the spall suspected')
+    wait_for(lambda: ros_convert.status_level(last_status(arrays, 'surface condition')) == ERROR, 5, 'ERROR')
+    # Impulsive and periodic, or periodic beyond the healthy runs' level alone: the evidence of the group judged.
+    assert last_status(arrays, 'surface condition').message.endswith(
+        'at 3.75x screw speed: nut raceway or roller defect suspected; theta_Oil is not a lubrication measure while '
+        'it lasts')
+    assert last_status(arrays, '/prsm lubrication').message.startswith('theta_oil withheld: nut raceway or roller')
+
+
+def test_the_simulators_healthy_rig_replayed_live_stays_ok(graph, tmp_path):
+    """The same rig without a defect (stage 2, theta 0.83): the screen judges and stays OK, theta is published."""
+    from prsm_lube_ros.cli import main
+    assert main(['simulate', str(tmp_path / 'healthy'), '--seed', '3']) == 0
+    node = graph.estimator(tmp_path, **{**SCREENED, 'calibration_file': str(tmp_path / 'none_{actuator}.yaml')})
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    assert call(graph, '/prsm/calibrate', ['healthy/stage_3'], theta=1.0).success
+    graph.publish(graph.publishers(), recording_events(tmp_path / 'healthy' / 'stage_2', 20.0))
+    wait_for(lambda: node.channels[0].surface.judged, 20, 'a judgement')
+    settle(states)
+    assert not node.channels[0].surface.suspected
+    wait_for(lambda: last_status(arrays, 'surface condition').message.startswith('no surface defect'), 5, 'OK')
+    assert any(math.isfinite(s.theta_oil) for s in states)
+    assert not any('withheld' in s.message for s in states)
