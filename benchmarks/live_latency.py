@@ -65,7 +65,10 @@ RESULTS = ROOT / 'benchmarks' / 'results'
 SPEED, LOAD, THETA = 20.0, 150.0, 0.8
 RATE, BLOCK = 4000.0, 0.1
 WARM_UP = 3.0          # s of wall time after the first message before measuring
-ESTIMATOR_CPU, GENERATOR_CPU = 0, 1
+#: The estimator's CPU (``LIVE_LATENCY_ESTIMATOR_CPU``, 0 or 1: on a shared machine, the one less busy); the
+#: generator gets the other.
+ESTIMATOR_CPU = int(os.environ.get('LIVE_LATENCY_ESTIMATOR_CPU', '0'))
+GENERATOR_CPU = 1 - ESTIMATOR_CPU
 
 
 def actuator_names(count: int) -> list[str]:
