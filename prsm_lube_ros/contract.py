@@ -20,9 +20,9 @@ from __future__ import annotations
 
 __all__ = ['AXIAL_LOAD_TOPIC', 'CALIBRATE', 'CALIBRATE_SERVICE', 'DEFAULT_NAMESPACE', 'DIAGNOSTICS_TOPIC',
            'JOINT_STATE', 'JOINT_STATES_TOPIC', 'LUBRICATION_STATE', 'LUBRICATION_STATE_TOPIC', 'LUBRICATION_TASK',
-           'PACKAGE', 'SCREW_JOINT', 'SOURCE_TASK', 'TEMPERATURE', 'TEMPERATURE_TOPIC', 'VIBRATION_BLOCK',
-           'VIBRATION_BLOCK_LAYOUT', 'VIBRATION_TOPIC', 'WRENCH_STAMPED', 'namespace_of', 'status_name',
-           'topic_name']
+           'PACKAGE', 'SCREW_JOINT', 'SOURCE_TASK', 'SURFACE_TASK', 'TEMPERATURE', 'TEMPERATURE_TOPIC',
+           'VIBRATION_BLOCK', 'VIBRATION_BLOCK_LAYOUT', 'VIBRATION_TOPIC', 'WRENCH_STAMPED', 'namespace_of',
+           'status_name', 'topic_name']
 
 PACKAGE = 'prsm_lube_ros'
 VIBRATION_BLOCK = f'{PACKAGE}/msg/VibrationBlock'
@@ -54,6 +54,8 @@ SCREW_JOINT = 'screw'
 #: Tasks of the diagnostic statuses on ``/diagnostics`` (see :func:`status_name`).
 LUBRICATION_TASK = 'lubrication'
 SOURCE_TASK = 'sensor source'
+#: The estimator's second status per actuator: the surface defect screen (theta_Oil is withheld while it is ERROR).
+SURFACE_TASK = 'surface condition'
 
 
 def status_name(node_name: str, namespace: str, task: str) -> str:

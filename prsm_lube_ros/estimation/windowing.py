@@ -83,6 +83,9 @@ class WindowSettings:
     spectrum_lowest_frequency: float = 0.0
     #: Compute each window's :class:`~.condition_indicators.ConditionIndicators` (needs the band's samples).
     condition_indicators: bool = True
+    #: Compute them only on windows whose grid index is a multiple of this (1: every window); a live estimator
+    #: serving many actuators trades the screen's reaction time for CPU with it.
+    condition_every: int = 1
     #: Defect orders that label the envelope lines (the actuator's, :func:`~..physics.defect_orders.defect_orders`).
     defect_orders: tuple[DefectOrder, ...] = DEFAULT_DEFECT_ORDERS
 
@@ -100,6 +103,7 @@ class WindowSettings:
             'reset_after_backstep': self.reset_after_backstep > 0,
             'spectrum_segment': self.spectrum_segment >= 0,
             'spectrum_lowest_frequency': self.spectrum_lowest_frequency >= 0,
+            'condition_every': isinstance(self.condition_every, int) and self.condition_every >= 1,
         }
         for name, ok in checks.items():
             value = getattr(self, name)
@@ -757,7 +761,7 @@ class WindowBuilder:
                 first_time = chunks[0][0]
                 if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
                     rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
-                if indicators and count[row] > 0 and maybe_steady[row]:
+                if indicators and count[row] > 0 and maybe_steady[row] and k % s.condition_every == 0:
                     jobs.setdefault((samples.size, rate_k), []).append(
                         (row, samples, float(speed[row]), self._window_angles(k, first_time)))
                 if spectral:

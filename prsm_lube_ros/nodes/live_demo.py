@@ -44,8 +44,8 @@ __all__ = ['CALIBRATE_SERVICE', 'LiveResult', 'Observer', 'STATE_TOPIC', 'STATUS
 #: The contract's default namespace: topics and the service of the actuator ``prsm``.
 STATE_TOPIC = '/prsm/lubrication_state'
 CALIBRATE_SERVICE = '/prsm/calibrate'
-#: Part of the estimator's status name on /diagnostics ('<node>: /prsm lubrication').
-STATUS_PART = 'lubrication_estimator: /prsm'
+#: The estimator's lubrication status name on /diagnostics (not its '... /prsm surface condition' beside it).
+STATUS_PART = 'lubrication_estimator: /prsm lubrication'
 
 
 @dataclass

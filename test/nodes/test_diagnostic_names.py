@@ -17,7 +17,7 @@ import yaml
 pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
-from prsm_lube_ros.contract import LUBRICATION_TASK, SOURCE_TASK, status_name  # noqa: E402
+from prsm_lube_ros.contract import LUBRICATION_TASK, SOURCE_TASK, status_name, SURFACE_TASK  # noqa: E402
 from prsm_lube_ros.nodes.lubrication_estimator import ActuatorChannel  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[2] / 'config' / 'diagnostic_aggregator.yaml'
@@ -44,7 +44,7 @@ def estimator_status_name(node_name, actuator):
 
 def test_every_analyzer_is_a_generic_analyzer_with_a_path():
     found = analyzers()
-    assert set(found) == {'lubrication', 'sensor_sources'}
+    assert set(found) == {'lubrication', 'surface_condition', 'sensor_sources'}
     for analyzer in found.values():
         assert analyzer['type'] == 'diagnostic_aggregator/GenericAnalyzer' and analyzer['path']
 
@@ -58,6 +58,13 @@ def test_an_estimator_status_is_claimed_by_the_lubrication_analyzer_only(node_na
     name = estimator_status_name(node_name, actuator)
     assert name == status_name(node_name, actuator, LUBRICATION_TASK)
     assert [key for key, a in analyzers().items() if claims(a, name)] == ['lubrication']
+
+
+@pytest.mark.parametrize('node_name, actuator', NAMES)
+def test_a_surface_condition_status_is_claimed_by_the_surface_analyzer_only(node_name, actuator):
+    name = ActuatorChannel.surface_status_name.fget(SimpleNamespace(node_name=node_name, name=actuator))
+    assert name == status_name(node_name, actuator, SURFACE_TASK)
+    assert [key for key, a in analyzers().items() if claims(a, name)] == ['surface_condition']
 
 
 @pytest.mark.parametrize('node_name, namespace', NAMES)

@@ -35,6 +35,7 @@ from prsm_lube_ros.estimation.conditioning import DEFAULT_BAND  # noqa: E402
 from prsm_lube_ros.estimation.domain import CalibrationDomain  # noqa: E402
 from prsm_lube_ros.estimation.calibration import Calibration  # noqa: E402
 from prsm_lube_ros.estimation.calibration_file import load_calibration, save_calibration  # noqa: E402
+from prsm_lube_ros.estimation.defect_screen import ConditionBaseline  # noqa: E402
 from prsm_lube_ros.estimation.health import ERROR, OK, STALE, WARN  # noqa: E402
 from prsm_lube_ros.msg import LubricationState, VibrationBlock  # noqa: E402
 from prsm_lube_ros.nodes import ros_convert  # noqa: E402
@@ -74,21 +75,28 @@ def rms_for(theta, constants=START, speed=SPEED, load=LOAD):
 
 
 # -- synthetic inputs ------------------------------------------------------------------------------
-def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, load_rate=20.0, freq=100.0):
+def segments_stream(segments, t0=T0, rate=2000.0, block=0.05, joint_rate=50.0, load_rate=20.0, freq=100.0,
+                    vibration=None):
     """Messages ``(stamp, kind, msg)`` in stamp order for segments ``(seconds, rms, speed, load)``.
 
     The vibration is a sine of ``freq`` Hz with the segment's RMS; 100 Hz puts
     whole periods in every 0.05 s block, so any window of whole blocks has that RMS.
+    ``vibration(times, rms, speed, index)``, given, makes the samples of segment
+    ``index`` instead (``times`` in s from the segment's start).
     """
     events = []
     t = 0.0
     angle = 0.0
     n = int(round(block * rate))
-    for seconds, rms, speed, load in segments:
-        for b in range(int(round(seconds / block))):
+    for index, (seconds, rms, speed, load) in enumerate(segments):
+        blocks = int(round(seconds / block))
+        if vibration is not None:
+            samples = vibration(np.arange(blocks * n) / rate, rms, speed, index)
+        for b in range(blocks):
             start = t + b * block
-            samples = math.sqrt(2) * rms * np.sin(2 * math.pi * freq * (np.arange(n) / rate))
-            events.append((t0 + start, 'vibration', ros_convert.vibration_block_msg(t0 + start, rate, samples)))
+            chunk = (samples[b * n:(b + 1) * n] if vibration is not None
+                     else math.sqrt(2) * rms * np.sin(2 * math.pi * freq * (np.arange(n) / rate)))
+            events.append((t0 + start, 'vibration', ros_convert.vibration_block_msg(t0 + start, rate, chunk)))
         for j in range(int(round(seconds * joint_rate))):
             stamp = t + j / joint_rate
             events.append((t0 + stamp, 'joint_states', ros_convert.joint_state_msg(t0 + stamp, angle, speed)))
@@ -447,7 +455,10 @@ def test_several_actuators_each_have_topics_status_and_service(graph, tmp_path):
     assert not other
     wait_for(lambda: status_of(diagnostics[-1], left).level == bytes([WARN]), 5, 'left WARN')
     last = diagnostics[-1]
-    assert len(last.status) == 2
+    assert [s.name for s in last.status] == [f'lubrication_estimator: {a} {task}' for a in (left, right)
+                                             for task in ('lubrication', 'surface condition')]
+    assert [s.hardware_id for s in last.status] == ['EMA-L 0042'] * 2 + ['ema_right/prsm'] * 2
+    assert status_of(last, f'{right} surface').level == bytes([STALE])
     assert status_of(last, left).hardware_id == 'EMA-L 0042'
     assert status_of(last, right).hardware_id == 'ema_right/prsm'
     assert status_of(last, right).level == bytes([STALE])
@@ -458,8 +469,9 @@ def test_several_actuators_each_have_topics_status_and_service(graph, tmp_path):
 
 
 # -- calibration service ---------------------------------------------------------------------------
-def write_reference_bag(path, segments, namespace='/prsm', topics=('vibration', 'joint_states', 'axial_load')):
-    """A rosbag2 (mcap) of ``segments_stream(segments)`` written with rosbags and the contract typestore."""
+def write_reference_bag(path, segments, namespace='/prsm', topics=('vibration', 'joint_states', 'axial_load'),
+                        stream=None):
+    """A rosbag2 (mcap) of ``stream(segments)`` (default ``segments_stream``) written with rosbags."""
     from rosbags.rosbag2 import StoragePlugin, Writer
     from prsm_lube_ros.contract import JOINT_STATE, VIBRATION_BLOCK, WRENCH_STAMPED
     from prsm_lube_ros.recording.typestore import contract_typestore
@@ -485,7 +497,7 @@ def write_reference_bag(path, segments, namespace='/prsm', topics=('vibration', 
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         connections = {kind: writer.add_connection(f'{namespace}/{kind}', types[kind], typestore=store)
                        for kind in topics}
-        for stamp, kind, msg in segments_stream(segments):
+        for stamp, kind, msg in (stream or segments_stream)(segments):
             if kind in connections:
                 writer.write(connections[kind], int(round(stamp * 1e9)),
                              store.serialize_cdr(convert(kind, msg), types[kind]))
@@ -1017,3 +1029,239 @@ def test_a_bridge_in_a_namespace_publishes_there():
             bridge.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
+
+
+# -- surface defect screen (issue 34) --------------------------------------------------------------
+DEFECT_SPEED = 16.0                        # rad/s: 2.5 revolutions in a 1 s window, strikes at 15.9 Hz
+#: Healthy indicators of a Gaussian machine (as prsm-lube calibrate keeps them).
+HEALTHY_BASELINE = ConditionBaseline(runs=6, kurtosis_median=3.0, kurtosis_max=3.1, crest_median=4.0,
+                                     crest_max=4.4, envelope_levels=((6.25, 4.0), (3.75, 4.0)))
+SCREENED = dict(window_length=1.0, completion_delay=0.25, stale_timeout=5.0, defect_windows=4)
+
+
+def screened_estimator(graph, tmp_path, baseline=HEALTHY_BASELINE, **params):
+    """An estimator whose calibration is START with the band of 4 kHz recordings and ``baseline``.
+
+    ``baseline`` None: a file written before baselines were kept.
+    """
+    save_calibration(replace(calibration(START), band=DEFAULT_BAND.resolved(4000.0), condition_baseline=baseline),
+                     tmp_path / 'calibration_prsm.yaml')
+    return graph.estimator(tmp_path, **{**SCREENED, 'calibration_file': str(tmp_path / 'calibration_{actuator}.yaml'),
+                                        **params})
+
+
+def defect_stream(segments, strike=0.0, seed=1):
+    """:func:`segments_stream` at 4 kHz in 0.1 s blocks with Gaussian vibration of the segment's RMS and, when
+    ``strike`` > 0, a screw raceway spall: ``strike`` x RMS peak strikes at 6.25 per screw revolution ringing
+    a 1 kHz mode (the angle is continuous over segments of one speed, as the strikes assume)."""
+    def vibration(times, rms, speed, index):
+        return synthetic_inputs.defect_vibration(times, max(speed, 1e-3), rms=rms, strike=strike * rms,
+                                                 seed=seed + index)
+    return segments_stream(segments, rate=4000.0, block=0.1, vibration=vibration)
+
+
+def last_status(arrays, name_part):
+    """The newest status whose name contains ``name_part``, or None."""
+    for array in reversed(list(arrays)):
+        found = [s for s in array.status if name_part in s.name]
+        if found:
+            return found[0]
+    return None
+
+
+def values_by_key(status):
+    return {kv.key: kv.value for kv in status.values}
+
+
+def test_a_spall_is_an_error_with_its_component_and_theta_is_withheld_not_insufficient(graph, tmp_path):
+    node = screened_estimator(graph, tmp_path)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    # RMS where Eq. 23 reads theta 0.5: as oil, "lubrication insufficient".
+    rms = rms_for(0.5, speed=DEFECT_SPEED)
+    graph.publish(graph.publishers(), defect_stream([(9.0, rms, DEFECT_SPEED, LOAD)], strike=8.0))
+    wait_for(lambda: len(states) >= 8, 15, 'eight windows')
+
+    def surface():
+        status = last_status(arrays, '/prsm surface condition')
+        return status if status is not None and ros_convert.status_level(status) == ERROR else None
+    wait_for(surface, 10, 'surface condition ERROR')
+    status = surface()
+    assert status.name == 'lubrication_estimator: /prsm surface condition' and status.hardware_id == 'prsm'
+    assert status.message == ('impulsive at 6.25x screw speed: screw raceway defect suspected; theta_Oil is not '
+                              'a lubrication measure while it lasts')
+    values = values_by_key(status)
+    assert values['defect_suspected'] == 'True' and values['component'] == 'screw raceway'
+    assert float(values['kurtosis']) > 4.0 and 'screw raceway' in values['envelope_peaks']
+    assert values['baseline'].startswith('6 calibration run(s)') and values['windows_pooled'] == '4'
+    lubrication = last_status(arrays, '/prsm lubrication')
+    assert ros_convert.status_level(lubrication) == WARN
+    assert lubrication.message.startswith('theta_oil withheld: screw raceway defect suspected')
+    assert 0.4 < float(values_by_key(lubrication)['theta_oil_withheld']) < 0.6
+    # Never read as oil: the first three windows, before the first judgement, 'not yet judged'; from the
+    # fourth on, theta withheld (NaN).
+    assert all('insufficient' not in s.message and 'degraded' not in s.message and s.level == WARN for s in states)
+    assert all(s.message.startswith('lubrication not yet judged') for s in states if s.window_start - T0 < 3.0)
+    judged = [s for s in states if s.window_start - T0 >= 3.0]
+    assert judged and all(math.isnan(s.theta_oil) and s.message.startswith('theta_oil withheld') for s in judged)
+    for array in arrays:
+        for s in array.status:
+            if ros_convert.status_level(s) == ERROR and 'surface' not in s.name:
+                assert False, f'lubrication ERROR while the spall was being screened: {s.message}'
+    assert node.channels[0].surface.suspected
+
+
+def test_healthy_vibration_keeps_the_surface_ok_and_theta_published(graph, tmp_path):
+    node = screened_estimator(graph, tmp_path, defect_windows=10)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    # defect_windows through the rcl_interfaces service, as ros2 param set does.
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    client = graph.probe.create_client(SetParameters, '/prsm/lubrication_estimator/set_parameters')
+    assert client.wait_for_service(timeout_sec=10)
+    for value, ok in ((0, False), (4, True)):
+        future = client.call_async(SetParameters.Request(parameters=[ParameterMsg(
+            name='defect_windows', value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value))]))
+        wait_for(future.done, 10, 'set_parameters answer')
+        assert future.result().results[0].successful is ok, future.result().results[0].reason
+    assert node.channels[0].surface.windows == 4
+    graph.publish(graph.publishers(), defect_stream([(9.0, rms_for(0.9, speed=DEFECT_SPEED), DEFECT_SPEED, LOAD)]))
+    wait_for(lambda: len(states) >= 8, 15, 'eight windows')
+    wait_for(lambda: (last_status(arrays, 'surface condition') is not None
+                      and last_status(arrays, 'surface condition').message.startswith('no surface defect')), 10,
+             'surface judged')
+    status = last_status(arrays, 'surface condition')
+    assert ros_convert.status_level(status) == OK
+    assert status.message == 'no surface defect: kurtosis below 4.0, no envelope line at a defect order'
+    assert float(values_by_key(status)['kurtosis']) < 3.5
+    assert all(math.isfinite(s.theta_oil) and 'withheld' not in s.message for s in states), [
+        (s.window_start - T0, s.theta_oil, s.message) for s in states]
+    assert 'withheld' not in last_status(arrays, '/prsm lubrication').message
+
+
+def reference_defect_stream(segments):
+    """This machine's healthy vibration: mildly impulsive at the strike order, as some machines are."""
+    return defect_stream(segments, strike=MILD_STRIKE, seed=7)
+
+
+MILD_STRIKE = 5.0
+
+
+def test_recalibration_keeps_the_baseline_and_the_node_judges_with_it(graph, tmp_path):
+    """A calibration without a baseline judges on absolute limits; calibrate keeps one and the node uses it."""
+    node = screened_estimator(graph, tmp_path, baseline=None)
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    graph.publish(graph.publishers(), defect_stream([(7.0, rms_for(0.9, speed=DEFECT_SPEED), DEFECT_SPEED, LOAD)],
+                                                    strike=0.8 * MILD_STRIKE, seed=30))
+    wait_for(lambda: len(states) >= 6, 15, 'six windows')
+    wait_for(lambda: node.channels[0].surface.status().level == ERROR, 5, 'absolute limits flag it')
+    wait_for(lambda: (last_status(arrays, 'surface condition') is not None
+                      and last_status(arrays, 'surface condition').message.startswith('impulsive')), 10,
+             'ERROR on /diagnostics')
+    assert values_by_key(last_status(arrays, 'surface condition'))['baseline'].startswith('none: the calibration')
+
+    write_reference_bag(tmp_path / 'reference', reference_segments(speeds=(8.0, 12.0, DEFECT_SPEED)),
+                        stream=reference_defect_stream)
+    response = call(graph, '/prsm/calibrate', ['reference'], persist=True)
+    assert response.success, response.message
+    saved = load_calibration(tmp_path / 'calibration_prsm.yaml')
+    assert saved.condition_baseline is not None and saved.condition_baseline.runs == 6
+    assert saved.condition_baseline.kurtosis_median > 4.0           # this machine's own impulsiveness
+    live = node.channels[0].assessor.calibration.condition_baseline      # the fitted one (the file rounds)
+    assert live.runs == 6 and live.kurtosis_median == pytest.approx(saved.condition_baseline.kurtosis_median)
+    assert node.channels[0].surface.baseline is live
+    # Judged again at once on the same windows, against the new baseline: within this machine's healthy range.
+    status = node.channels[0].surface.status()
+    assert status.level == OK and status.message.startswith('no surface defect'), status.message
+    wait_for(lambda: last_status(arrays, 'surface condition').message.startswith('no surface defect'), 10,
+             'OK on /diagnostics')
+    assert values_by_key(last_status(arrays, 'surface condition'))['baseline'].startswith('6 calibration run(s)')
+
+
+def test_the_actuator_file_gives_the_defect_orders_screened(graph, tmp_path, repo_root):
+    """A rig whose actuator file configures a support bearing (and no roller screw): its orders label the lines."""
+    from prsm_lube_ros.physics.actuator import load_actuator
+    from prsm_lube_ros.physics.defect_orders import defect_orders
+    file = repo_root / 'config' / 'femto_pronostia_bearing.yaml'
+    node = screened_estimator(graph, tmp_path, actuator_file=str(file))
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    expected = defect_orders(load_actuator(file))
+    assert [o.component for o in expected][:2] == ['support bearing outer race', 'support bearing inner race']
+    assert node.channels[0].builder.settings.defect_orders == expected
+    assert node.channels[0].surface.orders == expected and node.channels[0].assessor.defect_orders == expected
+    wait_for(lambda: last_status(arrays, 'surface condition') is not None, 10, 'a surface status')
+    orders = values_by_key(last_status(arrays, 'surface condition'))['defect_orders']
+    assert orders.startswith('support bearing outer race 5.61') and 'screw raceway' not in orders
+
+
+def test_indicators_on_every_second_window_still_find_the_spall(graph, tmp_path):
+    """condition_every 2: half the indicator CPU; the screen pools 4 screened windows, over 8 s."""
+    node = screened_estimator(graph, tmp_path, condition_every=2)
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    graph.publish(graph.publishers(), defect_stream([(11.0, rms_for(0.9, speed=DEFECT_SPEED), DEFECT_SPEED, LOAD)],
+                                                    strike=8.0))
+    wait_for(lambda: len(states) >= 10, 15, 'ten windows')
+    wait_for(lambda: node.channels[0].surface.suspected, 5, 'the spall suspected')
+    wait_for(lambda: ros_convert.status_level(last_status(arrays, 'surface condition')) == ERROR, 5, 'ERROR')
+    status = last_status(arrays, 'surface condition')
+    assert status.message.startswith('impulsive at 6.25x screw speed: screw raceway defect suspected')
+    assert values_by_key(status)['windows_pooled'] == '4'
+    assert node.channels[0].surface.status().since - T0 >= 7.0      # the fourth screened window ends at 8 s
+
+
+def recording_events(path, seconds):
+    """The first ``seconds`` of a recording's contract topics as ``(stamp, kind, msg)``, in stamp order."""
+    from prsm_lube_ros.recording import reader
+    kinds = {'VibrationBatch': 'vibration', 'ScrewStateBatch': 'joint_states', 'AxialLoadBatch': 'axial_load',
+             'TemperatureBatch': 'temperature'}
+    recording = reader.open_recording(path, namespace='/prsm')
+    end = recording.start_time + seconds
+    events = []
+    for batches in recording.slices(slice_seconds=5.0):
+        for batch in batches:
+            events += [(float(stamp), kinds[type(batch).__name__], msg)
+                       for stamp, msg in zip(batch.stamps, ros_convert.batch_messages(batch)) if stamp < end]
+        if batches and min(float(b.stamps[0]) for b in batches if len(b)) >= end:
+            break
+    return sorted(events, key=lambda e: e[0])
+
+
+def test_the_simulators_spall_replayed_live_after_calibrating_on_healthy_recordings(graph, tmp_path):
+    """prsm-lube simulate --effect surface_defect (a steady roller spall, seed 5); calibrate on the same rig
+    healthy; the spalled recording's first 14 s replayed live: ERROR naming the shared 3.75 order."""
+    from prsm_lube_ros.cli import main
+    assert main(['simulate', str(tmp_path / 'healthy'), '--seed', '3']) == 0
+    assert main(['simulate', str(tmp_path / 'spall'), '--effect', 'surface_defect', '--seed', '5']) == 0
+    node = graph.estimator(tmp_path, **{**SCREENED, 'calibration_file': str(tmp_path / 'none_{actuator}.yaml')})
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    response = call(graph, '/prsm/calibrate', ['healthy/stage_3'], theta=1.0)
+    assert response.success, response.message
+    assert node.channels[0].assessor.calibration.condition_baseline.runs == 6
+    graph.publish(graph.publishers(), recording_events(tmp_path / 'spall' / 'stage_3', 14.0))
+    wait_for(lambda: node.channels[0].surface.suspected, 20, 'the spall suspected')
+    wait_for(lambda: ros_convert.status_level(last_status(arrays, 'surface condition')) == ERROR, 5, 'ERROR')
+    # Impulsive and periodic, or periodic beyond the healthy runs' level alone: the evidence of the group judged.
+    assert last_status(arrays, 'surface condition').message.endswith(
+        'at 3.75x screw speed: nut raceway or roller defect suspected; theta_Oil is not a lubrication measure while '
+        'it lasts')
+    assert last_status(arrays, '/prsm lubrication').message.startswith('theta_oil withheld: nut raceway or roller')
+
+
+def test_the_simulators_healthy_rig_replayed_live_stays_ok(graph, tmp_path):
+    """The same rig without a defect (stage 2, theta 0.83): the screen judges and stays OK, theta is published."""
+    from prsm_lube_ros.cli import main
+    assert main(['simulate', str(tmp_path / 'healthy'), '--seed', '3']) == 0
+    node = graph.estimator(tmp_path, **{**SCREENED, 'calibration_file': str(tmp_path / 'none_{actuator}.yaml')})
+    arrays = graph.collect(DiagnosticArray, '/diagnostics')
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    assert call(graph, '/prsm/calibrate', ['healthy/stage_3'], theta=1.0).success
+    graph.publish(graph.publishers(), recording_events(tmp_path / 'healthy' / 'stage_2', 20.0))
+    wait_for(lambda: node.channels[0].surface.judged, 20, 'a judgement')
+    settle(states)
+    assert not node.channels[0].surface.suspected
+    wait_for(lambda: last_status(arrays, 'surface condition').message.startswith('no surface defect'), 5, 'OK')
+    assert any(math.isfinite(s.theta_oil) for s in states)
+    assert not any('withheld' in s.message for s in states)

@@ -115,3 +115,24 @@ def test_a_setting_for_another_source_is_refused_with_its_reason(sides):
                    SetParameters.Request(parameters=[ParameterMsg(name='playback_rate', value=double(2.0))]))
     assert not refused.results[0].successful
     assert 'playback' in refused.results[0].reason
+
+
+def test_defect_windows_is_an_integer_with_its_range_and_changes_at_run_time(sides, tmp_path):
+    nodes, probe = sides
+    node = nodes.add(LubricationEstimator(context=nodes.context, parameter_overrides=[
+        Parameter('calibration_file', value=str(tmp_path / 'calibration_{actuator}.yaml')),
+        Parameter('recordings_dir', value=str(tmp_path))]))
+    base = '/prsm/lubrication_estimator'
+    descriptor = call(probe, DescribeParameters, f'{base}/describe_parameters',
+                      DescribeParameters.Request(names=['defect_windows'])).descriptors[0]
+    assert descriptor.type == ParameterType.PARAMETER_INTEGER and not descriptor.read_only
+    assert (descriptor.integer_range[0].from_value, descriptor.integer_range[0].to_value) == (1, 1000)
+    assert 'surface defect' in descriptor.description
+
+    def set_to(value):
+        request = SetParameters.Request(parameters=[ParameterMsg(name='defect_windows', value=ParameterValue(
+            type=ParameterType.PARAMETER_INTEGER, integer_value=value))])
+        return call(probe, SetParameters, f'{base}/set_parameters', request).results[0]
+    assert set_to(25).successful and node.channels[0].surface.windows == 25
+    refused = set_to(0)
+    assert not refused.successful and refused.reason and node.channels[0].surface.windows == 25

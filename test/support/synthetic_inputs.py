@@ -61,3 +61,27 @@ def merge(batches):
     cls = type(first)
     fields = [*first.__dataclass_fields__]
     return cls(*[np.concatenate([getattr(b, f) for b in batches]) for f in fields])
+
+
+def defect_vibration(t, speed, rms=1.0, strike=0.0, order=6.25, mode=1000.0, decay=0.002, seed=0):
+    """Gaussian vibration of ``rms`` at sample times ``t`` (s) plus a spall's strikes: ``order`` per screw revolution.
+
+    The screw turns at ``speed`` rad/s from angle 0 at t = 0; each strike rings a
+    structural mode of ``mode`` Hz decaying with time constant ``decay`` s, peak
+    ``strike`` m/s^2 (0: healthy), with a strike-to-strike scatter of 20 % in
+    amplitude and 2 % of the strike period in time, as a rolling contact gives.
+    """
+    t = np.asarray(t, dtype=float)
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal(t.size) * rms
+    if strike > 0 and t.size:
+        period = 2 * math.pi / (speed * order)
+        first, last = math.floor(t[0] / period) - 1, math.ceil(t[-1] / period)
+        for k in range(first, last + 1):
+            k_rng = np.random.default_rng([seed, k + 10 ** 6])   # the same strike whichever block holds it
+            at = k * period + 0.02 * period * k_rng.standard_normal()
+            size = strike * (1 + 0.2 * k_rng.standard_normal())
+            lo, hi = np.searchsorted(t, [at, at + 10 * decay])
+            dt = t[lo:hi] - at
+            x[lo:hi] += size * np.exp(-dt / decay) * np.sin(2 * math.pi * mode * dt)
+    return x

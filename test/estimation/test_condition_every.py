@@ -1,0 +1,35 @@
+# Copyright 2026 prsm_lube_ros developers
+# SPDX-License-Identifier: Apache-2.0
+"""WindowSettings.condition_every: the condition indicators on every k-th window of the grid only, the rest alike."""
+import pytest
+
+from prsm_lube_ros.errors import InputError
+from prsm_lube_ros.estimation.conditioning import DEFAULT_BAND
+from prsm_lube_ros.estimation.windowing import WindowBuilder, WindowSettings
+
+import synthetic_inputs
+
+
+def windows(**settings):
+    builder = WindowBuilder(WindowSettings(band=DEFAULT_BAND, **settings), lead=0.005)
+    for batch in synthetic_inputs.interleave(synthetic_inputs.run_streams(plateau=20.0, hold=8.0)):
+        builder.add(batch)
+    return [w for w in builder.pop_closed() + builder.finish() if w.steady]
+
+
+def test_every_second_window_has_indicators_and_every_window_its_rms():
+    every, second = windows(), windows(condition_every=2)
+    assert len(every) == len(second) >= 6
+    assert all(w.condition is not None for w in every)
+    for full, half in zip(every, second):
+        assert half.vibration_rms == full.vibration_rms
+        key = round(full.start / 1.0)
+        assert (half.condition is not None) == (key % 2 == 0)
+        if half.condition is not None:
+            assert half.condition.kurtosis == full.condition.kurtosis
+
+
+@pytest.mark.parametrize('bad', [0, -2, 1.5])
+def test_condition_every_must_be_a_positive_integer(bad):
+    with pytest.raises(InputError, match='condition_every'):
+        WindowSettings(condition_every=bad)
