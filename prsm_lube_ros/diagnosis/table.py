@@ -27,8 +27,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import InputError
-from ..estimation.defect_screen import strike_line
-from ..estimation.windowing import AT_REST, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, usable_windows
+from ..estimation.defect_screen import run_condition, strike_line
+from ..estimation.windowing import AT_REST, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 if TYPE_CHECKING:
@@ -45,7 +45,7 @@ TEMPERATURE_GAP = 30.0
 COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
 
 #: Optional columns of condition indicators (NaN where a window has none).
-INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order')
+INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'run_defect_db')
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
@@ -157,6 +157,9 @@ class WindowTable:
     crest_factor: np.ndarray | None = field(default=None, compare=False, repr=False)
     defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
     defect_order: np.ndarray | None = field(default=None, compare=False, repr=False)
+    #: The strongest strike-order line of the window's run, its windows' envelope spectra averaged (dB over the
+    #: floor, as the defect screen judges a run): one window's line reaches 10 dB by chance now and then.
+    run_defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
     #: The actuator's defect orders the envelope lines were labelled with.
     defect_orders: tuple[DefectOrder, ...] = ()
 
@@ -291,6 +294,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         run_offset += int(local_run.max()) + 1
         for name, values in zip(INDICATOR_COLUMNS, zip(*(_indicators(w, orders) for w in chosen))):
             rows[name].extend(values)
+        rows['run_defect_db'].extend(_run_lines(chosen, orders))
         for w in chosen:
             spectra.append(w.spectrum)
             if math.isfinite(w.spectrum_resolution):
@@ -309,6 +313,20 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
                        band_high=float(band_high), rest_windows=int(rest.size),
                        rest_rms=float(np.median(rest)) if rest.size >= REST_WINDOWS_NEEDED else math.nan,
                        defect_orders=orders, **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+
+
+def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> list[float]:
+    """For each window, the strongest strike-order line of its run's averaged envelope spectrum, dB.
+
+    0 where the run's spectrum shows none (none reaches the report level), NaN where its windows have none.
+    """
+    levels = {}
+    for run, members in runs_of(windows).items():
+        condition = run_condition([w.condition for w in members if w.condition is not None], orders)
+        line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
+        if condition.envelope is not None:   # no line reported: under the report level, taken as 0 dB
+            levels[run] = line.db if line is not None else 0.0
+    return [levels.get(w.run_index, math.nan) for w in windows]
 
 
 def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float]:

@@ -50,7 +50,7 @@ factor (see :mod:`prsm_lube_ros.estimation.extension`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import TYPE_CHECKING
 from collections.abc import Iterable, Sequence
@@ -105,7 +105,9 @@ class WindowAssessment:
     theta_oil_std: float
     reason: str = ''
     domain_flag: str = ''   # :func:`.domain.domain_flag` of an assessed window outside the calibration's domain
-    defect: DefectFinding = NOT_SUSPECTED   # surface defect screen of the window (:mod:`.defect_screen`)
+    #: The surface defect screen of the window's run (:meth:`Assessor.runs_screen_windows`): one window's
+    #: envelope is too noisy to judge alone (a quarter of healthy windows would trip it at low speed)
+    defect: DefectFinding = NOT_SUSPECTED
 
     @property
     def flag(self) -> str:
@@ -247,9 +249,16 @@ class Assessor:
                     reasons[rows[j]] = 'Eq. 23 has no finite value for this window'
         domain = self.calibration.domain
         return [WindowAssessment(w, t, s, r, domain_flag(domain, w.screw_speed, w.axial_load, w.temperature)
-                                 if domain is not None and t == t else '',
-                                 self.screen([w.condition])[1] if w.condition is not None else NOT_SUSPECTED)
+                                 if domain is not None and t == t else '')
                 for w, t, s, r in zip(windows, theta.tolist(), std.tolist(), reasons)]
+
+    @staticmethod
+    def runs_screen_windows(assessed: Sequence[WindowAssessment],
+                            runs: Sequence[RunAssessment]) -> list[WindowAssessment]:
+        """Each steady window with its run's defect finding (the screen judges pooled windows, not one)."""
+        findings = {run.run_index: run.defect for run in runs}
+        return [replace(item, defect=findings.get(item.window.run_index, NOT_SUSPECTED)) if item.window.steady
+                else item for item in assessed]
 
     def assess_runs(self, assessed: Sequence[WindowAssessment], bag: str = '') -> list[RunAssessment]:
         """One :class:`RunAssessment` per run that has steady windows, in run order."""

@@ -37,6 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 from typing import Any, TYPE_CHECKING
+import warnings
 
 import numpy as np
 
@@ -139,7 +140,8 @@ def run_condition(indicators: Sequence[ConditionIndicators], orders: Sequence[De
     spectra = [c.envelope for c in usable if c.envelope is not None]
     if not spectra:
         return RunCondition(kurt, crest, (), len(usable), math.nan)
-    with np.errstate(invalid='ignore'):
+    with np.errstate(invalid='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)    # orders no window reaches: NaN, said by none
         average = np.nanmean(np.vstack(spectra).astype(float), axis=0) if len(spectra) > 1 else spectra[0].astype(float)
     resolution = float(np.nanmedian([c.order_resolution for c in usable]))
     peaks = envelope_peaks(average, resolution, orders, RUN_REPORT_DB if len(spectra) > 1 else REPORT_DB)

@@ -201,7 +201,8 @@ def assess_recording(recording: RecordingWindows, calibration: Calibration,
     """theta_Oil of every window and every run of one recording."""
     assessor = Assessor(calibration, min_axial_load=min_axial_load, defect_orders=recording.defect_orders)
     windows = assessor.assess_windows(recording.windows)
-    return RecordingAssessment(recording.path, windows, assessor.assess_runs(windows, recording.path),
+    runs = assessor.assess_runs(windows, recording.path)
+    return RecordingAssessment(recording.path, assessor.runs_screen_windows(windows, runs), runs,
                                list(recording.problems))
 
 

@@ -101,7 +101,6 @@ from ..estimation.assessment import Assessor
 from ..estimation.calibration import Calibration
 from ..estimation.calibration_file import band_note, baseline_note, load_calibration, save_calibration
 from ..estimation.conditioning import band_text
-from ..estimation.defect_screen import NOT_SUSPECTED
 from ..estimation.health import HealthMonitor, HealthThresholds, LEVEL_NAMES, out_of_range, outside_domain, \
     uncalibrated
 from ..estimation.surface_health import DEFAULT_DEFECT_WINDOWS, defect_orders_text, SurfaceMonitor, withheld
@@ -346,20 +345,6 @@ class ActuatorChannel:
         return sum(self.builder.problem_summary().values()) + sum(self.input_errors.values())
 
 
-class _PooledScreenAssessor(Assessor):
-    """The node's Assessor: theta per window, without each window's own surface defect screen.
-
-    The node screens the pooled last ``defect_windows`` windows (:class:`SurfaceMonitor`); a window alone is
-    not judged (too noisy, see :mod:`..estimation.surface_health`), and its screen cost about 0.25 ms per
-    window of a 4 kHz actuator, a fifth of the live window path.  ``WindowAssessment.defect`` is therefore
-    always NOT_SUSPECTED here.
-    """
-
-    def screen(self, conditions):
-        """No per-window screen in the node (class doc)."""
-        return None, NOT_SUSPECTED
-
-
 class CalibrationWithdrawn(Exception):
     """A calibration action cancelled before it changed anything (waiting, or while reading the recordings)."""
 
@@ -544,8 +529,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
 
     def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
         band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
-        channel.assessor = _PooledScreenAssessor(calibration, min_axial_load=self._min_axial_load,
-                                                 defect_orders=self._defect_orders)
+        channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load,
+                                    defect_orders=self._defect_orders)
         channel.calibration_note = ''
         channel.last_domain_flag = ''
         rebuilt = band_changed and channel.builder.band != self._channel_settings(channel).band
