@@ -90,7 +90,7 @@ def test_the_browser_check_sees_a_figure_that_does_not_load(tmp_path):
 
 def test_a_failed_check_fails_the_demo(tmp_path, monkeypatch, capsys):
     """Exit status 1 and FAIL on the page when one step's check fails (the steps replaced by fixed results)."""
-    from prsm_lube_ros.cli import demo, demo_steps, main
+    from prsm_lube_ros.cli import demo, demo_defect, demo_steps, main
     from prsm_lube_ros.cli.demo_steps import StepResult
 
     def step(number, ok):
@@ -99,7 +99,8 @@ def test_a_failed_check_fails_the_demo(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(demo_steps, 'live_step', step(2, True))
     monkeypatch.setattr(demo_steps, 'diagnosis_step', step(3, False))
     monkeypatch.setattr(demo_steps, 'fleet_step', step(4, True))
+    monkeypatch.setattr(demo_defect, 'defect_step', step(5, True))
     assert main(['demo', '--out', str(tmp_path)]) == 1
     text = capsys.readouterr().out
-    assert 'step 3 FAIL' in text and 'DEMO: FAIL - 3/4 steps' in text
+    assert 'step 3 FAIL' in text and 'DEMO: FAIL - 4/5 steps' in text
     assert '<span class="fail">FAIL</span>' in Path(tmp_path / 'index.html').read_text()
