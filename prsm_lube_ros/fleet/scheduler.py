@@ -18,6 +18,7 @@ import socket
 import struct
 import time
 from collections.abc import Iterator
+import logging
 import warnings
 
 from ..errors import InputError
@@ -106,8 +107,10 @@ def dask_client(scheduler: str, workers: int, timeout: float = CONNECT_TIMEOUT) 
         if scheduler == LOCAL_SCHEDULER:
             with warnings.catch_warnings():     # its HTTP port taken by another cluster: it picks another, say nothing
                 warnings.filterwarnings('ignore', message='Port .* is already in use', category=UserWarning)
+                # silence_logs: a worker's heartbeat racing the cluster's close logs a traceback on stderr, which
+                # is no user's error (task errors reach the client as exceptions, and are one line there)
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
+                                       dashboard_address=None, silence_logs=logging.CRITICAL)
             client = Client(cluster, timeout=f'{timeout}s')
         else:
             probe_scheduler(scheduler, timeout)
