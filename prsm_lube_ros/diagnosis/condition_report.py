@@ -43,7 +43,7 @@ import numpy as np
 from ..atomic_file import write_atomically
 from ..errors import InputError
 from ..estimation.condition_indicators import FLOOR_LOWEST_ORDER, MAX_ORDER, ORDER_GRID, ORDER_STEP, order_spectrum_db
-from ..estimation.defect_screen import DEFAULT_RULES, strike_orders
+from ..estimation.defect_screen import DEFAULT_RULES, screen_limits, strike_orders
 from ..physics.defect_orders import label_order
 
 if TYPE_CHECKING:
@@ -429,12 +429,9 @@ class ConditionReport:
         from .. import condition_figures as figures
         x, _, label = _time_axis(np.array([r.start for r in runs]))
         rules, baseline = self.rules, self.baseline
-        impulsive = rules.healthy_kurtosis
+        impulsive, strong, crest = screen_limits(baseline, rules)
         limits = [(2, rules.envelope_db, f'periodic from {rules.envelope_db:g} dB'), (3, 1.0, 'reference state 1')]
         if baseline is not None:
-            impulsive = max(impulsive, rules.kurtosis_ratio * baseline.kurtosis_median)
-            strong = max(impulsive, baseline.kurtosis_max + rules.kurtosis_margin)
-            crest = max(rules.healthy_crest, rules.crest_ratio * baseline.crest_max)
             limits.append((1, crest, f'strongly impulsive from {crest:.2f}'))
             if strong > impulsive + 0.005:
                 limits.append((0, strong, f'strongly impulsive from {strong:.2f}'))

@@ -52,7 +52,7 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ConditionBaseline', 'DEFAULT_RULES', 'DefectFinding', 'DefectRules', 'NOT_SUSPECTED', 'RunCondition',
-           'STRIKE_COMPONENTS', 'run_condition', 'screen', 'strike_line', 'strike_orders']
+           'STRIKE_COMPONENTS', 'run_condition', 'screen', 'screen_limits', 'strike_line', 'strike_orders']
 
 #: Components whose defect is struck by passing contacts (their order is a strike rate).
 STRIKE_COMPONENTS = ('screw raceway', 'nut raceway', 'roller', 'support bearing outer race',
@@ -246,19 +246,26 @@ class DefectFinding:
 NOT_SUSPECTED = DefectFinding(False, '')
 
 
+def screen_limits(baseline: ConditionBaseline | None,
+                  rules: DefectRules = DEFAULT_RULES) -> tuple[float, float, float]:
+    """The screen's limits: (impulsive kurtosis, strongly impulsive kurtosis, strongly impulsive crest factor).
+
+    Without a baseline only the absolute term holds: the strong limits are infinite.
+    """
+    if baseline is None:
+        return rules.healthy_kurtosis, math.inf, math.inf
+    impulsive = max(rules.healthy_kurtosis, rules.kurtosis_ratio * baseline.kurtosis_median)
+    return (impulsive, max(impulsive, baseline.kurtosis_max + rules.kurtosis_margin),
+            max(rules.healthy_crest, rules.crest_ratio * baseline.crest_max))
+
+
 def screen(condition: RunCondition, orders: Sequence[DefectOrder], baseline: ConditionBaseline | None,
            rules: DefectRules = DEFAULT_RULES) -> DefectFinding:
     """Whether ``condition`` shows a surface defect (see module doc for the rule)."""
     if not math.isfinite(condition.kurtosis):
         return NOT_SUSPECTED
     kurt, crest = condition.kurtosis, condition.crest_factor
-    kurt_limit = rules.healthy_kurtosis
-    strong_kurt_limit = math.inf
-    strong_crest_limit = math.inf
-    if baseline is not None:
-        kurt_limit = max(kurt_limit, rules.kurtosis_ratio * baseline.kurtosis_median)
-        strong_kurt_limit = max(kurt_limit, baseline.kurtosis_max + rules.kurtosis_margin)
-        strong_crest_limit = max(rules.healthy_crest, rules.crest_ratio * baseline.crest_max)
+    kurt_limit, strong_kurt_limit, strong_crest_limit = screen_limits(baseline, rules)
     impulsive = kurt >= kurt_limit
     strongly_impulsive = kurt >= strong_kurt_limit or (math.isfinite(crest) and crest >= strong_crest_limit)
     line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)

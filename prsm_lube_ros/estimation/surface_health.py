@@ -43,7 +43,8 @@ import math
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
-from .defect_screen import DEFAULT_RULES, DefectFinding, NOT_SUSPECTED, run_condition, screen, STRIKE_COMPONENTS
+from .defect_screen import (DEFAULT_RULES, DefectFinding, NOT_SUSPECTED, run_condition, screen, screen_limits,
+                            STRIKE_COMPONENTS)
 from .health import ERROR, LEVEL_NAMES, OK, STALE, WARN
 
 if TYPE_CHECKING:
@@ -80,9 +81,7 @@ class SurfaceStatus:
 
 def kurtosis_limit(baseline: ConditionBaseline | None, rules: DefectRules = DEFAULT_RULES) -> float:
     """Kurtosis from which :func:`~.defect_screen.screen` calls a pool impulsive (its first rule)."""
-    if baseline is None:
-        return rules.healthy_kurtosis
-    return max(rules.healthy_kurtosis, rules.kurtosis_ratio * baseline.kurtosis_median)
+    return screen_limits(baseline, rules)[0]
 
 
 def nominal_order(component: str, orders: Sequence[DefectOrder]) -> float:
