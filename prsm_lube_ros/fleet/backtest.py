@@ -12,7 +12,9 @@ first relubrication after the cut (which the forecast cannot know of):
   confidence);
 * crossings: where the later recordings cross a level (interpolated between
   the last one above and the first one below), whether that time lies inside
-  the forecast interval, and the error of the estimate in days.
+  the forecast interval widened by the time measurement noise moves it (the
+  recordings' own one-sigma over the forecast's fall rate, at the same
+  confidence, as the band is widened), and the error of the estimate in days.
 
 Coverage near the stated confidence says the intervals mean what they say.
 Each crossing is scored with its horizon, the days from the cut to the
@@ -209,9 +211,10 @@ def _score(forecast: ActuatorForecast, points: Sequence[RecordingPoint], cut: fl
     result.later = len(later)
     result.inside_band = sum(_inside_band(forecast, p) for p in later)
     for crossing in forecast.crossings:
-        seen = _observed_crossing(before[-1:] + later, crossing.level, two_sided_quantile(forecast.confidence))
+        seen = _observed_crossing(before[-1:] + later, crossing.level)
         if seen is not None:
-            observed, slack = seen
+            observed, noise, local_slope = seen
+            slack = _timing_slack(forecast, crossing.level, noise, local_slope)
             high = math.inf if crossing.high is None else crossing.high
             low = -math.inf if crossing.low is None else crossing.low
             inside = crossing.low is not None and crossing.low - slack <= observed <= high + slack
@@ -230,18 +233,31 @@ def _inside_band(forecast: ActuatorForecast, point: RecordingPoint) -> bool:
     return abs(math.log(point.theta_oil) - math.log(centre)) <= spread
 
 
-def _observed_crossing(points: Sequence[RecordingPoint], level: float, z: float) -> tuple[float, float] | None:
-    """Time the measured theta_Oil first falls below ``level`` (interpolated) and its uncertainty (s); None if never.
+def _observed_crossing(points: Sequence[RecordingPoint], level: float) -> tuple[float, float, float] | None:
+    """The measured theta_Oil's first fall below ``level``: interpolated time, its theta one-sigma, local slope.
 
-    The uncertainty is ``z`` times the recordings' own one-sigma over the
-    slope between them (a time), at most the gap between them: measurement
-    noise moves where the measured values cross a level.
+    The one-sigma is that of the interpolated value (the bracketing
+    recordings' own), the slope (theta per s, > 0 falling) that between them;
+    None when the values never fall below ``level``.
     """
     for before, after in zip(points, points[1:]):
         if before.theta_oil > level >= after.theta_oil:
             share = (before.theta_oil - level) / (before.theta_oil - after.theta_oil)
             gap = after.time - before.time
-            slope = (before.theta_oil - after.theta_oil) / max(gap, 1e-9)
             noise = math.hypot((1.0 - share) * before.independent_std, share * after.independent_std)
-            return before.time + share * gap, min(z * noise / slope, gap)
+            return before.time + share * gap, noise, (before.theta_oil - after.theta_oil) / max(gap, 1e-9)
     return None
+
+
+def _timing_slack(forecast: ActuatorForecast, level: float, noise: float, local_slope: float) -> float:
+    """How far (s) measurement noise moves a measured crossing: ``z`` one-sigmas of theta over theta's fall rate.
+
+    The fall rate is the forecast's own drift at the level (k theta), the
+    bracketing recordings' slope without one: that slope is steepest exactly
+    where a recording's noise dips below the level, and would make the slack
+    smallest where it is needed most.
+    """
+    z = two_sided_quantile(forecast.confidence)
+    drift = forecast.state[1] / DAY if forecast.state is not None else 0.0
+    slope = drift * level if drift > 0 else local_slope
+    return z * noise / slope if slope > 0 else math.inf
