@@ -142,8 +142,8 @@ def horizon_coverage(results: Sequence[Backtest], horizons: Sequence[float] = HO
         for horizon in horizons:
             chosen = [c for c in scores if math.isclose(c.level, level)
                       and horizon_class(c.horizon_days, horizons) == horizon]
-            table.append(HorizonCoverage(level, horizon, len(chosen), sum(c.inside for c in chosen),
-                                         sum(not c.estimate_inside for c in chosen)))
+            table.append(HorizonCoverage(float(level), float(horizon), len(chosen), int(sum(c.inside for c in chosen)),
+                                         int(sum(not c.estimate_inside for c in chosen))))
     return table
 
 
@@ -217,9 +217,9 @@ def _score(forecast: ActuatorForecast, points: Sequence[RecordingPoint], cut: fl
             slack = _timing_slack(forecast, crossing.level, noise, local_slope)
             high = math.inf if crossing.high is None else crossing.high
             low = -math.inf if crossing.low is None else crossing.low
-            inside = crossing.low is not None and crossing.low - slack <= observed <= high + slack
+            inside = bool(crossing.low is not None and crossing.low - slack <= observed <= high + slack)
             error = None if crossing.time is None else (crossing.time - observed) / DAY
-            estimate_inside = crossing.time is None or low <= crossing.time <= high
+            estimate_inside = bool(crossing.time is None or low <= crossing.time <= high)
             result.crossings.append(CrossingScore(crossing.level, observed, inside, error, (observed - cut) / DAY,
                                                   estimate_inside))
     return result
