@@ -144,3 +144,19 @@ def test_a_relubrication_placed_before_the_cut_but_after_the_last_recording_ends
     cut_days = (newest - 0.5 * (points[-1].time + refill[0].time)) / DAY - 0.01
     result = backtest({'A': gap_free}, cut_days, levels=(0.85, 0.70))
     assert result.actuators[0].later == 0 and not result.actuators[0].crossings
+
+
+def test_the_horizon_study_writes_its_tables_and_a_json_a_plain_reader_loads(tmp_path):
+    from prsm_lube_ros.experiments.fleet_study import main
+    status = main(['--out', str(tmp_path / 'out'), '--results', str(tmp_path / 'results'), '--horizons', '3', '7',
+                   '--synthetic', '--seeds', '5', '--actuators', '4', '--days', '16', '--step', '4'])
+    document = json.loads((tmp_path / 'results' / 'results.json').read_text())
+    assert status == (0 if document['pass'] else 1)
+    assert document['horizons'] == [3.0, 7.0] and document['estimates_outside'] == 0
+    table = document['coverage']['truth']
+    assert [(c['level'], c['horizon_days']) for c in table] == [(0.85, 3.0), (0.85, 7.0), (0.7, 3.0), (0.7, 7.0)]
+    assert all(isinstance(c['inside'], int) and 0 <= c['inside'] <= c['scored'] for c in table)
+    conditions = document['fleets'][0]['conditions']
+    assert 0 <= conditions['recording_missed'] < 1 and conditions['relubricate_below_range'][0] >= 0.55
+    text = (tmp_path / 'results' / 'coverage.md').read_text()
+    assert '| 0.85 |' in text and '| 0.7 |' in text and '| 5 |' in text
