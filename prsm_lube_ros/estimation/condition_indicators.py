@@ -171,15 +171,18 @@ def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float
 
 def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: Sequence[float],
                                band: tuple[float, float], orders: Sequence[DefectOrder],
-                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None
-                               ) -> list[ConditionIndicators]:
+                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None,
+                               *, spectra: np.ndarray | None = None) -> list[ConditionIndicators]:
     """Indicators of windows of one length and rate at once: ``samples`` is (windows x samples), m/s^2.
 
     ``screw_speeds`` rad/s per window; ``tracks`` per window the
     ``(angle_times, angles)`` of order tracking (None: none).  The FFTs run
     over the whole array (the cost is the numpy calls, not the windows).
+    ``spectra``: the rows' ``numpy.fft.rfft`` when the caller has it already
+    (the window builder's band RMS), used instead of transforming again
+    (it is not changed); ``samples`` then only gives the windows' length.
     """
-    x = np.asarray(samples, dtype=float)
+    x = np.asarray(samples) if spectra is not None else np.asarray(samples, dtype=float)
     count, n = x.shape
     if n < MIN_SAMPLES or not rate > 0:
         return [NO_INDICATORS] * count
@@ -187,10 +190,10 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     chunk = max(1, BATCH_SAMPLES // n)
     if count > chunk:    # arrays that stay in cache: a few hundred thousand samples at a time
         return [item for start in range(0, count, chunk)
-                for item in condition_indicators_batch(x[start:start + chunk], rate,
-                                                       screw_speeds[start:start + chunk], band, orders,
-                                                       tracks[start:start + chunk])]
-    spec = np.fft.rfft(x, axis=1)
+                for item in condition_indicators_batch(
+                    x[start:start + chunk], rate, screw_speeds[start:start + chunk], band, orders,
+                    tracks[start:start + chunk], spectra=None if spectra is None else spectra[start:start + chunk])]
+    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra.copy()
     spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
