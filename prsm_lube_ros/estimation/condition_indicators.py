@@ -213,14 +213,18 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
     min_bins = np.maximum(np.ceil(ENVELOPE_HARMONICS * highest * np.where(moving, shaft_hz, 0.0) / df), 8)
     sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
+    enveloped = [k for k in range(count) if moving[k] and math.isfinite(sk[k])]
+    envelopes = _envelopes(spec, first, last, n, enveloped)
+    spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate, [float(shaft_hz[k]) for k in enveloped],
+                             [tracks[k] for k in enveloped])
+    by_window = dict(zip(enveloped, spectra))
     out = []
     for k in range(count):
-        if not moving[k] or not math.isfinite(sk[k]):
+        if k not in by_window:
             out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
                                            math.nan))
             continue
-        envelope = np.abs(_complex_envelope(spec[k], int(first[k]), int(last[k]), n))
-        grid, resolution = _order_spectrum(envelope, n / rate, float(shaft_hz[k]), *tracks[k])
+        grid, resolution = by_window[k]
         out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
                                        (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
     spectral = [k for k, item in enumerate(out) if item.envelope is not None]
@@ -259,14 +263,18 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         allowed = bins >= min_bins
         if not allowed.any():
             break
+        rows = np.flatnonzero(allowed)      # the windows this level still serves
         size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        shifted = np.zeros((count, parts, size), dtype=complex)
-        shifted[:, :, :bins] = spec[:, lo_bin:lo_bin + parts * bins].reshape(count, parts, bins)
-        power = np.abs(np.fft.ifft(shifted, axis=2)) ** 2
+        shifted = np.zeros((rows.size, parts, size), dtype=complex)
+        shifted[:, :, :bins] = spec[rows, lo_bin:lo_bin + parts * bins].reshape(rows.size, parts, bins)
+        envelope = np.fft.ifft(shifted, axis=2)
+        power = envelope.real * envelope.real + envelope.imag * envelope.imag     # |z|^2
         mean = power.mean(axis=2)
         with np.errstate(divide='ignore', invalid='ignore'):
-            sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
-        sk -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+            sk_rows = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+        sk = np.full((count, parts), -np.inf)
+        sk[rows] = sk_rows
         part = np.argmax(sk, axis=1)
         value = sk[np.arange(count), part]
         better = allowed & (value > best_sk + 1e-12)
@@ -277,24 +285,58 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     return best_sk, first, last
 
 
-def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
-    """The band's analytic signal shifted to 0 Hz and decimated, m/s^2: bins ``first..last`` inverse-transformed.
+def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
+               rows: Sequence[int]) -> dict[int, np.ndarray]:
+    """Hilbert envelope ``|z|`` (m/s^2) of band ``first[k]..last[k]`` of each window ``k`` in ``rows``.
 
-    ``spec`` is the rfft of ``n`` samples; ``|z|`` is the band's Hilbert envelope.
+    ``spec`` holds the rfft of ``n`` samples a row; ``z`` is the band's analytic
+    signal shifted to 0 Hz and decimated: its bins inverse-transformed (the
+    windows whose bands are equally wide in one inverse FFT).
     """
-    count = last - first + 1
-    size = 1 << int(math.ceil(math.log2(max(2 * count, 8))))
-    shifted = np.zeros(size, dtype=complex)
-    shifted[:count] = spec[first:last + 1]
-    return np.fft.ifft(shifted) * (2.0 * size / n)
+    by_width: dict[int, list[int]] = {}
+    for k in rows:
+        by_width.setdefault(int(last[k] - first[k] + 1), []).append(k)
+    envelopes = {}
+    for width, members in by_width.items():
+        size = 1 << int(math.ceil(math.log2(max(2 * width, 8))))
+        index = np.array(members)
+        shifted = np.zeros((index.size, size), dtype=complex)
+        shifted[:, :width] = spec[index[:, None], first[index][:, None] + np.arange(width)]
+        found = np.abs(np.fft.ifft(shifted, axis=1) * (2.0 * size / n))
+        envelopes.update(zip(members, found))
+    return envelopes
 
 
-def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
-                    angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
-    """Envelope power spectrum on :data:`ORDER_GRID` and its resolution in orders.
+def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: Sequence[float],
+                   tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]]
+                   ) -> list[tuple[np.ndarray, float]]:
+    """Envelope power spectrum on :data:`ORDER_GRID` and its resolution in orders, per envelope.
 
     With the screw angle through the window the envelope is first resampled
-    to uniform angle (order tracking); otherwise orders are Hz / ``shaft_hz``.
+    to uniform angle (order tracking, :func:`_angle_resampled`); otherwise
+    orders are Hz / ``shaft_hz``.  Envelopes of one length are transformed together.
+    """
+    resampled = [_angle_resampled(envelope, duration, hz, *track)
+                 for envelope, hz, track in zip(envelopes, shaft_hz, tracks)]
+    by_size: dict[int, list[int]] = {}
+    for k, (values, _) in enumerate(resampled):
+        by_size.setdefault(values.size, []).append(k)
+    out: list[tuple[np.ndarray, float]] = [(np.zeros(0), math.nan)] * len(resampled)
+    for m, members in by_size.items():
+        values = np.vstack([resampled[k][0] for k in members])
+        power = np.abs(np.fft.rfft(values - values.mean(axis=1, keepdims=True), axis=1)) ** 2 / m ** 2
+        bins = np.arange(power.shape[1])
+        for k, row in zip(members, power):
+            revolutions = resampled[k][1]
+            out[k] = (np.interp(ORDER_GRID, bins / revolutions, row, right=math.nan), 1.0 / revolutions)
+    return out
+
+
+def _angle_resampled(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
+                     angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
+    """The envelope at uniform screw angle where the angle through the window is known, and the revolutions.
+
+    Otherwise the envelope as it is and ``duration * shaft_hz`` revolutions.
     """
     m = envelope.size
     times = np.arange(m) * (duration / m)
@@ -309,10 +351,7 @@ def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angl
                 uniform = np.linspace(angle[0], angle[-1], m)
                 values = np.interp(uniform, angle, envelope)
                 revolutions = (angle[-1] - angle[0]) / (2.0 * math.pi) * m / max(m - 1, 1)
-    power = np.abs(np.fft.rfft(values - values.mean())) ** 2 / m ** 2
-    bin_orders = np.arange(power.size) / revolutions
-    grid = np.interp(ORDER_GRID, bin_orders, power, right=math.nan)
-    return grid, 1.0 / revolutions
+    return values, revolutions
 
 
 def envelope_floor(grid: np.ndarray) -> float:
