@@ -109,9 +109,11 @@ from ..fleet.forecast_summary import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..physics.defect_orders import defect_orders as actuator_defect_orders
+from ..recording.batches import VibrationBatch
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
+from .raw_vibration import join_blocks, raw_vibration_converter
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 
@@ -488,7 +490,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
         converters = {
-            'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),
+            # Raw CDR bytes, decoded straight into numpy (raw_vibration.py): no Python message is built.
+            'vibration': (VibrationBlock, raw_vibration_converter(topics['vibration'],
+                                                                  lambda frame: self._note_frame(channel, frame))),
             'joint_states': (JointState, lambda m: ros_convert.screw_batch(m, topics['joint_states'], joint)),
             'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
@@ -497,7 +501,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         holder = {}
         holder['vibration'] = self.create_subscription(
             msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
-            callback_group=self._input_group)
+            callback_group=self._input_group, raw=True)
         for key, (msg_type, convert) in converters.items():
             if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
                 self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
@@ -562,16 +566,20 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         of it is one time slice: the builder closes windows once, after the
         slice, so no stream is judged silent halfway through it.
         """
-        def callback(msg):
+        def callback(data):
             with self._lock:
                 channel.monitor.note_input(self.now())
-                channel.frame_id = msg.header.frame_id or channel.frame_id
                 self._drain_auxiliary(channel)
-                self._take(channel, 'vibration', convert, msg)
-                for queued in self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN):
-                    self._take(channel, 'vibration', convert, queued)
+                # The blocks of this wake-up go to the builder as one batch (split where stamps go back).
+                self._take_queued(channel, 'vibration', convert,
+                                  [data, *self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN)])
                 self._close_windows(channel)
         return callback
+
+    @staticmethod
+    def _note_frame(channel: ActuatorChannel, frame_id: str):
+        """Keep the sensor frame of the actuator's last vibration block (its outputs' frame)."""
+        channel.frame_id = frame_id or channel.frame_id
 
     def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
         """Plain callback of one auxiliary input, used only when the fast drain is off."""
@@ -1086,6 +1094,8 @@ def join_batches(batches: list):
     if len(batches) == 1:
         return batches[0]
     first = batches[0]
+    if isinstance(first, VibrationBatch):       # blocks of many samples each: offsets shift
+        return join_blocks(batches)
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
 
 
