@@ -24,8 +24,8 @@ if TYPE_CHECKING:
     from ..estimation.pipeline import RecordingWindows
     from ..physics.actuator import Actuator
 
-__all__ = ['EXIT_USER_ERROR', 'add_band_option', 'add_recording_options', 'percent_updater', 'progress_bar',
-           'json_pieces', 'read_recordings', 'warn', 'write_json']
+__all__ = ['EXIT_USER_ERROR', 'HiddenBar', 'add_band_option', 'add_recording_options', 'json_pieces',
+           'percent_updater', 'progress_bar', 'read_recordings', 'warn', 'write_json']
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -40,8 +40,14 @@ def add_recording_options(parser: argparse.ArgumentParser) -> None:
                         help='actuator geometry (default: the contract\'s default actuator)')
 
 
-def progress_bar(total: int, description: str, unit: str = '%') -> tqdm:
-    """A tqdm bar on stderr that hides itself when stderr is not a terminal; counts ``unit`` (default percent)."""
+def progress_bar(total: int, description: str, unit: str = '%') -> tqdm | HiddenBar:
+    """A tqdm bar on stderr, hidden when stderr is not a terminal; counts ``unit`` (default percent).
+
+    Hidden, it is a :class:`HiddenBar` and tqdm is not imported (a script or a
+    pipe pays nothing for a bar nobody sees).
+    """
+    if not _stderr_is_terminal():
+        return HiddenBar()
     from tqdm import tqdm
     if unit != '%':
         return tqdm(total=total, desc=description, unit=unit, disable=None, leave=False)
@@ -49,7 +55,29 @@ def progress_bar(total: int, description: str, unit: str = '%') -> tqdm:
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 
 
-def percent_updater(bar: tqdm) -> Callable[[float], None]:
+class HiddenBar:
+    """The bar when stderr is no terminal: counts (``n``, as tqdm) and shows nothing."""
+
+    def __init__(self) -> None:
+        self.n: float = 0
+
+    def update(self, n: float = 1) -> None:
+        """Count ``n`` more."""
+        self.n += n
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+def _stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal (tqdm's ``disable=None`` test)."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):      # replaced or closed stderr
+        return False
+
+
+def percent_updater(bar: tqdm | HiddenBar) -> Callable[[float], None]:
     """A ``progress(fraction)`` callback that advances ``bar`` in whole percent."""
     last = [0]
 
