@@ -113,7 +113,7 @@ from ..recording.batches import VibrationBatch
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .raw_vibration import join_blocks, raw_vibration_converter
+from .raw_inputs import join_blocks, raw_load_converter, raw_screw_converter, raw_vibration_converter, RAW_INPUTS
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 
@@ -490,11 +490,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
                   for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
         converters = {
-            # Raw CDR bytes, decoded straight into numpy (raw_vibration.py): no Python message is built.
+            # Raw CDR bytes, decoded straight into numpy (raw_inputs.py): no Python message is built.
             'vibration': (VibrationBlock, raw_vibration_converter(topics['vibration'],
                                                                   lambda frame: self._note_frame(channel, frame))),
-            'joint_states': (JointState, lambda m: ros_convert.screw_batch(m, topics['joint_states'], joint)),
-            'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
+            'joint_states': (JointState, raw_screw_converter(topics['joint_states'], joint)),
+            'axial_load': (WrenchStamped, raw_load_converter(topics['axial_load'])),
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
         }
         msg_type, convert = converters.pop('vibration')
@@ -503,15 +503,16 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
             callback_group=self._input_group, raw=True)
         for key, (msg_type, convert) in converters.items():
+            raw = key in RAW_INPUTS
             if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
                 self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
-                                         qos, callback_group=self._input_group)
+                                         qos, callback_group=self._input_group, raw=raw)
                 continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
             subscription = self.create_subscription(
                 msg_type, topics[key], self._fast.never_called, qos, callback_group=self._fast.group,
-                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False), raw=raw)
             channel.auxiliary.append((key, subscription, convert))
 
     def _load_initial_calibration(self, channel: ActuatorChannel):
