@@ -215,9 +215,9 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
     enveloped = [k for k in range(count) if moving[k] and math.isfinite(sk[k])]
     envelopes = _envelopes(spec, first, last, n, enveloped)
-    spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate, [float(shaft_hz[k]) for k in enveloped],
-                             [tracks[k] for k in enveloped])
-    by_window = dict(zip(enveloped, spectra))
+    order_spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate,
+                                   [float(shaft_hz[k]) for k in enveloped], [tracks[k] for k in enveloped])
+    by_window = dict(zip(enveloped, order_spectra))
     out = []
     for k in range(count):
         if k not in by_window:
@@ -296,7 +296,7 @@ def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
     by_width: dict[int, list[int]] = {}
     for k in rows:
         by_width.setdefault(int(last[k] - first[k] + 1), []).append(k)
-    envelopes = {}
+    envelopes: dict[int, np.ndarray] = {}
     for width, members in by_width.items():
         size = 1 << int(math.ceil(math.log2(max(2 * width, 8))))
         index = np.array(members)
