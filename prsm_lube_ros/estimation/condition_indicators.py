@@ -268,10 +268,11 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         shifted = np.zeros((rows.size, parts, size), dtype=complex)
         shifted[:, :, :bins] = spec[rows, lo_bin:lo_bin + parts * bins].reshape(rows.size, parts, bins)
         envelope = np.fft.ifft(shifted, axis=2)
-        power = envelope.real * envelope.real + envelope.imag * envelope.imag     # |z|^2
+        power = np.multiply(envelope.real, envelope.real)      # |z|^2, in place of temporaries
+        power += np.square(envelope.imag)
         mean = power.mean(axis=2)
         with np.errstate(divide='ignore', invalid='ignore'):
-            sk_rows = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+            sk_rows = np.where(mean > 0, np.square(power, out=power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
         sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
         sk = np.full((count, parts), -np.inf)
         sk[rows] = sk_rows
@@ -362,9 +363,26 @@ def envelope_floor(grid: np.ndarray) -> float:
 def _floors(grids: np.ndarray) -> np.ndarray:
     """:func:`envelope_floor` of each row."""
     part = grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER]
-    with np.errstate(invalid='ignore'), warnings.catch_warnings():
-        warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
-        return np.nanmedian(part, axis=1)
+    # An order spectrum is NaN only above the highest order it holds: the median of each row's finite head,
+    # rows of one head length at once (np.nanmedian goes row by row); other rows the general way.
+    finite = np.isfinite(part)
+    heads = finite.sum(axis=1)
+    plain = finite[np.arange(part.shape[0]), np.maximum(heads - 1, 0)] & (heads > 0)
+    plain &= ~finite[np.arange(part.shape[0]), np.minimum(heads, part.shape[1] - 1)] | (heads == part.shape[1])
+    floors = np.full(part.shape[0], math.nan)
+    for head in np.unique(heads[plain]).tolist():
+        rows = np.flatnonzero(plain & (heads == head))
+        head_rows = part[rows, :head]
+        if np.isfinite(head_rows).all():
+            floors[rows] = np.median(head_rows, axis=1)
+        else:
+            plain[rows] = False
+    other = np.flatnonzero(~plain)
+    if other.size:
+        with np.errstate(invalid='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
+            floors[other] = np.nanmedian(part[other], axis=1)
+    return floors
 
 
 def order_spectrum_db(grid: np.ndarray) -> np.ndarray:
