@@ -41,8 +41,10 @@ The envelope spectrum is also kept on the fixed order grid :data:`ORDER_GRID`
 (float32), so windows of different speeds average into one run spectrum
 (:mod:`.defect_screen` does it) and a report can draw a waterfall.
 
-Costs about a band-RMS FFT plus one inverse FFT per band of the tree (each as
-long as its band), a few ms for a 1 s window at 25.6 kHz.  Pure numpy.
+Costs one inverse FFT per band of the tree (each as long as its band) and the
+envelope's transforms, a few ms for a 1 s window at 25.6 kHz; the window's own
+FFT is the band RMS's, which the window builder hands over (``spectra``), and
+every transform runs over the windows of one size at once.  Pure numpy.
 """
 from __future__ import annotations
 
