@@ -23,7 +23,7 @@ raw RMS instead (files from before analysis bands: no indicators), the load
 this benchmark measured before issue 34.
 
 Inside the estimator, ``arrival`` is the entry of an executor callback (after
-rclpy has taken and deserialized its message); ``latency`` is from the arrival
+rclpy has taken its message: raw bytes for the estimator's raw subscriptions); ``latency`` is from the arrival
 of the callback that closes a window to the return of that window's
 ``LubricationState`` ``publish()`` (whatever the callback drains from other
 queues first is inside it).  ``close delay`` is wall time at that return minus
@@ -400,8 +400,8 @@ def markdown(results: dict) -> str:
                 'analysis band and healthy baseline: condition indicators on every '
                 f'{results.get("condition_every", 1)}. window, surface defect screen on.')
              + f' Commit {results.get("commit", "?")}.', '',
-             'Latency: entry of the executor callback that closes a window (after rclpy took and deserialized '
-             'its message; any queues the callback drains are inside the latency) to the return of the '
+             'Latency: entry of the executor callback that closes a window (after rclpy took its message, raw or '
+             'deserialized; any queues the callback drains are inside the latency) to the return of the '
              'LubricationState `publish()`. Close delay: wall time at that return minus (window end + '
              'completion_delay), the earliest moment every input of the window can have been sent; it also '
              'counts transport, waiting for the closing callback, and one block (0.1 s): a stream has passed a '
