@@ -133,7 +133,7 @@ class _Cursor:
         return value
 
     def string(self) -> bytes:
-        """A CDR string (length with its NUL, then the bytes)."""
+        """The next CDR text: its length (NUL included), then its bytes, returned without the NUL."""
         length = self.read('I', 4)
         text = self.data[self.at:self.at + length - 1]
         self.at += length
