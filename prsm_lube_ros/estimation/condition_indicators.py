@@ -202,14 +202,7 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
     if hi_bin - lo_bin < 8:
         return [NO_INDICATORS] * count
-    in_band = np.zeros_like(spec)
-    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n, axis=1)
-    squares = signal * signal
-    power = squares.mean(axis=1)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
-        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    kurt, crest = _impulsiveness(spec, lo_bin, hi_bin, n)
     shaft_hz = np.abs(np.asarray(screw_speeds, dtype=float)) / (2.0 * math.pi)
     moving = np.isfinite(shaft_hz) & (shaft_hz > 0)
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
@@ -235,6 +228,19 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
         for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
             out[k] = replace(out[k], envelope_peaks=peaks)
     return out
+
+
+def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Kurtosis and crest factor of each window's signal in bins ``lo_bin..hi_bin`` of its rfft ``spec`` (n samples)."""
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
+    signal = np.fft.irfft(in_band, n, axis=1)
+    squares = signal * signal
+    power = squares.mean(axis=1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    return kurt, crest
 
 
 def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
