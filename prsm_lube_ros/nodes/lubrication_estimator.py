@@ -69,6 +69,7 @@ left out and reported once per kind.
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field, fields, replace
 import math
 import os
@@ -88,8 +89,9 @@ from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
@@ -114,6 +116,7 @@ from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
+from .topic_status import RateSettings, StampSettings, TopicStatus
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -134,6 +137,7 @@ _DOUBLE = ParameterType.PARAMETER_DOUBLE
 _INTEGER = ParameterType.PARAMETER_INTEGER
 _STRING = ParameterType.PARAMETER_STRING
 _STRINGS = ParameterType.PARAMETER_STRING_ARRAY
+_BOOL = ParameterType.PARAMETER_BOOL
 
 #: Defaults of the window and health parameters: the dataclasses' own.
 _WINDOW, _HEALTH = WindowSettings(), HealthThresholds()
@@ -146,8 +150,16 @@ PARAMETERS = {
         '(reported resolved)', read_only=True),
     'hardware_ids': ParameterSpec(
         [''], _STRINGS,
-        'diagnostic hardware_id of each actuator, in the order of actuators (missing or empty: the actuator '
-        'name)', read_only=True),
+        'diagnostic hardware_id of each actuator, in the order of actuators: its serial or device id, unique in '
+        'the fleet (missing or empty: the actuator name, with one WARN at start-up)', read_only=True),
+    'autostart': ParameterSpec(
+        True, _BOOL,
+        'configure and activate at start-up (the node works at once); false: it waits unconfigured for a '
+        'lifecycle manager (ros2 lifecycle set, nav2_lifecycle_manager)', read_only=True),
+    'calibrate_enabled': ParameterSpec(
+        True, _BOOL,
+        'offer the calibrate service and action; false: neither exists on the graph (where swapping the live '
+        'calibration must not be reachable)', read_only=True),
     'calibration_file': ParameterSpec(
         '~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
         'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name with / as _ (e.g. '
@@ -222,9 +234,39 @@ PARAMETERS = {
         'last steady windows pooled for the surface defect screen (kurtosis, crest factor, envelope lines at the '
         "defect orders) against the calibration's healthy baseline; judged once that many are in, and a suspected "
         'defect clears only after that many clean judgements in a row', bounds=(1, 1000)),
+    'diagnostic_period': ParameterSpec(
+        1.0, _DOUBLE,
+        's of node clock between /diagnostics messages (also the period the input rates are counted in)',
+        bounds=(0.05, 60.0), read_only=True),
     'diagnostics_period': ParameterSpec(
         1.0, _DOUBLE,
-        's of node clock between /diagnostics messages', bounds=(0.05, 60.0), read_only=True),
+        'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
+        bounds=(0.05, 60.0), read_only=True),
+    'vibration_rate': ParameterSpec(
+        10.0, _DOUBLE,
+        'expected VibrationBlocks per s on <ns>/vibration (input status: WARN below it by more than '
+        'rate_tolerance; 0: only silence is judged)', bounds=(0.0, 1.0e6), read_only=True),
+    'joint_states_rate': ParameterSpec(
+        100.0, _DOUBLE, 'expected JointStates per s on <ns>/joint_states (as vibration_rate)', bounds=(0.0, 1.0e6),
+        read_only=True),
+    'axial_load_rate': ParameterSpec(
+        50.0, _DOUBLE, 'expected WrenchStampeds per s on <ns>/axial_load (as vibration_rate)', bounds=(0.0, 1.0e6),
+        read_only=True),
+    'temperature_rate': ParameterSpec(
+        0.0, _DOUBLE, 'expected Temperatures per s on <ns>/temperature (as vibration_rate; 0: optional input, '
+        'only its silence is reported)', bounds=(0.0, 1.0e6), read_only=True),
+    'rate_tolerance': ParameterSpec(
+        0.1, _DOUBLE, 'relative shortfall of an input rate that is still OK (diagnostic_updater tolerance)',
+        bounds=(0.0, 1.0), read_only=True),
+    'rate_window': ParameterSpec(
+        5, _INTEGER, 'diagnostic periods an input rate is measured over (diagnostic_updater window_size)',
+        bounds=(1, 1000), read_only=True),
+    'max_stamp_age': ParameterSpec(
+        5.0, _DOUBLE, 's a header stamp may trail the node clock at arrival before the input status is ERROR',
+        bounds=(0.001, 86400.0), read_only=True),
+    'max_future_stamp': ParameterSpec(
+        1.0, _DOUBLE, 's a header stamp may lie ahead of the node clock before the input status is ERROR',
+        bounds=(0.0, 86400.0), read_only=True),
     'vibration_topic': ParameterSpec(
         'vibration', _STRING,
         'vibration topic below each actuator namespace', read_only=True),
@@ -275,6 +317,35 @@ FIXED_REASONS = {
     'history_dir': 'it decides what the node reads',
     'actuator_file': 'it decides what the node reads',
 }
+
+
+#: The input streams of an actuator, as the ``<key>_topic`` and ``<key>_rate`` parameters name them.
+INPUT_KEYS = ('vibration', 'joint_states', 'axial_load', 'temperature')
+#: Every publisher and subscription offers the standard ``qos_overrides.<topic>.<publisher|subscription>.<policy>``
+#: parameters (history, depth, reliability, durability), read at creation.
+OVERRIDABLE = QoSOverridingOptions.with_default_policies()
+#: What an input status is called: '<node>: <actuator> <key> input'.
+INPUT_TASK = '{key} input'
+
+
+def hardware_ids(actuators: Sequence[str], configured: Sequence[str]) -> dict:
+    """actuator: its hardware_id, the ``hardware_ids`` entry at its index or (missing or empty) its name."""
+    return {name: configured_hardware_id(actuators, configured, name) or name.strip('/') or name
+            for name in actuators}
+
+
+def configured_hardware_id(actuators: Sequence[str], configured: Sequence[str], name: str) -> str:
+    """The ``hardware_ids`` entry of actuator ``name`` ('' when none is given)."""
+    i = list(actuators).index(name)
+    return str(configured[i]).strip() if i < len(configured) else ''
+
+
+def diagnostic_period(values: dict) -> float:
+    """``diagnostic_period``; the former ``diagnostics_period`` when only that one was changed."""
+    default = PARAMETERS['diagnostic_period'].default
+    if values['diagnostic_period'] == default:
+        return float(values['diagnostics_period'])
+    return float(values['diagnostic_period'])
 
 
 def actuator_label(actuator: str) -> str:
@@ -329,6 +400,8 @@ class ActuatorChannel:
     withheld_theta: float = math.nan                 # theta_Oil of the last window withheld for a surface defect
     withholding: bool = False                        # the last assessed window's theta was withheld
     last_surface_level: int | None = None
+    inputs: dict = field(default_factory=dict)       # input key: TopicStatus (rate and stamps), while active
+    subscriptions: dict = field(default_factory=dict)  # input key: its subscription, while active
 
     @property
     def status_name(self) -> str:
@@ -375,8 +448,15 @@ class CalibrationJob:
             return self.started
 
 
-class LubricationEstimator(ReadOnlyAfterStartUp, Node):
-    """The estimator node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`."""
+class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
+    """The estimator node, a lifecycle node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`.
+
+    Constructed with its parameters declared and checked; configure makes the
+    channels (calibrations loaded) and the publishers, activate the
+    subscriptions, calibrate services and actions and the timers; deactivate
+    takes those away again, cleanup the rest.  With ``autostart`` (the
+    default) the constructor configures and activates it: the node works at once.
+    """
 
     fixed_reasons = FIXED_REASONS
 
@@ -403,42 +483,146 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             raise InputError('parameter actuators: empty; name at least one namespace, e.g. [/prsm]')
         if len(set(actuators)) != len(actuators):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
+        self._actuator_names = actuators
+        self._hardware_ids = hardware_ids(actuators, list(values['hardware_ids']))
+        defaulted = [name for name in actuators if not configured_hardware_id(actuators, values['hardware_ids'], name)]
+        if defaulted:
+            self.get_logger().warning(
+                f'hardware_ids not set for {", ".join(defaulted)}: /diagnostics names them by actuator name, which '
+                'collides across a fleet; set hardware_ids to each actuator\'s serial or device id')
+        self._diagnostic_period = diagnostic_period(values)
+        self._rates = {key: RateSettings(expected=float(values[f'{key}_rate']),
+                                         tolerance=float(values['rate_tolerance']),
+                                         window=int(values['rate_window'])) for key in INPUT_KEYS}
+        self._stamp_settings = StampSettings(max_age=float(values['max_stamp_age']),
+                                             max_future=float(values['max_future_stamp']))
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
         self._fast = FastDrain(self.get_logger())
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
-                         reliability=ReliabilityPolicy.BEST_EFFORT)
-        hardware_ids = list(values['hardware_ids'])
+        self._arrival = 0.0                   # node-clock time of the input callback running (stamp ages)
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
         self._calibrate_services: list[Service] = []
         self._calibrate_actions: list[ActionServer] = []
-        for i, name in enumerate(actuators):
-            hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
-            self._add_actuator(name, hw, values, qos, first=i == 0)
-        self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
-        self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
-                                        callback_group=self._input_group)
-        # Steady clock: the auxiliary queues must be drained even when a simulated clock stands still.
-        self._drain_period = min(DRAIN_PERIOD, float(values['diagnostics_period']))
-        self._drain_timer = self.create_timer(self._drain_period, self._drain_idle, callback_group=self._input_group,
-                                              clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._input_subscriptions: list = []
+        self._timers_started: list = []
+        self._diagnostics = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
         self._history_dir = str(values['history_dir']).strip()
         if self._history_dir:
             threading.Thread(target=self._forecast_loop, args=(float(values['forecast_period']),),
                              name='forecast', daemon=True).start()
+        if values['autostart']:
+            for step, trigger in (('configure', self.trigger_configure), ('activate', self.trigger_activate)):
+                if trigger() != TransitionCallbackReturn.SUCCESS:
+                    raise InputError(f'autostart: {step} failed (see the log line before)')
+        else:
+            self.get_logger().info('autostart is false: unconfigured, waiting for a lifecycle manager '
+                                   '(ros2 lifecycle set ... configure, then activate)')
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """The actuators' channels (calibrations loaded) and the publishers: state and /diagnostics."""
+        try:
+            with self._lock:
+                self._open()
+        except InputError as exc:
+            self.get_logger().error(f'configure failed: {exc}')
+            self._close()
+            return TransitionCallbackReturn.FAILURE
+        self.get_logger().info(f'configure: {state.label} -> inactive')
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Subscriptions, calibrate services and actions, diagnostics and drain timers."""
+        with self._lock:
+            self._start()
         self.get_logger().info(
-            f'watching {", ".join(c.name for c in self.channels)}; window {self._settings.window_length:g} s; '
-            f'WARN below {self._thresholds.warn_below:g}, ERROR below {self._thresholds.error_below:g}')
+            f'activate: {state.label} -> active; watching {", ".join(c.name for c in self.channels)}; window '
+            f'{self._settings.window_length:g} s; WARN below {self._thresholds.warn_below:g}, ERROR below '
+            f'{self._thresholds.error_below:g}')
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """No more input, calibration or diagnostics; channels and publishers stay."""
+        with self._lock:
+            self._halt()
+        self.get_logger().info(f'deactivate: {state.label} -> inactive')
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Channels and publishers go."""
+        with self._lock:
+            self._close()
+        self.get_logger().info(f'cleanup: {state.label} -> unconfigured')
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Everything goes, from any state."""
+        with self._lock:
+            self._halt()
+            self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """A transition raised: everything goes, back to unconfigured."""
+        return self.on_shutdown(state)
 
     # -- set-up ------------------------------------------------------------------------------------
-    def _add_actuator(self, name: str, hardware_id: str, values: dict, qos: QoSProfile, *, first: bool) -> None:
-        """One actuator's channel: calibration, state publisher, subscriptions, calibrate services and actions.
+    def _open(self) -> None:
+        """configure: one channel and state publisher per actuator, and the /diagnostics publisher."""
+        values = self._values()
+        for name in self._actuator_names:
+            self.channels.append(self._open_actuator(name, self._hardware_ids[name], values))
+        self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], QoSProfile(depth=10),
+                                                  qos_overriding_options=OVERRIDABLE)
 
-        The first actuator also answers on the ``calibrate_service`` parameter's name.
-        """
+    def _start(self) -> None:
+        """activate: inputs, calibration interfaces, timers; the input statuses start counting now."""
+        values = self._values()
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
+                         reliability=ReliabilityPolicy.BEST_EFFORT)
+        now = self.now()
+        for i, channel in enumerate(self.channels):
+            self._subscribe(channel, values, qos, now)
+            if values['calibrate_enabled']:
+                self._serve_calibration(channel, values, first=i == 0)
+        self._timers_started.append(self.create_timer(self._diagnostic_period, self._publish_diagnostics,
+                                                      callback_group=self._input_group))
+        # Steady clock: the auxiliary queues must be drained even when a simulated clock stands still.
+        self._drain_period = min(DRAIN_PERIOD, self._diagnostic_period)
+        self._timers_started.append(self.create_timer(self._drain_period, self._drain_idle,
+                                                      callback_group=self._input_group,
+                                                      clock=Clock(clock_type=ClockType.STEADY_TIME)))
+
+    def _halt(self) -> None:
+        """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
+        for timer in self._timers_started:
+            self.destroy_timer(timer)
+        for subscription in self._input_subscriptions:
+            self.destroy_subscription(subscription)
+        for service in self._calibrate_services:
+            self.destroy_service(service)
+        for action in self._calibrate_actions:
+            action.destroy()
+        self._timers_started, self._input_subscriptions = [], []
+        self._calibrate_services, self._calibrate_actions = [], []
+        for channel in self.channels:
+            channel.auxiliary = []
+            channel.inputs = {}
+
+    def _close(self) -> None:
+        """cleanup: the channels and publishers go."""
+        for channel in self.channels:
+            if channel.publisher is not None:
+                self.destroy_publisher(channel.publisher)
+        if self._diagnostics is not None:
+            self.destroy_publisher(self._diagnostics)
+        self.channels, self._diagnostics = [], None
+
+    def _open_actuator(self, name: str, hardware_id: str, values: dict) -> ActuatorChannel:
+        """One actuator's channel: calibration loaded, state publisher."""
         prefix = '' if name == self.get_namespace() else name      # the node's own: relative names
         channel = ActuatorChannel(name=name, hardware_id=hardware_id, prefix=prefix,
                                   builder=WindowBuilder(self._settings, lead=self._lead),
@@ -448,10 +632,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                                   node_name=self.get_name())
         self._load_initial_calibration(channel)
         channel.publisher = self.create_publisher(
-            LubricationState, topic_name(prefix, values['state_topic']), STATE_QOS)
-        self._subscribe(channel, values, qos)
-        self.channels.append(channel)
-        service_names = [topic_name(prefix, 'calibrate')]
+            LubricationState, topic_name(prefix, values['state_topic']), copy.copy(STATE_QOS),
+            qos_overriding_options=OVERRIDABLE)
+        return channel
+
+    def _serve_calibration(self, channel: ActuatorChannel, values: dict, *, first: bool) -> None:
+        """The actuator's calibrate service and action; the first actuator also on ``calibrate_service``."""
+        service_names = [topic_name(channel.prefix, 'calibrate')]
         extra = values['calibrate_service']
         if first and extra and extra != self.resolve_service_name(service_names[0]):
             service_names.insert(0, extra)
@@ -482,11 +669,16 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             raise InputError(f'parameter actuators: {entry!r} is not a ROS namespace or topic prefix ({exc})') \
                 from None
 
-    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
-        """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
+    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile, now: float):
+        """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc).
+
+        Each subscription gets its own copy of ``qos`` (the QoS override parameters change the copy), and each
+        input its :class:`~.topic_status.TopicStatus`, counting from ``now``.
+        """
         joint = values['screw_joint']
-        topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
-                  for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
+        topics = {key: topic_name(channel.prefix, values[f'{key}_topic']) for key in INPUT_KEYS}
+        channel.inputs = {key: TopicStatus(self.resolve_topic_name(topic), self._rates[key], self._stamp_settings,
+                                           now) for key, topic in topics.items()}
         converters = {
             'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),
             'joint_states': (JointState, lambda m: ros_convert.screw_batch(m, topics['joint_states'], joint)),
@@ -494,21 +686,24 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
         }
         msg_type, convert = converters.pop('vibration')
-        holder = {}
+        holder = channel.subscriptions
         holder['vibration'] = self.create_subscription(
-            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
-            callback_group=self._input_group)
+            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), copy.copy(qos),
+            callback_group=self._input_group, qos_overriding_options=OVERRIDABLE)
         for key, (msg_type, convert) in converters.items():
             if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
-                self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
-                                         qos, callback_group=self._input_group)
+                holder[key] = self.create_subscription(
+                    msg_type, topics[key], self._auxiliary_callback(channel, key, convert), copy.copy(qos),
+                    callback_group=self._input_group, qos_overriding_options=OVERRIDABLE)
                 continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
-            subscription = self.create_subscription(
-                msg_type, topics[key], self._fast.never_called, qos, callback_group=self._fast.group,
-                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
-            channel.auxiliary.append((key, subscription, convert))
+            holder[key] = self.create_subscription(
+                msg_type, topics[key], self._fast.never_called, copy.copy(qos), callback_group=self._fast.group,
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False),
+                qos_overriding_options=OVERRIDABLE)
+            channel.auxiliary.append((key, holder[key], convert))
+        self._input_subscriptions.extend(holder.values())
 
     def _load_initial_calibration(self, channel: ActuatorChannel):
         path = channel.calibration_file
@@ -564,7 +759,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         """
         def callback(msg):
             with self._lock:
-                channel.monitor.note_input(self.now())
+                self._arrival = self.now()
+                channel.monitor.note_input(self._arrival)
                 channel.frame_id = msg.header.frame_id or channel.frame_id
                 self._drain_auxiliary(channel)
                 self._take(channel, 'vibration', convert, msg)
@@ -577,6 +773,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         """Plain callback of one auxiliary input, used only when the fast drain is off."""
         def callback(msg):
             with self._lock:
+                self._arrival = self.now()
                 self._take(channel, key, convert, msg)
         return callback
 
@@ -591,6 +788,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
     def _drain_idle(self):
         """Drain timer: the auxiliary inputs of actuators whose vibration stopped (bounded queues, staleness)."""
         with self._lock:
+            self._arrival = self.now()
             limit = time.monotonic() - self._drain_period
             for channel in self.channels:
                 if channel.last_drain < limit:
@@ -635,7 +833,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         return None
 
     def _add(self, channel: ActuatorChannel, key: str, batch):
-        """Add one batch to the actuator's builder; a batch it refuses is counted and left out."""
+        """Count one batch in the input's status, add it to the actuator's builder; a refused one is left out."""
+        status = channel.inputs.get(key)
+        if status is not None:
+            stamps = batch.stamps
+            status.tick(len(stamps), float(stamps[0]), float(stamps[-1]), self._arrival)
         try:
             channel.builder.add(batch)
         except (InputError, ValueError, TypeError, IndexError) as exc:
@@ -720,7 +922,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             channel.name, window, theta, std, status.level, message,
             frame_id=channel.frame_id or actuator_label(channel.name), theta_oil_flag=flag))
         if status.level != channel.last_level or self._surface(channel, now).level != channel.last_surface_level:
-            self._publish_diagnostics()
+            self._publish_diagnostics(inputs=False)    # the input rates are counted on the timer's beat only
 
     # -- diagnostics -------------------------------------------------------------------------------
     def _health(self, channel: ActuatorChannel, now: float):
@@ -819,14 +1021,29 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         return ros_convert.diagnostic_status(channel.surface_status_name, channel.hardware_id, surface.level,
                                              surface.message, values)
 
-    def _publish_diagnostics(self):
+    def _input_statuses(self, channel: ActuatorChannel, now: float) -> list:
+        """One ``DiagnosticStatus`` per input stream: rate and stamps (:mod:`.topic_status`), while active."""
+        statuses = []
+        for key, topic in channel.inputs.items():
+            judged = topic.status(now)
+            statuses.append(ros_convert.diagnostic_status(
+                status_name(channel.node_name, channel.name, INPUT_TASK.format(key=key)), channel.hardware_id,
+                judged.level, judged.message, judged.values))
+        return statuses
+
+    def _publish_diagnostics(self, inputs: bool = True):
+        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat."""
         with self._lock:
+            if self._diagnostics is None:
+                return
             now = self.now()
             array = DiagnosticArray()
             array.header.stamp = self.get_clock().now().to_msg()
             array.status = [status for channel in self.channels
-                            for status in (self._status(channel, now), self._surface_status(channel, now))]
-        self._diagnostics.publish(array)
+                            for status in (self._status(channel, now), self._surface_status(channel, now))
+                            + (tuple(self._input_statuses(channel, now)) if inputs else ())]
+            publisher = self._diagnostics
+        publisher.publish(array)
 
     # -- forecast from the fleet history -----------------------------------------------------------
     def _forecast_loop(self, period: float):
@@ -1040,7 +1257,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         must not drop the open windows).
         """
         values = self._values()
-        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
+        # Only the node's own table: rclpy declares the read-only qos_overrides.* through here as well.
+        parameters = [p for p in parameters if p.name in PARAMETERS and not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             values[parameter.name] = parameter.value
         names = {p.name for p in parameters}
