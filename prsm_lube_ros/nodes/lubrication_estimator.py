@@ -69,7 +69,6 @@ left out and reported once per kind.
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field, fields, replace
 import math
 import os
@@ -91,7 +90,6 @@ from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
 
@@ -114,7 +112,8 @@ from ..physics.defect_orders import defect_orders as actuator_defect_orders
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, OVERRIDABLE, own_qos, \
+    ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import run_node
 from .topic_status import RateSettings, StampSettings, TopicStatus
 
@@ -235,11 +234,11 @@ PARAMETERS = {
         "defect orders) against the calibration's healthy baseline; judged once that many are in, and a suspected "
         'defect clears only after that many clean judgements in a row', bounds=(1, 1000)),
     'diagnostic_period': ParameterSpec(
-        1.0, _DOUBLE,
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         's of node clock between /diagnostics messages (also the period the input rates are counted in)',
         bounds=(0.05, 60.0), read_only=True),
     'diagnostics_period': ParameterSpec(
-        1.0, _DOUBLE,
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
         bounds=(0.05, 60.0), read_only=True),
     'vibration_rate': ParameterSpec(
@@ -321,9 +320,6 @@ FIXED_REASONS = {
 
 #: The input streams of an actuator, as the ``<key>_topic`` and ``<key>_rate`` parameters name them.
 INPUT_KEYS = ('vibration', 'joint_states', 'axial_load', 'temperature')
-#: Every publisher and subscription offers the standard ``qos_overrides.<topic>.<publisher|subscription>.<policy>``
-#: parameters (history, depth, reliability, durability), read at creation.
-OVERRIDABLE = QoSOverridingOptions.with_default_policies()
 #: What an input status is called: '<node>: <actuator> <key> input'.
 INPUT_TASK = '{key} input'
 
@@ -338,14 +334,6 @@ def configured_hardware_id(actuators: Sequence[str], configured: Sequence[str], 
     """The ``hardware_ids`` entry of actuator ``name`` ('' when none is given)."""
     i = list(actuators).index(name)
     return str(configured[i]).strip() if i < len(configured) else ''
-
-
-def diagnostic_period(values: dict) -> float:
-    """``diagnostic_period``; the former ``diagnostics_period`` when only that one was changed."""
-    default = PARAMETERS['diagnostic_period'].default
-    if values['diagnostic_period'] == default:
-        return float(values['diagnostics_period'])
-    return float(values['diagnostic_period'])
 
 
 def actuator_label(actuator: str) -> str:
@@ -632,7 +620,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                                   node_name=self.get_name())
         self._load_initial_calibration(channel)
         channel.publisher = self.create_publisher(
-            LubricationState, topic_name(prefix, values['state_topic']), copy.copy(STATE_QOS),
+            LubricationState, topic_name(prefix, values['state_topic']), own_qos(STATE_QOS),
             qos_overriding_options=OVERRIDABLE)
         return channel
 
@@ -688,18 +676,18 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         msg_type, convert = converters.pop('vibration')
         holder = channel.subscriptions
         holder['vibration'] = self.create_subscription(
-            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), copy.copy(qos),
+            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), own_qos(qos),
             callback_group=self._input_group, qos_overriding_options=OVERRIDABLE)
         for key, (msg_type, convert) in converters.items():
             if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
                 holder[key] = self.create_subscription(
-                    msg_type, topics[key], self._auxiliary_callback(channel, key, convert), copy.copy(qos),
+                    msg_type, topics[key], self._auxiliary_callback(channel, key, convert), own_qos(qos),
                     callback_group=self._input_group, qos_overriding_options=OVERRIDABLE)
                 continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
             holder[key] = self.create_subscription(
-                msg_type, topics[key], self._fast.never_called, copy.copy(qos), callback_group=self._fast.group,
+                msg_type, topics[key], self._fast.never_called, own_qos(qos), callback_group=self._fast.group,
                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False),
                 qos_overriding_options=OVERRIDABLE)
             channel.auxiliary.append((key, holder[key], convert))

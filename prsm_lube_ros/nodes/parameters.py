@@ -21,6 +21,7 @@ and the other parameters go on to rclpy and the node's own callback.
 """
 from __future__ import annotations
 
+import copy
 from typing import Any, NamedTuple
 from collections.abc import Callable
 
@@ -28,14 +29,23 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
     SetParametersResult
 from rclpy.exceptions import ParameterException
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
+from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from ..errors import InputError
 
-__all__ = ['DOUBLE', 'INTEGER', 'ParameterSpec', 'ReadOnlyAfterStartUp', 'declare_parameter_table',
-           'parameter_descriptor', 'resolved_names', 'same_value', 'value_problem']
+__all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'INTEGER', 'OVERRIDABLE', 'ParameterSpec', 'ReadOnlyAfterStartUp',
+           'declare_parameter_table', 'diagnostic_period', 'own_qos', 'parameter_descriptor', 'resolved_names',
+           'same_value', 'value_problem']
 
 DOUBLE = ParameterType.PARAMETER_DOUBLE
 INTEGER = ParameterType.PARAMETER_INTEGER
+#: s between /diagnostics messages when neither diagnostic_period nor its former name diagnostics_period is given.
+DEFAULT_DIAGNOSTIC_PERIOD = 1.0
+#: Every publisher and subscription of the nodes offers the standard
+#: ``qos_overrides.<topic>.<publisher|subscription>.<policy>`` parameters (history, depth, reliability), read
+#: when the entity is created, as ros2_control, nav2 and drivers do (rclpy ``QoSOverridingOptions``).
+OVERRIDABLE = QoSOverridingOptions.with_default_policies()
 
 
 class ParameterSpec(NamedTuple):
@@ -150,3 +160,15 @@ class ReadOnlyAfterStartUp:
 def resolved_names(node) -> Callable[[str], str]:
     """A resolver for :func:`declare_parameter_table`: a service or topic name resolved in ``node``."""
     return lambda value: node.resolve_service_name(value) if str(value).strip() else value
+
+
+def own_qos(profile: QoSProfile) -> QoSProfile:
+    """A copy of ``profile`` for one entity: rclpy writes the entity's QoS overrides into the profile it is given."""
+    return copy.copy(profile)
+
+
+def diagnostic_period(values: dict) -> float:
+    """``diagnostic_period``; the former name ``diagnostics_period`` when only that one was changed."""
+    if values['diagnostic_period'] == DEFAULT_DIAGNOSTIC_PERIOD:
+        return float(values['diagnostics_period'])
+    return float(values['diagnostic_period'])

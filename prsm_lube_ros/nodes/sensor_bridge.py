@@ -38,7 +38,7 @@ Parameter ``source`` (read-only) chooses where the data come from:
   the relays below).
 
 The bridge reports its own health on ``/diagnostics`` (absolute, as
-diagnostic aggregators expect) every ``diagnostics_period`` s: one status
+diagnostic aggregators expect) every ``diagnostic_period`` s: one status
 named ``<node name>: <namespace> sensor source`` with ``hardware_id`` (the
 DAQ channel, bag, IMU topic or ``rig simulator`` unless set), the blocks
 published, block and sample rate, lost samples, and the last error; OK,
@@ -91,7 +91,8 @@ from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .fast_drain import FastDrain, missing_api
 from .imu_blocks import check_axis, ImuBlockAssembler
-from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, OVERRIDABLE, own_qos, \
+    ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
 from .startup import run_node
@@ -127,15 +128,23 @@ PARAMETERS = {
         "the IMU's when it sets one)", read_only=True),
     'hardware_id': ParameterSpec(
         '', _STRING,
-        'diagnostic hardware_id of the source status (empty: the DAQ channel, bag, IMU topic or rig simulator)',
-        read_only=True),
+        'diagnostic hardware_id of the source status: the serial or device id of the sensor, unique in the fleet '
+        '(empty: the DAQ channel, bag, IMU topic or rig simulator, with one WARN at start-up)', read_only=True),
+    'autostart': ParameterSpec(
+        False, _BOOL,
+        'sensor_bridge_managed: configure and activate at start-up (false: wait unconfigured for a lifecycle '
+        'manager or ros2 lifecycle set); the plain sensor_bridge always starts at once', read_only=True),
     'stale_timeout': ParameterSpec(
         2.0, _DOUBLE,
         's without a published vibration block before the source status is STALE',
         bounds=(0.01, 3600.0), read_only=True),
-    'diagnostics_period': ParameterSpec(
-        1.0, _DOUBLE,
+    'diagnostic_period': ParameterSpec(
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         's between the source status messages on /diagnostics', bounds=(0.05, 60.0), read_only=True),
+    'diagnostics_period': ParameterSpec(
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
+        'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
+        bounds=(0.05, 60.0), read_only=True),
     'bag': ParameterSpec('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', read_only=True),
     'bag_namespace': ParameterSpec(
         '', _STRING,
@@ -304,11 +313,13 @@ class BridgeCore(ReadOnlyAfterStartUp):
             kinds = ['vibration']
         types = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
                  'temperature': Temperature}
-        self._outputs = {kind: self.create_publisher(types[kind], topic_name(self._prefix, kind), qos)
+        self._outputs = {kind: self.create_publisher(types[kind], topic_name(self._prefix, kind), own_qos(qos),
+                                                     qos_overriding_options=OVERRIDABLE)
                          for kind in kinds}
         self.topics = {kind: publisher.topic_name for kind, publisher in self._outputs.items()}
         wants_clock = self.source == 'playback' and values['publish_clock']
-        self._clock_publisher = self.create_publisher(Clock, '/clock', QoSProfile(depth=10)) if wants_clock else None
+        self._clock_publisher = self.create_publisher(
+            Clock, '/clock', QoSProfile(depth=10), qos_overriding_options=OVERRIDABLE) if wants_clock else None
         self._relays = []
         if self.source in ('hardware', 'imu'):
             self._create_relays(values, qos)
@@ -324,7 +335,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self.health.active = True
         if self.source == 'imu':
             self._imu_subscription = self.create_subscription(Imu, self._imu_topic, self._on_imu,
-                                                              self._imu_qos)
+                                                              own_qos(self._imu_qos),
+                                                              qos_overriding_options=OVERRIDABLE)
             return
         if self._pacer is not None:
             self._pacer.stop = self._stop
@@ -427,7 +439,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
         joint = str(values['relay_joint']).strip()
         if values['relay_joint_states']:
-            out = self.create_publisher(JointState, topic_name(self._prefix, 'joint_states'), qos)
+            out = self.create_publisher(JointState, topic_name(self._prefix, 'joint_states'), own_qos(qos),
+                                        qos_overriding_options=OVERRIDABLE)
 
             def relay_joints(msg):
                 if joint and joint in msg.name:
@@ -436,11 +449,13 @@ class BridgeCore(ReadOnlyAfterStartUp):
                     msg.name = names
                 out.publish(msg)
             self._relays.append(self.create_subscription(JointState, values['relay_joint_states'], relay_joints,
-                                                         sensor_qos))
+                                                         own_qos(sensor_qos), qos_overriding_options=OVERRIDABLE))
         if values['relay_axial_load']:
-            out_load = self.create_publisher(WrenchStamped, topic_name(self._prefix, 'axial_load'), qos)
+            out_load = self.create_publisher(WrenchStamped, topic_name(self._prefix, 'axial_load'), own_qos(qos),
+                                             qos_overriding_options=OVERRIDABLE)
             self._relays.append(self.create_subscription(WrenchStamped, values['relay_axial_load'],
-                                                         out_load.publish, sensor_qos))
+                                                         out_load.publish, own_qos(sensor_qos),
+                                                         qos_overriding_options=OVERRIDABLE))
 
     # -- imu ----------------------------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
@@ -495,11 +510,17 @@ class BridgeCore(ReadOnlyAfterStartUp):
         defaults = {'playback': str(values['bag']).strip(), 'simulator': 'rig simulator',
                     'hardware': str(values['daq_channel']), 'imu': getattr(self, '_imu_topic', '')}
         self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
+        if not str(values['hardware_id']).strip() and not getattr(self, '_hardware_id_told', False):
+            self._hardware_id_told = True      # once per process, not on every configure
+            self.get_logger().warning(
+                f'hardware_id not set: /diagnostics names the source {self.hardware_id!r}, which collides across a '
+                "fleet; set hardware_id to the sensor's serial or device id")
         self.status_name = status_name(self.get_name(), self.namespace, SOURCE_TASK)
         self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
         self.health.active = False                          # until _start
-        self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
-        self._timer = self.create_timer(float(values['diagnostics_period']), self.publish_diagnostics)
+        self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, QoSProfile(depth=10),
+                                                  qos_overriding_options=OVERRIDABLE)
+        self._timer = self.create_timer(diagnostic_period(values), self.publish_diagnostics)
 
     def source_status(self):
         """The source's :class:`~.bridge_health.SourceStatus` now."""
@@ -621,7 +642,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
 
         A value equal to the current one changes nothing and passes, also for another source's setting.
         """
-        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
+        # Only the node's own table: rclpy declares the read-only qos_overrides.* through here as well.
+        parameters = [p for p in parameters if p.name in PARAMETERS and not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             if parameter.name in SIMULATOR_PARAMETERS and self.source != 'simulator':
                 return SetParametersResult(successful=False,
@@ -661,7 +683,8 @@ class SensorBridge(BridgeCore, Node):
 class ManagedSensorBridge(BridgeCore, LifecycleNode):
     """The bridge as a lifecycle (managed) node: each step of :class:`BridgeCore` on a transition.
 
-    Constructed unconfigured (parameters declared and checked).  configure
+    Constructed unconfigured (parameters declared and checked), or with
+    ``autostart`` configured and activated at once (InputError when a step fails).  configure
     opens the source (the bag, the rig simulator, the DAQ task set up but not
     started, the IMU settings), creates the publishers and the status on
     /diagnostics; activate starts publishing (worker thread, acquisition or
@@ -675,7 +698,11 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
 
     def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
         super().__init__(node_name, namespace=namespace, **kwargs)
-        self._read_parameters()
+        values = self._read_parameters()
+        if values['autostart']:
+            for step, trigger in (('configure', self.trigger_configure), ('activate', self.trigger_activate)):
+                if trigger() != TransitionCallbackReturn.SUCCESS:
+                    raise InputError(f'autostart: {step} failed (see the log line before)')
 
     def _step(self, what: str, action) -> TransitionCallbackReturn:
         try:
