@@ -497,6 +497,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._diagnostics = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
+        self._forecast_wake = threading.Event()     # set on configure: the new channels' forecasts at once
         self._history_dir = str(values['history_dir']).strip()
         if self._history_dir:
             threading.Thread(target=self._forecast_loop, args=(float(values['forecast_period']),),
@@ -563,6 +564,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         values = self._values()
         for name in self._actuator_names:
             self.channels.append(self._open_actuator(name, self._hardware_ids[name], values))
+        self._forecast_wake.set()
         self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], QoSProfile(depth=10),
                                                   qos_overriding_options=OVERRIDABLE)
 
@@ -1069,13 +1071,15 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 values += [(f'forecast_{key}', value) for key, value in summary.items()]
                 with self._lock:
                     channel.forecast = values
-            self._stop_forecast.wait(period)
+            self._forecast_wake.wait(period)
+            self._forecast_wake.clear()
 
     def destroy_node(self):
         """Stop the forecast worker before the node goes."""
         stop = getattr(self, '_stop_forecast', None)
         if stop is not None:
             stop.set()
+            self._forecast_wake.set()
         return super().destroy_node()
 
     # -- calibration service -----------------------------------------------------------------------

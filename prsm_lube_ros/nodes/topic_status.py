@@ -16,7 +16,9 @@ to the estimator, per actuator and input stream:
   "Desired frequency met".  ``expected`` 0: an optional input with no target: no
   message is OK "No events expected.", and its stamp status is OK without data.
 - :class:`TimeStampStatus`: the age of the header stamps (node clock at
-  arrival minus stamp, s) since the last read: older than ``max_age`` is ERROR
+  arrival minus stamp, s) over the same last ``window`` reads (diagnostic_updater
+  judges one period only, so an input slower than the diagnostic period, a 1 Hz
+  temperature, would flap between OK and "No data"): older than ``max_age`` is ERROR
   "Timestamps too far in past seen.", newer than ``-max_future`` (stamps from
   the future) ERROR "Timestamps too far in future seen.", a zero stamp ERROR
   "Zero timestamp seen.", no message WARN "No data since last update.", else OK
@@ -30,6 +32,7 @@ joined by ``'; '``.  Not thread-safe: the caller holds its own lock.
 """
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 import math
 
@@ -117,11 +120,12 @@ class FrequencyStatus:
 class TimeStampStatus:
     """Stamp ages since the last :meth:`status`; see the module docstring."""
 
-    def __init__(self, settings: StampSettings, required: bool = True):
+    def __init__(self, settings: StampSettings, required: bool = True, window: int = 1):
         self.settings = settings
         self.required = required        # False: no data is OK (an optional input)
         self._reset()
         self.late_count = self.early_count = self.zero_count = 0
+        self._periods: deque = deque(maxlen=max(1, int(window)))   # (seen, earliest, latest, early, late, zero)
 
     def _reset(self) -> None:
         self.seen = False
@@ -144,23 +148,28 @@ class TimeStampStatus:
             self.early = True
 
     def status(self) -> TaskStatus:
-        """The judgement since the last read; then it starts over."""
+        """The judgement over the last ``window`` reads, this one's period included; the period starts over."""
         s = self.settings
         self.late_count += self.late
         self.early_count += self.early
         self.zero_count += self.zero
-        found = [(self.early, 'Timestamps too far in future seen.'), (self.late, 'Timestamps too far in past seen.'),
-                 (self.zero, 'Zero timestamp seen.')]
+        self._periods.append((self.seen, self.earliest, self.latest, self.early, self.late, self.zero))
+        seen = any(p[0] for p in self._periods)
+        earliest = min(p[1] for p in self._periods)
+        latest = max(p[2] for p in self._periods)
+        found = [(any(p[3] for p in self._periods), 'Timestamps too far in future seen.'),
+                 (any(p[4] for p in self._periods), 'Timestamps too far in past seen.'),
+                 (any(p[5] for p in self._periods), 'Zero timestamp seen.')]
         errors = [text for flag, text in found if flag]
-        if not self.seen:
+        if not seen:
             level, message = (WARN if self.required else OK), 'No data since last update.'
         elif errors:
             level, message = ERROR, ' '.join(errors)
         else:
             level, message = OK, 'Timestamps are reasonable.'
-        seen = self.seen and math.isfinite(self.earliest)
-        values = [('Earliest timestamp delay (s)', self.earliest if seen else math.nan),
-                  ('Latest timestamp delay (s)', self.latest if seen else math.nan),
+        stamped = math.isfinite(earliest)
+        values = [('Earliest timestamp delay (s)', earliest if stamped else math.nan),
+                  ('Latest timestamp delay (s)', latest if stamped else math.nan),
                   ('Earliest acceptable timestamp delay (s)', -s.max_future),
                   ('Latest acceptable timestamp delay (s)', s.max_age),
                   ('Late diagnostic update count', self.late_count),
@@ -176,7 +185,7 @@ class TopicStatus:
     def __init__(self, topic: str, rate: RateSettings, stamps: StampSettings, now: float):
         self.topic = topic
         self.frequency = FrequencyStatus(rate, now)
-        self.stamps = TimeStampStatus(stamps, required=rate.expected > 0)
+        self.stamps = TimeStampStatus(stamps, required=rate.expected > 0, window=rate.window)
 
     def tick(self, count: int, oldest_stamp: float, newest_stamp: float, now: float) -> None:
         """``count`` messages stamped ``oldest_stamp`` .. ``newest_stamp`` arrived at node time ``now``."""

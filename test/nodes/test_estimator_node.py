@@ -1107,7 +1107,8 @@ def test_a_spall_is_an_error_with_its_component_and_theta_is_withheld_not_insuff
     assert judged and all(math.isnan(s.theta_oil) and s.message.startswith('theta_oil withheld') for s in judged)
     for array in arrays:
         for s in array.status:
-            if ros_convert.status_level(s) == ERROR and 'surface' not in s.name:
+            # the input statuses judge the synthetic 2026-01-01 stamps as too old: not the lubrication's
+            if ros_convert.status_level(s) == ERROR and not s.name.endswith((' surface condition', ' input')):
                 assert False, f'lubrication ERROR while the spall was being screened: {s.message}'
     assert node.channels[0].surface.suspected
 
