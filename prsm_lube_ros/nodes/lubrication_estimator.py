@@ -472,12 +472,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if len(set(actuators)) != len(actuators):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
         self._actuator_names = actuators
-        self._hardware_ids = hardware_ids(actuators, list(values['hardware_ids']))
-        defaulted = [name for name in actuators if not configured_hardware_id(actuators, values['hardware_ids'], name)]
-        if defaulted:
-            self.get_logger().warning(
-                f'hardware_ids not set for {", ".join(defaulted)}: /diagnostics names them by actuator name, which '
-                'collides across a fleet; set hardware_ids to each actuator\'s serial or device id')
+        self._hardware_ids = self._checked_hardware_ids(actuators, list(values['hardware_ids']))
         self._diagnostic_period = diagnostic_period(values)
         self._rates = {key: RateSettings(expected=float(values[f'{key}_rate']),
                                          tolerance=float(values['rate_tolerance']),
@@ -509,6 +504,15 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         else:
             self.get_logger().info('autostart is false: unconfigured, waiting for a lifecycle manager '
                                    '(ros2 lifecycle set ... configure, then activate)')
+
+    def _checked_hardware_ids(self, actuators: list[str], configured: list[str]) -> dict:
+        """:func:`hardware_ids`, with one WARN naming the actuators left at their default."""
+        defaulted = [name for name in actuators if not configured_hardware_id(actuators, configured, name)]
+        if defaulted:
+            self.get_logger().warning(
+                f'hardware_ids not set for {", ".join(defaulted)}: /diagnostics names them by actuator name, which '
+                "collides across a fleet; set hardware_ids to each actuator's serial or device id")
+        return hardware_ids(actuators, configured)
 
     # -- lifecycle ---------------------------------------------------------------------------------
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:

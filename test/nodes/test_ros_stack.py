@@ -343,3 +343,10 @@ def test_a_ros2_control_stack_is_relayed_into_the_contract(graph, tmp_path):
         wait_for(lambda: statuses and int(values_of(statuses[-1])['Events since startup']) > 0, TIMEOUT,
                  f'the estimator counting {key}')
         assert statuses[-1].hardware_id == 'EMA-L 11'
+
+
+def test_diagnostic_period_takes_the_former_name_only_when_the_new_one_is_left_alone():
+    from prsm_lube_ros.nodes.parameters import diagnostic_period
+    assert diagnostic_period({'diagnostic_period': 1.0, 'diagnostics_period': 0.2}) == 0.2
+    assert diagnostic_period({'diagnostic_period': 0.5, 'diagnostics_period': 0.2}) == 0.5
+    assert diagnostic_period({'diagnostic_period': 1.0, 'diagnostics_period': 1.0}) == 1.0
