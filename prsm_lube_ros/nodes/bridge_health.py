@@ -134,7 +134,7 @@ class SourceHealth:
                 return SourceStatus(STALE, 'no block for stale_timeout', values)
             if self._loss_times:
                 return SourceStatus(WARN, 'data lost recently (last error in the values)', values)
-            settled = now - self._first_block >= RATE_SPAN
+            settled = self._first_block is not None and now - self._first_block >= RATE_SPAN
             if expected and settled and rate < (1.0 - RATE_SLACK) * expected:
                 return SourceStatus(WARN, 'block rate below the expected one', values)
             return SourceStatus(OK, 'publishing', values)

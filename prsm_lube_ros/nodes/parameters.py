@@ -22,7 +22,7 @@ and the other parameters go on to rclpy and the node's own callback.
 from __future__ import annotations
 
 import copy
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TYPE_CHECKING
 from collections.abc import Callable
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
@@ -37,6 +37,12 @@ from ..errors import InputError
 __all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'INTEGER', 'OVERRIDABLE', 'ParameterSpec', 'ReadOnlyAfterStartUp',
            'declare_parameter_table', 'diagnostic_period', 'own_qos', 'parameter_descriptor', 'resolved_names',
            'same_value', 'value_problem']
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    _NodeBase = Node              # the mixin goes before an rclpy Node: its methods are there
+else:
+    _NodeBase = object
 
 DOUBLE = ParameterType.PARAMETER_DOUBLE
 INTEGER = ParameterType.PARAMETER_INTEGER
@@ -63,7 +69,8 @@ class ParameterSpec(NamedTuple):
     read_only: bool = False
 
 
-def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_only: bool) -> ParameterDescriptor:
+def parameter_descriptor(name: str, ptype: int, description: str, bounds: tuple | None,
+                         read_only: bool) -> ParameterDescriptor:
     """Descriptor with the description, read-only flag and (for numbers) the inclusive range ``bounds``."""
     descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
     if bounds and ptype == DOUBLE:
@@ -74,7 +81,7 @@ def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_o
     return descriptor
 
 
-def declare_parameter_table(node, table: dict, resolve: dict | None = None) -> dict:
+def declare_parameter_table(node: Node, table: dict, resolve: dict | None = None) -> dict:
     """Declare every parameter of ``table`` on ``node``; return their values by name.
 
     ``resolve`` maps names of read-only parameters that hold ROS names to a
@@ -105,7 +112,7 @@ def declare_parameter_table(node, table: dict, resolve: dict | None = None) -> d
     return {name: node.get_parameter(name).value for name in table}
 
 
-def value_problem(value, ptype: int, bounds) -> str | None:
+def value_problem(value: Any, ptype: int, bounds: tuple | None) -> str | None:
     """Why ``value`` does not fit a parameter of type ``ptype`` and inclusive range ``bounds`` (None: it fits)."""
     given = Parameter.Type.from_parameter_value(value)
     if given.value != ptype:
@@ -126,7 +133,7 @@ def same_value(parameter: Parameter, current: Parameter) -> bool:
     return new == old
 
 
-class ReadOnlyAfterStartUp:
+class ReadOnlyAfterStartUp(_NodeBase):
     """Mixin before an rclpy ``Node``: read-only parameters set to their value pass; a change gets its reason.
 
     See the module docstring.  ``fixed_reasons`` (name: why) adds why a
@@ -135,7 +142,7 @@ class ReadOnlyAfterStartUp:
 
     fixed_reasons: dict = {}
 
-    def set_parameters_atomically(self, parameter_list) -> SetParametersResult:
+    def set_parameters_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
         """rclpy's, after taking the read-only parameters out: unchanged ones pass, a change refuses all."""
         changing = []
         for parameter in parameter_list:
@@ -152,12 +159,12 @@ class ReadOnlyAfterStartUp:
             return SetParametersResult(successful=True)
         return super().set_parameters_atomically(changing)
 
-    def set_parameters(self, parameter_list) -> list:
+    def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
         """One :meth:`set_parameters_atomically` per parameter, as rclpy's own does."""
         return [self.set_parameters_atomically([parameter]) for parameter in parameter_list]
 
 
-def resolved_names(node) -> Callable[[str], str]:
+def resolved_names(node: Node) -> Callable[[str], str]:
     """A resolver for :func:`declare_parameter_table`: a service or topic name resolved in ``node``."""
     return lambda value: node.resolve_service_name(value) if str(value).strip() else value
 
