@@ -77,8 +77,8 @@ import sys
 import threading
 import time
 import traceback
-from typing import TYPE_CHECKING
-from collections.abc import Callable
+from typing import Any, TYPE_CHECKING
+from collections.abc import Awaitable, Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
@@ -114,13 +114,21 @@ from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
 from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, OVERRIDABLE, own_qos, \
     ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
-from .startup import run_node
+from .startup import autostart, run_node
 from .topic_status import RateSettings, StampSettings, TopicStatus
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+    from diagnostic_msgs.msg import DiagnosticStatus
+    from rclpy.parameter import Parameter
+    from rclpy.publisher import Publisher
     from rclpy.service import Service
+
+    from ..estimation.health import HealthStatus
+    from ..estimation.surface_health import SurfaceStatus
+    from ..estimation.windowing import Window
+    from ..recording.batches import InputBatch
 
     from ..physics.defect_orders import DefectOrder
 
@@ -371,8 +379,8 @@ class ActuatorChannel:
     surface: SurfaceMonitor                          # the surface defect screen of the last steady windows
     assessor: Assessor | None = None
     calibration_note: str = 'no calibration loaded'
-    publisher: object = None
-    last_window: object = None
+    publisher: Any = None                            # rclpy Publisher of LubricationState, once configured
+    last_window: Window | None = None
     last_theta: float = math.nan
     last_theta_std: float = math.nan
     last_flag: str = ''                              # theta_range_flag of the last assessed theta
@@ -418,7 +426,7 @@ class CalibrationJob:
     written or swapped); one already fitting finishes.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._lock = threading.Lock()
         self.started = False
         self.withdrawn = False
@@ -448,7 +456,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
 
     fixed_reasons = FIXED_REASONS
 
-    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs: Any) -> None:
         super().__init__(node_name, namespace=namespace, **kwargs)
         self._lock = threading.RLock()
         self._fit_lock = threading.Lock()
@@ -481,7 +489,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                                              max_future=float(values['max_future_stamp']))
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
-        self._fast = FastDrain(self.get_logger())
+        self._fast = FastDrain(self.log)
         self._arrival = 0.0                   # node-clock time of the input callback running (stamp ages)
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
@@ -489,7 +497,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._calibrate_actions: list[ActionServer] = []
         self._input_subscriptions: list = []
         self._timers_started: list = []
-        self._diagnostics = None
+        self._diagnostics: Publisher | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
         self._forecast_wake = threading.Event()     # set on configure: the new channels' forecasts at once
@@ -498,18 +506,16 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             threading.Thread(target=self._forecast_loop, args=(float(values['forecast_period']),),
                              name='forecast', daemon=True).start()
         if values['autostart']:
-            for step, trigger in (('configure', self.trigger_configure), ('activate', self.trigger_activate)):
-                if trigger() != TransitionCallbackReturn.SUCCESS:
-                    raise InputError(f'autostart: {step} failed (see the log line before)')
+            autostart(self)
         else:
-            self.get_logger().info('autostart is false: unconfigured, waiting for a lifecycle manager '
-                                   '(ros2 lifecycle set ... configure, then activate)')
+            self.log.info('autostart is false: unconfigured, waiting for a lifecycle manager '
+                          '(ros2 lifecycle set ... configure, then activate)')
 
     def _checked_hardware_ids(self, actuators: list[str], configured: list[str]) -> dict:
         """:func:`hardware_ids`, with one WARN naming the actuators left at their default."""
         defaulted = [name for name in actuators if not configured_hardware_id(actuators, configured, name)]
         if defaulted:
-            self.get_logger().warning(
+            self.log.warning(
                 f'hardware_ids not set for {", ".join(defaulted)}: /diagnostics names them by actuator name, which '
                 "collides across a fleet; set hardware_ids to each actuator's serial or device id")
         return hardware_ids(actuators, configured)
@@ -521,17 +527,17 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             with self._lock:
                 self._open()
         except InputError as exc:
-            self.get_logger().error(f'configure failed: {exc}')
+            self.log.error(f'configure failed: {exc}')
             self._close()
             return TransitionCallbackReturn.FAILURE
-        self.get_logger().info(f'configure: {state.label} -> inactive')
+        self.log.info(f'configure: {state.label} -> inactive')
         return TransitionCallbackReturn.SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Subscriptions, calibrate services and actions, diagnostics and drain timers."""
         with self._lock:
             self._start()
-        self.get_logger().info(
+        self.log.info(
             f'activate: {state.label} -> active; watching {", ".join(c.name for c in self.channels)}; window '
             f'{self._settings.window_length:g} s; WARN below {self._thresholds.warn_below:g}, ERROR below '
             f'{self._thresholds.error_below:g}')
@@ -541,14 +547,14 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """No more input, calibration or diagnostics; channels and publishers stay."""
         with self._lock:
             self._halt()
-        self.get_logger().info(f'deactivate: {state.label} -> inactive')
+        self.log.info(f'deactivate: {state.label} -> inactive')
         return super().on_deactivate(state)
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Channels and publishers go."""
         with self._lock:
             self._close()
-        self.get_logger().info(f'cleanup: {state.label} -> unconfigured')
+        self.log.info(f'cleanup: {state.label} -> unconfigured')
         return TransitionCallbackReturn.SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -663,7 +669,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             raise InputError(f'parameter actuators: {entry!r} is not a ROS namespace or topic prefix ({exc})') \
                 from None
 
-    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile, now: float):
+    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile, now: float) -> None:
         """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc).
 
         Each subscription gets its own copy of ``qos`` (the QoS override parameters change the copy), and each
@@ -699,7 +705,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             channel.auxiliary.append((key, holder[key], convert))
         self._input_subscriptions.extend(holder.values())
 
-    def _load_initial_calibration(self, channel: ActuatorChannel):
+    def _load_initial_calibration(self, channel: ActuatorChannel) -> None:
         path = channel.calibration_file
         if not path:
             channel.calibration_note = 'no calibration: parameter calibration_file is empty; call the ' \
@@ -712,11 +718,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             except InputError as exc:
                 channel.calibration_note = f'no calibration: {exc}'
         if channel.assessor is None:
-            self.get_logger().warning(f'{channel.name}: {channel.calibration_note}')
+            self.log.warning(f'{channel.name}: {channel.calibration_note}')
         else:
-            self.get_logger().info(f'{channel.name}: calibration {path} loaded')
+            self.log.info(f'{channel.name}: calibration {path} loaded')
 
-    def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
+    def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration) -> None:
         band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load,
                                     defect_orders=self._defect_orders)
@@ -726,7 +732,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if rebuilt:
             # Windows in the calibration's band (conditioning): open windows in another band are dropped.
             channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
-            self.get_logger().info(f'{channel.name}: windows now in the calibration\'s {band_note(calibration)}')
+            self.log.info(f'{channel.name}: windows now in the calibration\'s {band_note(calibration)}')
         channel.monitor.restart_smoothing()      # thetas of the old constants must not be averaged with the new
         # The new baseline judges afresh; the pooled indicators go with the band they were computed in.
         channel.surface.set_baseline(calibration.condition_baseline, keep_windows=not rebuilt)
@@ -742,7 +748,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """Node-clock time in s (sim time when use_sim_time is set)."""
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _vibration_callback(self, channel: ActuatorChannel, convert: Callable, subscriptions: dict):
+    def _vibration_callback(self, channel: ActuatorChannel, convert: Callable,
+                            subscriptions: dict) -> Callable[[Any], None]:
         """Callback of one actuator's vibration topic: everything queued for the actuator, then closing.
 
         The auxiliary queues are drained with the block, and the vibration queue
@@ -751,7 +758,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         of it is one time slice: the builder closes windows once, after the
         slice, so no stream is judged silent halfway through it.
         """
-        def callback(msg):
+        def callback(msg: Any) -> None:
             with self._lock:
                 self._arrival = self.now()
                 channel.monitor.note_input(self._arrival)
@@ -763,15 +770,15 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 self._close_windows(channel)
         return callback
 
-    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable) -> Callable[[Any], None]:
         """Plain callback of one auxiliary input, used only when the fast drain is off."""
-        def callback(msg):
+        def callback(msg: Any) -> None:
             with self._lock:
                 self._arrival = self.now()
                 self._take(channel, key, convert, msg)
         return callback
 
-    def _drain_auxiliary(self, channel: ActuatorChannel):
+    def _drain_auxiliary(self, channel: ActuatorChannel) -> None:
         """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
         channel.last_drain = time.monotonic()
         for key, subscription, convert in channel.auxiliary:
@@ -779,7 +786,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             if messages:
                 self._take_queued(channel, key, convert, messages)
 
-    def _drain_idle(self):
+    def _drain_idle(self) -> None:
         """Drain timer: the auxiliary inputs of actuators whose vibration stopped (bounded queues, staleness)."""
         with self._lock:
             self._arrival = self.now()
@@ -789,20 +796,21 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                     self._drain_auxiliary(channel)
                     self._close_windows(channel)
 
-    def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+    def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> None:
         """Add one message to the actuator's builder (closing is left to :meth:`_close_windows`)."""
         batch = self._convert(channel, key, convert, msg)
         if batch is not None:
             self._add(channel, key, batch)
 
-    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list):
+    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> None:
         """Add messages drained from one auxiliary queue, joined into batches while their stamps rise.
 
         A message that cannot be read is left out and counted on its own.  A
         stamp going back starts a new batch, so back-steps and clock resets reach
         the builder where they happened, as with one message at a time.
         """
-        run, last = [], -math.inf
+        run: list[InputBatch] = []
+        last = -math.inf
         for msg in messages:
             batch = self._convert(channel, key, convert, msg)
             if batch is None:
@@ -816,7 +824,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if run:
             self._add(channel, key, join_batches(run))
 
-    def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+    def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> InputBatch | None:
         """The message as a one-entry batch, or None (counted, logged once per kind) when it cannot be read."""
         try:
             return convert(msg)
@@ -826,7 +834,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._internal_error(channel, key, exc)
         return None
 
-    def _add(self, channel: ActuatorChannel, key: str, batch):
+    def _add(self, channel: ActuatorChannel, key: str, batch: InputBatch) -> None:
         """Count one batch in the input's status, add it to the actuator's builder; a refused one is left out."""
         status = channel.inputs.get(key)
         if status is not None:
@@ -839,7 +847,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, key, exc)
 
-    def _close_windows(self, channel: ActuatorChannel):
+    def _close_windows(self, channel: ActuatorChannel) -> None:
         """Close the windows every live input has passed, assess and publish them; log new input problems."""
         try:
             windows = channel.builder.pop_closed()
@@ -850,27 +858,27 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._internal_error(channel, 'windows', exc)
             windows = []
         for line in channel.builder.take_problems():
-            self.get_logger().warning(f'{channel.name}: {line}')
+            self.log.warning(f'{channel.name}: {line}')
         for window in windows:
             self._evaluate(channel, window)
 
-    def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception):
+    def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception) -> None:
         """Count an unexpected exception; log the first with its traceback."""
         if channel.input_errors.get('internal', 0) == 0:
-            self.get_logger().error(f'{channel.name}: internal error on {key} (please report): '
-                                    f'{"".join(traceback.format_exception(exc)).strip()}')
+            self.log.error(f'{channel.name}: internal error on {key} (please report): '
+                           f'{"".join(traceback.format_exception(exc)).strip()}')
         channel.input_errors['internal'] = channel.input_errors.get('internal', 0) + 1
 
-    def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception):
+    def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception) -> None:
         """Count a message that could not be taken; log the first of each kind."""
         kind = f'{key}:{type(exc).__name__}'
         seen = channel.input_errors.get(kind, 0)
         channel.input_errors[kind] = seen + 1
         if seen == 0:
             text = str(exc) if isinstance(exc, InputError) else f'{key}: message left out ({exc})'
-            self.get_logger().warning(f'{channel.name}: {text} (further ones counted, not logged)')
+            self.log.warning(f'{channel.name}: {text} (further ones counted, not logged)')
 
-    def _screen(self, channel: ActuatorChannel, window) -> None:
+    def _screen(self, channel: ActuatorChannel, window: Window) -> None:
         """Add a steady window's condition indicators to the actuator's surface screen (never raises)."""
         if not window.steady or (window.condition is None and channel.builder.band is not None):
             return   # not steady, or no indicators on this window by design (condition_every)
@@ -879,7 +887,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, 'surface screen', exc)
 
-    def _evaluate(self, channel: ActuatorChannel, window):
+    def _evaluate(self, channel: ActuatorChannel, window: Window) -> None:
         assessor = channel.assessor      # one read: a calibration swapped meanwhile applies to the next window
         self._screen(channel, window)
         flag = ''
@@ -919,7 +927,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._publish_diagnostics(inputs=False)    # the input rates are counted on the timer's beat only
 
     # -- diagnostics -------------------------------------------------------------------------------
-    def _health(self, channel: ActuatorChannel, now: float):
+    def _health(self, channel: ActuatorChannel, now: float) -> HealthStatus:
         """The monitor's status; without calibration at best WARN 'not calibrated'."""
         status = channel.monitor.status(now)
         if channel.assessor is None:
@@ -927,7 +935,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         status = outside_domain(out_of_range(status, channel.last_flag), channel.last_domain_flag)
         return withheld(status, self._surface(channel, now), channel.surface.pending)
 
-    def _surface(self, channel: ActuatorChannel, now: float):
+    def _surface(self, channel: ActuatorChannel, now: float) -> SurfaceStatus:
         """The surface monitor's status; STALE when the lubrication status is (no vibration for stale_timeout)."""
         silent = channel.monitor.stale_for(now)
         stale = ''
@@ -936,7 +944,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                      f'inputs stopped: no vibration for more than stale_timeout ({self._thresholds.stale_timeout:g} s)')
         return channel.surface.status(stale)
 
-    def _status(self, channel: ActuatorChannel, now: float):
+    def _status(self, channel: ActuatorChannel, now: float) -> DiagnosticStatus:
         status = self._health(channel, now)
         w = channel.last_window
         values = [
@@ -972,11 +980,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
     def _log_level(self, line: str, level: int) -> None:
         """Log a status's change of level: info for OK, warning otherwise."""
         if level == 0:      # two call sites: rclpy refuses a second severity at one line
-            self.get_logger().info(line)
+            self.log.info(line)
         else:
-            self.get_logger().warning(line)
+            self.log.warning(line)
 
-    def _surface_status(self, channel: ActuatorChannel, now: float):
+    def _surface_status(self, channel: ActuatorChannel, now: float) -> DiagnosticStatus:
         """The actuator's surface condition ``DiagnosticStatus``: the defect screen, its numbers in KeyValues."""
         surface = self._surface(channel, now)
         condition, finding = surface.condition, surface.finding
@@ -1025,7 +1033,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 judged.level, judged.message, judged.values))
         return statuses
 
-    def _publish_diagnostics(self, inputs: bool = True):
+    def _publish_diagnostics(self, inputs: bool = True) -> None:
         """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat."""
         with self._lock:
             if self._diagnostics is None:
@@ -1040,19 +1048,22 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         publisher.publish(array)
 
     # -- forecast from the fleet history -----------------------------------------------------------
-    def _forecast_loop(self, period: float):
+    def _forecast_loop(self, period: float) -> None:
         """Worker thread: the actuators' depletion forecasts from ``history_dir``, every ``period`` s.
 
         An actuator is looked up in the history by its hardware id (what
         ``prsm-lube assess --actuator-id`` names it), else by its namespace
         (the default of ``assess``).  One read of the history serves all.
         """
-        told = set()
+        told: set[str] = set()
 
-        def tell(line: str, error: bool = False):
+        def tell(line: str, error: bool = False) -> None:
             if line not in told:
                 told.add(line)
-                (self.get_logger().error if error else self.get_logger().warning)(line)
+                if error:
+                    self.log.error(line)
+                else:
+                    self.log.warning(line)
 
         while not self._stop_forecast.is_set():
             with self._lock:
@@ -1078,17 +1089,17 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._forecast_wake.wait(period)
             self._forecast_wake.clear()
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         """Stop the forecast worker before the node goes."""
         stop = getattr(self, '_stop_forecast', None)
         if stop is not None:
             stop.set()
             self._forecast_wake.set()
-        return super().destroy_node()
+        super().destroy_node()  # type: ignore[no-untyped-call]  # rclpy's destroy_node has no annotations
 
     # -- calibration service -----------------------------------------------------------------------
-    def _calibrate_handler(self, channel: ActuatorChannel):
-        async def handler(request, response):
+    def _calibrate_handler(self, channel: ActuatorChannel) -> Callable[[Any, Any], Awaitable[Any]]:
+        async def handler(request: Any, response: Any) -> Any:
             return await self._calibrate(channel, request, response)
         return handler
 
@@ -1097,7 +1108,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         done = Future(executor=self.executor)
         done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
 
-        def run():
+        def run() -> None:
             try:
                 done.set_result(work())
             except BaseException as exc:   # never lose the answer: the request gets success=false
@@ -1106,25 +1117,25 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         threading.Thread(target=run, name=f'calibrate {channel.name}', daemon=True).start()
         return done
 
-    async def _calibrate(self, channel: ActuatorChannel, request, response):
+    async def _calibrate(self, channel: ActuatorChannel, request: Any, response: Any) -> Any:
         """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
         arguments = calibration_arguments(request)
         outcome = await self._off_thread(channel, lambda: self._run_calibration(channel, *arguments))
         return self._answer(channel, response, outcome, persist=arguments[2])
 
-    def _calibrate_action(self, channel: ActuatorChannel):
+    def _calibrate_action(self, channel: ActuatorChannel) -> Callable[[Any], Awaitable[Any]]:
         """Execute callback of the Calibrate action: as the service, with feedback; see :class:`CalibrationJob`."""
-        async def execute(goal_handle):
+        async def execute(goal_handle: Any) -> Any:
             key = bytes(goal_handle.goal_id.uuid)
             job = self._jobs.setdefault(key, CalibrationJob())
             arguments = calibration_arguments(goal_handle.request)
 
-            def progress(stage: str, read: int, count: int, windows: int):
+            def progress(stage: str, read: int, count: int, windows: int) -> None:
                 try:
                     goal_handle.publish_feedback(CalibrateAction.Feedback(
                         stage=stage, bags_read=read, bag_count=count, windows_read=windows))
                 except Exception as exc:   # feedback is a courtesy: the calibration goes on without it
-                    self.get_logger().debug(f'calibrate: feedback not sent ({exc})')
+                    self.log.debug(f'calibrate: feedback not sent ({exc})')
 
             progress('queued', 0, len(arguments[0]), 0)
             try:
@@ -1142,12 +1153,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             return result
         return execute
 
-    def _cancel_calibration(self, goal_handle) -> CancelResponse:
+    def _cancel_calibration(self, goal_handle: Any) -> CancelResponse:
         """Accept a cancel: the calibration stops before it starts or at its next check while reading."""
         self._jobs.setdefault(bytes(goal_handle.goal_id.uuid), CalibrationJob()).withdraw()
         return CancelResponse.ACCEPT
 
-    def _answer(self, channel: ActuatorChannel, response, outcome, persist: bool):
+    def _answer(self, channel: ActuatorChannel, response: Any, outcome: tuple[Calibration, str] | BaseException,
+                persist: bool) -> Any:
         """Fill a service response or action result (same fields) from a calibration's outcome."""
         if isinstance(outcome, BaseException):
             response.success = False
@@ -1157,7 +1169,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 response.message = f'calibrate: internal error {type(outcome).__name__}: {outcome}'
             for name in ('c_sys', 'c_f', 'c_lambda', 'fit_rmse', 'c_sys_std', 'c_f_std', 'c_lambda_std'):
                 setattr(response, name, math.nan)
-            self.get_logger().warning(f'{channel.name}: calibration refused: {response.message}')
+            self.log.warning(f'{channel.name}: calibration refused: {response.message}')
             return response
         calibration, message = outcome
         c = calibration.constants
@@ -1170,12 +1182,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         response.fit_rmse = calibration.fit_rmse
         response.windows_used = int(calibration.windows_used)
         response.calibration_file = channel.calibration_file if persist else ''
-        self.get_logger().info(f'{channel.name}: {message}')
+        self.log.info(f'{channel.name}: {message}')
         return response
 
-    def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool,
+    def _run_calibration(self, channel: ActuatorChannel, paths: list[str], theta: float, persist: bool,
                          requested_namespace: str = '', progress: Callable | None = None,
-                         job: CalibrationJob | None = None):
+                         job: CalibrationJob | None = None) -> tuple[Calibration, str]:
         """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message).
 
         One calibration at a time: the others wait; a ``job`` withdrawn while
@@ -1200,7 +1212,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """What a running calibration calls as it reads: raises once cancelled or past ``calibration_timeout``."""
         timeout = self._calibration_timeout
 
-        def check():
+        def check() -> None:
             if job is not None and job.withdrawn:
                 raise CalibrationWithdrawn('calibrate: cancelled while reading the recordings; nothing was '
                                            'written or changed')
@@ -1209,18 +1221,19 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                                  'recordings; nothing was written or changed (fewer or shorter recordings?)')
         return check
 
-    def _calibrate_now(self, channel: ActuatorChannel, paths, theta: float, persist: bool, namespace: str,
-                       progress: Callable | None, job: CalibrationJob | None = None):
+    def _calibrate_now(self, channel: ActuatorChannel, paths: list[str], theta: float, persist: bool,
+                       namespace: str, progress: Callable | None,
+                       job: CalibrationJob | None = None) -> tuple[Calibration, str]:
         """:meth:`_run_calibration` holding the fit lock."""
         with self._lock:
             settings, folder = self._settings, self._recordings_dir
             min_load = self._min_axial_load
-        logged = set()
+        logged: set[str] = set()
 
-        def on_problem(line: str):
+        def on_problem(line: str) -> None:
             if line not in logged and len(logged) < 20:
                 logged.add(line)
-                self.get_logger().warning(f'{channel.name}: calibrate: {line}')
+                self.log.warning(f'{channel.name}: calibrate: {line}')
 
         started = time.monotonic()
         outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
@@ -1246,7 +1259,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             + (f'; {len(outcome.problems)} problem(s) in the recordings' if outcome.problems else ''))
 
     # -- parameters --------------------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Validate and apply changed parameters; refuse with a reason and change nothing otherwise.
 
         A parameter set to its current value changes nothing (``ros2 param load`` of the node's own dump
@@ -1271,8 +1284,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 self._settings = settings
                 for channel in self.channels:
                     channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
-                self.get_logger().info(f'window settings changed ({", ".join(sorted(names))}); open windows '
-                                       'dropped, starting over')
+                self.log.info(f'window settings changed ({", ".join(sorted(names))}); open windows '
+                              'dropped, starting over')
             if thresholds is not None:
                 self._thresholds = thresholds
                 for channel in self.channels:
@@ -1289,13 +1302,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return SetParametersResult(successful=True)
 
 
-def calibration_arguments(request) -> tuple:
+def calibration_arguments(request: Any) -> tuple[list[str], float, bool, str]:
     """(bag paths, reference theta, persist, recording namespace) of a Calibrate request or action goal."""
     return (list(request.bag_paths), float(request.reference_theta), bool(request.persist),
             str(getattr(request, 'recording_namespace', '')))
 
 
-def join_batches(batches: list):
+def join_batches(batches: list) -> InputBatch:
     """One input batch holding the entries of ``batches`` (all of one kind, one value per entry), in order."""
     if len(batches) == 1:
         return batches[0]
@@ -1303,7 +1316,7 @@ def join_batches(batches: list):
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
     return run_node(LubricationEstimator, NODE_NAME, args)
 

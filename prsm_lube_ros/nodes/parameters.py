@@ -39,6 +39,7 @@ __all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'INTEGER', 'OVERRIDABLE', 'Par
            'same_value', 'value_problem']
 
 if TYPE_CHECKING:
+    from rclpy.impl.rcutils_logger import RcutilsLogger
     from rclpy.node import Node
     _NodeBase = Node              # the mixin goes before an rclpy Node: its methods are there
 else:
@@ -141,6 +142,12 @@ class ReadOnlyAfterStartUp(_NodeBase):
     """
 
     fixed_reasons: dict = {}
+
+    @property
+    def log(self) -> RcutilsLogger:
+        """The node's logger (rclpy's ``get_logger``, which carries no annotations, called as a Node's)."""
+        node: Node = self
+        return node.get_logger()
 
     def set_parameters_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
         """rclpy's, after taking the read-only parameters out: unchanged ones pass, a change refuses all."""

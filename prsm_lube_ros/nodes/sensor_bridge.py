@@ -95,7 +95,7 @@ from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diag
     ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
-from .startup import run_node
+from .startup import autostart, run_node
 
 __all__ = ['BridgeCore', 'MAX_IMU_DRAIN', 'ManagedSensorBridge', 'NODE_NAME', 'PARAMETERS', 'SIMULATOR_PARAMETERS',
            'SOURCES', 'SensorBridge', 'create_node', 'main', 'main_managed', 'publisher_qos']
@@ -355,8 +355,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
             thread.join(timeout=5.0)
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
-            self.get_logger().error('the source worker did not stop within 5 s (a blocked read?); '
-                                    'it is not started again until it has')
+            self.log.error('the source worker did not stop within 5 s (a blocked read?); '
+                           'it is not started again until it has')
         else:
             self._thread = None
         daq = getattr(self, '_daq', None)
@@ -433,7 +433,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self._imu_unusable = 0
         # Each IMU callback also takes the messages queued behind it (fast_drain.py): one executor wake-up per
         # burst instead of per sample.  Without that rclpy API: one callback per message.
-        self._imu_drain = FastDrain(self.get_logger()) if not missing_api() else None
+        self._imu_drain = FastDrain(self.log) if not missing_api() else None
 
     def _create_relays(self, values, qos):
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -502,7 +502,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
 
     def _imu_problem(self, kind: str, line: str) -> None:
         """First problem of a kind: one log line (later ones are counted on /diagnostics)."""
-        self.get_logger().warning(f'{self._imu_topic}: {kind}: {line} (logged once; counted on /diagnostics)')
+        self.log.warning(f'{self._imu_topic}: {kind}: {line} (logged once; counted on /diagnostics)')
         self.health.note(f'{kind}: {line}')
 
     # -- diagnostics --------------------------------------------------------------------------------
@@ -512,7 +512,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
         if not str(values['hardware_id']).strip() and not getattr(self, '_hardware_id_told', False):
             self._hardware_id_told = True      # once per process, not on every configure
-            self.get_logger().warning(
+            self.log.warning(
                 f'hardware_id not set: /diagnostics names the source {self.hardware_id!r}, which collides across a '
                 "fleet; set hardware_id to the sensor's serial or device id")
         self.status_name = status_name(self.get_name(), self.namespace, SOURCE_TASK)
@@ -545,12 +545,12 @@ class BridgeCore(ReadOnlyAfterStartUp):
             else:
                 self._acquire()
         except InputError as exc:
-            self.get_logger().error(str(exc))
+            self.log.error(str(exc))
             self.health.fail(str(exc))
             self.exit_status = 1
         except Exception as exc:      # a bug, not bad input: say so with the traceback
-            self.get_logger().error(f'internal error (please report): '
-                                    f'{"".join(traceback.format_exception(exc)).strip()}')
+            self.log.error(f'internal error (please report): '
+                           f'{"".join(traceback.format_exception(exc)).strip()}')
             self.health.fail(f'internal error: {exc}')
             self.exit_status = 1
         finally:
@@ -566,8 +566,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
                 return
         if vibration.get_subscription_count():
             self._stop.wait(0.3)      # best-effort readers match the writer a little after it matches them
-        self.get_logger().info(f'playback of {bag} ({", ".join(self.topics.values())}) at {rate:g} x real time'
-                               + (', looping' if values['loop'] else ''))
+        self.log.info(f'playback of {bag} ({", ".join(self.topics.values())}) at {rate:g} x real time'
+                      + (', looping' if values['loop'] else ''))
         first_stamp = None
         while not self._stop.is_set():
             count = 0
@@ -587,11 +587,11 @@ class BridgeCore(ReadOnlyAfterStartUp):
             if count == 0:
                 raise InputError(f'{bag}: no messages to replay on {", ".join(self.topics.values())}')
             if not values['loop']:
-                self.get_logger().info(f'playback of {bag} finished: {count} messages')
+                self.log.info(f'playback of {bag} finished: {count} messages')
                 return
             self.loops += 1
-            self.get_logger().info(f'loop {self.loops}: replaying {bag} from the start; header stamps go back '
-                                   f'to {first_stamp * 1e-9:.3f} (subscribers see a clock reset)')
+            self.log.info(f'loop {self.loops}: replaying {bag} from the start; header stamps go back '
+                          f'to {first_stamp * 1e-9:.3f} (subscribers see a clock reset)')
             self._pacer.restart()
 
     def _simulate(self):
@@ -606,8 +606,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
     def _acquire(self):
         daq = self._daq
         settings = daq.settings
-        self.get_logger().info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
-                               f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
+        self.log.info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
+                      f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
         try:
             while not self._stop.is_set():
                 stamp_ns, samples = daq.read_block()
@@ -633,7 +633,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
                 self.health.block(time.monotonic(), payload[0])
 
     def _problem(self, line: str):
-        self.get_logger().warning(f'{self._values["bag"]}: {line}')
+        self.log.warning(f'{self._values["bag"]}: {line}')
         self.health.note(line)
 
     # -- parameters --------------------------------------------------------------------------------
@@ -657,7 +657,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
                     setter = {'speed': self._generator.set_speed, 'load': self._generator.set_load,
                               'theta_oil': self._generator.set_theta}[parameter.name]
                     setter(float(value))
-                self.get_logger().info(f'simulator: {parameter.name} set to {value:g}')
+                self.log.info(f'simulator: {parameter.name} set to {value:g}')
             elif parameter.name == 'playback_rate' and self._pacer is not None:
                 self._pacer.rate = float(value)
                 self._pacer.restart()
@@ -700,24 +700,22 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
         super().__init__(node_name, namespace=namespace, **kwargs)
         values = self._read_parameters()
         if values['autostart']:
-            for step, trigger in (('configure', self.trigger_configure), ('activate', self.trigger_activate)):
-                if trigger() != TransitionCallbackReturn.SUCCESS:
-                    raise InputError(f'autostart: {step} failed (see the log line before)')
+            autostart(self)
 
     def _step(self, what: str, action) -> TransitionCallbackReturn:
         try:
             action()
         except InputError as exc:
-            self.get_logger().error(f'{what} failed: {exc}')
+            self.log.error(f'{what} failed: {exc}')
             return TransitionCallbackReturn.FAILURE
         return TransitionCallbackReturn.SUCCESS
 
     def _transition(self, what: str, state: LifecycleState, goal: str, result) -> TransitionCallbackReturn:
         """Log a transition once: ``configure: unconfigured -> inactive`` (or that it failed)."""
         if result == TransitionCallbackReturn.SUCCESS:
-            self.get_logger().info(f'{what}: {state.label} -> {goal}')
+            self.log.info(f'{what}: {state.label} -> {goal}')
         else:
-            self.get_logger().warning(f'{what}: failed, stays {state.label}')
+            self.log.warning(f'{what}: failed, stays {state.label}')
         return result
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:

@@ -22,12 +22,14 @@ from collections.abc import Callable, Sequence
 
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from ..errors import InputError
 
-__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'build_node', 'init_ros', 'run_node', 'spin_until_stopped']
+__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'autostart', 'build_node', 'init_ros', 'run_node',
+           'spin_until_stopped']
 
 #: Exit status of a node whose configuration or source cannot be used.
 EXIT_BAD_INPUT = 2
@@ -59,6 +61,14 @@ def _request_stop(signum: int, frame: object) -> None:
     """
     _stop_requested.set()
     signal.signal(signum, signal.SIG_DFL)
+
+
+def autostart(node: LifecycleNode) -> None:
+    """A lifecycle node's ``autostart``: configure, then activate; InputError when a step does not succeed."""
+    if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+        raise InputError('autostart: configure failed (see the log line before)')
+    if node.trigger_activate() != TransitionCallbackReturn.SUCCESS:
+        raise InputError('autostart: activate failed (see the log line before)')
 
 
 def build_node(factory: Callable[[], Node], node_name: str) -> Node | None:
