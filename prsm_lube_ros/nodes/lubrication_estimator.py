@@ -112,8 +112,8 @@ from ..physics.defect_orders import defect_orders as actuator_defect_orders
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, OVERRIDABLE, own_qos, \
-    ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, \
+    FORMER_DIAGNOSTIC_PERIOD, OVERRIDABLE, own_qos, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .startup import autostart, run_node
 from .topic_status import RateSettings, StampSettings, TopicStatus
 
@@ -133,9 +133,10 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
-           'HEALTH_PARAMETERS', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME', 'PARAMETERS', 'STATE_QOS',
-           'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments', 'calibration_path',
-           'health_thresholds', 'join_batches', 'main', 'window_settings']
+           'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME',
+           'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments',
+           'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds', 'join_batches', 'main',
+           'window_settings']
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -245,10 +246,7 @@ PARAMETERS = {
         DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         's of node clock between /diagnostics messages (also the period the input rates are counted in)',
         bounds=(0.05, 60.0), read_only=True),
-    'diagnostics_period': ParameterSpec(
-        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
-        'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
-        bounds=(0.05, 60.0), read_only=True),
+    'diagnostics_period': FORMER_DIAGNOSTIC_PERIOD,
     'vibration_rate': ParameterSpec(
         10.0, _DOUBLE,
         'expected VibrationBlocks per s on <ns>/vibration (input status: WARN below it by more than '

@@ -34,9 +34,9 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from ..errors import InputError
 
-__all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'INTEGER', 'OVERRIDABLE', 'ParameterSpec', 'ReadOnlyAfterStartUp',
-           'declare_parameter_table', 'diagnostic_period', 'own_qos', 'parameter_descriptor', 'resolved_names',
-           'same_value', 'value_problem']
+__all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'FORMER_DIAGNOSTIC_PERIOD', 'INTEGER', 'OVERRIDABLE',
+           'ParameterSpec', 'ReadOnlyAfterStartUp', 'declare_parameter_table', 'diagnostic_period', 'own_qos',
+           'parameter_descriptor', 'resolved_names', 'same_value', 'value_problem']
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger
@@ -68,6 +68,13 @@ class ParameterSpec(NamedTuple):
     bounds: tuple | None = None
     #: fixed after start-up (see :class:`ReadOnlyAfterStartUp`)
     read_only: bool = False
+
+
+#: Both nodes' former name of ``diagnostic_period`` (see :func:`diagnostic_period`).
+FORMER_DIAGNOSTIC_PERIOD = ParameterSpec(
+    DEFAULT_DIAGNOSTIC_PERIOD, DOUBLE,
+    'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
+    bounds=(0.05, 60.0), read_only=True)
 
 
 def parameter_descriptor(name: str, ptype: int, description: str, bounds: tuple | None,

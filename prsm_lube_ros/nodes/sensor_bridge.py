@@ -93,8 +93,8 @@ from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .fast_drain import FastDrain, missing_api
 from .imu_blocks import AssembledBlock, check_axis, ImuBlockAssembler
-from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, OVERRIDABLE, own_qos, \
-    ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, \
+    FORMER_DIAGNOSTIC_PERIOD, OVERRIDABLE, own_qos, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
 from .startup import autostart, run_node
@@ -152,10 +152,7 @@ PARAMETERS = {
     'diagnostic_period': ParameterSpec(
         DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         's between the source status messages on /diagnostics', bounds=(0.05, 60.0), read_only=True),
-    'diagnostics_period': ParameterSpec(
-        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
-        'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
-        bounds=(0.05, 60.0), read_only=True),
+    'diagnostics_period': FORMER_DIAGNOSTIC_PERIOD,
     'bag': ParameterSpec('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', read_only=True),
     'bag_namespace': ParameterSpec(
         '', _STRING,
