@@ -112,7 +112,7 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
         raise InputError(f'calibrate: cannot read recordings on this installation ({exc})') from None
     problems: list[str] = []
 
-    def report(line: str):
+    def report(line: str) -> None:
         problems.append(line)
         if on_problem:
             on_problem(line)
