@@ -24,7 +24,8 @@ if TYPE_CHECKING:
 
     from ..fleet.planner import PlannedCrossing, PlannerRow
 
-__all__ = ['CSV_COLUMNS', 'PageContext', 'csv_text', 'html_page', 'level_name', 'markdown_table', 'next_text']
+__all__ = ['CSV_COLUMNS', 'PageContext', 'SORT_SCRIPT', 'STYLE', 'csv_text', 'html_page', 'level_name',
+           'markdown_table', 'next_text']
 
 #: columns of trend.csv, one row per actuator
 CSV_COLUMNS = ('rank', 'actuator', 'next_level', 'next_status', 'next_days_to_go', 'next_days_low',

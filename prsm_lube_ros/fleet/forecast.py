@@ -72,7 +72,8 @@ from .depletion_walk import (depletion_state, drift_and_diffusion, Increments, i
 if TYPE_CHECKING:
     import pyarrow as pa
 
-__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'FleetRecords', 'INTERVAL', 'KILO', 'ODOMETER_REACH',
+__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'FleetRecords', 'INTERVAL', 'KILO', 'MODEL_FORM_RATE',
+           'ODOMETER_REACH',
            'RecordingPoint', 'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk',
            'forecast_history', 'forecast_points', 'history_points', 'history_readers', 'history_records',
            'recording_points', 'two_sided_quantile', 'urgency_key', 'utc_minutes']
