@@ -108,6 +108,10 @@ class SurfaceDefect(Effect, law.Extension):
                    'several speeds and loads, and repeated conditions early and late in the session')
     grows = False
     requires_evidence = True
+    #: The strikes ring a structural mode fixed in Hz, and the impulsive power grows with speed by its own exponent
+    #: (impact velocity, strike rate), not the contacts' omega^2 law: its share of the power, and so the spectrum's
+    #: shape, changes between the speeds by the defect alone (a shape change beside it is no background evidence).
+    changes_spectral_shape = True
 
     def applicable(self, table: WindowTable) -> str:
         """Needs the condition indicators (impulsiveness is what tells a defect apart) and known revolutions."""
