@@ -85,7 +85,7 @@ def cases(rig_seeds: range, synthetic_seeds: range) -> list[tuple]:
     from prsm_lube_ros.experiments.random_study import NONE, OUTSIDE_KINDS, THERMAL_FREE, TWO
     effects = list(effect_ids())
     kinds = effects + [NONE, TWO] + list(OUTSIDE_KINDS) + [THERMAL_FREE]
-    out: list[tuple] = [('rig', kind, seed) for seed in rig_seeds for kind in kinds]
+    out: list[tuple] = []
     for seed in synthetic_seeds:
         out += [('synthetic', 'single', effect, form, seed, False) for effect in forms.EFFECTS
                 for form in forms.FORMS[effect]]
@@ -93,7 +93,7 @@ def cases(rig_seeds: range, synthetic_seeds: range) -> list[tuple]:
                 for form in forms.FORMS['thermal_viscosity']]
         out.append(('synthetic', 'single', None, '', seed, False))
         out += [('synthetic', 'pair', list(pair), '', 100 + seed, False) for pair in forms.PAIRS]
-    return out
+    return out + [('rig', kind, seed) for seed in rig_seeds for kind in kinds]     # the slow ones last
 
 
 def case_key(case: tuple) -> str:
@@ -144,7 +144,7 @@ def compare(before: dict, after: dict) -> tuple[list[str], list[str]]:
     for key in sorted(set(before) | set(after)):
         old, new = before.get(key), after.get(key)
         if old is None or new is None:
-            decided.append(f'- `{key}`: only {"after" if old is None else "before"}')
+            worded.append(f'- `{key}`: only {"after" if old is None else "before"} (not compared)')
             continue
         changed = [field for field in DECISIONS if old.get(field) != new.get(field)]
         if changed:
@@ -168,15 +168,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--first-seed', type=int, default=300)
     parser.add_argument('--synthetic-seeds', type=int, default=2)
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--only', nargs='*', default=None, metavar='KEY',
+                        help='with --compare: only the cases recorded in the file (a stopped recording)')
     args = parser.parse_args(argv)
     started = time.time()
     rig_seeds = range(args.first_seed, args.first_seed + args.rig_seeds)
-    jobs = [(case, str(args.tables)) for case in cases(rig_seeds, range(args.synthetic_seeds))]
+    chosen = cases(rig_seeds, range(args.synthetic_seeds))
+    if args.compare and args.only is not None:      # --only with no key: the cases the file holds
+        recorded = set(args.only) or set(json.loads(args.compare.read_text()))
+        chosen = [case for case in chosen if case_key(case) in recorded]
+    jobs = [(case, str(args.tables)) for case in chosen]
+    results: dict[str, dict] = {}
     with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
-        results = dict(pool.map(run_case, jobs))
+        for key, found in pool.map(run_case, jobs):
+            results[key] = found
+            print(f'{len(results)}/{len(jobs)} {key}: {found["verdict"]}', file=sys.stderr, flush=True)
+            if args.record:     # a stopped run keeps what it recorded (compared case by case)
+                args.record.write_text(json.dumps(results, indent=1, sort_keys=True) + '\n')
     wall = time.time() - started
     if args.record:
-        args.record.write_text(json.dumps(results, indent=1, sort_keys=True) + '\n')
         print(f'{len(results)} cases recorded in {args.record} ({wall:.0f} s)')
         return 0
     before = json.loads(args.compare.read_text())
