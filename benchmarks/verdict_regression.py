@@ -162,6 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument('--record', type=Path, help='write the fingerprints of every case to this JSON file')
     mode.add_argument('--compare', type=Path, help='diagnose again and compare with this recorded JSON file')
+    mode.add_argument('--diff', nargs=2, type=Path, metavar=('BEFORE', 'AFTER'),
+                      help='compare two recorded files (the cases both hold), diagnosing nothing')
     parser.add_argument('--report', type=Path, default=None, help='with --compare: the list as Markdown')
     parser.add_argument('--tables', type=Path, default=ROOT / 'out' / 'verdict_regression' / 'tables')
     parser.add_argument('--rig-seeds', type=int, default=2)
@@ -171,6 +173,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--only', nargs='*', default=None, metavar='KEY',
                         help='with --compare: only the cases recorded in the file (a stopped recording)')
     args = parser.parse_args(argv)
+    command = 'python benchmarks/verdict_regression.py ' + ' '.join(argv if argv is not None else sys.argv[1:])
+    if args.diff:
+        before, after = (json.loads(path.read_text()) for path in args.diff)
+        return _report(command, before, after, args.diff[0], 0.0, args.report)
     started = time.time()
     rig_seeds = range(args.first_seed, args.first_seed + args.rig_seeds)
     chosen = cases(rig_seeds, range(args.synthetic_seeds))
@@ -189,17 +195,21 @@ def main(argv: list[str] | None = None) -> int:
     if args.record:
         print(f'{len(results)} cases recorded in {args.record} ({wall:.0f} s)')
         return 0
-    before = json.loads(args.compare.read_text())
-    decided, worded = compare(before, results)
-    command = 'python benchmarks/verdict_regression.py ' + ' '.join(argv if argv is not None else sys.argv[1:])
-    lines = ['# Verdicts before and after', '', f'Command: `{command}` ({wall:.0f} s wall). {len(results)} cases '
-             f'against `{args.compare}`: **{len(decided)} with a changed decision** (verdict, named effects or '
-             f'forms, tie, a candidate\'s status), {len(worded)} with changed words only.', '']
-    lines += ['## Changed decisions', ''] + (decided or ['none']) + ['', '## Changed words only', '']
+    return _report(command, json.loads(args.compare.read_text()), results, args.compare, wall, args.report)
+
+
+def _report(command: str, before: dict, after: dict, against: Path, wall: float, report: Path | None) -> int:
+    """Print (and write to ``report``) every change between two sets of fingerprints; 1 on a changed decision."""
+    decided, worded = compare(before, after)
+    both = len(set(before) & set(after))
+    lines = ['# Verdicts before and after', '', f'Command: `{command}` ({wall:.0f} s wall). {both} cases compared '
+             f'against `{against}`: **{len(decided)} with a changed decision** (verdict, named effects or '
+             f'forms, tie, a candidate\'s status), {len(worded)} with changed words only or not in both.', '']
+    lines += ['## Changed decisions', ''] + (decided or ['none']) + ['', '## Changed words only, or not in both', '']
     lines += (worded or ['none']) + ['']
     text = '\n'.join(lines)
-    if args.report:
-        args.report.write_text(text)
+    if report:
+        report.write_text(text)
     print(text)
     return 1 if decided else 0
 
