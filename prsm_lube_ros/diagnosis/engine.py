@@ -78,7 +78,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
 import math
-from typing import Any, cast, Collection, Mapping, Sequence, TYPE_CHECKING, TypeVar
+from typing import Any, cast, Collection, Generic, Mapping, Sequence, TYPE_CHECKING, TypeVar
 
 import numpy as np
 
@@ -103,6 +103,7 @@ if TYPE_CHECKING:
 
 #: An effect, or a combination of two (:func:`_choose_form` returns the kind it is given).
 _E = TypeVar('_E', bound=Effect)
+_T = TypeVar('_T')
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'CANNOT_TELL', 'Candidate', 'CandidateFit', 'Confounding', 'DRIFT_COVARIATES',
            'Decision', 'Diagnosis', 'EmpiricalFit', 'OUTCOMES', 'SecondEffect', 'Status', 'UNEXPLAINED', 'Verdict',
@@ -170,6 +171,16 @@ class CandidateFit:
     within_gain: float = math.nan               # held-out gain on those deviations (the shape of held-out runs)
 
 
+class _FromScores(Generic[_T]):
+    """A :class:`Candidate` attribute that is its :class:`CandidateFit`'s (the results, read-only)."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, candidate: Candidate, owner: type | None = None) -> _T:
+        return cast(_T, getattr(candidate.scores, self.name))
+
+
 @dataclass
 class Candidate:
     """One candidate effect: its fit results and the decisions of the rules on it, in order (the last one stands)."""
@@ -192,35 +203,13 @@ class Candidate:
         restart = max((i for i, d in enumerate(self.decisions) if d.restart), default=0)
         return '; '.join(d.text for d in self.decisions[restart:])
 
-    @property
-    def effect(self) -> Effect:
-        """The effect in its chosen form."""
-        return self.scores.effect
-
-    @property
-    def fit(self) -> ModelFit | None:
-        """The chosen form's fit (None when the candidate was not fitted)."""
-        return self.scores.fit
-
-    @property
-    def gain(self) -> float:
-        """1 - cv_rmse / the paper's model's cv_rmse."""
-        return self.scores.gain
-
-    @property
-    def delta_bic(self) -> float:
-        """BIC against the paper's model."""
-        return self.scores.delta_bic
-
-    @property
-    def evidence(self) -> str:
-        """Evidence from outside the amplitude fit, in words ('' when none)."""
-        return self.scores.evidence
-
-    @property
-    def form(self) -> str:
-        """The chosen form's name (with the forms that fit as well)."""
-        return self.scores.form
+    #: The fit results, read from :attr:`scores`.
+    effect = _FromScores[Effect]()          # the effect in its chosen form
+    fit = _FromScores['ModelFit | None']()  # the chosen form's fit (None when the candidate was not fitted)
+    gain = _FromScores[float]()             # 1 - cv_rmse / the paper's model's cv_rmse
+    delta_bic = _FromScores[float]()        # BIC against the paper's model
+    evidence = _FromScores[str]()           # evidence from outside the amplitude fit ('' when none)
+    form = _FromScores[str]()               # the chosen form's name (with the forms that fit as well)
 
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
