@@ -31,7 +31,7 @@ from typing import Any
 __all__ = ['DEFAULT_RULES', 'DEFAULT_SPECTRAL_RULES', 'DiagnosisRules', 'SpectralRules', 'rule_source',
            'rules_markdown']
 
-KASS_RAFTERY = 'Kass & Raftery (1995), Bayes factors, JASA 90: 773-795'
+_KASS_RAFTERY = 'Kass & Raftery (1995), Bayes factors, JASA 90: 773-795'
 
 
 def _rule(default: Any, source: str, test: str = '') -> Any:
@@ -45,7 +45,7 @@ class DiagnosisRules:
 
     # --- a candidate earns its parameters (engine) ---
     bic_margin: float = _rule(
-        10.0, f'principle: a BIC difference of 10 or more is very strong evidence ({KASS_RAFTERY}); study: at 8 '
+        10.0, f'principle: a BIC difference of 10 or more is very strong evidence ({_KASS_RAFTERY}); study: at 8 '
         'depletion would also be named in 3 recordings where it was not concealed (margins.md of seeds 0-29)',
         'test_rules.py::test_a_stricter_bic_margin_changes_the_verdict')
     min_gain: float = _rule(
@@ -54,15 +54,15 @@ class DiagnosisRules:
         'test_rules.py::test_a_larger_min_gain_names_nothing')
     # --- a second effect beside the first ---
     second_bic_margin: float = _rule(
-        5.0, f'principle: BIC 2-6 positive, 6-10 strong evidence ({KASS_RAFTERY}); the first effect has already '
+        5.0, f'principle: BIC 2-6 positive, 6-10 strong evidence ({_KASS_RAFTERY}); the first effect has already '
         'shown that the model misses, so less than a first effect needs',
         'test_engine.py::test_a_second_effect_is_named_by_the_rules_a_single_effect_earns_by')
     located_bic_tolerance: float = _rule(
-        2.0, f'principle: a BIC difference under 2 is not worth more than a bare mention ({KASS_RAFTERY})',
+        2.0, f'principle: a BIC difference under 2 is not worth more than a bare mention ({_KASS_RAFTERY})',
         'test_engine.py::test_a_second_effect_is_named_by_the_rules_a_single_effect_earns_by')
     # --- a law located on its own covariate ---
     located_law_bic: float = _rule(
-        2.0, f'principle: a BIC drop of 2 is positive evidence ({KASS_RAFTERY}), enough once the locate test has '
+        2.0, f'principle: a BIC drop of 2 is positive evidence ({_KASS_RAFTERY}), enough once the locate test has '
         'found the structure the margin of 10 guards against inventing; study: depletion 45, stiffness 30 and 59 '
         '(seeds 30-59: BIC -9.9, -6.0, -5.4 with the mismatch located)',
         'test_engine.py::test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_none_earns')
@@ -79,10 +79,10 @@ class DiagnosisRules:
         'test_engine.py::test_the_held_out_tolerance_of_evidence_is_what_estimating_the_parameters_costs')
     # --- forms of one effect ---
     form_margin: float = _rule(
-        6.0, f'principle: BIC 6 is strong evidence ({KASS_RAFTERY}) for a form with more parameters',
+        6.0, f'principle: BIC 6 is strong evidence ({_KASS_RAFTERY}) for a form with more parameters',
         'test_engine.py::test_an_off_centre_fixed_fixed_arch_still_chooses_the_arched_form')
     form_tie: float = _rule(
-        2.0, f'principle: forms within 2 of each other are not told apart by the data ({KASS_RAFTERY})',
+        2.0, f'principle: forms within 2 of each other are not told apart by the data ({_KASS_RAFTERY})',
         'test_forms.py::test_curved_viscosity_law_is_preferred_to_the_exponential_when_the_oil_warms_enough')
     # --- ties between candidates ---
     tie_ratio: float = _rule(
