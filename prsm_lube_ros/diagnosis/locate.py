@@ -802,8 +802,8 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
         constant = power.max() / power.min() <= _SPECTRAL.line_constancy
         spread = mean_square[compared].max() / mean_square[compared].min()
         # Where the line stands must be above ``lowest`` too, not only the bins that flagged it: the bins around
-        # them reach one below, where orders of neighbouring speeds share bins (resonance 295 of the fresh random
-        # study: orders 1 and 3.3 of two speeds read as a line at 3.9 Hz, 1.95 Hz bins, ``lowest`` 5.9 Hz).
+        # them reach one below, where orders of neighbouring speeds share bins (docs/diagnosis-rules.md, spectral
+        # evidence).
         peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
         if constant and spread >= _SPECTRAL.power_spread and freqs[peak] >= lowest:
             result.frequencies.append(float(freqs[peak]))
@@ -846,9 +846,7 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     its frequency, lies inside the spectrum: near the top the octave above is
     cut off, and a spectrum rising to its edge (the skirt of a mode above the
     top, an anti-alias filter's shape) stands out of the octave below alone
-    (background 198 of the fresh random study: a "band" at 396 Hz sampled at
-    1 kHz, its share growing with speed as the contact's own mode at 1024 Hz
-    is approached).
+    (the study case: ``docs/diagnosis-rules.md``, spectral evidence).
     Such a band's place at each speed is where its power over the floor is
     centred (its flat top puts the largest bin anywhere), and that is the
     frequency reported.
