@@ -105,7 +105,7 @@ if TYPE_CHECKING:
 _E = TypeVar('_E', bound=Effect)
 _T = TypeVar('_T')
 
-__all__ = ['ADEQUATE', 'AMBIGUOUS', 'CANNOT_TELL', 'Candidate', 'CandidateFit', 'Confounding', 'DRIFT_COVARIATES',
+__all__ = ['ADEQUATE', 'AMBIGUOUS', 'CANNOT_TELL', 'Candidate', 'CandidateFit', 'Confounding',
            'Decision', 'Diagnosis', 'EmpiricalFit', 'OUTCOMES', 'SecondEffect', 'Status', 'UNEXPLAINED', 'Verdict',
            'confounding', 'diagnose_table', 'drift_correlation', 'evidence_tolerance', 'same_shape_covariates']
 
