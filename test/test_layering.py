@@ -142,7 +142,8 @@ def _runtime_graph():
     for path, parts in modules():
         name = '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
         tree = ast.parse(path.read_text())
-        top = [node for node in tree.body if not (isinstance(node, ast.If) and 'TYPE_CHECKING' in ast.unparse(node.test))]
+        top = [node for node in tree.body
+               if not (isinstance(node, ast.If) and 'TYPE_CHECKING' in ast.unparse(node.test))]
         shallow = ast.Module(body=top, type_ignores=[])
         targets = set()
         for _, target, _ in imports_of_tree(shallow, parts):
