@@ -104,8 +104,7 @@ def add_band_option(parser: argparse.ArgumentParser) -> None:
 def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
                     spectra: bool = False) -> tuple[list[RecordingWindows], Actuator]:
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
-    from dataclasses import replace
-    from ..estimation.pipeline import analysis_settings, recording_windows, require_usable
+    from ..estimation.pipeline import analysis_settings, read_recordings as read
     from ..physics.actuator import load_actuator
     from ..physics.defect_orders import defect_orders
     from ..validation import require_positive
@@ -114,17 +113,20 @@ def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
     settings = analysis_settings(require_positive('--window', args.window), spectra=spectra,
                                  band_high=None if band_high is None else require_positive('--band-high', band_high),
                                  defect_orders=defect_orders(actuator))
-    recordings = []
-    for path in paths:
-        bar = progress_bar(100, Path(path).name)
-        try:
-            recording = recording_windows(path, lead=actuator.lead, settings=settings, namespace=args.namespace,
-                                          on_problem=warn, progress=percent_updater(bar))
-        finally:
+    paths = list(paths)
+    bars: list[tqdm] = []
+
+    def bar_of(index: int) -> Callable[[float], None]:
+        for done in bars:
+            done.close()
+        bars[:] = [progress_bar(100, Path(paths[index]).name)]
+        return percent_updater(bars[0])
+    try:      # the band rule (the first recording's band is every later one's) is read_recordings'
+        recordings = read(paths, lead=actuator.lead, settings=settings, namespace=args.namespace, on_problem=warn,
+                          progress=bar_of)
+    finally:
+        for bar in bars:
             bar.close()
-        recordings.append(require_usable(recording, settings))
-        # The first recording's band (its upper edge chosen for its sample rate) is every later one's.
-        settings = replace(settings, band=recording.band)
     return recordings, actuator
 
 

@@ -147,10 +147,12 @@ def band_text(band: AnalysisBand | None) -> str:
 
 
 def rate_refusal(band: AnalysisBand, rate: float) -> str:
-    """One line: a recording at ``rate`` Hz cannot give the RMS in ``band``."""
+    """One line: a recording at ``rate`` Hz cannot give the RMS in ``band``, and how to choose a band it covers."""
     return (f'sample rate {rate:g} Hz cannot cover the analysis band {band.low:g}-{band.high:g} Hz '
             f'(needs at least {band.min_sample_rate:g} Hz: upper edge at most {band.margin:g} x the Nyquist '
-            'frequency); record faster or calibrate at this rate')
+            f'frequency); record faster, or calibrate in a band every recording covers (prsm-lube calibrate '
+            f'--band-high HZ, at most {band.margin * rate / 2:g} Hz for this rate; {COMMON_BAND_HIGH:g} Hz serves '
+            f'every rate from {2 * COMMON_BAND_HIGH / band.margin:g} Hz up)')
 
 
 def band_mean_square(samples: np.ndarray, rate: float, band: AnalysisBand) -> float:
