@@ -446,6 +446,7 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
         padded[:, 1:-1] >= min_db)
     labels: dict[tuple[int, float], str] = {}
+    spans: dict[float, list[tuple[int, int]]] = {}
     out = []
     for row, resolution in enumerate(resolutions):
         levels = padded[row]
@@ -459,7 +460,9 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
                 chosen.append(k)
             if len(chosen) == count:
                 break
-        for first, stop in _order_windows(orders, resolution):
+        if resolution not in spans:     # windows of one speed share their resolution
+            spans[resolution] = _order_windows(orders, resolution)
+        for first, stop in spans[resolution]:
             if stop > first:
                 k = first + int(np.argmax(levels[first:stop]))
                 if levels[k] >= min_db and k not in chosen:
