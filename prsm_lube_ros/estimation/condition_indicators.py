@@ -235,11 +235,12 @@ def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[
     in_band = np.zeros_like(spec)
     in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
     signal = np.fft.irfft(in_band, n, axis=1)
-    squares = signal * signal
+    peak = np.maximum(signal.max(axis=1), -signal.min(axis=1))     # max |x| without an |x| array
+    squares = np.square(signal, out=signal)
     power = squares.mean(axis=1)
     with np.errstate(divide='ignore', invalid='ignore'):
-        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
-        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+        kurt = np.where(power > 0, np.square(squares, out=squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, peak / np.sqrt(power), math.nan)
     return kurt, crest
 
 
@@ -271,19 +272,23 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         allowed = bins >= min_bins
         if not allowed.any():
             break
-        rows = np.flatnonzero(allowed)      # the windows this level still serves
         size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        shifted = np.zeros((rows.size, parts, size), dtype=complex)
-        shifted[:, :, :bins] = spec[rows, lo_bin:lo_bin + parts * bins].reshape(rows.size, parts, bins)
-        envelope = np.fft.ifft(shifted, axis=2)
-        power = np.multiply(envelope.real, envelope.real)      # |z|^2, in place of temporaries
-        power += np.square(envelope.imag)
-        mean = power.mean(axis=2)
+        if allowed.all():    # a view of the bins, no copy
+            rows, bands = None, spec[:, lo_bin:lo_bin + parts * bins]
+        else:                # the windows this level still serves
+            rows = np.flatnonzero(allowed)
+            bands = spec[rows, lo_bin:lo_bin + parts * bins]
+        # Each band's bins zero-padded to ``size`` inside the transform (no padded copy made here).
+        envelope = np.fft.ifft(bands.reshape(bands.shape[0], parts, bins), n=size, axis=2)
+        mean, fourth = _power_moments(envelope)
         with np.errstate(divide='ignore', invalid='ignore'):
-            sk_rows = np.where(mean > 0, np.square(power, out=power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+            sk_rows = np.where(mean > 0, fourth / mean ** 2 - 2.0, -np.inf)
         sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
-        sk = np.full((count, parts), -np.inf)
-        sk[rows] = sk_rows
+        if rows is None:
+            sk = sk_rows
+        else:
+            sk = np.full((count, parts), -np.inf)
+            sk[rows] = sk_rows
         part = np.argmax(sk, axis=1)
         value = sk[np.arange(count), part]
         better = allowed & (value > best_sk + 1e-12)
@@ -292,6 +297,19 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         last = np.where(better, lo_bin + (part + 1) * bins - 1, last)
     best_sk[~np.isfinite(best_sk)] = math.nan
     return best_sk, first, last
+
+
+def _power_moments(envelope: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``E|z|^2`` and ``E|z|^4`` over the last axis of the complex ``envelope`` (destroys ``envelope``).
+
+    ``|z|^2`` is ``re^2 + im^2`` squared in place over the array's interleaved
+    floats (one contiguous pass instead of strided real and imaginary views).
+    """
+    interleaved = envelope.view(np.float64)     # re, im, re, im, ... along the last axis
+    np.square(interleaved, out=interleaved)
+    power = interleaved[..., 0::2] + interleaved[..., 1::2]
+    mean = power.mean(axis=-1)
+    return mean, np.square(power, out=power).mean(axis=-1)
 
 
 def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
@@ -428,6 +446,7 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
         padded[:, 1:-1] >= min_db)
     labels: dict[tuple[int, float], str] = {}
+    spans: dict[float, list[tuple[int, int]]] = {}
     out = []
     for row, resolution in enumerate(resolutions):
         levels = padded[row]
@@ -441,7 +460,9 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
                 chosen.append(k)
             if len(chosen) == count:
                 break
-        for first, stop in _order_windows(orders, resolution):
+        if resolution not in spans:     # windows of one speed share their resolution
+            spans[resolution] = _order_windows(orders, resolution)
+        for first, stop in spans[resolution]:
             if stop > first:
                 k = first + int(np.argmax(levels[first:stop]))
                 if levels[k] >= min_db and k not in chosen:

@@ -30,7 +30,7 @@ from ..contract import (AXIAL_LOAD_TOPIC as AXIAL_LOAD, JOINT_STATE, JOINT_STATE
                         TEMPERATURE, TEMPERATURE_TOPIC as TEMPERATURE_KIND, VIBRATION_BLOCK,
                         VIBRATION_TOPIC as VIBRATION, WRENCH_STAMPED)
 from .batches import stamp_seconds
-from .typestore import contract_typestore
+from .typestore import contract_fielddef, contract_typestore
 
 if TYPE_CHECKING:
     from typing import TypeAlias
@@ -77,7 +77,7 @@ def layout_signature(typename: str, typs: Typesdict | None = None, depth: int = 
     """
     if depth > 16:
         raise ValueError(f'{typename} nests too deep')
-    definition = (typs or {}).get(typename) or contract_typestore().fielddefs.get(typename)
+    definition = (typs or {}).get(typename) or contract_fielddef(typename)
     if definition is None:
         raise ValueError(f'no definition of {typename}')
     return tuple((name, _describe(desc, typs, depth)) for name, desc in definition[1])
@@ -112,7 +112,7 @@ def embedded_types(msgtype: str, encoding: str, text: str) -> Typesdict:
 
 
 def _fields_text(typename: str, typs: Typesdict | None) -> str:
-    definition = (typs or {}).get(typename) or contract_typestore().fielddefs.get(typename)
+    definition = (typs or {}).get(typename) or contract_fielddef(typename)
     if definition is None:
         return '?'
 

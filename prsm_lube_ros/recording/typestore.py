@@ -6,6 +6,12 @@
 truth: this module reads them (installed copies under ``share/`` or the source
 tree) and registers them in a :mod:`rosbags` typestore next to the standard
 ROS 2 types, so recordings can be written and read on any machine.
+
+Checking a recording's layout needs only the field definitions of the
+contract's messages and the standard types its topics use
+(:func:`contract_fielddef`); those are parsed alone, so reading a recording
+does not import rosbags' store of every ROS 2 type (its largest start-up cost)
+unless a layout names another type.
 """
 from __future__ import annotations
 
@@ -19,7 +25,21 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from ..contract import PACKAGE
 
 
-__all__ = ['contract_typestore', 'interface_dir', 'message_definition']
+__all__ = ['STANDARD_DEFINITIONS', 'contract_fielddef', 'contract_typestore', 'interface_dir', 'message_definition']
+
+#: The standard ROS 2 types the contract's topics and messages use, as their ``.msg`` text (unchanged since ROS 2's
+#: first release; a test compares them with rosbags' store).
+STANDARD_DEFINITIONS = {
+    'builtin_interfaces/msg/Time': 'int32 sec\nuint32 nanosec\n',
+    'std_msgs/msg/Header': 'builtin_interfaces/Time stamp\nstring frame_id\n',
+    'sensor_msgs/msg/JointState': 'std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n'
+                                  'float64[] effort\n',
+    'geometry_msgs/msg/Vector3': 'float64 x\nfloat64 y\nfloat64 z\n',
+    'geometry_msgs/msg/Wrench': 'geometry_msgs/Vector3 force\ngeometry_msgs/Vector3 torque\n',
+    'geometry_msgs/msg/WrenchStamped': 'std_msgs/Header header\ngeometry_msgs/Wrench wrench\n',
+    'sensor_msgs/msg/Temperature': 'std_msgs/Header header\nfloat64 temperature\nfloat64 variance\n'}
+#: The contract's own messages (``msg/<name>.msg``).
+CONTRACT_MESSAGES = ('VibrationBlock', 'LubricationState')
 
 
 def interface_dir() -> Path:
@@ -53,8 +73,32 @@ def contract_typestore(store: Stores = Stores.ROS2_JAZZY) -> Any:
     that wants the precise type annotates its own variable).
     """
     typestore = get_typestore(store)
-    types = {}
-    for name in ('VibrationBlock', 'LubricationState'):
-        types.update(get_types_from_msg(message_definition(name), f'{PACKAGE}/msg/{name}'))
-    typestore.register(types)
+    typestore.register(_contract_types())
     return typestore
+
+
+def _contract_types() -> dict[str, Any]:
+    """Field definitions of the contract's messages, parsed from ``msg/``."""
+    types: dict[str, Any] = {}
+    for name in CONTRACT_MESSAGES:
+        types.update(get_types_from_msg(message_definition(name), f'{PACKAGE}/msg/{name}'))
+    return types
+
+
+@lru_cache(maxsize=1)
+def _light_fielddefs() -> dict[str, Any]:
+    types = _contract_types()
+    for typename, text in STANDARD_DEFINITIONS.items():
+        types.update(get_types_from_msg(text, typename))
+    return types
+
+
+def contract_fielddef(typename: str) -> Any:
+    """``contract_typestore().fielddefs.get(typename)``, without building the store for the contract's types.
+
+    The contract's messages and :data:`STANDARD_DEFINITIONS` are answered
+    from their parsed text; any other type from the full store (None when it
+    has none either).
+    """
+    found = _light_fielddefs().get(typename)
+    return found if found is not None else contract_typestore().fielddefs.get(typename)
