@@ -86,7 +86,7 @@ def test_an_external_scheduler_gets_relative_paths_resolved_and_equals_serial(sm
     assert sorted(set(read_table(history).column('recording_path').to_pylist())) == sorted(relative)
     # each file written by the installed command says what it holds when read alone
     import pyarrow.parquet as pq
-    alone = pq.read_table(next(history.glob('recordings/actuator=A01/*/runs.parquet')))
+    alone = pq.read_table(next(history.glob('runs/actuator=A01/*.parquet')))
     assert alone.schema.metadata[b'prsm_lube_ros.actuator'] == b'A01'
     assert str(alone.schema.field('date').type) == 'date32[day]' and alone.schema.field('screw_speed').metadata
     identifier = alone.column('calibration_id')[0].as_py()
