@@ -624,7 +624,7 @@ def _bad_rows(found: pa.Table) -> list[tuple[int, str]]:
             if name == 'theta_oil':
                 wrong |= ~nulls & (values <= 0)
             for row in np.flatnonzero(wrong):
-                bad.setdefault(int(row), f'{name} = {values[row]!r}')
+                bad.setdefault(int(row), f'{name} = {float(values[row])!r}')
         elif name in ('start', 'end'):
             stamps = column.cast(pa.int64()).to_numpy(zero_copy_only=False).astype(float)    # us; null is NaN
             for row in np.flatnonzero((stamps < 0) | (stamps >= _LATEST_US)):
