@@ -188,10 +188,11 @@ def finished_batches(client: Any, futures: list, scheduler: str, timeout: float)
             done = wait(list(pending), timeout=POLL_SECONDS, return_when='FIRST_COMPLETED').done
         except TimeoutError:
             done = set()
-        except Exception as exc:  # noqa: BLE001 -- the scheduler gone: what is left fails, one line each
-            done = set()
+        except Exception as exc:  # noqa: BLE001 -- the work dropped (scheduler gone, tasks cancelled): one line each
+            done = {future for future in pending if future.done() and future.status == 'finished'}
             alone_since = -math.inf
-            why = f'--scheduler {scheduler}: lost ({exc.__class__.__name__})'
+            why = (f'--scheduler {scheduler}: the cluster dropped the work ({exc.__class__.__name__}'
+                   f'{"" if _workers(client) else "; no worker left"})')
         for future in done:
             pending.discard(future)
             yield future, ''
