@@ -280,7 +280,7 @@ def _defect_columns(defect: DefectFinding, condition: RunCondition | ConditionIn
 
 
 def _described(table: str, common: dict) -> pa.Schema:
-    """The table's schema with actuator, source, calibration, table, package and layout version and units as metadata."""
+    """The table's schema with actuator, source, calibration, table, package and layout version, units as metadata."""
     return SCHEMAS[table].with_metadata({'prsm_lube_ros.actuator': common['actuator_id'],
                                          'prsm_lube_ros.actuator_source': common['actuator_source'],
                                          'prsm_lube_ros.calibration_id': str(common['calibration_id']),
@@ -630,6 +630,8 @@ def _bad_rows(found: pa.Table) -> list[tuple[int, str]]:
             for row in np.flatnonzero((stamps < 0) | (stamps >= _LATEST_US)):
                 bad.setdefault(int(row), f'{name} = {column[int(row)].value} us since the epoch')
     return sorted(bad.items())
+
+
 def _screen_columns_filled(found: pa.Table, history: Path, on_note: Callable[[str], None] | None) -> pa.Table:
     """Rows of files written before the defect screen (``defect_suspected`` null) with :data:`DEFECT_COLUMNS`."""
     import pyarrow.compute as pc

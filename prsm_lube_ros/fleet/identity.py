@@ -6,8 +6,9 @@ Where the id comes from (:func:`name_actuators`, before anything is
 assessed): ``--actuator-id ID`` (the user's word), ``--actuator-map FILE``
 (lines ``PATH,ID``: each recording belongs to the entry that is its real
 path or its nearest enclosing folder), the recording itself (``custom_data``
-``actuator_id`` in a bag folder's ``metadata.yaml``, as ``ros2 bag record
---custom-data actuator_id=A05`` writes it), or the folder holding it: the
+``actuator_id``, as ``ros2 bag record --custom-data actuator_id=A05`` writes
+it: in a bag folder's ``metadata.yaml``, and in a bare ``.mcap`` file's
+``rosbag2`` metadata record), or the folder holding it: the
 name of its real folder (symlinks resolved, so a link never changes the id),
 with the folder's whole real path kept as the id's ``source``.  By default
 the recording's own id is used, else the folder's; the default is refused
@@ -99,23 +100,90 @@ class Identity:
 
 
 def recorded_actuator(bag: str | Path) -> str | None:
-    """The actuator id a bag folder's ``metadata.yaml`` carries in ``custom_data`` (:data:`RECORDED_KEY`), or None.
+    """The actuator id a recording carries in its rosbag2 ``custom_data`` (:data:`RECORDED_KEY`), or None.
 
-    Bare ``.mcap`` files carry none here.  A ``metadata.yaml`` that cannot be
-    read says nothing (the assessment reports what is wrong with the bag).
+    A bag folder's ``metadata.yaml`` (``rosbag2_bagfile_information.custom_data``)
+    or, for a bare ``.mcap`` file, the ``rosbag2`` metadata record rosbag2's MCAP
+    storage writes (``serialized_metadata``, found through the summary's
+    metadata index).  A recording that cannot be read for it says nothing here
+    (the assessment reports what is wrong with it).
     """
+    import struct
     import yaml
     from ..input_file import MAX_METADATA_BYTES, read_text
-    metadata = Path(bag) / 'metadata.yaml'
-    if not metadata.is_file():
-        return None
+    bag = Path(bag)
     try:
-        document = yaml.safe_load(read_text(metadata, 'bag metadata', max_bytes=MAX_METADATA_BYTES))
-        custom = document['rosbag2_bagfile_information'].get('custom_data') or {}
+        if (bag / 'metadata.yaml').is_file():
+            document = yaml.safe_load(read_text(bag / 'metadata.yaml', 'bag metadata', max_bytes=MAX_METADATA_BYTES))
+            custom = document['rosbag2_bagfile_information'].get('custom_data') or {}
+        elif bag.is_file():
+            custom = (yaml.safe_load(_mcap_rosbag2_metadata(bag, MAX_METADATA_BYTES) or '{}') or {}).get(
+                'custom_data') or {}
+        else:
+            return None
         value = custom.get(RECORDED_KEY)
-    except (InputError, yaml.YAMLError, KeyError, TypeError, AttributeError):
+    except (InputError, OSError, yaml.YAMLError, KeyError, TypeError, AttributeError, ValueError, struct.error):
         return None
-    return str(value).strip() or None if value is not None else None
+    return (str(value).strip() or None) if value is not None else None
+
+
+def _mcap_rosbag2_metadata(path: Path, limit: int) -> str | None:
+    """``serialized_metadata`` of the ``rosbag2`` metadata record of an MCAP file (found from its footer), or None.
+
+    MCAP layout: the file ends with the footer record (opcode 0x02: summary
+    start u64, ...) and the 8-byte magic; the summary holds MetadataIndex
+    records (0x0D: offset u64, length u64, name) pointing at Metadata records
+    (0x0C: name, then a map of strings, u32 byte length first).
+    """
+    import struct
+    with open(path, 'rb') as stream:
+        size = stream.seek(0, 2)
+        if size < 45:
+            return None
+        stream.seek(size - 37)
+        footer = stream.read(37)
+        if footer[0] != 0x02 or footer[29:] != b'\x89MCAP0\r\n':
+            return None
+        summary_start = struct.unpack_from('<Q', footer, 9)[0]
+        if not 0 < summary_start <= size - 37 or size - 37 - summary_start > limit:
+            return None
+        stream.seek(summary_start)
+        summary = stream.read(size - 37 - summary_start)
+        pos = 0
+        while pos + 9 <= len(summary):
+            opcode, length = summary[pos], struct.unpack_from('<Q', summary, pos + 1)[0]
+            content = summary[pos + 9:pos + 9 + length]
+            pos += 9 + length
+            if opcode != 0x0D or len(content) < 20:
+                continue
+            offset, record_length, name_length = struct.unpack_from('<QQI', content)
+            if content[20:20 + name_length] != b'rosbag2' or record_length > limit:
+                continue
+            stream.seek(offset)
+            record = stream.read(record_length)
+            return _metadata_value(record, 'serialized_metadata')
+    return None
+
+
+def _metadata_value(record: bytes, key: str) -> str | None:
+    """The value of ``key`` in an MCAP Metadata record (opcode, length, then name and map)."""
+    import struct
+    if len(record) < 13 or record[0] != 0x0C:
+        return None
+    (name_length,) = struct.unpack_from('<I', record, 9)
+    pos = 13 + name_length
+    (map_length,) = struct.unpack_from('<I', record, pos)
+    pos, end = pos + 4, min(pos + 4 + map_length, len(record))
+    while pos + 4 <= end:
+        (size,) = struct.unpack_from('<I', record, pos)
+        found = record[pos + 4:pos + 4 + size].decode('utf-8')
+        pos += 4 + size
+        (size,) = struct.unpack_from('<I', record, pos)
+        value = record[pos + 4:pos + 4 + size].decode('utf-8')
+        pos += 4 + size
+        if found == key:
+            return value
+    return None
 
 
 def read_actuator_map(path: str | Path) -> list[tuple[Path, str]]:

@@ -34,7 +34,8 @@ def test_history_actuator_defaults_to_the_real_folder(small_fleet, tmp_path):
                  '--history', str(history)]) == 0
     runs = read_table(history)
     assert set(runs.column('actuator').to_pylist()) == {'A01'}
-    assert set(runs.column('actuator_source').to_pylist()) == {f'folder {Path(small_fleet["bags"][0]).resolve().parent}'}
+    folder = Path(small_fleet['bags'][0]).resolve().parent
+    assert set(runs.column('actuator_source').to_pylist()) == {f'folder {folder}'}
 
 
 def test_the_calibrations_share_of_the_uncertainty_is_recorded(small_fleet):

@@ -206,8 +206,8 @@ def test_workers_lost_for_good_fail_each_recording_in_one_line(small_fleet, tmp_
     assert all('not assessed' in line and address in line and 'no worker left' in line for line in lines), lines
 
 
-@pytest.mark.parametrize('address', ['tcp://127.0.0.1:{closed}', 'nonsense://somewhere', 'tcp://no-such-host.invalid:8786',
-                                     'tcp://127.0.0.1:99999'])
+@pytest.mark.parametrize('address', ['tcp://127.0.0.1:{closed}', 'nonsense://somewhere',
+                                     'tcp://no-such-host.invalid:8786', 'tcp://127.0.0.1:99999'])
 def test_a_bad_scheduler_address_is_one_line(small_fleet, address):
     address = address.format(closed=free_port())
     result = assess(INSTALLED, small_fleet, small_fleet['bags'][:1], '--scheduler', address,

@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The Parquet history: one file per recording and table, re-assessment replaces it, a killed writer leaves it consistent."""
+"""The Parquet history: a file per recording and table, re-assessment replaces it, a killed writer leaves it sound."""
 from concurrent.futures import ProcessPoolExecutor
 import datetime
 import math
@@ -28,7 +28,8 @@ def test_rows_land_in_one_folder_per_recording_and_read_back(tmp_path):
     history = tmp_path / 'history'
     bag = recording(tmp_path, 'a.mcap')
     runs_file = add(history, bag, 0.9)
-    assert runs_file.relative_to(history).parts == ('runs', 'actuator=ema_left.prsm', f'{content_hash(bag)[:16]}.parquet')
+    key = content_hash(bag)[:16]
+    assert runs_file.relative_to(history).parts == ('runs', 'actuator=ema_left.prsm', f'{key}.parquet')
     assert (history / 'windows' / 'actuator=ema_left.prsm' / runs_file.name).is_file()
     runs = read_table(history, 'runs')
     assert runs.num_rows == 2 and set(runs.column('actuator').to_pylist()) == {'ema_left.prsm'}

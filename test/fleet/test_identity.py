@@ -41,6 +41,39 @@ def test_the_recording_names_its_actuator_in_its_metadata(tmp_path):
         name_actuators([silent], given='recording')
 
 
+def mcap_with_custom_data(path: Path, custom: str) -> str:
+    """A bare MCAP file holding only what rosbag2's MCAP storage writes for its metadata (found via the summary)."""
+    import struct
+
+    def string(text):
+        data = text.encode()
+        return struct.pack('<I', len(data)) + data
+
+    def record(opcode, content):
+        return bytes([opcode]) + struct.pack('<Q', len(content)) + content
+
+    magic = b'\x89MCAP0\r\n'
+    pairs = string('serialized_metadata') + string(f'version: 8\nstorage_identifier: mcap\ncustom_data: {custom}\n')
+    metadata = record(0x0C, string('rosbag2') + struct.pack('<I', len(pairs)) + pairs)
+    header = record(0x01, string('ros2') + string('test'))
+    offset = len(magic) + len(header)
+    summary = record(0x0D, struct.pack('<QQ', offset, len(metadata)) + string('rosbag2'))
+    summary_start = offset + len(metadata)
+    footer = record(0x02, struct.pack('<QQI', summary_start, 0, 0))
+    path.write_bytes(magic + header + metadata + summary + footer + magic)
+    return str(path)
+
+
+def test_a_bare_mcap_carries_its_actuator_in_the_rosbag2_metadata_record(tmp_path):
+    assert recorded_actuator(mcap_with_custom_data(tmp_path / 'a.mcap', '{actuator_id: EMA-3}')) == 'EMA-3'
+    assert recorded_actuator(mcap_with_custom_data(tmp_path / 'b.mcap', '~')) is None
+    real = Path(__file__).resolve().parents[1] / 'data' / 'conformance' / 'rosbag2' / 'rosbag2_tests' / 'resources' / \
+        'mcap' / 'bag_with_topics_and_service_events' / 'bag_with_topics_and_service_events.mcap'
+    assert real.is_file() and recorded_actuator(real) is None    # rosbag2's own file: custom_data ~
+    (tmp_path / 'cut.mcap').write_bytes((tmp_path / 'a.mcap').read_bytes()[:-20])
+    assert recorded_actuator(tmp_path / 'cut.mcap') is None
+
+
 def test_a_recording_that_says_another_id_than_the_option_is_refused_naming_both(tmp_path):
     said = bag_folder(tmp_path, 'rec', 'PUMP-7')
     with pytest.raises(InputError) as caught:
