@@ -707,23 +707,19 @@ def _strays(root: Path, old: Path) -> list[Path]:
 
     Hidden entries are left alone.
     """
+    def belongs(entry: Path, layout_4: bool) -> bool:
+        if layout_4:
+            return entry.suffix == '.parquet' and _KEY.match(entry.stem) is not None
+        return entry.is_dir() and _KEY.match(entry.name.removeprefix('recording=')) is not None
+
     found = []
-    for actuator in sorted(root.iterdir()) if root.is_dir() else []:
-        if actuator.name.startswith('.'):
-            continue
-        if not (actuator.is_dir() and actuator.name.startswith('actuator=')):
-            found.append(actuator)
-            continue
-        found += [f for f in actuator.iterdir()
-                  if not f.name.startswith('.') and not (f.suffix == '.parquet' and _KEY.match(f.stem))]
-    for actuator in sorted(old.iterdir()) if old.is_dir() else []:
-        if actuator.name.startswith('.'):
-            continue
-        if not (actuator.is_dir() and actuator.name.startswith('actuator=')):
-            found.append(actuator)
-            continue
-        for recording in actuator.iterdir():
-            if not recording.name.startswith('.') and not (
-                    recording.is_dir() and _KEY.match(recording.name.removeprefix('recording='))):
-                found.append(recording)
+    for folder, layout_4 in ((root, True), (old, False)):
+        for actuator in sorted(folder.iterdir()) if folder.is_dir() else []:
+            if actuator.name.startswith('.'):
+                continue
+            if not (actuator.is_dir() and actuator.name.startswith('actuator=')):
+                found.append(actuator)
+                continue
+            found += [entry for entry in actuator.iterdir()
+                      if not entry.name.startswith('.') and not belongs(entry, layout_4)]
     return sorted(found)
