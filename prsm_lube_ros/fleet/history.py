@@ -112,8 +112,8 @@ if TYPE_CHECKING:
 __all__ = ['CALIBRATIONS', 'DEFECT_COLUMNS', 'IDENTITY_COLUMNS', 'LAYOUT_VERSION', 'LOCK', 'MAX_PARQUET_BYTES',
            'MAX_PARQUET_FOOTER', 'MAX_PARQUET_ROWS', 'RECORDINGS', 'SCHEMAS', 'STAGING', 'TABLES', 'UNITS', 'UTC_TIME',
            'actuator_key', 'add_assessment', 'assessment_tables', 'calibration_id', 'content_hash',
-           'history_calibration', 'history_writer', 'migrate', 'path_text', 'read_history', 'read_table',
-           'register_calibration', 'stored_sources']
+           'history_calibration', 'history_writer', 'migrate', 'package_version', 'path_text', 'read_history',
+           'read_table', 'register_calibration', 'stored_sources']
 
 TABLES = ('runs', 'windows')
 #: ``RECORDINGS``: the folder of layouts 2 and 3 (read, and moved into layout 4 by the next writer)
@@ -164,6 +164,15 @@ SCHEMAS = {'runs': _schema(_COMMON + _RUN_ONLY + _DEFECT + _DATE + _IDENTITY),
            'windows': _schema(_COMMON + _WINDOW_ONLY + _DEFECT + _DATE + _IDENTITY)}
 _HASH_BLOCK = 1 << 20
 _KEY = re.compile(r'^[0-9a-f]{16}$')
+
+
+def package_version() -> str:
+    """The installed prsm_lube_ros version (``unknown`` when it is not installed as a distribution)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version('prsm_lube_ros')
+    except PackageNotFoundError:
+        return 'unknown'
 
 
 def content_hash(path: str | Path) -> str:
@@ -240,12 +249,11 @@ def assessment_tables(assessment: RecordingAssessment, *, content: str, calibrat
     ``actuator_id`` and ``actuator_source`` (:class:`~.identity.Identity`) go
     into every row and into the schema metadata.
     """
-    from .. import __version__
     assessed_at = assessed_at or datetime.datetime.now(datetime.UTC)
     common = {'recording_path': path_text(assessment.path), 'content_hash': content, 'calibration_id': calibration,
               'assessed_at': assessed_at, 'namespace': namespace, 'actuator_id': str(actuator_id),
               'actuator_source': path_text(actuator_source), 'recording': content[:16],
-              'package_version': __version__, 'layout': LAYOUT_VERSION}
+              'package_version': package_version(), 'layout': LAYOUT_VERSION}
     shared = _calibration_std(fit, assessment.runs)
     runs = [dict(common, run_index=run.run_index, start=_utc(run.start), end=_utc(run.end),
                  screw_speed=_finite(run.screw_speed), axial_load=_finite(run.axial_load),
@@ -498,19 +506,19 @@ def migrate(history: str | Path) -> int:
 
 def _as_layout(found: pa.Table, table: str) -> pa.Table:
     """A table read from an old layout as this layout writes it (identity columns filled, package version ours)."""
-    from .. import __version__
+    version = package_version()
     found = _screen_defaults(found)
     actuator_id = found.column('actuator_id').to_pylist()
     recordings = found.column('recording').to_pylist()
     columns = {name: found.column(name) for name in SCHEMAS[table].names}
-    columns['package_version'] = pa.array([__version__] * found.num_rows, pa.string())
+    columns['package_version'] = pa.array([version] * found.num_rows, pa.string())
     columns['layout'] = pa.array([LAYOUT_VERSION] * found.num_rows, pa.string())
     columns['recording'] = pa.array(recordings, pa.string())
     columns['actuator_id'] = pa.array([a or k for a, k in zip(actuator_id, found.column('actuator').to_pylist())],
                                       pa.string())
     common = {'actuator_id': actuator_id[0] if actuator_id else '', 'actuator_source': '',
               'calibration_id': found.column('calibration_id')[0].as_py() if found.num_rows else '',
-              'package_version': __version__}
+              'package_version': version}
     return pa.table(columns, schema=_described(table, common))
 
 

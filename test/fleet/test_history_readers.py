@@ -86,14 +86,15 @@ def test_polars_reads_a_table_folder_as_that_table_alone(small_fleet, table):
 def test_a_file_read_alone_says_whose_rows_they_are_and_what_wrote_them(small_fleet):
     import pyarrow.parquet as pq
     import prsm_lube_ros
-    from prsm_lube_ros.fleet.history import LAYOUT_VERSION
+    from prsm_lube_ros.fleet.history import LAYOUT_VERSION, package_version
     history = small_fleet['history']
     file = next(history.glob('runs/actuator=A01/*.parquet'))
     alone = pq.read_table(file)
     metadata = alone.schema.metadata
     assert metadata[b'prsm_lube_ros.actuator'] == b'A01'
     assert metadata[b'prsm_lube_ros.actuator_source'] == f'folder {small_fleet["root"].resolve() / "A01"}'.encode()
-    assert metadata[b'prsm_lube_ros.package_version'] == prsm_lube_ros.__version__.encode()
+    assert metadata[b'prsm_lube_ros.package_version'] == package_version().encode() == \
+        prsm_lube_ros.__version__.encode()
     assert metadata[b'prsm_lube_ros.history_layout'] == LAYOUT_VERSION.encode()
     assert metadata[b'prsm_lube_ros.calibration_id'] == alone.column('calibration_id')[0].as_py().encode()
     assert set(alone.column('actuator_id').to_pylist()) == {'A01'}
