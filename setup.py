@@ -36,7 +36,7 @@ setup(
         ('share/' + package_name + '/action', glob('action/*.action')),
     ],
     package_data={package_name: ['py.typed']},
-    python_requires='>=3.10',
+    python_requires='>=3.11',     # enum.StrEnum, datetime.UTC (the python_version mypy checks in setup.cfg)
     install_requires=requirements('core'),
     extras_require={'hardware': ['nidaqmx'], 'test': requirements('test')},
     zip_safe=True,

@@ -14,17 +14,26 @@ Each measurement runs in a fresh subprocess so its peak resident memory
 * ``assess``: what ``prsm-lube assess`` does -- read, decode, window, assess
   every window and run with a calibration fitted beforehand.
 
-Both are timed best of ``--repeat``.  Then whole processes, as a user feels
-them (interpreter start-up and imports included), best of ``--repeat``:
-``prsm-lube --help``, ``prsm-lube assess BAG --calibration C --json OUT`` on
-the hour, and beside it the obvious alternative, a short rosbags script that
-reads and deserializes the same vibration messages and does less
-(``benchmarks/rosbags_baseline.py``).  A 15-minute and a one-hour recording are
+Both are timed best of ``--repeat``.  A 15-minute and a one-hour recording are
 assessed so flat memory shows as equal peaks; the hour is measured again with
-zstd chunk compression, where the bare read includes decompression.  Results go to
-``benchmarks/results/assess_throughput.{json,md}``.
+zstd chunk compression, where the bare read includes decompression.
 
-Usage: ``python benchmarks/assess_throughput.py [--repeat 3] [--data DIR]``
+Then whole processes, as a user feels them (interpreter start-up and imports
+included), median wall and CPU time of ``--repeat`` rounds, the commands of a
+round run one after another so a loaded machine loads them alike:
+``prsm-lube --help``; ``prsm-lube assess BAG --calibration C --json OUT`` on the
+hour (band and condition indicators on: the calibration has a band and a
+baseline), with this code and, given ``--before CHECKOUT``, with the code of
+that checkout (a worktree of ``main``: the same file, machine and run); beside
+them the obvious alternative, a short rosbags script that reads and
+deserializes the same vibration messages and does less
+(``benchmarks/rosbags_baseline.py``), and the floor, the file's bytes read once
+with numpy (``benchmarks/bytes_floor.py``).  The ratios assess / rosbags script
+and assess / floor are printed beside them.  Results go to
+``benchmarks/results/<--name>.{json,md}`` (default ``assess_throughput``).
+
+Usage: ``python benchmarks/assess_throughput.py [--repeat 3] [--data DIR] [--before CHECKOUT]
+[--processes-only] [--name NAME]``
 """
 from __future__ import annotations
 
@@ -77,14 +86,25 @@ def measure(kind: str, bag: Path, calibration: Path, repeat: int) -> dict:
     return best_of_children([sys.executable, __file__, '--child', kind, str(bag), str(calibration)], repeat)
 
 
-def whole_process(argv: list[str], repeat: int) -> float:
-    """Best wall time of ``repeat`` runs of ``argv`` as a fresh process, start to exit, s."""
-    best = float('inf')
+def whole_processes(commands: dict[str, tuple[list[str], Path]], repeat: int) -> dict[str, dict]:
+    """Median wall and CPU time (s) of each command run as a fresh process, ``repeat`` interleaved rounds.
+
+    ``commands``: name -> (argv, checkout whose code it runs: cwd and PYTHONPATH).
+    """
+    import resource
+    import statistics
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
     for _ in range(repeat):
-        start = time.perf_counter()
-        subprocess.run(argv, check=True, capture_output=True, cwd=ROOT)
-        best = min(best, time.perf_counter() - start)
-    return best
+        for name, (argv, code) in commands.items():
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(code), os.environ.get('PYTHONPATH', '')]))
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            start = time.perf_counter()
+            subprocess.run(argv, check=True, capture_output=True, cwd=code, env=env)
+            wall = time.perf_counter() - start
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            times[name].append((wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime))
+    return {name: {'wall_s': statistics.median(w for w, _ in runs), 'cpu_s': statistics.median(c for _, c in runs),
+                   'wall_runs_s': [w for w, _ in runs]} for name, runs in times.items()}
 
 
 def prepare(data: Path) -> tuple[dict, Path]:
@@ -120,13 +140,70 @@ def main() -> int:
     parser.add_argument('--repeat', type=int, default=3)
     parser.add_argument('--data', type=Path, default=Path('/tmp/prsm_lube_bench'),
                         help='where the simulated recordings are cached (default /tmp/prsm_lube_bench)')
+    parser.add_argument('--before', type=Path, default=None, metavar='CHECKOUT',
+                        help='also time prsm-lube assess with the code of this checkout (e.g. a worktree of main)')
+    parser.add_argument('--processes-only', action='store_true',
+                        help='only the whole processes (leave out the in-process throughput and memory table)')
+    parser.add_argument('--name', default='assess_throughput', help='results file name (default assess_throughput)')
     args = parser.parse_args()
     bags, calibration = prepare(args.data)
+    rows = [] if args.processes_only else throughput_rows(bags, calibration, args.repeat)
+    hour_bag = bags['1 h'][0]
+    processes = whole_processes(process_commands(hour_bag, calibration, args.data, args.before), args.repeat)
+    ratios = process_ratios(processes)
+    goals = {'prsm-lube --help < 0.2 s': processes['prsm-lube --help']['wall_s'] < 0.2,
+             'assess CPU <= 0.5 x the rosbags script\'s': ratios['assess (1 h)']['cpu_over_rosbags'] <= 0.5,
+             'assess <= 0.5 x the rosbags script': ratios['assess (1 h)']['over_rosbags'] <= 0.5,
+             'assess <= 3 x the floor': ratios['assess (1 h)']['over_floor'] <= 3.0}
+    hour = next((r for r in rows if r['recording'] == '1 h'), None)
+    if hour is not None:
+        goals.update({'assess_x_realtime >= 5000': hour['assess_x_realtime'] >= 5000,
+                      'assess_over_bare <= 2': hour['assess_over_bare'] <= 2.0})
+    document = {'benchmark': 'assess_throughput', 'command': 'python benchmarks/assess_throughput.py '
+                + ' '.join(sys.argv[1:]),
+                'machine': {'python': platform.python_version(), 'processor': platform.processor() or
+                            platform.machine(), 'cpus': _cpus(), 'load_average_1min_at_end': os.getloadavg()[0]},
+                'repeat': args.repeat, 'rows': rows, 'whole_process': processes, 'ratios': ratios,
+                'before': str(args.before) if args.before else None, 'goals': goals}
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f'{args.name}.json').write_text(json.dumps(document, indent=1))
+    lines = [f'# Assessment throughput (`{document["command"]}`)', '',
+             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, 1-min load average '
+             f'{document["machine"]["load_average_1min_at_end"]:.1f} at the end.', '']
+    if rows:
+        lines += [f'In-process, best of {args.repeat}; times exclude the one-time set-up of a process (building the '
+                  'ROS type store for the layout checks), shown apart.', '',
+                  '| recording | size MiB | bare read s | assess s | assess x real time | assess / bare '
+                  '| peak RSS bare MiB | peak RSS assess MiB | one-time set-up s |',
+                  '|---|---|---|---|---|---|---|---|---|']
+        for r in rows:
+            lines.append(f'| {r["recording"]} | {r["size_mib"]:.0f} | {r["bare_read_s"]:.3f} | {r["assess_s"]:.3f} | '
+                         f'{r["assess_x_realtime"]:.0f} | {r["assess_over_bare"]:.2f} | {r["bare_peak_rss_mib"]:.0f} | '
+                         f'{r["assess_peak_rss_mib"]:.0f} | {r["setup_s"]:.3f} |')
+        lines.append('')
+    lines += [f'Whole processes on the hour ({hour_bag.name}), start to exit, median of {args.repeat} interleaved '
+              'rounds' + (f'; "before": the code of {args.before}' if args.before else '') + ':', '',
+              '| command | wall s | CPU s | wall / rosbags script | wall / floor | CPU / rosbags script '
+              '| CPU / floor |',
+              '|---|---|---|---|---|---|---|']
+    for name, measured in processes.items():
+        ratio = ratios.get(name, {})
+        lines.append(f'| {name} | {measured["wall_s"]:.3f} | {measured["cpu_s"]:.3f} | '
+                     f'{_ratio(ratio.get("over_rosbags"))} | {_ratio(ratio.get("over_floor"))} | '
+                     f'{_ratio(ratio.get("cpu_over_rosbags"))} | {_ratio(ratio.get("cpu_over_floor"))} |')
+    lines += ['', 'Goals: ' + ', '.join(f'{goal}: {"met" if ok else "NOT met"}' for goal, ok in goals.items())]
+    (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
+    print('\n'.join(lines))
+    return 0
+
+
+def throughput_rows(bags: dict, calibration: Path, repeat: int) -> list[dict]:
+    """In-process bare read and assessment of each recording, best of ``repeat`` fresh processes."""
     rows = []
     for label, (bag, seconds) in bags.items():
         size = sum(p.stat().st_size for p in bag.rglob('*') if p.is_file())
-        bare = measure('bare', bag, calibration, args.repeat)
-        assess = measure('assess', bag, calibration, args.repeat)
+        bare = measure('bare', bag, calibration, repeat)
+        assess = measure('assess', bag, calibration, repeat)
         rows.append({'recording': label, 'duration_s': seconds, 'size_mib': size / 2 ** 20,
                      'bare_read_s': bare['seconds'], 'assess_s': assess['seconds'],
                      'assess_x_realtime': seconds / assess['seconds'],
@@ -136,45 +213,38 @@ def main() -> int:
                      'setup_s': assess['setup_seconds'],
                      'messages': bare['messages'], 'windows': assess['windows'],
                      'assessed_runs': assess['assessed_runs']})
-    hour = next(r for r in rows if r['recording'] == '1 h')
-    hour_bag = bags['1 h'][0]
+    return rows
+
+
+def process_commands(hour_bag: Path, calibration: Path, data: Path,
+                     before: Path | None) -> dict[str, tuple[list[str], Path]]:
+    """The whole-process commands: name -> (argv, checkout whose code runs)."""
     cli = [sys.executable, '-m', 'prsm_lube_ros.cli']
-    processes = {
-        'prsm-lube --help': whole_process(cli + ['--help'], args.repeat),
-        'prsm-lube assess (1 h)': whole_process(cli + ['assess', str(hour_bag), '--calibration', str(calibration),
-                                                       '--json', str(args.data / 'assess.json')], args.repeat),
-        'rosbags script (1 h)': whole_process([sys.executable, str(ROOT / 'benchmarks' / 'rosbags_baseline.py'),
-                                               str(hour_bag)], args.repeat),
-    }
-    document = {'benchmark': 'assess_throughput', 'command': 'python benchmarks/assess_throughput.py',
-                'machine': {'python': platform.python_version(), 'processor': platform.processor() or
-                            platform.machine(), 'cpus': _cpus(), 'load_average_1min_at_end': os.getloadavg()[0]},
-                'repeat': args.repeat, 'rows': rows, 'whole_process_s': processes,
-                'goals': {'assess_x_realtime >= 5000': hour['assess_x_realtime'] >= 5000,
-                          'assess_over_bare <= 2': hour['assess_over_bare'] <= 2.0,
-                          'prsm-lube --help < 0.2 s': processes['prsm-lube --help'] < 0.2,
-                          'prsm-lube assess faster than the rosbags script':
-                              processes['prsm-lube assess (1 h)'] < processes['rosbags script (1 h)']}}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / 'assess_throughput.json').write_text(json.dumps(document, indent=1))
-    lines = ['# Assessment throughput (`python benchmarks/assess_throughput.py`)', '',
-             f'Python {document["machine"]["python"]}, {document["machine"]["cpus"]} CPUs, 1-min load average '
-             f'{document["machine"]["load_average_1min_at_end"]:.1f} at the end, best of {args.repeat}.',
-             'Times exclude the one-time set-up of a process (building the ROS type store for the layout '
-             'checks), shown apart.', '',
-             '| recording | size MiB | bare read s | assess s | assess x real time | assess / bare '
-             '| peak RSS bare MiB | peak RSS assess MiB | one-time set-up s |', '|---|---|---|---|---|---|---|---|---|']
-    for r in rows:
-        lines.append(f'| {r["recording"]} | {r["size_mib"]:.0f} | {r["bare_read_s"]:.3f} | {r["assess_s"]:.3f} | '
-                     f'{r["assess_x_realtime"]:.0f} | {r["assess_over_bare"]:.2f} | {r["bare_peak_rss_mib"]:.0f} | '
-                     f'{r["assess_peak_rss_mib"]:.0f} | {r["setup_s"]:.3f} |')
-    lines += ['', f'Whole processes, start to exit, best of {args.repeat}:', '', '| command | s |', '|---|---|']
-    lines += [f'| {name} | {seconds:.3f} |' for name, seconds in processes.items()]
-    lines += ['', 'Goals: ' + ', '.join(
-        f'{goal}: {"met" if ok else "NOT met"}' for goal, ok in document['goals'].items())]
-    (RESULTS / 'assess_throughput.md').write_text('\n'.join(lines) + '\n')
-    print('\n'.join(lines))
-    return 0
+    assess = ['assess', str(hour_bag), '--calibration', str(calibration)]
+    commands = {'prsm-lube --help': (cli + ['--help'], ROOT),
+                'assess (1 h)': (cli + assess + ['--json', str(data / 'assess.json')], ROOT)}
+    if before is not None:
+        commands['assess (1 h), before'] = (cli + assess + ['--json', str(data / 'assess_before.json')],
+                                            before.resolve())
+    commands['rosbags script (1 h)'] = ([sys.executable, str(ROOT / 'benchmarks' / 'rosbags_baseline.py'),
+                                         str(hour_bag)], ROOT)
+    commands['floor: bytes read once (1 h)'] = ([sys.executable, str(ROOT / 'benchmarks' / 'bytes_floor.py'),
+                                                 str(hour_bag)], ROOT)
+    return commands
+
+
+def process_ratios(processes: dict[str, dict]) -> dict[str, dict]:
+    """Each assess's wall time over the rosbags script's and over the floor's; the same for CPU time."""
+    rosbags, floor = processes['rosbags script (1 h)'], processes['floor: bytes read once (1 h)']
+    return {name: {'over_rosbags': measured['wall_s'] / rosbags['wall_s'],
+                   'over_floor': measured['wall_s'] / floor['wall_s'],
+                   'cpu_over_rosbags': measured['cpu_s'] / rosbags['cpu_s'],
+                   'cpu_over_floor': measured['cpu_s'] / floor['cpu_s']}
+            for name, measured in processes.items() if name.startswith('assess')}
+
+
+def _ratio(value: float | None) -> str:
+    return '' if value is None else f'{value:.2f}'
 
 
 def _cpus() -> int:

@@ -23,7 +23,7 @@ raw RMS instead (files from before analysis bands: no indicators), the load
 this benchmark measured before issue 34.
 
 Inside the estimator, ``arrival`` is the entry of an executor callback (after
-rclpy has taken and deserialized its message); ``latency`` is from the arrival
+rclpy has taken its message: raw bytes for the estimator's raw subscriptions); ``latency`` is from the arrival
 of the callback that closes a window to the return of that window's
 ``LubricationState`` ``publish()`` (whatever the callback drains from other
 queues first is inside it).  ``close delay`` is wall time at that return minus
@@ -84,10 +84,15 @@ def _percentiles(values, *qs):
 
 
 # -- the estimator process --------------------------------------------------------------------------------
-def run_estimator(count: int, duration: float, folder: str, profile: bool = False, condition_every: int = 1) -> dict:
-    """Spin a timed LubricationEstimator for ``count`` actuators; return what was measured."""
+def run_estimator(count: int, duration: float, folder: str, profile: bool = False, condition_every: int = 1,
+                  code: str = '', executor_kind: str = 'single') -> dict:
+    """Spin a timed LubricationEstimator (of checkout ``code``, default this one) for ``count`` actuators.
+
+    ``executor_kind``: ``single`` (rclpy's SingleThreadedExecutor) or ``events``
+    (``rclpy.experimental.EventsExecutor``).  Returns what was measured.
+    """
     os.sched_setaffinity(0, {ESTIMATOR_CPU})
-    sys.path.insert(0, str(ROOT))
+    sys.path.insert(0, code or str(ROOT))
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter import Parameter
@@ -142,6 +147,11 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
             if state['measuring']:
                 record['processing'].setdefault('closing', []).append(clock() - start)
 
+    if executor_kind == 'events':
+        # The EventsExecutor runs every subscription's callback as its messages arrive, whatever the callback
+        # group says: the fast drain's queues would be emptied into its no-op callback.  Plain callbacks then.
+        import prsm_lube_ros.nodes.fast_drain as fast_drain
+        fast_drain.missing_api = lambda: 'a drain the EventsExecutor honours (benchmark: plain callbacks)'
     rclpy.init(args=['estimator'])
     node = TimedEstimator(parameter_overrides=[
         Parameter('actuators', value=actuator_names(count)),
@@ -153,7 +163,11 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     for subscription in node.subscriptions:        # every callback the executor runs marks an arrival
         subscription.callback = timed_callback(subscription.callback)
     delay = node._settings.completion_delay
-    executor = SingleThreadedExecutor()
+    if executor_kind == 'events':
+        from rclpy.experimental import EventsExecutor
+        executor = EventsExecutor()    # its node was built with plain callbacks (see below)
+    else:
+        executor = SingleThreadedExecutor()
     executor.add_node(node)
     print('ready', flush=True)
     deadline = time.monotonic() + 60.0
@@ -300,8 +314,8 @@ def benchmark_calibration(raw_band: bool = False):
 
 
 def measure(count: int, duration: float, profile: bool = False, raw_band: bool = False,
-            condition_every: int = 1) -> dict:
-    """One level: N actuators for ``duration`` s of measurement; a summary dict."""
+            condition_every: int = 1, code: str = '', executor_kind: str = 'single') -> dict:
+    """One level: N actuators for ``duration`` s of measurement (estimator of checkout ``code``); a summary dict."""
     sys.path.insert(0, str(ROOT))
     import numpy as np
     from prsm_lube_ros.estimation.calibration_file import save_calibration
@@ -317,8 +331,8 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         out = os.path.join(folder, 'estimator.json')
         estimator = subprocess.Popen([sys.executable, __file__, '--role', 'estimator', '--count', str(count),
                                       '--duration', str(duration), '--folder', folder, '--out', out,
-                                      '--condition-every', str(condition_every)]
-                                     + (['--profile'] if profile else []),
+                                      '--condition-every', str(condition_every), '--executor', executor_kind]
+                                     + (['--code', code] if code else []) + (['--profile'] if profile else []),
                                      env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         assert estimator.stdout.readline().strip() == 'ready', estimator.stderr.read()
         generator = subprocess.run([sys.executable, __file__, '--role', 'generator', '--count', str(count),
@@ -386,8 +400,8 @@ def markdown(results: dict) -> str:
                 'analysis band and healthy baseline: condition indicators on every '
                 f'{results.get("condition_every", 1)}. window, surface defect screen on.')
              + f' Commit {results.get("commit", "?")}.', '',
-             'Latency: entry of the executor callback that closes a window (after rclpy took and deserialized '
-             'its message; any queues the callback drains are inside the latency) to the return of the '
+             'Latency: entry of the executor callback that closes a window (after rclpy took its message, raw or '
+             'deserialized; any queues the callback drains are inside the latency) to the return of the '
              'LubricationState `publish()`. Close delay: wall time at that return minus (window end + '
              'completion_delay), the earliest moment every input of the window can have been sent; it also '
              'counts transport, waiting for the closing callback, and one block (0.1 s): a stream has passed a '
@@ -442,6 +456,16 @@ def main(argv=None) -> int:
     parser.add_argument('--name', default='live_latency', help='results file name in benchmarks/results')
     parser.add_argument('--condition-every', type=int, default=1,
                         help="the estimator's condition_every: indicators on every k-th window only")
+    parser.add_argument('--executor', choices=('single', 'events'), default='single',
+                        help="the estimator's executor: rclpy's SingleThreadedExecutor (default) or the "
+                        'EventsExecutor of rclpy.experimental')
+    parser.add_argument('--code', default='', metavar='CHECKOUT',
+                        help='run the estimator of this checkout (e.g. a worktree of main: the code before a change)')
+    parser.add_argument('--compare', default='', metavar='CHECKOUT:EXECUTOR,...',
+                        help='instead of one configuration, alternate these at each level (CHECKOUT "." for this '
+                        'one), e.g. "/tmp/main:single,.:single,.:events": before and after measured in one run')
+    parser.add_argument('--keep-going', action='store_true',
+                        help='with --compare, measure every level even for a configuration already behind')
     parser.add_argument('--profile', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--role', choices=('estimator', 'generator'), help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, help=argparse.SUPPRESS)
@@ -449,7 +473,8 @@ def main(argv=None) -> int:
     parser.add_argument('--out', help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == 'estimator':
-        record = run_estimator(args.count, args.duration, args.folder, args.profile, args.condition_every)
+        record = run_estimator(args.count, args.duration, args.folder, args.profile, args.condition_every,
+                               args.code, args.executor)
         Path(args.out).write_text(json.dumps(record))
         return 0
     if args.role == 'generator':
@@ -458,9 +483,12 @@ def main(argv=None) -> int:
     if len(os.sched_getaffinity(0)) < 2:
         print('live_latency: needs two CPUs (estimator and generator on one each)', file=sys.stderr)
         return 2
+    if args.compare:
+        return compare(args)
     levels = []
     for count in (int(n) for n in args.levels.split(',')):
-        summary = measure(count, args.duration, raw_band=args.raw_band, condition_every=args.condition_every)
+        summary = measure(count, args.duration, raw_band=args.raw_band, condition_every=args.condition_every,
+                          code=args.code, executor_kind=args.executor)
         levels.append(summary)
         print(f'N={count}: CPU {100 * summary["cpu_utilisation"]:.0f} %, latency p99 '
               f'{summary["latency_p99_ms"]:.2f} ms, lag p99 {summary["lag_p99_s"]:.3f} s, '
@@ -489,6 +517,75 @@ def main(argv=None) -> int:
     (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
     (RESULTS / f'{args.name}.md').write_text(markdown(results))
     print(markdown(results))
+    return 0
+
+
+def compare(args: argparse.Namespace) -> int:
+    """Configurations (checkout and executor) measured alternately at each level: before and after in one run.
+
+    At each level every configuration still keeping up runs once, in turn, so
+    the other sessions' load falls on them alike; a configuration that falls
+    behind is dropped from the higher levels.  Writes
+    ``benchmarks/results/<name>.{json,md}``: per configuration the largest N
+    served and its latency p99, and every level's row.
+    """
+    configurations = []
+    for item in args.compare.split(','):
+        code, _, executor = item.rpartition(':')
+        code = '' if code in ('', '.') else str(Path(code).resolve())
+        configurations.append({'label': f'{Path(code).name if code else "this checkout"}, {executor} executor',
+                               'code': code, 'executor': executor, 'levels': [], 'behind': False})
+    for count in (int(n) for n in args.levels.split(',')):
+        for config in configurations:
+            if config['behind']:
+                continue
+            summary = measure(count, args.duration, raw_band=args.raw_band, condition_every=args.condition_every,
+                              code=config['code'], executor_kind=config['executor'])
+            config['levels'].append(summary)
+            print(f'{config["label"]}: N={count}: CPU {100 * summary["cpu_utilisation"]:.0f} %, latency p99 '
+                  f'{summary["latency_p99_ms"]:.2f} ms, lag p99 {summary["lag_p99_s"]:.3f} s, '
+                  f'behind: {", ".join(summary["behind"]) or "no"}', flush=True)
+            config['behind'] = bool(summary['behind']) and not args.keep_going
+    for config in configurations:
+        served = [r for r in config['levels'] if not r['behind']]
+        config['max_actuators_real_time'] = served[-1]['actuators'] if served else 0
+        config['latency_p99_ms_at_max'] = served[-1]['latency_p99_ms'] if served else math.nan
+        config['cpu_at_max'] = served[-1]['cpu_utilisation'] if served else math.nan
+        # The estimator's own CPU per actuator (rusage: what it did, whatever else ran on its core), and the
+        # actuators 90 % of a core would serve at that cost: comparable on a loaded machine where the largest
+        # N served is not.
+        costs = [r['cpu_utilisation'] / r['actuators'] for r in served]
+        config['cpu_ms_per_actuator_s'] = 1e3 * min(costs) if costs else math.nan
+        config['actuators_per_core_from_cpu'] = 0.9 / min(costs) if costs else math.nan
+    commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=ROOT, capture_output=True, text=True)
+    results = {'python': f'Python {platform.python_version()}', 'cpus': os.cpu_count(), 'duration': args.duration,
+               'raw_band': args.raw_band, 'condition_every': args.condition_every, 'commit': commit.stdout.strip(),
+               'load_average_1min_at_end': os.getloadavg()[0], 'configurations': configurations,
+               'command': 'python benchmarks/live_latency.py ' + ' '.join(sys.argv[1:])}
+    lines = [f'# Live estimator capacity, configurations side by side (`{results["command"]}`)', '',
+             f'{results["python"]}, {results["cpus"]} CPUs, 1-min load average '
+             f'{results["load_average_1min_at_end"]:.1f}'
+             f' at the end (a shared machine: compare the configurations, measured alternately at each level, '
+             f'not the absolute figures); estimator pinned to CPU {ESTIMATOR_CPU}, {args.duration:g} s per level. '
+             + ('Calibrations of the raw RMS: no condition indicators.' if args.raw_band else
+                f'Analysis band and baseline: condition indicators on every {args.condition_every}. window.'),
+             ' CPU ms per actuator-s: the estimator process\'s own CPU time (rusage) per actuator and second, the '
+             'lowest over the levels it kept up with; actuators per core from it: 90 % of a core over that cost.',
+             '', '| configuration | largest N served | latency p99 ms there | CPU there | CPU ms per actuator-s | '
+             'actuators per core from CPU |', '|---|---|---|---|---|---|']
+    lines += [f'| {c["label"]} | {c["max_actuators_real_time"]} | {c["latency_p99_ms_at_max"]:.2f} | '
+              f'{100 * c["cpu_at_max"]:.0f} % | {c["cpu_ms_per_actuator_s"]:.2f} | '
+              f'{c["actuators_per_core_from_cpu"]:.0f} |' for c in configurations]
+    lines += ['', '| configuration | actuators | CPU | CPU ms per actuator-s | latency p50 ms | latency p99 ms | '
+              'lag p99 s | windows out | falls behind |', '|---|---|---|---|---|---|---|---|---|']
+    lines += [f'| {c["label"]} | {r["actuators"]} | {100 * r["cpu_utilisation"]:.0f} % | '
+              f'{1e3 * r["cpu_utilisation"] / r["actuators"]:.2f} | {r["latency_p50_ms"]:.2f} | '
+              f'{r["latency_p99_ms"]:.2f} | {r["lag_p99_s"]:.3f} | {100 * r["windows_published_fraction"]:.0f} % | '
+              f'{", ".join(r["behind"]) or "no"} |' for c in configurations for r in c['levels']]
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
+    (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
+    print('\n'.join(lines))
     return 0
 
 

@@ -15,7 +15,8 @@ the node's Assessor then leaves out each window's own screen).
 Three calibrations as in ``live_latency.py``: raw RMS (no indicators), band
 (indicators computed), band and baseline (indicators and screen).
 
-Usage: ``python benchmarks/live_window_cost.py [--seconds 120] [--repeat 3] [--name live_window_cost]``
+Usage: ``python benchmarks/live_window_cost.py [--seconds 120] [--repeat 3] [--name live_window_cost]
+[--code CHECKOUT]`` (``--code``: the code of another checkout, e.g. a worktree of main, measured by this file)
 (after ``source .env-jazzy.sh``); the best of the repeats per configuration goes to
 ``benchmarks/results/<name>.{json,md}``.
 """
@@ -68,10 +69,8 @@ def cost(items, mode: str, seconds: float) -> dict:
     builder = WindowBuilder(settings, lead=0.005)
     assessor = Assessor(calibration)
     monitor = None
-    if mode == 'screen':      # as the node does it: pooled screen, no per-window screen in its Assessor
+    if mode == 'screen':      # as the node does it: the pooled screen of its last windows beside the Assessor
         from prsm_lube_ros.estimation.surface_health import SurfaceMonitor
-        from prsm_lube_ros.nodes.lubrication_estimator import _PooledScreenAssessor
-        assessor = _PooledScreenAssessor(calibration)
         monitor = SurfaceMonitor(settings.defect_orders)
         monitor.set_baseline(calibration.condition_baseline)
     windows = 0
@@ -94,7 +93,11 @@ def main(argv=None) -> int:
     parser.add_argument('--seconds', type=float, default=120.0, help='s of one actuator\'s stream')
     parser.add_argument('--repeat', type=int, default=3, help='repeats per configuration (the best is kept)')
     parser.add_argument('--name', default='live_window_cost', help='results file name in benchmarks/results')
+    parser.add_argument('--code', default='', metavar='CHECKOUT',
+                        help='measure the code of this checkout (e.g. a worktree of main) instead of this one\'s')
     args = parser.parse_args(argv)
+    if args.code:       # before anything imports the package
+        sys.path.insert(0, str(Path(args.code).resolve()))
     items = stream(args.seconds)
     try:
         import prsm_lube_ros.estimation.surface_health  # noqa: F401
@@ -108,7 +111,8 @@ def main(argv=None) -> int:
         rows.append(best)
         print(f'{mode}: {best["cpu_ms_per_actuator_second"]:.2f} ms CPU per actuator-second '
               f'({best["windows"]} windows)', flush=True)
-    commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=ROOT, capture_output=True, text=True)
+    commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=args.code or ROOT, capture_output=True,
+                            text=True)
     results = {'python': f'Python {platform.python_version()}', 'commit': commit.stdout.strip() or '?',
                'seconds': args.seconds, 'repeat': args.repeat, 'rows': rows}
     words = {'raw': 'raw RMS (no indicators)',

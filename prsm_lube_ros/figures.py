@@ -94,7 +94,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
 
     def dates(seconds: npt.ArrayLike) -> list[datetime.datetime]:
         return [datetime.datetime.fromtimestamp(float(t), datetime.UTC) for t in np.atleast_1d(seconds)]
-    fig, ax = plt.subplots(figsize=(8.0, 4.4), dpi=120)
+    fig, ax = plt.subplots(figsize=(10.5, 4.4), dpi=120)
     if len(times):
         ax.errorbar(dates(times), values, yerr=errors, fmt='o', markersize=3, capsize=2,
                     label='recordings (one-sigma)')
@@ -102,7 +102,7 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     if len(band_times) and np.isfinite(centre).any():
         ax.plot(dates(band_times), centre, color='C1', label='forecast')
         ax.fill_between(dates(band_times), low, high, color='C1', alpha=0.25,
-                        label=f'{confidence:.0%} band: theta_Oil itself (fit state, calibration, usage scatter)')
+                        label=f'{confidence:.0%} band of theta_Oil (fit, calibration, usage, model form)')
     for i, (label, value) in enumerate(levels.items()):
         ax.axhline(value, color=('C3' if i else 'C8'), linestyle='--', linewidth=1, label=label)
     _crossing_marks(ax, crossings, dates, confidence)
@@ -120,7 +120,8 @@ def history_with_forecast(path: Path, times: Sequence[float], values: Sequence[f
     ax.set_xlabel('date (UTC)')
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7, loc='best')
+    # beside the axes, never over the data
+    ax.legend(fontsize=7, loc='upper left', bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(alpha=0.3)
     fig.autofmt_xdate()
     fig.tight_layout()

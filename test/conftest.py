@@ -6,6 +6,7 @@ Helpers that tests import by name (``bagfactory``, ``polling``,
 ``synthetic_inputs``) live in ``test/support/``, put on ``sys.path`` by the
 ``pythonpath`` setting in ``setup.cfg``.
 """
+import os
 from pathlib import Path
 import sys
 
@@ -13,6 +14,31 @@ import pytest
 
 #: The repository root (package.xml, config/, msg/).
 ROOT = Path(__file__).resolve().parents[1]
+
+#: Test modules that start ROS graphs (in this process or in a child) without the ``ros`` marker.
+GRAPH_MODULES = ('test/cli/test_demo.py', 'test/cli/test_signals.py')
+
+# Under pytest-xdist (tools/test runs two workers), each worker talks on its own DDS domain, so two
+# workers' graphs never see each other's topics; the modules derive theirs from this one.
+_WORKER = os.environ.get('PYTEST_XDIST_WORKER', '')
+if _WORKER.startswith('gw') and _WORKER[2:].isdigit():
+    _base = int(os.environ.get('ROS_DOMAIN_ID', '0') or 0)
+    os.environ['ROS_DOMAIN_ID'] = str((_base + 13 * int(_WORKER[2:])) % 100 + 100)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Put every test that runs a ROS graph in one xdist group: they run one after another on one worker.
+
+    Graph tests wait on discovery and timers; two of them at once on a 2-core machine, beside the CPU-bound
+    tests, is what makes them late. Without pytest-xdist the mark has no effect.
+    """
+    for item in items:
+        try:
+            path = Path(str(item.fspath)).resolve().relative_to(ROOT).as_posix()
+        except ValueError:
+            path = ''
+        if item.get_closest_marker('ros') or path.startswith('test/nodes/') or path in GRAPH_MODULES:
+            item.add_marker(pytest.mark.xdist_group('ros_graph'))
 
 
 @pytest.fixture(scope='session')

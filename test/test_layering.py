@@ -130,3 +130,93 @@ def test_the_checker_sees_an_upward_import(tmp_path):
     found = [target for _, target, _ in imports(fake / 'bad.py', ('physics', 'bad'))]
     assert found == [['estimation', 'calibration']]
     assert layer_of(found[0]) not in ALLOWED['physics']
+
+
+def _runtime_graph():
+    """Module -> modules it imports when it is imported: module-level imports outside ``if TYPE_CHECKING``.
+
+    A package ``__init__`` that imports its modules by name (``importlib.import_module(f'{__name__}.{id}')``,
+    the effect registries) imports every module of its folder.
+    """
+    graph = {}
+    for path, parts in modules():
+        name = '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+        tree = ast.parse(path.read_text())
+        top = [node for node in tree.body
+               if not (isinstance(node, ast.If) and 'TYPE_CHECKING' in ast.unparse(node.test))]
+        shallow = ast.Module(body=top, type_ignores=[])
+        targets = set()
+        for _, target, _ in imports_of_tree(shallow, parts):
+            if target:
+                targets.add('.'.join(target))
+        if parts[-1] == '__init__' and 'import_module' in path.read_text():
+            targets.update('.'.join((*parts[:-1], p.stem)) for p in path.parent.glob('*.py') if p.stem != '__init__')
+        graph[name] = targets
+    known = set(graph)
+    # a target may name an object inside a module (from .x import Name): keep the longest known module prefix
+    resolved = {}
+    for name, targets in graph.items():
+        out = set()
+        for target in targets:
+            pieces = target.split('.')
+            while pieces and '.'.join(pieces) not in known:
+                pieces.pop()
+            if pieces and '.'.join(pieces) != name:
+                out.add('.'.join(pieces))
+        resolved[name] = out
+    return resolved
+
+
+def imports_of_tree(tree, parts):
+    """:func:`imports` of an already parsed (and possibly trimmed) module tree."""
+    class _Path:
+        def read_text(self):
+            return ast.unparse(tree)
+    return imports(_Path(), parts)
+
+
+def _circles(graph):
+    """Strongly connected groups of more than one module (Tarjan)."""
+    index, low, stack, on, found, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                found.append(sorted(group))
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_circle_between_modules():
+    """Importing a module never needs a module that is itself still being imported (its import order by luck).
+
+    Package ``__init__`` modules are left out as targets of their own submodules' imports (Python runs a
+    package's ``__init__`` first by design); every other circle fails.
+    """
+    graph = _runtime_graph()
+    for name in graph:      # a submodule importing its own package's __init__ is no circle
+        graph[name] = {t for t in graph[name] if not name.startswith(t + '.')}
+    assert _circles(graph) == []
+
+
+def test_the_circle_check_sees_a_circle():
+    assert _circles({'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}}) == [['a', 'b', 'c']]

@@ -109,3 +109,15 @@ def test_setup_py_installs_the_requirement_files_and_ships_py_typed():
     assert calls == {'core', 'test'}
     assert "install_requires=requirements('core')" in source
     assert (root / 'prsm_lube_ros' / 'py.typed').is_file() and "'py.typed'" in source
+
+
+def test_python_requires_is_the_version_the_code_is_checked_for_and_needs():
+    """One answer: setup.py's python_requires is mypy's python_version, and the code uses what that version added."""
+    import configparser
+    root = Path(__file__).resolve().parents[1]
+    config = configparser.ConfigParser()
+    config.read(root / 'setup.cfg')
+    checked = config['mypy']['python_version']
+    assert re.search(r"python_requires='>=([0-9.]+)'", (root / 'setup.py').read_text()).group(1) == checked
+    sources = '\n'.join(p.read_text() for p in (root / 'prsm_lube_ros').rglob('*.py'))
+    assert checked == '3.11' and 'StrEnum' in sources and 'datetime.UTC' in sources    # both new in 3.11

@@ -30,7 +30,9 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
         description='Assess theta_oil for every steady window and every run of the recordings.')
     parser.add_argument('bags', nargs='+', metavar='BAG', help='rosbag2 folder or .mcap file')
     parser.add_argument('--calibration', required=True, metavar='CALIB.yaml')
-    parser.add_argument('--json', metavar='OUT.json', help='write runs and windows as JSON')
+    parser.add_argument('--json', metavar='OUT.json', help='write runs and windows as JSON (compact, one line)')
+    parser.add_argument('--indent', type=int, default=None, metavar='N',
+                        help='indent the --json output by N spaces a level, for people (default: compact)')
     add_recording_options(parser)
     parser.add_argument('--report', metavar='DIR',
                         help='write DIR/index.html with the condition figures of every recording: order and envelope '
@@ -77,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     calibration = load_calibration(args.calibration)
     actuator = load_actuator(args.actuator)
     settings = _window_settings(args, calibration, actuator)
+    _indent(args.indent)        # refused before the work, not after it
     report = _condition_report(calibration, settings, args.bags) if args.report else None
     job = BagJob(calibration, actuator.lead, settings, args.namespace,
                  hash_content=bool(args.history))
@@ -140,10 +143,18 @@ def _write_outputs(args: argparse.Namespace, results: Sequence[RecordingAssessme
         print(f'history {args.history}: {added} recordings added or replaced')
     if args.json:
         document = assessment_json(results, calibration)
-        write_json(args.json, document)
+        write_json(args.json, document, indent=_indent(args.indent))
         print(f'wrote {args.json}: {len(document["runs"])} runs, {len(document["windows"])} windows')
     if report is not None:
         print(f'wrote {report.write(args.report)}: condition figures of {len(report.runs)} runs')
+
+
+def _indent(spaces: int | None) -> int | None:
+    """``--indent``: None (compact) or spaces >= 0; a negative count is refused in one line."""
+    from ..errors import InputError
+    if spaces is not None and spaces < 0:
+        raise InputError(f'--indent {spaces}: give a number of spaces >= 0')
+    return spaces
 
 
 def _print_table(results: Sequence[RecordingAssessment], calibration: Calibration, calibration_path: str) -> None:

@@ -11,21 +11,21 @@ from pathlib import Path
 import sys
 from typing import TYPE_CHECKING
 
-from ..atomic_file import write_text_atomically
 from ..errors import ConfigError
 from ..validation import finite_or_none
 
 if TYPE_CHECKING:
     import argparse
-    from collections.abc import Callable, Iterable
+    from collections.abc import Callable, Iterable, Iterator
+    from typing import IO
 
     from tqdm import tqdm
 
     from ..estimation.pipeline import RecordingWindows
     from ..physics.actuator import Actuator
 
-__all__ = ['EXIT_USER_ERROR', 'add_band_option', 'add_recording_options', 'percent_updater', 'progress_bar',
-           'read_recordings', 'warn', 'write_json']
+__all__ = ['EXIT_USER_ERROR', 'HiddenBar', 'add_band_option', 'add_recording_options', 'json_pieces',
+           'percent_updater', 'progress_bar', 'read_recordings', 'warn', 'write_json']
 
 #: Exit status of a user error (bad file, bad option, unusable data).
 EXIT_USER_ERROR = 2
@@ -40,8 +40,14 @@ def add_recording_options(parser: argparse.ArgumentParser) -> None:
                         help='actuator geometry (default: the contract\'s default actuator)')
 
 
-def progress_bar(total: int, description: str, unit: str = '%') -> tqdm:
-    """A tqdm bar on stderr that hides itself when stderr is not a terminal; counts ``unit`` (default percent)."""
+def progress_bar(total: int, description: str, unit: str = '%') -> tqdm | HiddenBar:
+    """A tqdm bar on stderr, hidden when stderr is not a terminal; counts ``unit`` (default percent).
+
+    Hidden, it is a :class:`HiddenBar` and tqdm is not imported (a script or a
+    pipe pays nothing for a bar nobody sees).
+    """
+    if not _stderr_is_terminal():
+        return HiddenBar()
     from tqdm import tqdm
     if unit != '%':
         return tqdm(total=total, desc=description, unit=unit, disable=None, leave=False)
@@ -49,7 +55,29 @@ def progress_bar(total: int, description: str, unit: str = '%') -> tqdm:
                 bar_format='{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}')
 
 
-def percent_updater(bar: tqdm) -> Callable[[float], None]:
+class HiddenBar:
+    """The bar when stderr is no terminal: counts (``n``, as tqdm) and shows nothing."""
+
+    def __init__(self) -> None:
+        self.n: float = 0
+
+    def update(self, n: float = 1) -> None:
+        """Count ``n`` more."""
+        self.n += n
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+def _stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal (tqdm's ``disable=None`` test)."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):      # replaced or closed stderr
+        return False
+
+
+def percent_updater(bar: tqdm | HiddenBar) -> Callable[[float], None]:
     """A ``progress(fraction)`` callback that advances ``bar`` in whole percent."""
     last = [0]
 
@@ -76,8 +104,7 @@ def add_band_option(parser: argparse.ArgumentParser) -> None:
 def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
                     spectra: bool = False) -> tuple[list[RecordingWindows], Actuator]:
     """Windows of each recording (``RecordingWindows``) and the actuator, with a progress bar per file."""
-    from dataclasses import replace
-    from ..estimation.pipeline import analysis_settings, recording_windows, require_usable
+    from ..estimation.pipeline import analysis_settings, read_recordings as read
     from ..physics.actuator import load_actuator
     from ..physics.defect_orders import defect_orders
     from ..validation import require_positive
@@ -86,34 +113,75 @@ def read_recordings(paths: Iterable[str | Path], args: argparse.Namespace, *,
     settings = analysis_settings(require_positive('--window', args.window), spectra=spectra,
                                  band_high=None if band_high is None else require_positive('--band-high', band_high),
                                  defect_orders=defect_orders(actuator))
-    recordings = []
-    for path in paths:
-        bar = progress_bar(100, Path(path).name)
-        try:
-            recording = recording_windows(path, lead=actuator.lead, settings=settings, namespace=args.namespace,
-                                          on_problem=warn, progress=percent_updater(bar))
-        finally:
+    paths = list(paths)
+    bars: list[tqdm] = []
+
+    def bar_of(index: int) -> Callable[[float], None]:
+        for done in bars:
+            done.close()
+        bars[:] = [progress_bar(100, Path(paths[index]).name)]
+        return percent_updater(bars[0])
+    try:      # the band rule (the first recording's band is every later one's) is read_recordings'
+        recordings = read(paths, lead=actuator.lead, settings=settings, namespace=args.namespace, on_problem=warn,
+                          progress=bar_of)
+    finally:
+        for bar in bars:
             bar.close()
-        recordings.append(require_usable(recording, settings))
-        # The first recording's band (its upper edge chosen for its sample rate) is every later one's.
-        settings = replace(settings, band=recording.band)
     return recordings, actuator
 
 
-def write_json(path: str | Path, document: object) -> None:
-    """``document`` as indented JSON at ``path`` (folders made, written atomically); no NaN or infinity.
+def write_json(path: str | Path, document: object, indent: int | None = 1) -> None:
+    """``document`` as JSON at ``path`` (folders made, written atomically); no NaN or infinity.
 
+    ``indent`` spaces per level for people; ``None``: compact (no spaces, one
+    line), streamed out element by element of the top-level lists with the C
+    encoder, so a long window list is neither held twice nor encoded in Python.
     JSON has no NaN: a non-finite number that reached the document (the
     builders give ``None`` for them already) is written as ``null``, not a traceback.
     """
+    from ..atomic_file import write_atomically
+
+    def write(stream: IO[str]) -> None:
+        for piece in json_pieces(document, indent):
+            stream.write(piece)
     try:
-        text = json.dumps(document, indent=1, allow_nan=False)
-    except ValueError:      # "Out of range float values are not JSON compliant"
-        text = json.dumps(_finite_or_null(document), indent=1, allow_nan=False)
-    try:
-        write_text_atomically(Path(path), text)    # a full disk leaves the earlier file whole
+        write_atomically(Path(path), write, binary=False)    # a full disk leaves the earlier file whole
     except OSError as exc:
         raise ConfigError(f'{path}: cannot write ({exc.strerror or exc})') from None
+
+
+def json_pieces(document: object, indent: int | None = None) -> Iterator[str]:
+    """The JSON text of ``document`` in pieces (non-finite numbers as ``null``); compact when ``indent`` is None.
+
+    Compact: an object's members and a top-level list's items are encoded one
+    at a time by ``json.dumps`` (its C encoder); indented: the standard
+    encoder's ``iterencode``.
+    """
+    if indent is not None:
+        yield from json.JSONEncoder(indent=indent, allow_nan=False).iterencode(_finite_or_null(document))
+        return
+    if not isinstance(document, dict):
+        yield _compact(document)
+        return
+    yield '{'
+    for number, (key, value) in enumerate(document.items()):
+        yield (',' if number else '') + json.dumps(str(key)) + ':'
+        if isinstance(value, (list, tuple)):
+            yield '['
+            for position, item in enumerate(value):
+                yield (',' if position else '') + _compact(item)
+            yield ']'
+        else:
+            yield _compact(value)
+    yield '}'
+
+
+def _compact(value: object) -> str:
+    """``value`` as compact JSON, non-finite numbers as ``null``."""
+    try:
+        return json.dumps(value, separators=(',', ':'), allow_nan=False)
+    except ValueError:      # "Out of range float values are not JSON compliant"
+        return json.dumps(_finite_or_null(value), separators=(',', ':'), allow_nan=False)
 
 
 def _finite_or_null(value: object) -> object:

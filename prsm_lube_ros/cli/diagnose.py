@@ -68,10 +68,7 @@ def run(args: argparse.Namespace) -> int:
         print(f'record: {result.what_to_record}')
     if args.calibration_out:
         from ..estimation.calibration_file import save_calibration
-        from ..estimation.pipeline import with_band_and_domain
-        from ..estimation.windowing import usable_windows
-        used = [w for rec in recordings for w in usable_windows(rec.windows)]
-        save_calibration(with_band_and_domain(result.calibration(), recordings[0].band, used), args.calibration_out)
+        save_calibration(result.calibration(), args.calibration_out)     # with the band and domain it was fitted in
         print(f'wrote {args.calibration_out}')
     if args.report:
         from ..atomic_file import staged_folder

@@ -5,7 +5,11 @@
 For the people who plan maintenance: every figure is stated as of a date
 (``--as-of``, default now): days to go with their interval (``--level``),
 overdue, "may have crossed" with its probability, and the probability of
-crossing by a chosen date (``--by``).  ``--backtest DAYS`` forecasts from the
+crossing by a chosen date (``--by``).  Actuators are ranked by the next
+crossing of either level, each with its last recording, the data's age
+(stale beyond ``--stale-days``) and theta_Oil forecast at the as-of date;
+trend.md, trend.csv and the one-page trend.html show that
+(:mod:`.trend_report`).  ``--backtest DAYS`` forecasts from the
 history cut DAYS earlier and scores it against what was measured since.
 
 An actuator whose history holds a run the defect screen flagged (from the
@@ -33,7 +37,7 @@ if TYPE_CHECKING:
     import numpy.typing as npt
 
     from ..fleet.forecast import ActuatorForecast, FleetRecords, RecordingPoint
-    from ..fleet.planner import PlannedCrossing
+    from ..fleet.planner import PlannerRow
 
     #: Each actuator's recording points.
     _Points = Mapping[str, Sequence[RecordingPoint]]
@@ -42,10 +46,12 @@ if TYPE_CHECKING:
     #: Odometers per actuator: (times s since the epoch, cumulative revolutions).
     _Odometers = dict[str, tuple[list[float], list[float]]] | None
 
-__all__ = ['BY_DAYS', 'TrendOptions', 'add_command', 'run']
+__all__ = ['BY_DAYS', 'STALE_DAYS', 'TrendOptions', 'add_command', 'run']
 
 #: days after the as-of date of the default ``--by`` date
 BY_DAYS = 30.0
+#: the default of ``--stale-days`` (:data:`~prsm_lube_ros.fleet.planner.STALE_DAYS`, without importing numpy here)
+STALE_DAYS = 7.0
 
 
 def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -54,13 +60,15 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
         'trend', help='theta_oil history per actuator and the forecast of the warn and error crossings',
         description='Fit theta_oil = a exp(-t/tau) per lubrication cycle to each actuator\'s history (written '
         'by assess --history), relubrications found as jumps up or given, and forecast when theta_oil crosses '
-        'the warn and error levels, with an interval. Table most urgent first, JSON and dated plots, as of a '
+        'the warn and error levels, with an interval. Table most urgent first (the next crossing of either level), '
+        'CSV, JSON, dated plots and one HTML page, as of a '
         'date; --backtest scores the forecast against later recordings. An actuator with a run the surface '
         'defect screen of assess flagged gets no forecast from then on (theta_oil is no lubrication measure) '
         'and comes first: it needs an inspection.')
     parser.add_argument('history', metavar='HISTORY', help='history folder written by prsm-lube assess --history')
     parser.add_argument('--actuator', default=None, metavar='ID', help='only this actuator')
-    parser.add_argument('--report', required=True, metavar='DIR', help='folder for trend.json, trend.md, plots')
+    parser.add_argument('--report', required=True, metavar='DIR',
+                        help='folder for trend.html (one self-contained page), trend.md, trend.csv, trend.json, plots')
     parser.add_argument('--warn-below', type=float, default=0.85, help='warn level (estimator default 0.85)')
     parser.add_argument('--error-below', type=float, default=0.70, help='error level (estimator default 0.70)')
     parser.add_argument('--as-of', default=None, metavar='DATE',
@@ -78,6 +86,9 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
     parser.add_argument('--relubrications', default=None, metavar='CSV',
                         help='known relubrications, lines "actuator,time" (ISO 8601 or s since the epoch); '
                         'actuators not listed have theirs found as jumps up in theta_oil')
+    parser.add_argument('--stale-days', type=float, default=STALE_DAYS, metavar='DAYS',
+                        help=f'flag an actuator whose last recording is more than DAYS before the as-of date '
+                        f'(default {STALE_DAYS:g})')
     parser.add_argument('--odometer', default=None, metavar='CSV',
                         help='cumulative screw revolutions, lines "actuator,time,revolutions": adds the fit against '
                         'revolutions (N_d) and the odometer reading at each crossing')
@@ -92,6 +103,7 @@ class TrendOptions:
     confidence: float
     as_of: float
     by: float
+    stale_days: float = STALE_DAYS
 
 
 def _options(args: argparse.Namespace) -> TrendOptions:
@@ -105,7 +117,10 @@ def _options(args: argparse.Namespace) -> TrendOptions:
     now = datetime.datetime.now(datetime.UTC).timestamp()
     as_of = _date('--as-of', args.as_of) if args.as_of else now
     by = _date('--by', args.by) if args.by else as_of + BY_DAYS * 86400.0
-    return TrendOptions((args.warn_below, args.error_below), args.level, as_of, by)
+    stale_days = getattr(args, 'stale_days', STALE_DAYS)
+    if not stale_days > 0:
+        raise InputError(f'--stale-days must be > 0, got {stale_days:g}')
+    return TrendOptions((args.warn_below, args.error_below), args.level, as_of, by, stale_days)
 
 
 def _date(option: str, text: str) -> float:
@@ -170,8 +185,9 @@ def _forecast(args: argparse.Namespace, options: TrendOptions, records: FleetRec
     """Forecast, plan, print the table and write trend.json, trend.md and the plots."""
     from ..fleet.forecast import forecast_points
     from ..atomic_file import write_text_atomically
-    from ..fleet.planner import plan
+    from ..fleet.planner import planner_rows
     from .common import write_json
+    from .trend_report import csv_text, html_page, markdown_table, PageContext
     from ..errors import InputError
     forecasts = forecast_points(records.points, relubrications=relubrications, levels=options.levels,
                                 only=args.actuator, odometers=odometers, confidence=options.confidence,
@@ -180,17 +196,20 @@ def _forecast(args: argparse.Namespace, options: TrendOptions, records: FleetRec
         raise InputError(f'{args.history}: no assessed recording made by --as-of {_utc(options.as_of)}')
     for forecast in forecasts:
         forecast.revolutions_reason = odometer_reasons.get(forecast.actuator, '')
-    plans = {forecast.actuator: plan(forecast, options.as_of, options.by) for forecast in forecasts}
-    parts = (_table(forecasts, plans, options, bool(args.odometer)), _defect_lines(forecasts),
-             _note_lines(records.notes))
+    rows = planner_rows(forecasts, options.as_of, options.by, options.stale_days)
+    context = PageContext(options.levels, options.confidence, options.as_of, options.by, options.stale_days)
+    odometer = {row.actuator: _odometer_cells(row.forecast) for row in rows
+                if not row.forecast.reason} if args.odometer else {}
+    parts = (markdown_table(rows, context, odometer), _defect_lines(forecasts), _note_lines(records.notes))
     text = '\n\n'.join(part for part in parts if part)
     print(text)
-    for forecast in forecasts:
-        _plot(report, forecast, options)
-    write_json(report / 'trend.json', _document(args, options, forecasts, plans, records.notes))
+    plots = {row.actuator: _plot(report, row.forecast, options) for row in rows}
+    write_json(report / 'trend.json', _document(args, options, rows, records.notes))
     write_text_atomically(report / 'trend.md', f'# theta_Oil trend as of {_utc(options.as_of)}, most urgent '
                           f'first\n\n{text}\n')
-    print(f'wrote {report}: trend.json, trend.md and {len(forecasts)} plots')
+    write_text_atomically(report / 'trend.csv', csv_text(rows, context))
+    write_text_atomically(report / 'trend.html', html_page(rows, context, plots, records.notes, str(args.history)))
+    print(f'wrote {report}: trend.html, trend.json, trend.md, trend.csv and {len(rows)} plots')
 
 
 def _defect_lines(forecasts: Sequence[ActuatorForecast]) -> str:
@@ -223,55 +242,20 @@ def _utc(seconds: float | None) -> str:
     return utc_minutes(seconds) or 'never'
 
 
-def _document(args: argparse.Namespace, options: TrendOptions, forecasts: Sequence[ActuatorForecast],
-              plans: Mapping[str, list[PlannedCrossing]], notes: Sequence[str]) -> dict:
-    """trend.json: options, notes, and per actuator the forecast with its planner view."""
+def _document(args: argparse.Namespace, options: TrendOptions, rows: Sequence[PlannerRow],
+              notes: Sequence[str]) -> dict:
+    """trend.json: options, notes, and per actuator (most urgent first) the forecast with its planner view."""
     actuators = []
-    for forecast in forecasts:
-        entry = forecast.as_json()
-        entry['planner'] = [item.as_json() for item in plans[forecast.actuator]]
-        entry['revolutions']['reason'] = forecast.revolutions_reason
+    for row in rows:
+        entry = row.forecast.as_json()
+        entry['planner'] = [item.as_json() for item in row.planned]
+        entry.update(row.as_json())
+        entry['revolutions']['reason'] = row.forecast.revolutions_reason
         actuators.append(entry)
     return {'history': str(args.history), 'levels': {'warn': options.levels[0], 'error': options.levels[1]},
             'confidence': options.confidence, 'as_of': options.as_of, 'as_of_utc': _utc(options.as_of),
-            'by': options.by, 'by_utc': _utc(options.by), 'notes': list(notes), 'actuators': actuators}
-
-
-def _table(forecasts: Sequence[ActuatorForecast], plans: Mapping[str, list[PlannedCrossing]], options: TrendOptions,
-           with_odometer: bool) -> str:
-    """The Markdown table, one row per actuator, every row with as many cells as the header."""
-    percent = f'{options.confidence:.0%}'
-    by_day = _utc(options.by)[:10]
-    header = ['actuator', 'recordings', 'relubrications', 'tau d', 'theta now']
-    for name in ('warn', 'error'):
-        header += [f'{name} crossing ({percent} interval)', f'{name}: days to go as of {_utc(options.as_of)[:10]}',
-                   f'P({name} by {by_day})']
-    if with_odometer:
-        header += ['N_d rev', f'warn at odometer rev ({percent} interval)']
-    rows = [_row(forecast, plans[forecast.actuator], with_odometer) for forecast in forecasts]
-    lines = ['| ' + ' | '.join(header) + ' |', '|---' * len(header) + '|']
-    lines += ['| ' + ' | '.join(cells + [''] * (len(header) - len(cells))) + ' |' for cells in rows]
-    return '\n'.join(lines)
-
-
-def _row(forecast: ActuatorForecast, planned: Sequence[PlannedCrossing], with_odometer: bool) -> list[str]:
-    """The cells of one actuator's row."""
-    from ..fleet.forecast_summary import crossing_interval_text
-    from ..fleet.planner import planner_text
-    if forecast.defect is not None:
-        return [forecast.actuator, str(len(forecast.points)), str(len(forecast.relubrications)), '–', '–',
-                forecast.reason]
-    if forecast.reason:
-        return [forecast.actuator, str(len(forecast.points)), '–', '–', '–', forecast.reason]
-    cells = [forecast.actuator, str(len(forecast.points)), str(len(forecast.relubrications)),
-             f'{forecast.tau_days:.3g}', f'{forecast.theta_now:.3f}']
-    for crossing, item in zip(forecast.crossings, planned):
-        when = f'{_utc(crossing.time)} ({crossing_interval_text(crossing)})' if crossing.time is not None else 'never'
-        probability = '–' if item.probability_by is None else f'{item.probability_by:.2f}'
-        cells += [when, planner_text(item), probability]
-    if with_odometer:
-        cells += _odometer_cells(forecast)
-    return cells
+            'by': options.by, 'by_utc': _utc(options.by), 'stale_days': options.stale_days, 'notes': list(notes),
+            'actuators': actuators}
 
 
 def _odometer_cells(forecast: ActuatorForecast) -> list[str]:
@@ -289,7 +273,7 @@ def _odometer_cells(forecast: ActuatorForecast) -> list[str]:
     return [f'{forecast.depletion_revolutions:.3g}', where]
 
 
-def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> None:
+def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> Path:
     """One dated plot: recordings, band to the by-date, levels, crossings with intervals, as-of line."""
     import numpy as np
     from ..figures import history_with_forecast
@@ -307,13 +291,13 @@ def _plot(report: Path, forecast: ActuatorForecast, options: TrendOptions) -> No
                  f'{forecast.defect.since_utc[:10]})')
         since = (f'surface defect suspected ({forecast.defect.component or "impulsive"}): theta_Oil no lubrication '
                  'measure', forecast.defect.since)
-    history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
-                          [p.theta_oil for p in points], [p.theta_oil_std for p in points], future, band,
-                          {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
-                          forecast.relubrications, title,
-                          crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
-                                     for name, c in zip(names, forecast.crossings)],
-                          as_of=options.as_of, confidence=options.confidence, marked_since=since)
+    return history_with_forecast(report / f'{forecast.actuator}.png', [p.time for p in points],
+                                 [p.theta_oil for p in points], [p.theta_oil_std for p in points], future, band,
+                                 {f'{name} {level:g}': level for name, level in zip(names, options.levels)},
+                                 forecast.relubrications, title,
+                                 crossings=[(f'{name} crossing', c.level, c.time, c.low, c.high)
+                                            for name, c in zip(names, forecast.crossings)],
+                                 as_of=options.as_of, confidence=options.confidence, marked_since=since)
 
 
 def _backtest(args: argparse.Namespace, options: TrendOptions, records: FleetRecords,

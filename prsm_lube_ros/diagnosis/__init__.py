@@ -25,32 +25,34 @@ from typing import TYPE_CHECKING
 
 from ..estimation.windowing import DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD
 from .effects import Effect, effect_ids, get_effect, register, registered
-from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED
-from .table import band_high_of, table_from_windows, WindowTable
+from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED, Verdict
+from .rules import DEFAULT_RULES, DiagnosisRules
+from .table import band_of, table_from_windows, WindowTable
 
 if TYPE_CHECKING:
     from pathlib import Path
 
     from ..estimation.pipeline import RecordingWindows
 
-__all__ = ['ADEQUATE', 'AMBIGUOUS', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'Effect', 'WindowTable',
-           'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect', 'register', 'registered',
-           'table_from_windows', 'write_report']
+__all__ = ['ADEQUATE', 'AMBIGUOUS', 'DEFAULT_RULES', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'DiagnosisRules',
+           'Effect', 'Verdict', 'WindowTable', 'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect',
+           'register', 'registered', 'table_from_windows', 'write_report']
 
 
 def diagnose_recordings(recordings: Sequence[RecordingWindows], theta: float = 1.0,
-                        min_axial_load: float = MIN_AXIAL_LOAD) -> Diagnosis:
+                        min_axial_load: float = MIN_AXIAL_LOAD, rules: DiagnosisRules = DEFAULT_RULES) -> Diagnosis:
     """Diagnose :class:`~prsm_lube_ros.estimation.pipeline.RecordingWindows` taken at lubrication state ``theta``.
 
     Recordings ``prsm-lube calibrate`` refuses are refused here with the same line: the calibration is fitted
-    first, and its flags (what the fit cannot vouch for) are carried into the diagnosis.
+    first, and its flags (what the fit cannot vouch for) are carried into the diagnosis.  ``rules``: the
+    policy every decision is taken by (:class:`.rules.DiagnosisRules`).
     """
     from ..estimation.pipeline import calibrate_recordings
     calibration = calibrate_recordings(recordings, theta, min_axial_load)
     table = table_from_windows([rec.windows for rec in recordings], theta=theta, min_axial_load=min_axial_load,
-                               sources=[rec.path for rec in recordings], band_high=band_high_of(recordings),
+                               sources=[rec.path for rec in recordings], band=band_of(recordings),
                                defect_orders=recordings[0].defect_orders if recordings else DEFAULT_DEFECT_ORDERS)
-    result = diagnose_table(table)
+    result = diagnose_table(table, rules=rules)
     result.calibration_flags = list(calibration.flags)
     return result
 

@@ -22,13 +22,13 @@ are conditions.  Structure inside runs (a trend along the stroke) is not
 tested here but by :mod:`.locate`.
 
 Lack of fit counts as *material* only when it is significant (``p`` below
-:data:`LOF_P`) and its size, the excess RMS per run
-``sqrt(max(SS_lof - df_lof MS_pe, 0) / G)``, exceeds :data:`LOF_TOLERANCE`.
+``DiagnosisRules.lof_p``) and its size, the excess RMS per run
+``sqrt(max(SS_lof - df_lof MS_pe, 0) / G)``, exceeds ``DiagnosisRules.lof_tolerance``.
 The window scatter inside runs is reported beside it for reference.
 
 The pure error itself is tested too: repeated runs of one unit scatter by
 what its set-up gives (1-4 % on rigs), so a scatter significantly above
-:data:`SETUP_SCATTER` (chi-square on ``df_pe``, ``p`` below :data:`LOF_P`)
+``DiagnosisRules.setup_scatter`` (chi-square on ``df_pe``, ``p`` below ``DiagnosisRules.lof_p``)
 is not noise but something that varies between runs and that the model
 leaves out (a step in time, a cycle in revolutions).  Either finding makes the
 model's misfit :attr:`LackOfFit.significant`.
@@ -45,18 +45,12 @@ from scipy import stats
 
 from ..estimation.calibration import condition_labels
 from ..validation import finite_or_none
+from .rules import DEFAULT_RULES, DiagnosisRules
 
 if TYPE_CHECKING:
     from .table import WindowTable
 
-__all__ = ['LOF_P', 'LOF_TOLERANCE', 'LackOfFit', 'REPEAT_ADVICE', 'SETUP_SCATTER', 'lack_of_fit', 'run_conditions']
-
-#: p-value below which lack of fit is significant.
-LOF_P = 0.01
-#: Smallest relative excess RMS per run that counts as a material lack of fit.
-LOF_TOLERANCE = 0.01
-#: Largest run-to-run scatter (relative) a rig's set-up gives repeated runs of one unit (1-4 %, with margin).
-SETUP_SCATTER = 0.05
+__all__ = ['LackOfFit', 'REPEAT_ADVICE', 'lack_of_fit', 'run_conditions']
 
 
 @dataclass
@@ -74,7 +68,8 @@ class LackOfFit:
     runs: int = 0
     conditions: int = 0
     reason: str = ''        # why the test cannot be made on this plan ('' when it can)
-    scatter_p: float = math.nan     # p of the pure error being no larger than SETUP_SCATTER (chi-square)
+    scatter_p: float = math.nan     # p of the pure error being no larger than rules.setup_scatter (chi-square)
+    rules: DiagnosisRules = DEFAULT_RULES   # the thresholds the test is judged by
 
     @property
     def testable(self) -> bool:
@@ -84,12 +79,12 @@ class LackOfFit:
     @property
     def lack_of_fit(self) -> bool:
         """The condition means miss the model: significant and material (see module doc)."""
-        return self.testable and self.p_value < LOF_P and self.excess_rms > LOF_TOLERANCE
+        return self.testable and self.p_value < self.rules.lof_p and self.excess_rms > self.rules.lof_tolerance
 
     @property
     def excess_scatter(self) -> bool:
         """Repeated runs scatter significantly more than a rig's set-up makes them."""
-        return self.scatter_p < LOF_P
+        return self.scatter_p < self.rules.lof_p
 
     @property
     def significant(self) -> bool:
@@ -106,7 +101,8 @@ class LackOfFit:
                          f'F = {self.statistic:.3g}, p = {self.p_value:.2g})')
         if self.excess_scatter:
             words.append(f'repeated runs of one condition scatter by {100 * self.pure_error_rms:.1f} %, beyond the '
-                         f'{100 * SETUP_SCATTER:.0f} % a rig\'s set-up gives (chi-square p = {self.scatter_p:.2g}): '
+                         f'{100 * self.rules.setup_scatter:.0f} % a rig\'s set-up gives '
+                         f'(chi-square p = {self.scatter_p:.2g}): '
                          'something that varies between runs is not in the model')
         return '; '.join(words)
 
@@ -132,7 +128,7 @@ class LackOfFit:
                 'window_scatter_rms': finite_or_none(self.window_scatter_rms),
                 'residual_rms': finite_or_none(self.residual_rms), 'lack_of_fit': self.lack_of_fit,
                 'scatter_p_value': finite_or_none(self.scatter_p), 'excess_scatter': self.excess_scatter,
-                'setup_scatter_limit': SETUP_SCATTER, 'significant': self.significant}
+                'setup_scatter_limit': self.rules.setup_scatter, 'significant': self.significant}
 
 
 def run_conditions(table: WindowTable) -> np.ndarray:
@@ -143,8 +139,9 @@ def run_conditions(table: WindowTable) -> np.ndarray:
 REPEAT_ADVICE = 'record each (speed, load) condition in two runs or more'
 
 
-def lack_of_fit(table: WindowTable, log_residual: npt.ArrayLike, n_params: int) -> LackOfFit:
-    """The lack-of-fit test of a model with ``n_params`` fitted parameters (see module doc)."""
+def lack_of_fit(table: WindowTable, log_residual: npt.ArrayLike, n_params: int,
+                rules: DiagnosisRules = DEFAULT_RULES) -> LackOfFit:
+    """The lack-of-fit test of a model with ``n_params`` fitted parameters (see module doc), judged by ``rules``."""
     residual = np.asarray(log_residual, dtype=float)
     n = residual.size
     residual_rms = math.sqrt(float(residual @ residual) / n)
@@ -159,7 +156,7 @@ def lack_of_fit(table: WindowTable, log_residual: npt.ArrayLike, n_params: int) 
     counts = np.bincount(condition, minlength=conditions)
     means = np.bincount(condition, weights=levels, minlength=conditions) / counts
     ss_pe = float(np.sum((levels - means[condition]) ** 2))
-    scatter_p = float(stats.chi2.sf(ss_pe / SETUP_SCATTER ** 2, dof_pure)) if dof_pure > 0 else math.nan
+    scatter_p = float(stats.chi2.sf(ss_pe / rules.setup_scatter ** 2, dof_pure)) if dof_pure > 0 else math.nan
     reason = ''
     if dof_pure <= 0:
         reason = (f'no condition repeated ({groups} runs at {conditions} conditions): run-to-run scatter and '
@@ -172,11 +169,11 @@ def lack_of_fit(table: WindowTable, log_residual: npt.ArrayLike, n_params: int) 
     if reason:
         pure = math.sqrt(ss_pe / dof_pure) if dof_pure > 0 else math.nan
         return LackOfFit(math.nan, math.nan, dof_lack, dof_pure, pure, math.nan, residual_rms, window_scatter,
-                         groups, conditions, reason, scatter_p)
+                         groups, conditions, reason, scatter_p, rules)
     ms_pe = ss_pe / dof_pure
     ss_lof = float(np.sum(counts * means ** 2))
     f = (ss_lof / dof_lack) / ms_pe
     p = float(stats.f.sf(f, dof_lack, dof_pure))
     excess = math.sqrt(max(ss_lof - dof_lack * ms_pe, 0.0) / groups)
     return LackOfFit(f, p, dof_lack, dof_pure, math.sqrt(ms_pe), excess, residual_rms, window_scatter,
-                     groups, conditions, scatter_p=scatter_p)
+                     groups, conditions, scatter_p=scatter_p, rules=rules)

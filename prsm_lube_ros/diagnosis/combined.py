@@ -33,10 +33,10 @@ class CombinedEffect(Effect):
 
     def __init__(self, first: Effect, second: Effect, first_start: npt.ArrayLike | None = None,
                  second_start: npt.ArrayLike | None = None) -> None:
-        """Combine ``first`` and ``second``; an amplitude-dependent gain (background) should come second."""
+        """Combine ``first`` and ``second``; a law that adds power (:attr:`.effects.Effect.adds_power`) goes second."""
         self.added = second
         self._anchors = {id(first): first_start, id(second): second_start}
-        if second.id != 'background_vibration' and first.id == 'background_vibration':
+        if first.adds_power and not second.adds_power:
             first, second = second, first
         self.first, self.second = first, second
         self.id = f'{first.id}+{second.id}'

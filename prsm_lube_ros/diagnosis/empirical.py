@@ -119,14 +119,17 @@ class EmpiricalTerm(Effect):
 
 
 def empirical_terms(table: WindowTable, residual: np.ndarray, location: Location,
-                    significance: float) -> list[EmpiricalTerm]:
-    """The empirical terms of every shape the location found significant (time segment, direction, smooth)."""
+                    significance: float, min_segment_runs: int) -> list[EmpiricalTerm]:
+    """The empirical terms of every shape the location found significant (time segment, direction, smooth).
+
+    ``significance`` and ``min_segment_runs``: the locate test's (:class:`.rules.DiagnosisRules`).
+    """
     terms = []
     for test in location.tests:
         if not test.p_value < significance:
             continue
         if test.kind == 'segment of runs':
-            segment = time_segment(table, residual)
+            segment = time_segment(table, residual, min_segment_runs)
             if segment is None:
                 continue
             inside = segment['inside']

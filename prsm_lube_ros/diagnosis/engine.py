@@ -8,11 +8,11 @@ speed band, the viscosity laws, depletion exponential or linear, with or
 without recovery at rest) is fitted in each on all windows; of the forms whose
 constants are physical (all forms when none is), the one with the lowest BIC
 stands for it, except that a form with more parameters than the
-best of the fewest-parameter forms must lower the BIC by :data:`FORM_MARGIN`;
-forms with as many parameters within :data:`FORM_TIE` of it are named with it
+best of the fewest-parameter forms must lower the BIC by ``rules.form_margin``;
+forms with as many parameters within ``rules.form_tie`` of it are named with it
 ("Vogel or Walther (ASTM D341)": the data fit them equally well); the forms
 of a law swept within runs (position) are compared on the windows'
-deviations from their run means (:data:`WITHIN_RUN_SHARE`).  Only the
+deviations from their run means (``rules.within_run_share``).  Only the
 chosen form is scored on held-out runs.  Its name is in the JSON (``form``,
 and ``forms`` with every form's BIC relative to it).
 
@@ -27,8 +27,8 @@ in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
-:mod:`.fitting`) by :data:`BIC_MARGIN` or more **and** lowers the held-out
-error by :data:`MIN_GAIN` or more; or when evidence from outside the
+:mod:`.fitting`) by ``rules.bic_margin`` or more **and** lowers the held-out
+error by ``rules.min_gain`` or more; or when evidence from outside the
 amplitude fit (the spectrum's fixed lines or the vibration at standstill for
 background vibration, a mode band for a resonance) shows it
 and it does not predict held-out runs worse.  A candidate whose law can mimic
@@ -53,7 +53,7 @@ fit, no excess run scatter *and* no covariate left carrying the residual;
 otherwise, with no candidate, the verdict is ``unexplained`` with where the
 residual lives and its size, unless the residual is located on a candidate's
 own covariate and its law explains it (:func:`_located_law`: a BIC drop of
-:data:`LOCATED_LAW_BIC` and the held-out gain, or for a law swept within runs
+``rules.located_law_bic`` and the held-out gain, or for a law swept within runs
 what it shows there; no pattern left there, and better held-out predictions
 than the empirical term of the located shape).  A plan with no repeated condition cannot tell
 run scatter from model error: ``cannot tell``, with what to record.
@@ -75,10 +75,10 @@ exact whatever the truth, so adequacy means nothing; see
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 import math
-from typing import Any, cast, Collection, Sequence, TYPE_CHECKING, TypeVar
+from typing import Any, cast, Collection, Generic, Mapping, Sequence, TYPE_CHECKING, TypeVar
 
 import numpy as np
 
@@ -86,6 +86,7 @@ from ..errors import InputError
 from ..estimation.calibration import (Calibration, calibration_flags, check_identifiable, form_advice, form_flag,
                                       form_testable, operating_conditions, operating_levels, replicated_conditions,
                                       run_level_covariance)
+from ..validation import finite_or_none
 from .adequacy import lack_of_fit, LackOfFit, REPEAT_ADVICE
 from .combined import CombinedEffect
 from .effects import Effect, registered
@@ -93,54 +94,41 @@ from .empirical import causes, empirical_terms, EmpiricalTerm
 from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, \
     predict_log, score_held_out, within_run_correlation, within_run_delta_bic, within_run_gain, \
     within_run_residual, within_run_sample_size, within_run_share
-from .locate import covariate_tests, locate, Location, SIGNIFICANCE
-from .table import WindowTable
+from .locate import covariate_tests, locate, Location
+from .rules import DEFAULT_RULES, DiagnosisRules
+from .table import DRIFT_COVARIATES, PLAN_COVARIATES, WindowTable
 
 if TYPE_CHECKING:
     from ..estimation.run_scatter import RunScatter
 
 #: An effect, or a combination of two (:func:`_choose_form` returns the kind it is given).
 _E = TypeVar('_E', bound=Effect)
+_T = TypeVar('_T')
 
-__all__ = ['ADEQUATE', 'AMBIGUOUS', 'BIC_MARGIN', 'CANNOT_TELL', 'COLLINEAR', 'CONFOUNDED', 'Candidate',
-           'Confounding', 'DRIFT_COVARIATES', 'Diagnosis', 'EVIDENCE_TOLERANCE', 'EmpiricalFit', 'FORM_MARGIN',
-           'FORM_TIE', 'LOCATED_BIC_TOLERANCE', 'LOCATED_LAW_BIC', 'MIN_GAIN', 'PAIR_POOL', 'SECOND_BIC_MARGIN',
-           'SecondEffect', 'Status', 'TIE_RATIO', 'UNEXPLAINED', 'WITHIN_RUN_SHARE', 'confounding', 'diagnose_table',
-           'drift_correlation', 'evidence_tolerance', 'same_shape_covariates']
+__all__ = ['ADEQUATE', 'AMBIGUOUS', 'CANNOT_TELL', 'Candidate', 'CandidateFit', 'Confounding',
+           'Decision', 'Diagnosis', 'EmpiricalFit', 'OUTCOMES', 'SecondEffect', 'Status', 'UNEXPLAINED', 'Verdict',
+           'confounding', 'diagnose_table', 'drift_correlation', 'evidence_tolerance', 'same_shape_covariates']
 
-#: BIC improvement (effective sample size) a candidate needs.
-BIC_MARGIN = 10.0
-#: Relative fall of the held-out error a candidate needs.
-MIN_GAIN = 0.05
-#: BIC drop a second effect must give over the first alone (the first has already shown the model misses).
-SECOND_BIC_MARGIN = 5.0
-#: BIC rise a second effect may cost when what the first leaves is located on its covariate (a BIC
-#: difference under 2 is no evidence either way).
-LOCATED_BIC_TOLERANCE = 2.0
-#: BIC drop that names an effect none of whose rivals earns when the mismatch is located on its own covariate
-#: and its law leaves nothing there (:func:`_located_law`): a drop of 2 or more is positive evidence.
-LOCATED_LAW_BIC = 2.0
-#: Share of a covariate's variance within runs from which a law of it is also scored on the windows' deviations
-#: from their run means (:func:`.fitting.within_run_delta_bic`, :func:`.fitting.within_run_gain`; position: every
-#: run sweeps the stroke; revolutions or temperature only where each recording holds about one run).  Such a
-#: law located on its covariate is named by what it shows within runs as well (:func:`_shows_within_runs`):
-#: counted by runs, a 2 % change along the stroke is hidden by 3 % set-up scatter between runs (stiffness 214
-#: and 220 of the fresh random study: BIC -0.4 and -0.7, within runs -329 and -270).  Its forms are compared
-#: within runs (:func:`_choose_form`; the JSON's ``forms`` BICs are then on that scale).
-WITHIN_RUN_SHARE = 0.5
-#: A candidate with independent evidence may not predict held-out runs worse than this (relative), or than
-#: what estimating its parameters costs on the runs recorded (:func:`evidence_tolerance`), the larger.
-EVIDENCE_TOLERANCE = 0.02
-#: BIC drop a form with more parameters needs over the simpler forms of the same effect.
-FORM_MARGIN = 6.0
-#: BIC difference below which two forms with as many parameters are reported together (a tie).
-FORM_TIE = 2.0
-#: Runner-up gain, relative to the leader's, from which the two are tested against each other.
-TIE_RATIO = 0.5
-#: |Spearman| over runs from which two covariates count as confounded.
-CONFOUNDED = 0.9
 
-ADEQUATE, AMBIGUOUS, UNEXPLAINED, CANNOT_TELL = 'adequate', 'ambiguous', 'unexplained', 'cannot tell'
+class Verdict(str):
+    """What a diagnosis concludes: the ID of the (first) effect it names, or one of the words of :data:`OUTCOMES`.
+
+    A ``str`` (the JSON's ``verdict`` and every comparison with a word or an
+    effect ID keep working); :attr:`names_an_effect` tells the two kinds apart.
+    """
+
+    __slots__ = ()
+
+    @property
+    def names_an_effect(self) -> bool:
+        """True when the verdict is an effect ID, not one of the four words."""
+        return str(self) not in OUTCOMES
+
+
+ADEQUATE, AMBIGUOUS, UNEXPLAINED, CANNOT_TELL = (Verdict(word) for word in
+                                                 ('adequate', 'ambiguous', 'unexplained', 'cannot tell'))
+#: The verdicts that name no effect.
+OUTCOMES = frozenset({'adequate', 'ambiguous', 'unexplained', 'cannot tell'})
 
 
 class Status(StrEnum):
@@ -152,45 +140,100 @@ class Status(StrEnum):
     DROPPED = 'dropped'             # earned alone, but another effect explains it (or more)
 
 
-@dataclass
-class Candidate:
-    """One candidate effect: its fit, scores and status."""
+@dataclass(frozen=True)
+class Decision:
+    """One rule's decision on a candidate: which rule, the status it gives, and why in words.
+
+    ``restart``: the text replaces the account so far (a later rule that names
+    a candidate the earlier ones rejected); otherwise it is added to it.
+    """
+
+    rule: str
+    status: Status
+    text: str
+    restart: bool = False
+
+
+@dataclass(frozen=True)
+class CandidateFit:
+    """What fitting one candidate gave (the results, apart from any decision): its chosen form's fit and scores."""
 
     effect: Effect
     fit: ModelFit | None
-    status: Status
-    reason: str = ''
     gain: float = math.nan      # 1 - cv_rmse / baseline cv_rmse
     delta_bic: float = math.nan
     evidence: str = ''
-    evidence_against: str = ''
     form: str = ''              # the chosen form's name
-    forms: list = field(default_factory=list)   # (form name, BIC relative to the chosen form)
-    family: Effect | None = None                # the registered effect (all its forms); set by _evaluate
-    form_vectors: dict = field(default_factory=dict)   # form name -> its fitted internal parameters alone
+    forms: tuple = ()           # (form name, BIC relative to the chosen form)
+    family: Effect | None = None                # the registered effect (all its forms)
+    form_vectors: Mapping[str, np.ndarray] = field(default_factory=dict)   # form -> its fitted internal parameters
     within_delta_bic: float = math.nan          # BIC drop on deviations from run means (a law swept within runs)
     within_gain: float = math.nan               # held-out gain on those deviations (the shape of held-out runs)
 
+
+class _FromScores(Generic[_T]):
+    """A :class:`Candidate` attribute that is its :class:`CandidateFit`'s (the results, read-only)."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, candidate: Candidate, owner: type | None = None) -> _T:
+        return cast(_T, getattr(candidate.scores, self.name))
+
+
+@dataclass
+class Candidate:
+    """One candidate effect: its fit results and the decisions of the rules on it, in order (the last one stands)."""
+
+    scores: CandidateFit
+    decisions: tuple[Decision, ...]
+
+    def decide(self, decision: Decision) -> None:
+        """Add a rule's decision (the decisions themselves are immutable values)."""
+        self.decisions = (*self.decisions, decision)
+
+    @property
+    def status(self) -> Status:
+        """The status the last decision gave."""
+        return self.decisions[-1].status
+
+    @property
+    def reason(self) -> str:
+        """The decisions' words from the last one that restarts the account on."""
+        restart = max((i for i, d in enumerate(self.decisions) if d.restart), default=0)
+        return '; '.join(d.text for d in self.decisions[restart:])
+
+    #: The fit results, read from :attr:`scores`.
+    effect = _FromScores[Effect]()          # the effect in its chosen form
+    fit = _FromScores['ModelFit | None']()  # the chosen form's fit (None when the candidate was not fitted)
+    gain = _FromScores[float]()             # 1 - cv_rmse / the paper's model's cv_rmse
+    delta_bic = _FromScores[float]()        # BIC against the paper's model
+    evidence = _FromScores[str]()           # evidence from outside the amplitude fit ('' when none)
+    form = _FromScores[str]()               # the chosen form's name (with the forms that fit as well)
+
     def as_json(self) -> dict:
         """Mapping for the ``candidates`` list."""
+        scores = self.scores
         out: dict[str, Any] = {
             'effect': self.effect.id, 'title': self.effect.title, 'status': self.status,
             'reason': self.reason, 'equations': self.effect.equations, 'form': self.form,
-            'forms': [{'form': name, 'delta_bic': _num(delta)} for name, delta in self.forms],
-            'parameters': list(self.effect.parameter_names), 'evidence': self.evidence}
+            'forms': [{'form': name, 'delta_bic': finite_or_none(delta)} for name, delta in scores.forms],
+            'parameters': list(self.effect.parameter_names), 'evidence': self.evidence,
+            'decisions': [{'rule': d.rule, 'status': d.status, 'text': d.text} for d in self.decisions]}
         if self.fit is not None:
             c = self.fit.constants
-            out.update({'rmse': _num(self.fit.rmse), 'cv_rmse': _num(self.fit.cv_rmse),
-                        'cv_run_rmse': _num(self.fit.cv_run_rmse), 'gain': _num(self.gain),
-                        'delta_bic': _num(self.delta_bic), 'effective_windows': _num(self.fit.n_eff),
-                        'within_run_delta_bic': _num(self.within_delta_bic),
-                        'within_run_gain': _num(self.within_gain), 'params': _clean(self.fit.params),
+            out.update({'rmse': finite_or_none(self.fit.rmse), 'cv_rmse': finite_or_none(self.fit.cv_rmse),
+                        'cv_run_rmse': finite_or_none(self.fit.cv_run_rmse), 'gain': finite_or_none(self.gain),
+                        'delta_bic': finite_or_none(self.delta_bic),
+                        'effective_windows': finite_or_none(self.fit.n_eff),
+                        'within_run_delta_bic': finite_or_none(scores.within_delta_bic),
+                        'within_run_gain': finite_or_none(scores.within_gain), 'params': _clean(self.fit.params),
                         'constants': c.by_name(),
                         'explanation': self.effect.describe(self.fit.params)})
         return out
 
 
-@dataclass
+@dataclass(frozen=True)
 class SecondEffect:
     """A second effect named with the first: the pair's fit and what the second adds."""
 
@@ -214,9 +257,10 @@ class SecondEffect:
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
         return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
-                'explanation': self.effect.describe(self.params), 'gain': _num(self.gain),
-                'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'basis': self.basis,
-                'within_run_delta_bic': _num(self.within_delta_bic), 'within_run_gain': _num(self.within_gain)}
+                'explanation': self.effect.describe(self.params), 'gain': finite_or_none(self.gain),
+                'delta_bic': finite_or_none(self.delta_bic), 'cv_rmse': finite_or_none(self.fit.cv_rmse),
+                'basis': self.basis, 'within_run_delta_bic': finite_or_none(self.within_delta_bic),
+                'within_run_gain': finite_or_none(self.within_gain)}
 
     def first_as_json(self) -> dict:
         """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
@@ -224,7 +268,7 @@ class SecondEffect:
                 'explanation': self.first_effect.describe(self.first_params)}
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmpiricalFit:
     """An empirical term of the located shape fitted with Eq. 22 (physics outside the catalogue)."""
 
@@ -233,11 +277,13 @@ class EmpiricalFit:
     gain: float                 # 1 - cv_rmse / cv_rmse of the paper's model
     delta_bic: float            # against the paper's model
     overrules: str = ''         # the catalogue effect it explains better than (held-out), if any
+    rules: DiagnosisRules = DEFAULT_RULES   # the thresholds it is judged by
 
     @property
     def earns(self) -> bool:
         """It earns its parameters as a candidate would (BIC and held-out gain)."""
-        return self.delta_bic <= -BIC_MARGIN and self.gain >= MIN_GAIN and not self.fit.unphysical()
+        rules = self.rules
+        return self.delta_bic <= -rules.bic_margin and self.gain >= rules.min_gain and not self.fit.unphysical()
 
     def beats(self, named: ModelFit, covariates: Collection[str] = ()) -> bool:
         """True when it predicts held-out runs better than ``named`` (the catalogue model) does.
@@ -251,7 +297,7 @@ class EmpiricalFit:
         follows its thermal law as closely as a step, with the place found in
         the temperature recorded).  A smooth term follows any monotone or
         curved law, so it overrules the catalogue model only when it is better
-        by :data:`MIN_GAIN`, and never in one of ``covariates``, those the
+        by ``rules.min_gain``, and never in one of ``covariates``, those the
         named effects follow (their law is a smooth law of it: a curve fitting
         better says the law's form is approximate, not that the physics is
         missing).
@@ -265,7 +311,7 @@ class EmpiricalFit:
             place = (2 if self.term.form == 'stretch' else 1) * math.log(max(self.fit.n_eff, 2.0))
             if not _delta_bic(self.fit, named) + place < 0:
                 return False
-        margin = MIN_GAIN if self.term.form == 'smooth' else 0.0
+        margin = self.rules.min_gain if self.term.form == 'smooth' else 0.0
         return self.fit.cv_rmse < (1.0 - margin) * named.cv_rmse
 
     @property
@@ -282,8 +328,9 @@ class EmpiricalFit:
         term = self.term
         out: dict[str, Any] = {
             'covariate': term.covariate, 'form': term.form, 'params': _clean(self.fit.params),
-            'explanation': term.describe(self.fit.params), 'gain': _num(self.gain),
-            'delta_bic': _num(self.delta_bic), 'cv_rmse': _num(self.fit.cv_rmse), 'earns': self.earns,
+            'explanation': term.describe(self.fit.params), 'gain': finite_or_none(self.gain),
+            'delta_bic': finite_or_none(self.delta_bic), 'cv_rmse': finite_or_none(self.fit.cv_rmse),
+            'earns': self.earns,
             'causes': causes(term), 'overrules': self.overrules or None,
             'constants': self.fit.constants.by_name()}
         if term.form in ('step', 'stretch'):
@@ -295,7 +342,7 @@ class EmpiricalFit:
 class Diagnosis:
     """The outcome of :func:`diagnose_table`."""
 
-    verdict: str
+    verdict: Verdict
     baseline: ModelFit
     candidates: list
     best: Candidate | None
@@ -311,6 +358,7 @@ class Diagnosis:
     calibration_flags: list = field(default_factory=list)   # what calibrate says the recordings cannot vouch for
     empirical: EmpiricalFit | None = None    # an empirical term of the located shape (physics outside the catalogue)
     temperature_revolutions: float = math.nan   # Pearson correlation of run temperature and revolutions
+    rules: DiagnosisRules = DEFAULT_RULES     # the policy the verdict was reached by
 
     @property
     def confident(self) -> bool:
@@ -336,7 +384,11 @@ class Diagnosis:
                 (second.effect, second.form, second.params)]
 
     def calibration(self) -> Calibration:
-        """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate)."""
+        """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate).
+
+        It carries the table's analysis band and domain (:attr:`.table.WindowTable.band`, ``domain``): the
+        constants were fitted on the RMS of that band, and ``assess`` must take recordings in it.
+        """
         fit = self.chosen.fit if self.chosen is not None else self.baseline
         assert fit is not None  # a chosen candidate earned its parameters, so it was fitted
         effect: Effect | None = self.chosen.effect if self.chosen is not None else None
@@ -363,7 +415,8 @@ class Diagnosis:
                            speed_levels=tuple(operating_levels(table.speed)),
                            load_levels=tuple(operating_levels(table.load)), sources=table.sources,
                            extension=extension, conditions=conditions, runs=int(table.runs.size),
-                           standard_errors=method, flags=flags, scatter=scatter)
+                           standard_errors=method, flags=flags, scatter=scatter, band=table.band,
+                           domain=table.domain)
 
     def as_json(self) -> dict:
         """The contract's ``diagnose`` document (plus location, notes and tied candidates)."""
@@ -373,10 +426,10 @@ class Diagnosis:
         if self.best is not None:
             f = self.best.fit
             assert f is not None  # the best candidate is one of the fitted ones
-            best = {'effect': self.best.effect.id, 'form': self.best.form, 'rmse': _num(f.rmse),
-                    'cv_rmse': _num(f.cv_rmse), 'cv_run_rmse': _num(f.cv_run_rmse),
+            best = {'effect': self.best.effect.id, 'form': self.best.form, 'rmse': finite_or_none(f.rmse),
+                    'cv_rmse': finite_or_none(f.cv_rmse), 'cv_run_rmse': finite_or_none(f.cv_run_rmse),
                     'params': _clean(f.params), 'explanation': self.best.effect.describe(f.params),
-                    'gain': _num(self.best.gain), 'delta_bic': _num(self.best.delta_bic),
+                    'gain': finite_or_none(self.best.gain), 'delta_bic': finite_or_none(self.best.delta_bic),
                     'status': self.best.status}
         effects = []
         if self.chosen is not None:
@@ -393,24 +446,20 @@ class Diagnosis:
         return {'verdict': self.verdict, 'confident': self.confident, 'adequacy': adequacy, 'effects': effects,
                 'flags': list(self.calibration_flags),
                 'tied': list(self.tied), 'what_to_record': self.what_to_record,
-                'baseline': {'rmse': _num(base.rmse), 'cv_rmse': _num(base.cv_rmse),
-                             'cv_run_rmse': _num(base.cv_run_rmse),
+                'baseline': {'rmse': finite_or_none(base.rmse), 'cv_rmse': finite_or_none(base.cv_rmse),
+                             'cv_run_rmse': finite_or_none(base.cv_run_rmse),
                              'constants': c.by_name(),
-                             'unphysical': base.unphysical(), 'effective_windows': _num(base.n_eff)},
+                             'unphysical': base.unphysical(), 'effective_windows': finite_or_none(base.n_eff)},
                 'best': best, 'candidates': [cand.as_json() for cand in self.candidates],
                 'location': self.location.as_json(), 'notes': list(self.notes),
                 'confounding': [c.as_json() for c in self.confounding],
                 'empirical': self.empirical.as_json() if self.empirical is not None else None,
-                'temperature_revolutions_correlation': _num(self.temperature_revolutions),
+                'temperature_revolutions_correlation': finite_or_none(self.temperature_revolutions),
                 'data': {'windows': len(table), 'runs': int(table.runs.size),
                          'recordings': int(np.unique(table.recording).size),
                          'speed_levels': operating_levels(table.speed), 'load_levels': operating_levels(table.load),
                          'reference_theta': table.theta, 'sources': list(table.sources),
-                         'standstill_rms': _num(table.rest_rms), 'standstill_windows': table.rest_windows}}
-
-
-def _num(value: float | None) -> float | None:
-    return float(value) if value is not None and math.isfinite(value) else None
+                         'standstill_rms': finite_or_none(table.rest_rms), 'standstill_windows': table.rest_windows}}
 
 
 def _clean(params: dict) -> dict:
@@ -420,7 +469,7 @@ def _clean(params: dict) -> dict:
         if isinstance(value, dict):
             out[key] = _clean(value)
         elif isinstance(value, (float, int, np.floating)):
-            out[key] = _num(float(value))
+            out[key] = finite_or_none(float(value))
         else:
             out[key] = value
     return out
@@ -453,13 +502,13 @@ def _delta_bic(candidate: ModelFit, reference: ModelFit) -> float:
     return own - bic(reference.log_residual, reference.n_params, n_eff)
 
 
-def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
+def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rules: DiagnosisRules) \
         -> tuple[_E, ModelFit, list[tuple[str, float]], list[str], dict[str, np.ndarray]]:
     """Fit every form (Effects of one ID) on all windows; the chosen form's fit (with held-out scores) and all BICs.
 
     Forms are compared on one effective sample size: each fit's own would favour the form that leaves the
     more structured residual (a higher intraclass correlation lowers n_eff and so the penalty).  Forms of a law
-    swept within runs (:data:`WITHIN_RUN_SHARE`) are compared on the deviations from run means
+    swept within runs (``rules.within_run_share``) are compared on the deviations from run means
     (:func:`.fitting.within_run_residual`), where their shapes along the stroke differ, with the sample size of
     the best of them there (:func:`.fitting.within_run_sample_size`: a form that misses the shape leaves
     consecutive windows correlated, which says nothing of the scatter between windows).
@@ -471,7 +520,7 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
     shape = forms[0].added if isinstance(forms[0], CombinedEffect) else forms[0]   # a pair's forms are the added's
-    if _swept_within_runs(table, shape):
+    if _swept_within_runs(table, shape, rules):
         # A law swept along every run: its forms differ in the shape along the run, seen within runs.
         within = [within_run_residual(table, f.log_residual) for f in fits]
         residuals, counts = [w for w, _ in within], [within_run_sample_size(within)]
@@ -485,11 +534,12 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int]) \
     chosen = simple
     if richer:
         best_richer = min(richer, key=lambda i: scores[i])
-        if scores[best_richer] <= scores[simple] - FORM_MARGIN:
+        if scores[best_richer] <= scores[simple] - rules.form_margin:
             chosen = best_richer
     fit = score_held_out(table, fits[chosen], forms[chosen], folds) if folds else fits[chosen]
     ties = [forms[i].form for i in eligible
-            if i != chosen and fits[i].n_params == fits[chosen].n_params and scores[i] - scores[chosen] < FORM_TIE]
+            if i != chosen and fits[i].n_params == fits[chosen].n_params
+            and scores[i] - scores[chosen] < rules.form_tie]
     vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
     return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
             ties, vectors)
@@ -502,12 +552,9 @@ def _physical_refit(table: WindowTable, form: Effect, free: ModelFit) -> ModelFi
     where the plan does not pin both: a mode inside the band on three speeds
     draws its peak through three level means with C_lambda = -0.50, where the
     true constants (0.3) and a mode at the middle speed fit the means as well
-    (resonance 183 of the fresh random study: 36 % amplitude at the middle of 3
-    speeds, the free in-band fit unphysical, so the physical but empty
-    above-band form stood for the resonance and no candidate earned).  The
-    physical fit is the form's fit; when the free fit's constants were
-    unphysical because the law does not hold, the physical one fits worse and
-    does not earn.
+    (the study case: ``docs/diagnosis-rules.md``, "forms").  The physical fit
+    is the form's fit; when the free fit's constants were unphysical because
+    the law does not hold, the physical one fits worse and does not earn.
     """
     starts = [free.vector, *form.starts()]
     return fit_model(table, form, folds=[], starts=starts, physical=True)
@@ -529,7 +576,7 @@ def _too_few_conditions(table: WindowTable, effect: Effect, location: Location) 
     the spectrum still tests it, vibration measured at standstill does not
     (:meth:`.effects.Effect.standstill_evidence`).
     """
-    if effect.covariate not in ('speed', 'load'):
+    if effect.covariate not in PLAN_COVARIATES:
         return ''
     conditions = operating_conditions(table.speed, table.load)
     needed = 3 + min(len(form.parameter_names) for form in effect.variants())
@@ -541,7 +588,7 @@ def _too_few_conditions(table: WindowTable, effect: Effect, location: Location) 
             f'speed and load cannot be tested on so few conditions (record {needed - conditions} more)')
 
 
-def evidence_tolerance(table: WindowTable, added_params: int) -> float:
+def evidence_tolerance(table: WindowTable, added_params: int, rules: DiagnosisRules = DEFAULT_RULES) -> float:
     """How much worse held-out runs an effect with independent evidence may predict: the cost of its estimate.
 
     A least-squares fit of p parameters on n independent units predicts a
@@ -550,61 +597,69 @@ def evidence_tolerance(table: WindowTable, added_params: int) -> float:
     shows but that changes the run amplitudes less than their scatter), raise
     it by about k/n, the RMS error by k/(2n).  The units are the runs
     (:attr:`.table.WindowTable.runs`: windows of one run share its set-up
-    scatter).  Never below :data:`EVIDENCE_TOLERANCE`.  Resonance 151 of the
-    fresh random study: a band at 31.7 Hz that follows the speed as the
-    mode's transfer does (true 32.1 Hz), 3 speeds in 12 runs, the fit's two
-    parameters 4.6 % worse held out (tolerance 8.3 %).
+    scatter).  Never below ``rules.evidence_tolerance`` (the study case behind
+    it: ``docs/diagnosis-rules.md``, "evidence").
     """
     runs = max(int(table.runs.size), 1)
-    return max(EVIDENCE_TOLERANCE, added_params / (2.0 * runs))
+    return max(rules.evidence_tolerance, added_params / (2.0 * runs))
 
 
 def _evaluate(table: WindowTable, effect: Effect, baseline: ModelFit, location: Location,
-              folds: list[int]) -> Candidate:
+              folds: list[int], rules: DiagnosisRules) -> Candidate:
+    """Fit ``effect`` in each of its forms and decide whether it earns its parameters alone."""
     family = effect
     reason = effect.applicable(table) or _too_few_conditions(table, effect, location)
     if reason:
-        return Candidate(effect, None, Status.NOT_TESTABLE, reason, form=effect.form, family=family)
+        return Candidate(CandidateFit(effect, None, form=effect.form, family=family),
+                         (Decision('testable', Status.NOT_TESTABLE, reason),))
     if effect.requires_evidence and not effect.independent_evidence(table, location):
         against = effect.contrary_evidence(table, location)
-        return Candidate(effect, None, Status.REJECTED, 'named only where its signature shows outside the '
-                         'amplitudes (its law can mimic other effects there), and the recording shows none'
-                         + (f': {against}' if against else ''), evidence_against=against, form=effect.form,
-                         family=family)
+        return Candidate(CandidateFit(effect, None, form=effect.form, family=family),
+                         (Decision('requires_evidence', Status.REJECTED, 'named only where its signature shows '
+                                   'outside the amplitudes (its law can mimic other effects there), and the recording '
+                                   'shows none' + (f': {against}' if against else '')),))
     testable = [form for form in effect.variants() if not form.applicable(table)]
-    effect, fit, forms, ties, vectors = _choose_form(table, testable, folds)
+    effect, fit, forms, ties, vectors = _choose_form(table, testable, folds, rules)
     gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
     delta = _delta_bic(fit, baseline)
     evidence = effect.independent_evidence(table, location, fit.params)
-    unphysical = fit.unphysical()
     form = _named_form(effect, fit.params, table, location, ties)
     if len(forms) == 1:
         forms = [(form, 0.0)]
-    candidate = Candidate(effect, fit, Status.REJECTED, gain=gain, delta_bic=delta, evidence=evidence,
-                          form=form, forms=forms, family=family, form_vectors=vectors)
-    if _swept_within_runs(table, effect):
-        candidate.within_delta_bic = within_run_delta_bic(table, fit.log_residual, baseline.log_residual,
-                                                          len(effect.parameter_names))
-        candidate.within_gain = within_run_gain(table, fit.cv_log_residual, baseline.cv_log_residual)
+    within_delta_bic = within_gain = math.nan
+    if _swept_within_runs(table, effect, rules):
+        within_delta_bic = within_run_delta_bic(table, fit.log_residual, baseline.log_residual,
+                                                len(effect.parameter_names))
+        within_gain = within_run_gain(table, fit.cv_log_residual, baseline.cv_log_residual)
+    scores = CandidateFit(effect, fit, gain=gain, delta_bic=delta, evidence=evidence, form=form, forms=tuple(forms),
+                          family=family, form_vectors=vectors, within_delta_bic=within_delta_bic,
+                          within_gain=within_gain)
+    return Candidate(scores, (_alone(table, scores, rules),))
+
+
+def _alone(table: WindowTable, scores: CandidateFit, rules: DiagnosisRules) -> Decision:
+    """Whether a fitted candidate earns its parameters alone: physical constants, then BIC and held-out, or evidence."""
+    fit, gain, delta, evidence = scores.fit, scores.gain, scores.delta_bic, scores.evidence
+    assert fit is not None  # only fitted candidates are judged
+    k = len(scores.effect.parameter_names)
+    unphysical = fit.unphysical()
     if unphysical:
-        candidate.reason = 'unphysical constants: ' + '; '.join(unphysical)
-    elif delta <= -BIC_MARGIN and gain >= MIN_GAIN:
-        candidate.status = Status.EARNS
-        candidate.reason = f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}'
-    elif evidence and gain >= -(tolerance := evidence_tolerance(table, len(effect.parameter_names))):
-        candidate.status = Status.EARNS
-        candidate.reason = f'{evidence}; held-out error {100 * gain:+.1f} % lower'
-        if gain < -EVIDENCE_TOLERANCE:
-            candidate.reason += (f' (within the {100 * tolerance:.1f} % that estimating '
-                                 f'{len(effect.parameter_names)} parameter(s) costs on {table.runs.size} runs)')
-    else:
-        candidate.reason = (f'does not earn its {len(effect.parameter_names)} parameter(s): held-out error '
-                            f'{100 * gain:+.1f} % lower, BIC {delta:+.1f}')
-    return candidate
+        return Decision('physical_constants', Status.REJECTED, 'unphysical constants: ' + '; '.join(unphysical))
+    if delta <= -rules.bic_margin and gain >= rules.min_gain:
+        return Decision('bic_margin', Status.EARNS, f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}')
+    if evidence and gain >= -(tolerance := evidence_tolerance(table, k, rules)):
+        text = f'{evidence}; held-out error {100 * gain:+.1f} % lower'
+        if gain < -rules.evidence_tolerance:
+            text += (f' (within the {100 * tolerance:.1f} % that estimating {k} parameter(s) costs on '
+                     f'{table.runs.size} runs)')
+        return Decision('evidence_tolerance', Status.EARNS, text)
+    return Decision('bic_margin', Status.REJECTED, f'does not earn its {k} parameter(s): held-out error '
+                    f'{100 * gain:+.1f} % lower, BIC {delta:+.1f}')
 
 
-def _pair_test(table: WindowTable, leader: Candidate, runner: Candidate, folds: list[int]) -> tuple[bool, bool]:
-    """Fit both effects together and say whether each adds to the other (BIC drop of BIC_MARGIN)."""
+def _pair_test(table: WindowTable, leader: Candidate, runner: Candidate, folds: list[int],
+               rules: DiagnosisRules) -> tuple[bool, bool]:
+    """Fit both effects together and say whether each adds to the other (BIC drop of rules.bic_margin)."""
     assert leader.fit is not None and runner.fit is not None  # both earn, so both were fitted
     both = CombinedEffect(leader.effect, runner.effect)
     first_vec = leader.fit.vector[3:] if both.first is leader.effect else runner.fit.vector[3:]
@@ -616,40 +671,39 @@ def _pair_test(table: WindowTable, leader: Candidate, runner: Candidate, folds: 
     n_eff = effective_sample_size(residual, table.run)
     k = 3 + len(both.parameter_names)
     joint = bic(residual, k, n_eff)
-    leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -BIC_MARGIN
-    runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -BIC_MARGIN
+    leader_adds = joint - bic(runner.fit.log_residual, runner.fit.n_params, n_eff) <= -rules.bic_margin
+    runner_adds = joint - bic(leader.fit.log_residual, leader.fit.n_params, n_eff) <= -rules.bic_margin
     return leader_adds, runner_adds
 
 
-def _earns_by_bic(pair: SecondEffect, margin: float) -> bool:
-    """The BIC rule: BIC lower by ``margin`` than the first alone, and held-out error by :data:`MIN_GAIN` (basis set).
+def _earns_by_bic(pair: SecondEffect, margin: float, rules: DiagnosisRules) -> SecondEffect | None:
+    """The BIC rule: BIC lower by ``margin`` than the first alone, and held-out error by ``rules.min_gain``.
 
-    The held-out error is read on windows, or on run amplitudes (windows pooled
-    per run) with the windows' error no worse than :data:`EVIDENCE_TOLERANCE`:
-    an effect between runs on top of the first (depletion beside a resonance)
-    shows where the window scatter has averaged out, and only there when that
-    scatter is large (two 66 of the fresh random study: 1.1 % on windows, 7.6 %
-    on run amplitudes, BIC -6.8).
+    Returns the pair with its basis, or None.  The held-out error is read on
+    windows, or on run amplitudes (windows pooled per run) with the windows'
+    error no worse than ``rules.evidence_tolerance``: an effect between runs on
+    top of the first (depletion beside a resonance) shows where the window
+    scatter has averaged out, and only there when that scatter is large (see
+    ``docs/diagnosis-rules.md``).
     """
     if not pair.delta_bic <= -margin:     # a NaN score earns nothing
-        return False
-    if pair.gain >= MIN_GAIN:
-        pair.basis = f'held-out error {100 * pair.gain:.0f} % lower than the first alone, BIC {pair.delta_bic:+.0f}'
-        return True
-    if pair.run_gain >= MIN_GAIN and pair.gain >= -EVIDENCE_TOLERANCE:
-        pair.basis = (f'held-out run amplitudes {100 * pair.run_gain:.0f} % closer than with the first alone '
-                      f'(windows {100 * pair.gain:+.1f} %), BIC {pair.delta_bic:+.0f}')
-        return True
-    return False
+        return None
+    if pair.gain >= rules.min_gain:
+        return replace(pair, basis=f'held-out error {100 * pair.gain:.0f} % lower than the first alone, '
+                                   f'BIC {pair.delta_bic:+.0f}')
+    if pair.run_gain >= rules.min_gain and pair.gain >= -rules.evidence_tolerance:
+        return replace(pair, basis=f'held-out run amplitudes {100 * pair.run_gain:.0f} % closer than with the first '
+                                   f'alone (windows {100 * pair.gain:+.1f} %), BIC {pair.delta_bic:+.0f}')
+    return None
 
 
 def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: ModelFit, other: Candidate,
-               folds: list[int], location: Location) -> SecondEffect | None:
+               folds: list[int], location: Location, rules: DiagnosisRules) -> SecondEffect | None:
     """The best of ``combos`` by BIC with physical constants, as a :class:`SecondEffect` on ``reference``."""
     combos = [both for both in combos if not both.applicable(table)]
     if not combos or not reference.cv_rmse > 0:
         return None
-    both, fit, _, ties, _ = _choose_form(table, combos, folds)
+    both, fit, _, ties, _ = _choose_form(table, combos, folds, rules)
     if fit.unphysical():
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
@@ -664,63 +718,69 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
 
 
 def _on_top(table: WindowTable, first: Candidate, other: Candidate, folds: list[int],
-            location: Location) -> SecondEffect | None:
+            location: Location, rules: DiagnosisRules) -> SecondEffect | None:
     """``other`` fitted on top of ``first`` (first's form held), every form of ``other``: :func:`_best_pair`."""
-    family = other.family
+    family = other.scores.family
     assert family is not None and first.fit is not None  # set by _evaluate on fitted candidates
-    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.form_vectors.get(form.form))
+    combos = [CombinedEffect(first.effect, form, first.fit.vector[3:], other.scores.form_vectors.get(form.form))
               for form in family.variants()]
-    return _best_pair(table, combos, first.fit, other, folds, location)
+    return _best_pair(table, combos, first.fit, other, folds, location, rules)
 
 
 def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int], location: Location,
-                left: Location) -> SecondEffect | None:
+                left: Location, rules: DiagnosisRules) -> SecondEffect | None:
     """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC.
 
     The pair names ``other`` when its constants are physical and, beside
-    (1) a BIC drop of :data:`SECOND_BIC_MARGIN` with the held-out error lower by
-    :data:`MIN_GAIN` than the first alone (on windows or on run amplitudes,
+    (1) a BIC drop of ``rules.second_bic_margin`` with the held-out error lower by
+    ``rules.min_gain`` than the first alone (on windows or on run amplitudes,
     :func:`_earns_by_bic`), either (2) the first effect's residual
     ``left`` is located on ``other``'s covariate (a significance test of its
-    own) and the pair lowers the held-out error by :data:`MIN_GAIN` with a BIC
-    at most :data:`LOCATED_BIC_TOLERANCE` higher (a law swept within runs: or
+    own) and the pair lowers the held-out error by ``rules.min_gain`` with a BIC
+    at most ``rules.located_bic_tolerance`` higher (a law swept within runs: or
     shows there on top of the first, :func:`_shows_within_runs`), or (3)
     ``other`` has evidence outside the amplitude fit (its spectrum signature,
     with the pair's parameters) and the pair predicts held-out runs no worse
     than :func:`evidence_tolerance` allows -- the rules a single effect earns by.
     """
-    pair = _on_top(table, first, other, folds, location)
+    pair = _on_top(table, first, other, folds, location, rules)
     if pair is None:
         return None
-    if _earns_by_bic(pair, SECOND_BIC_MARGIN):
-        return pair
-    if left.located == other.effect.covariate and pair.delta_bic < LOCATED_BIC_TOLERANCE \
-            and (pair.gain >= MIN_GAIN or _within_runs_on_top(table, first, pair)):
-        pair.route = 2
-        pair.basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
-                      f'{100 * pair.gain:.1f} % lower, BIC {pair.delta_bic:+.1f}')
-        if pair.gain < MIN_GAIN:
-            pair.basis += '; ' + _within_runs_note(table, left.located, pair.within_delta_bic, pair.within_gain)
-        return pair
-    return pair if _earns_by_evidence(table, pair, location) else None
+    by_bic = _earns_by_bic(pair, rules.second_bic_margin, rules)
+    if by_bic is not None:
+        return by_bic
+    if left.located == other.effect.covariate and pair.delta_bic < rules.located_bic_tolerance:
+        shows = False
+        if not pair.gain >= rules.min_gain:     # a NaN gain too
+            shows, pair = _within_runs_on_top(table, first, pair, rules)
+        if pair.gain >= rules.min_gain or shows:
+            basis = (f'what {first.effect.id} leaves follows {left.located}; with it the held-out error is '
+                     f'{100 * pair.gain:.1f} % lower, BIC {pair.delta_bic:+.1f}')
+            if pair.gain < rules.min_gain:
+                basis += '; ' + _within_runs_note(table, left.located, pair.within_delta_bic, pair.within_gain, rules)
+            return replace(pair, route=2, basis=basis)
+    return _earns_by_evidence(table, pair, location, rules)
 
 
-def _within_runs_on_top(table: WindowTable, first: Candidate, pair: SecondEffect) -> bool:
-    """True when ``pair``'s added law is swept within runs and shows there on top of ``first``.
+def _within_runs_on_top(table: WindowTable, first: Candidate, pair: SecondEffect,
+                        rules: DiagnosisRules) -> tuple[bool, SecondEffect]:
+    """Whether ``pair``'s added law is swept within runs and shows there on top of ``first``; the pair scored so.
 
-    Its within-run scores are set on ``pair`` (:func:`_shows_within_runs`); other laws are not scored.
+    Other laws are not scored within runs (``(False, pair)``).
     """
-    if not _swept_within_runs(table, pair.effect):
-        return False
+    if not _swept_within_runs(table, pair.effect, rules):
+        return False, pair
     assert first.fit is not None    # a first effect was fitted
-    pair.within_delta_bic = within_run_delta_bic(table, pair.fit.log_residual, first.fit.log_residual,
-                                                 len(pair.effect.parameter_names))
-    pair.within_gain = within_run_gain(table, pair.fit.cv_log_residual, first.fit.cv_log_residual)
-    return _shows_within_runs(table, pair.effect.covariate, (pair.within_delta_bic, pair.within_gain, pair.gain))
+    pair = replace(pair, within_delta_bic=within_run_delta_bic(table, pair.fit.log_residual, first.fit.log_residual,
+                                                               len(pair.effect.parameter_names)),
+                   within_gain=within_run_gain(table, pair.fit.cv_log_residual, first.fit.cv_log_residual))
+    return _shows_within_runs(table, pair.effect.covariate, (pair.within_delta_bic, pair.within_gain, pair.gain),
+                              rules), pair
 
 
-def _earns_by_evidence(table: WindowTable, pair: SecondEffect, location: Location) -> bool:
-    """The evidence rule: the added effect shows outside the amplitude fit and costs little held-out (route, basis set).
+def _earns_by_evidence(table: WindowTable, pair: SecondEffect, location: Location,
+                       rules: DiagnosisRules) -> SecondEffect | None:
+    """The evidence rule: the added effect shows outside the amplitude fit and costs little held-out (or None).
 
     The added effect has evidence outside the amplitude fit with the pair's
     parameters, whatever its fit alone showed (that fit may have given its part
@@ -731,36 +791,35 @@ def _earns_by_evidence(table: WindowTable, pair: SecondEffect, location: Locatio
     than what estimating its parameters costs (:func:`evidence_tolerance`).
     """
     evidence = pair.effect.independent_evidence(table, location, pair.params, beside=pair.first_effect)
-    if not (evidence and pair.gain >= -evidence_tolerance(table, len(pair.effect.parameter_names))):
-        return False
-    pair.route = 3
-    pair.basis = f'{evidence}; held-out error {100 * pair.gain:+.1f} % lower than the first alone'
-    return True
+    if not (evidence and pair.gain >= -evidence_tolerance(table, len(pair.effect.parameter_names), rules)):
+        return None
+    return replace(pair, route=3, basis=f'{evidence}; held-out error {100 * pair.gain:+.1f} % lower than the first '
+                                        'alone')
 
 
 def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candidate], folds: list[int],
-                   location: Location) -> tuple[SecondEffect | None, list[SecondEffect]]:
+                   location: Location, rules: DiagnosisRules) -> tuple[SecondEffect | None, list[SecondEffect]]:
     """Forward selection: the other candidate that best explains what ``first`` leaves, if one earns its place.
 
     Tried only when the first effect leaves a lack of fit or a located pattern,
     or when another candidate alone predicted held-out runs better than the
-    paper's model by :data:`MIN_GAIN` (an effect drifting between replicate runs,
+    paper's model by ``rules.min_gain`` (an effect drifting between replicate runs,
     depletion say, leaves no lack of fit in the condition means); otherwise only
     the candidates with evidence at standstill are tried
     (:meth:`.effects.Effect.standstill_evidence`: a floor measured with the
     screw still that a resonance's fit has absorbed).
     Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
-    within :data:`BIC_MARGIN` of each other tie, and neither is named, unless
+    within ``rules.bic_margin`` of each other tie, and neither is named, unless
     what the first leaves is located on the covariate of one of them only, or
     else one of them only shows outside the amplitude fit (its spectrum or the
     vibration at standstill, with the pair's parameters); one
     named by a stronger rule of :func:`_add_second` goes before the others.
     """
     assert first.fit is not None  # the named candidate was fitted
-    remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params)
-    others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= MIN_GAIN
+    remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params, rules)
+    others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= rules.min_gain
                       for c in candidates)
-    left = locate(table, first.fit.log_residual)
+    left = locate(table, first.fit.log_residual, rules)
     if not remaining.significant and not others_gain and left.located == 'none':
         # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill.
         candidates = [c for c in candidates if c.effect.standstill_evidence(table)]
@@ -768,16 +827,16 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
-        second = _add_second(table, first, cand, folds, location, left)
+        second = _add_second(table, first, cand, folds, location, left, rules)
         if second is not None:
             earning.append(second)
     earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
     if len(earning) > 1 and earning[1].route == earning[0].route == 1 \
-            and abs(earning[1].delta_bic - earning[0].delta_bic) < BIC_MARGIN:
+            and abs(earning[1].delta_bic - earning[0].delta_bic) < rules.bic_margin:
         located = [second for second in earning[:2] if second.candidate.effect.covariate == left.located]
         if len(located) == 1:
-            located[0].basis += f'; what {first.effect.id} leaves follows {left.located}, as this effect does'
-            return located[0], []
+            return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
+                           f'{left.located}, as this effect does'), []
         shown = [(second, second.effect.independent_evidence(table, location, second.params,
                                                              beside=second.first_effect)) for second in earning[:2]]
         with_evidence = [(second, evidence) for second, evidence in shown if evidence]
@@ -785,20 +844,16 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
             return None, earning[:2]
         (named, evidence), = with_evidence
         other = earning[1] if named is earning[0] else earning[0]
-        named.basis += f'; {evidence}; {other.effect.id} fits as well but shows nothing outside the amplitude fit'
-        return named, []
+        return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
+                       'outside the amplitude fit'), []
     return (earning[0] if earning else None), []
 
 
-#: Candidates (by held-out gain alone) tried in pairs when none earns its parameters alone.
-PAIR_POOL = 3
-
-
 def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],
-                          location: Location) -> tuple[Candidate, SecondEffect] | None:
+                          location: Location, rules: DiagnosisRules) -> tuple[Candidate, SecondEffect] | None:
     """Two effects that only together explain the mismatch: ``(first, second)`` or None.
 
-    Among the :data:`PAIR_POOL` candidates with evidence outside the amplitude
+    Among the ``rules.pair_pool`` candidates with evidence outside the amplitude
     fit first, then the largest held-out gains alone, each pair is fitted (the
     first of the pool first); a pair counts when the second adds to the first
     by the BIC rule or the evidence rule of :func:`_add_second`, and the pair
@@ -806,69 +861,70 @@ def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline:
     """
     pool = sorted([c for c in ranked if c.fit is not None and math.isfinite(c.gain)],
                   key=lambda c: (not c.evidence, -c.gain))
-    pool = pool[:PAIR_POOL]
+    pool = pool[:rules.pair_pool]
     best = None
     for i, first in enumerate(pool):
         for other in pool[i + 1:]:
             # the pool holds fitted candidates only
-            assert first.family is not None and other.family is not None
+            first_family, other_family = first.scores.family, other.scores.family
+            assert first_family is not None and other_family is not None
             assert first.fit is not None and other.fit is not None
-            combos = [CombinedEffect(a, b, first.form_vectors.get(a.form), other.form_vectors.get(b.form))
-                      for a in first.family.variants()
-                      for b in other.family.variants()]
-            second = _best_pair(table, combos, first.fit, other, folds, location)
-            if second is None or not (_earns_by_bic(second, BIC_MARGIN)
-                                      or _earns_by_evidence(table, second, location)):
+            combos = [CombinedEffect(a, b, first.scores.form_vectors.get(a.form),
+                                     other.scores.form_vectors.get(b.form))
+                      for a in first_family.variants()
+                      for b in other_family.variants()]
+            pair = _best_pair(table, combos, first.fit, other, folds, location, rules)
+            second = None if pair is None else (_earns_by_bic(pair, rules.bic_margin, rules)
+                                                or _earns_by_evidence(table, pair, location, rules))
+            if second is None:
                 continue
-            pair = second.fit
-            earns = (_delta_bic(pair, baseline) <= -BIC_MARGIN and _delta_bic(pair, other.fit) <= -BIC_MARGIN
-                     and 1.0 - pair.cv_rmse / baseline.cv_rmse >= MIN_GAIN)
-            if earns and (best is None or pair.cv_rmse < best[1].fit.cv_rmse):
+            joint = second.fit
+            earns = (_delta_bic(joint, baseline) <= -rules.bic_margin
+                     and _delta_bic(joint, other.fit) <= -rules.bic_margin
+                     and 1.0 - joint.cv_rmse / baseline.cv_rmse >= rules.min_gain)
+            if earns and (best is None or joint.cv_rmse < best[1].fit.cv_rmse):
                 best = (first, second)
     return best
 
 
 def _tie_both_shown(table: WindowTable, best: Candidate, runner: Candidate, folds: list[int],
-                    location: Location) -> SecondEffect | None:
+                    location: Location, rules: DiagnosisRules) -> SecondEffect | None:
     """Two tied candidates that each show outside the amplitude fit, beside the other: ``runner`` on ``best``, or None.
 
     Two effects of which each explains the amplitudes' mismatch alone, and
     neither adds to the other by BIC, still both show when each has evidence
     the other's law cannot give (a floor measured at standstill, a band fixed
-    in Hz that follows a transfer): two 177 of the fresh random study, a
-    broadband background of 0.73 m/s^2 read at standstill beside a mode at
-    10 Hz whose band the orders pass.  Both are named when the evidence of
+    in Hz that follows a transfer; ``docs/diagnosis-rules.md``, "ties").  Both are named when the evidence of
     each holds with the pair's parameters beside the other (the evidence rule
     of a second effect, :func:`_earns_by_evidence`, both ways round).
     """
     if not (best.evidence and runner.evidence):
         return None
-    pair = _on_top(table, best, runner, folds, location)
-    if pair is None or not _earns_by_evidence(table, pair, location):
+    on_top = _on_top(table, best, runner, folds, location, rules)
+    pair = None if on_top is None else _earns_by_evidence(table, on_top, location, rules)
+    if pair is None:
         return None
     first_shown = pair.first_effect.independent_evidence(table, location, pair.first_params, beside=pair.effect)
     if not first_shown:
         return None
-    pair.basis += f'; and {pair.first_effect.id} beside it: {first_shown}'
-    return pair
+    return replace(pair, basis=pair.basis + f'; and {pair.first_effect.id} beside it: {first_shown}')
 
 
 def _spectral_tiebreak(table: WindowTable, location: Location, first: Candidate,
-                       second: Candidate) -> Candidate | None:
-    """The candidate to drop from a tie on evidence outside the amplitude fit, or None."""
-    for cand in (first, second):
-        # tied candidates both earn, so both were fitted
-        cand.evidence_against = cand.effect.contrary_evidence(table, location, cast(ModelFit, cand.fit).params)
+                       second: Candidate) -> tuple[Candidate, str] | None:
+    """The candidate to drop from a tie on evidence outside the amplitude fit, with the evidence against it; or None."""
+    # tied candidates both earn, so both were fitted
+    against = [cand.effect.contrary_evidence(table, location, cast(ModelFit, cand.fit).params)
+               for cand in (first, second)]
     support = [bool(first.evidence), bool(second.evidence)]
-    against = [bool(first.evidence_against), bool(second.evidence_against)]
     if support[0] and not support[1]:
-        return second
+        return second, against[1]
     if support[1] and not support[0]:
-        return first
+        return first, against[0]
     if against[0] and not against[1]:
-        return first
+        return first, against[0]
     if against[1] and not against[0]:
-        return second
+        return second, against[1]
     return None
 
 
@@ -890,44 +946,42 @@ class Confounding:
 
     def as_json(self) -> dict:
         """Plain mapping."""
-        return {'variable': self.variable, 'follows': self.follows, 'spearman': _num(self.spearman)}
+        return {'variable': self.variable, 'follows': self.follows, 'spearman': finite_or_none(self.spearman)}
 
 
-def confounding(table: WindowTable) -> list[Confounding]:
-    """Run-level covariates that move together (|Spearman| >= :data:`CONFOUNDED`)."""
+def confounding(table: WindowTable, rules: DiagnosisRules = DEFAULT_RULES) -> list[Confounding]:
+    """Run-level covariates that move together (|Spearman| >= ``rules.confounded``): a set-point and a drift."""
     from scipy.stats import spearmanr
-    names = ['speed', 'load', 'revolutions', 'time'] + (['temperature'] if table.has_temperature else [])
+    drifts = [name for name in DRIFT_COVARIATES if name != 'temperature' or table.has_temperature]
+    names = list(PLAN_COVARIATES) + drifts
     means = {name: table.run_means(name) for name in names}
-    for name in ('speed', 'load'):
+    for name in PLAN_COVARIATES:
         levels: np.ndarray = np.array(operating_levels(means[name]))
         means[name] = levels[np.argmin(np.abs(means[name][:, None] - levels[None, :]), axis=1)]
     found = []
-    for a in names[:2]:
-        for b in names[2:]:
+    for a in PLAN_COVARIATES:
+        for b in drifts:
             x, y = means[a], means[b]
             ok = np.isfinite(x) & np.isfinite(y)
             if ok.sum() < 4 or np.ptp(x[ok]) == 0 or np.ptp(y[ok]) == 0:
                 continue
             rho = float(spearmanr(x[ok], y[ok]).statistic)
-            if abs(rho) >= CONFOUNDED:
+            if abs(rho) >= rules.confounded:
                 found.append(Confounding(a, b, rho))
     return found
 
 
-def _empirical(table: WindowTable, baseline: ModelFit, location: Location, folds: list[int]) -> EmpiricalFit | None:
+def _empirical(table: WindowTable, baseline: ModelFit, location: Location, folds: list[int],
+               rules: DiagnosisRules) -> EmpiricalFit | None:
     """The empirical term (of each significant located shape) that predicts held-out runs best, or None."""
     best = None
-    for term in empirical_terms(table, baseline.log_residual, location, SIGNIFICANCE):
+    for term in empirical_terms(table, baseline.log_residual, location, rules.significance, rules.min_segment_runs):
         fit = fit_model(table, term, folds)
         gain = 1.0 - fit.cv_rmse / baseline.cv_rmse if baseline.cv_rmse > 0 else math.nan
-        candidate = EmpiricalFit(term, fit, gain, _delta_bic(fit, baseline))
+        candidate = EmpiricalFit(term, fit, gain, _delta_bic(fit, baseline), rules=rules)
         if best is None or (candidate.earns, -fit.cv_rmse) > (best.earns, -best.fit.cv_rmse):
             best = candidate
     return best
-
-
-#: |Pearson| over runs from which temperature and revolutions count as collinear (their laws cannot be told apart).
-COLLINEAR = 0.9
 
 
 def drift_correlation(table: WindowTable, first: str = 'temperature', second: str = 'revolutions') -> float:
@@ -941,53 +995,51 @@ def drift_correlation(table: WindowTable, first: str = 'temperature', second: st
     return float(np.corrcoef(x[ok], y[ok])[0, 1])
 
 
-#: Covariates that drift over a session, compared over runs by :func:`same_shape_covariates`.
-DRIFT_COVARIATES = ('time', 'revolutions', 'temperature')
-
-
-def same_shape_covariates(table: WindowTable, covariates: Collection[str]) -> set[str]:
-    """``covariates`` and the drift covariates whose run means are collinear with one of them (|r| >= COLLINEAR).
+def same_shape_covariates(table: WindowTable, covariates: Collection[str],
+                          rules: DiagnosisRules = DEFAULT_RULES) -> set[str]:
+    """``covariates`` and the drift covariates whose run means are collinear with one of them (|r| >= rules.collinear).
 
     A smooth curve in time, when time and revolutions rise together over runs
     (one session after another, each from rest), is a smooth curve in
     revolutions too: it says the law of revolutions is approximate, not that
-    the physics is missing (depletion 201 of the fresh random study: 12 runs,
-    time and revolutions r = 0.99, a quadratic in time predicted held-out runs
-    19 % better than the exponential depletion law that was concealed).
+    the physics is missing (``docs/diagnosis-rules.md``, "physics outside the catalogue").
     """
     out = set(covariates)
     for drift in DRIFT_COVARIATES:
         if drift not in out and any(other in DRIFT_COVARIATES
-                                    and abs(drift_correlation(table, drift, other)) >= COLLINEAR
+                                    and abs(drift_correlation(table, drift, other)) >= rules.collinear
                                     for other in covariates):
             out.add(drift)
     return out
 
 
 def _held_out_tiebreak(table: WindowTable, first: Candidate, second: Candidate,
-                       correlation: float) -> Candidate | None:
-    """The candidate to drop from a tie between laws of two drift covariates that the recording does not tie.
+                       rules: DiagnosisRules) -> tuple[Candidate, float] | None:
+    """The candidate to drop from a tie between laws of two drift covariates the recording does not tie, and their r.
 
-    When the two follow different recorded covariates (temperature and
-    revolutions) and these are not collinear over runs (|r| below
-    :data:`COLLINEAR`), held-out runs decide: the one predicting them worse is dropped.
+    When the two follow different recorded drift covariates (:data:`DRIFT_COVARIATES`:
+    temperature and revolutions, say) and these are not collinear over runs
+    (|r| below ``rules.collinear``), held-out runs decide: the one predicting
+    them worse is dropped.
     """
-    covariates = {first.effect.covariate, second.effect.covariate}
-    if covariates != {'temperature', 'revolutions'} or not abs(correlation) < COLLINEAR:
+    a, b = first.effect.covariate, second.effect.covariate
+    if a == b or a not in DRIFT_COVARIATES or b not in DRIFT_COVARIATES:
+        return None
+    correlation = drift_correlation(table, a, b)
+    if not abs(correlation) < rules.collinear:
         return None
     assert first.fit is not None and second.fit is not None  # tied candidates both earn, so both were fitted
-    return first if first.fit.cv_rmse > second.fit.cv_rmse else second
+    return (first if first.fit.cv_rmse > second.fit.cv_rmse else second), correlation
 
 
-def _settle_tie(best: Candidate, runner: Candidate, loser: Candidate, notes: list, loser_reason: str,
+def _settle_tie(best: Candidate, runner: Candidate, loser: Candidate, notes: list, decision: Decision,
                 decided_by: str) -> Candidate:
-    """Drop ``loser`` of two candidates that fit the amplitudes equally well; note why; return the winner.
+    """Drop ``loser`` of two candidates that fit the amplitudes equally well by ``decision``; note why; the winner.
 
-    ``loser_reason`` may name the winner as ``{winner}``.
+    ``decision.text`` may name the winner as ``{winner}``.
     """
     winner = runner if loser is best else best
-    loser.status = Status.DROPPED
-    loser.reason += loser_reason.replace('{winner}', winner.effect.id)
+    loser.decide(replace(decision, text=decision.text.replace('{winner}', winner.effect.id)))
     notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well; {decided_by}: '
                  f'{winner.effect.id}')
     return winner
@@ -1027,16 +1079,21 @@ def _untestable_advice(test: LackOfFit) -> str:
 class _Outcome:
     """The verdict as :func:`diagnose_table` builds it, step by step."""
 
-    verdict: str = ADEQUATE
+    verdict: Verdict = ADEQUATE
     best: Candidate | None = None
     second: SecondEffect | None = None
     tied: list[str] = field(default_factory=list)
     advice: str = ''
     notes: list[str] = field(default_factory=list)
+    empirical: EmpiricalFit | None = None
 
 
-def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis:
-    """Run the whole diagnosis on a window table (see module doc)."""
+def diagnose_table(table: WindowTable, effects: dict | None = None, rules: DiagnosisRules = DEFAULT_RULES) -> Diagnosis:
+    """Run the whole diagnosis on a window table (see module doc), every decision by ``rules``.
+
+    ``effects``: the candidates by ID (default: every registered effect);
+    ``rules``: the policy (:class:`.rules.DiagnosisRules`; ``docs/diagnosis-rules.md``).
+    """
     check_identifiable(table.speed, table.load)
     effects = registered() if effects is None else effects
     folds = cv_folds(table)
@@ -1044,33 +1101,33 @@ def diagnose_table(table: WindowTable, effects: dict | None = None) -> Diagnosis
         raise InputError(f'diagnose: {len(folds)} run(s) can be held out with the constants still identifiable; '
                          'record each speed and load in two runs or more (6 runs or more in all)')
     baseline = fit_model(table, None, folds)
-    baseline_test = lack_of_fit(table, baseline.log_residual, baseline.n_params)
-    location = locate(table, baseline.log_residual)
-    confounded_with = confounding(table)
+    baseline_test = lack_of_fit(table, baseline.log_residual, baseline.n_params, rules)
+    location = locate(table, baseline.log_residual, rules)
+    confounded_with = confounding(table, rules)
     correlation = drift_correlation(table)
-    out = _Outcome(notes=_plan_notes(table, baseline, folds, confounded_with, correlation))
-    candidates = [_evaluate(table, effect, baseline, location, folds) for effect in effects.values()]
+    out = _Outcome(notes=_plan_notes(table, baseline, folds, confounded_with, correlation, rules))
+    candidates = [_evaluate(table, effect, baseline, location, folds, rules) for effect in effects.values()]
     ranked = sorted([c for c in candidates if c.fit is not None], key=lambda c: cast(ModelFit, c.fit).cv_rmse)
     earning = [c for c in ranked if c.status == Status.EARNS]
     out.best = earning[0] if earning else (ranked[0] if ranked else None)
     conditions = operating_conditions(table.speed, table.load)
-    empirical = _empirical(table, baseline, location, folds)
+    out.empirical = _empirical(table, baseline, location, folds, rules)
     if earning:
-        _settle_earning(table, earning, out, folds, location, correlation)
+        _settle_earning(table, earning, out, folds, location, rules)
     else:
-        _when_none_earns(table, ranked, baseline, baseline_test, location, folds, conditions, out, empirical)
+        _when_none_earns(table, ranked, baseline, baseline_test, location, folds, conditions, out, rules)
     _qualify_verdict(out, bool(confounded_with), conditions, baseline_test)
-    _let_empirical_overrule(table, out, empirical)
-    chosen_test = _name_second_and_test(table, out, candidates, folds, location)
+    _let_empirical_overrule(table, out, rules)
+    chosen_test = _name_second_and_test(table, out, candidates, folds, location, rules)
     return Diagnosis(verdict=out.verdict, baseline=baseline, candidates=candidates, best=out.best,
                      location=location, tied=out.tied, notes=out.notes, what_to_record=out.advice, table=table,
                      confounding=confounded_with, baseline_fit_test=baseline_test, chosen_fit_test=chosen_test,
-                     second=out.second, empirical=empirical if out.verdict == UNEXPLAINED else None,
-                     temperature_revolutions=correlation)
+                     second=out.second, empirical=out.empirical if out.verdict == UNEXPLAINED else None,
+                     temperature_revolutions=correlation, rules=rules)
 
 
 def _plan_notes(table: WindowTable, baseline: ModelFit, folds: list[int], confounded_with: list[Confounding],
-                correlation: float) -> list[str]:
+                correlation: float, rules: DiagnosisRules) -> list[str]:
     """What the plan and the paper's model say before any candidate: unphysical constants, confounding, ..."""
     notes = []
     if baseline.unphysical():
@@ -1082,124 +1139,132 @@ def _plan_notes(table: WindowTable, baseline: ModelFit, folds: list[int], confou
                      'would not be identifiable')
     if math.isfinite(correlation):
         notes.append(f'temperature and revolutions over runs: r = {correlation:+.2f} '
-                     f'({"collinear" if abs(correlation) >= COLLINEAR else "not collinear"})')
+                     f'({"collinear" if abs(correlation) >= rules.collinear else "not collinear"})')
     return notes
 
 
 def _settle_earning(table: WindowTable, earning: list[Candidate], out: _Outcome, folds: list[int], location: Location,
-                    correlation: float) -> None:
+                    rules: DiagnosisRules) -> None:
     """Among candidates that earn alone: the one named, or a tie (``ambiguous``), each runner-up with its reason."""
     best = earning[0]
-    out.verdict = best.effect.id
+    out.verdict = Verdict(best.effect.id)
     for runner in earning[1:]:
-        close = runner.gain >= TIE_RATIO * best.gain or abs(runner.delta_bic - best.delta_bic) < BIC_MARGIN
+        close = (runner.gain >= rules.tie_ratio * best.gain
+                 or abs(runner.delta_bic - best.delta_bic) < rules.bic_margin)
         if not close:
-            runner.status = Status.DROPPED
-            runner.reason += f'; explains less than {best.effect.id}'
+            runner.decide(Decision('tie_ratio', Status.DROPPED, f'explains less than {best.effect.id}'))
             continue
-        leader_adds, runner_adds = _pair_test(table, best, runner, folds)
+        leader_adds, runner_adds = _pair_test(table, best, runner, folds, rules)
         if leader_adds and not runner_adds:
-            runner.status = Status.DROPPED
-            runner.reason += f'; adds nothing given {best.effect.id}'
+            runner.decide(Decision('bic_margin', Status.DROPPED, f'adds nothing given {best.effect.id}'))
         elif runner_adds and not leader_adds:
-            best.status = Status.DROPPED
-            best.reason += f'; adds nothing given {runner.effect.id}'
-            best, out.verdict = runner, runner.effect.id
+            best.decide(Decision('bic_margin', Status.DROPPED, f'adds nothing given {runner.effect.id}'))
+            best, out.verdict = runner, Verdict(runner.effect.id)
         elif runner_adds and leader_adds:
             out.notes.append(f'{runner.effect.id} adds to {best.effect.id} as well: both effects may be present')
-        elif (loser := _held_out_tiebreak(table, best, runner, correlation)) is not None:
-            collinearity = f'temperature and revolutions not collinear, r = {correlation:+.2f} over runs'
+        elif (held_out := _held_out_tiebreak(table, best, runner, rules)) is not None:
+            loser, correlation = held_out
+            first, second = sorted((best.effect.covariate, runner.effect.covariate), reverse=True)
+            collinearity = f'{first} and {second} not collinear, r = {correlation:+.2f} over runs'
             best = _settle_tie(best, runner, loser, out.notes,
-                               f'; fits the amplitudes as well as {{winner}} but predicts held-out runs worse '
-                               f'({collinearity})', f'{collinearity}, so the held-out runs decide')
-            out.verdict = best.effect.id
-        elif (both_shown := _tie_both_shown(table, best, runner, folds, location)) is not None:
+                               Decision('collinear', Status.DROPPED, f'fits the amplitudes as well as {{winner}} but '
+                                        f'predicts held-out runs worse ({collinearity})'),
+                               f'{collinearity}, so the held-out runs decide')
+            out.verdict = Verdict(best.effect.id)
+        elif (both_shown := _tie_both_shown(table, best, runner, folds, location, rules)) is not None:
             out.second = both_shown
             out.notes.append(f'{best.effect.id} and {runner.effect.id} fit the amplitudes equally well and neither '
                              'adds by BIC given the other, but each shows outside the amplitude fit beside the '
                              'other: both are named')
-        elif (loser := _spectral_tiebreak(table, location, best, runner)) is not None:
+        elif (spectral := _spectral_tiebreak(table, location, best, runner)) is not None:
+            loser, against = spectral
             best = _settle_tie(best, runner, loser, out.notes,
-                               '; fits as well as {winner} but '
-                               + (loser.evidence_against or 'the other has independent evidence'),
+                               Decision('evidence', Status.DROPPED, 'fits as well as {winner} but '
+                                        + (against or 'the other has independent evidence')),
                                'decided by evidence from outside the fit')
-            out.verdict = best.effect.id
+            out.verdict = Verdict(best.effect.id)
         else:
-            out.tied = [best.effect.id, runner.effect.id]
-            out.verdict = AMBIGUOUS
-            out.advice = _separation_advice(best.effect, runner.effect)
-            collinear = ''
-            if {best.effect.covariate, runner.effect.covariate} == {'temperature', 'revolutions'} \
-                    and math.isfinite(correlation):
-                collinear = (f' (temperature and revolutions are collinear over runs, r = {correlation:+.2f}; '
-                             'pauses that let the nut cool while the revolutions stand still separate them)')
-            out.notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
-                             'neither adds anything given the other: the recording cannot tell them apart'
-                             + collinear)
+            _tie(table, best, runner, out)
             break
     out.best = best
 
 
-def _swept_within_runs(table: WindowTable, effect: Effect) -> bool:
-    """True when ``effect``'s covariate varies mostly within runs (:data:`WITHIN_RUN_SHARE`: position)."""
-    return within_run_share(table, effect.covariate) >= WITHIN_RUN_SHARE
+def _tie(table: WindowTable, best: Candidate, runner: Candidate, out: _Outcome) -> None:
+    """Two candidates the recording cannot tell apart: ``ambiguous``, with what to record."""
+    out.tied = [best.effect.id, runner.effect.id]
+    out.verdict = AMBIGUOUS
+    out.advice = _separation_advice(best.effect, runner.effect)
+    collinear = ''
+    covariates = sorted((best.effect.covariate, runner.effect.covariate), reverse=True)
+    if covariates[0] != covariates[1] and set(covariates) <= set(DRIFT_COVARIATES):
+        correlation = drift_correlation(table, *covariates)
+        if math.isfinite(correlation):
+            collinear = (f' ({covariates[0]} and {covariates[1]} are collinear over runs, r = {correlation:+.2f}; '
+                         f'pauses that change {covariates[0]} while {covariates[1]} stand still separate them)')
+    out.notes.append(f'{best.effect.id} and {runner.effect.id} explain the recording equally well and '
+                     'neither adds anything given the other: the recording cannot tell them apart' + collinear)
 
 
-def _with_time_within_runs(table: WindowTable, covariate: str) -> float:
-    """Pearson r of ``covariate`` and time within runs when collinear (|r| >= :data:`COLLINEAR`), else NaN."""
+def _swept_within_runs(table: WindowTable, effect: Effect, rules: DiagnosisRules) -> bool:
+    """True when ``effect``'s covariate varies mostly within runs (``rules.within_run_share``: position)."""
+    return within_run_share(table, effect.covariate) >= rules.within_run_share
+
+
+def _with_time_within_runs(table: WindowTable, covariate: str, rules: DiagnosisRules) -> float:
+    """Pearson r of ``covariate`` and time within runs when collinear (|r| >= ``rules.collinear``), else NaN."""
     r = within_run_correlation(table, covariate)
-    return r if abs(r) >= COLLINEAR else math.nan
+    return r if abs(r) >= rules.collinear else math.nan
 
 
-def _shows_within_runs(table: WindowTable, covariate: str, scores: tuple[float, float, float]) -> bool:
+def _shows_within_runs(table: WindowTable, covariate: str, scores: tuple[float, float, float],
+                       rules: DiagnosisRules) -> bool:
     """True when a law swept within runs shows there; ``scores``: within-run BIC and gain, held-out gain.
 
     The BIC on the windows' deviations from their run means is lower by
-    :data:`BIC_MARGIN` and held-out runs are predicted better, on their shape
+    ``rules.bic_margin`` and held-out runs are predicted better, on their shape
     along the run and on their windows (the BIC counted by runs charges the
     law's parameters against runs it does not change: it is not asked).  Within runs the law is
     seen against the scatter between windows (sensor noise, contact events),
     which a weak shape along the stroke reduces by little even where it is
-    certain (stiffness on top of a resonance, two 74 of the fresh random
-    study: within-run BIC -36, the held-out shape 1.3 % closer, 1.1 % on
-    windows); the held-out gains only have to show that the shape found
+    certain; the held-out gains only have to show that the shape found
     carries over to runs it was not fitted on.  Where every traverse runs one
     way, ``covariate`` and time are collinear within runs and a drift during
     each traverse has the law's shape: the held-out shape must then be closer
-    by :data:`MIN_GAIN` (stiffness 188 of seeds 180-209: 20 %).
+    by ``rules.min_gain`` (the study cases: ``docs/diagnosis-rules.md``, "within runs").
     """
     within_delta_bic, within_gain, gain = scores
-    if not (within_delta_bic <= -BIC_MARGIN and gain > 0):     # NaN: not scored within runs
+    if not (within_delta_bic <= -rules.bic_margin and gain > 0):     # NaN: not scored within runs
         return False
-    return within_gain > (MIN_GAIN if math.isfinite(_with_time_within_runs(table, covariate)) else 0.0)
+    return within_gain > (rules.min_gain if math.isfinite(_with_time_within_runs(table, covariate, rules)) else 0.0)
 
 
-def _within_runs_note(table: WindowTable, covariate: str, within_delta_bic: float, within_gain: float) -> str:
+def _within_runs_note(table: WindowTable, covariate: str, within_delta_bic: float, within_gain: float,
+                      rules: DiagnosisRules) -> str:
     """What a law swept within runs shows there, in words (and when time within runs shows the same)."""
     note = (f'within runs (the windows\' deviations from their run means, the set-up scatter between runs left out) '
             f'BIC {within_delta_bic:+.0f}, the shape of held-out runs {100 * within_gain:.1f} % closer')
-    r = _with_time_within_runs(table, covariate)
+    r = _with_time_within_runs(table, covariate, rules)
     if math.isfinite(r):
         note += (f'; {covariate} and time are collinear within runs (r = {r:+.2f}: every traverse one way), so a '
                  'drift during each traverse would look the same: traverses out and back tell them apart')
     return note
 
 
-def _located_by_bic(cand: Candidate) -> bool:
-    """The located law's rule on all windows: a BIC drop of :data:`LOCATED_LAW_BIC`, held-out :data:`MIN_GAIN`."""
-    return cand.delta_bic <= -LOCATED_LAW_BIC and cand.gain >= MIN_GAIN
+def _located_by_bic(cand: Candidate, rules: DiagnosisRules) -> bool:
+    """The located law's rule on all windows: a BIC drop of ``rules.located_law_bic``, held-out ``rules.min_gain``."""
+    return cand.delta_bic <= -rules.located_law_bic and cand.gain >= rules.min_gain
 
 
 def _located_law(table: WindowTable, ranked: list[Candidate], location: Location,
-                 empirical: EmpiricalFit | None) -> Candidate | None:
+                 empirical: EmpiricalFit | None, rules: DiagnosisRules) -> Candidate | None:
     """The candidate whose law is the mismatch located on its covariate, when none earns alone (None if none is).
 
     The located test has already shown structure in that covariate
     (revolutions, temperature, position: not speed or load, whose few levels
     a law of two or three parameters follows whatever the physics); a
     candidate that follows it is
-    named with a BIC drop of :data:`LOCATED_LAW_BIC` (instead of
-    :data:`BIC_MARGIN`) and a held-out error lower by :data:`MIN_GAIN`
+    named with a BIC drop of ``rules.located_law_bic`` (instead of
+    ``rules.bic_margin``) and a held-out error lower by ``rules.min_gain``
     (:func:`_located_by_bic`), or a law swept within runs by what it shows
     there (:func:`_shows_within_runs`), when its constants are physical, its
     fit leaves no significant pattern in the covariate (:func:`.locate.covariate_tests` on its residual), and the
@@ -1214,16 +1279,17 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
     best: Candidate | None = None
     for cand in ranked:
         fit = cand.fit
-        if fit is None or cand.effect.covariate in ('speed', 'load') or cand.effect.covariate != location.located \
+        if fit is None or cand.effect.covariate in PLAN_COVARIATES or cand.effect.covariate != location.located \
                 or fit.unphysical():
             continue
-        if not (_located_by_bic(cand) or _shows_within_runs(table, cand.effect.covariate, (
-                cand.within_delta_bic, cand.within_gain, cand.gain))):
+        if not (_located_by_bic(cand, rules) or _shows_within_runs(table, cand.effect.covariate, (
+                cand.scores.within_delta_bic, cand.scores.within_gain, cand.gain), rules)):
             continue
-        if empirical is not None and empirical.beats(fit, same_shape_covariates(table, {cand.effect.covariate})):
+        shapes = same_shape_covariates(table, {cand.effect.covariate}, rules)
+        if empirical is not None and empirical.beats(fit, shapes):
             continue
-        if any(t.covariate == location.located and t.p_value < SIGNIFICANCE
-               for t in covariate_tests(table, fit.log_residual)):
+        if any(t.covariate == location.located and t.p_value < rules.significance
+               for t in covariate_tests(table, fit.log_residual, rules)):
             continue
         if best is None or fit.cv_rmse < cast(ModelFit, best.fit).cv_rmse:
             best = cand
@@ -1232,10 +1298,10 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
 
 def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, baseline_test: LackOfFit,
                      location: Location, folds: list[int], conditions: int, out: _Outcome,
-                     empirical: EmpiricalFit | None = None) -> None:
+                     rules: DiagnosisRules) -> None:
     """No candidate earns alone: a located mismatch's law, two that only together explain it, unexplained, adequate.
 
-    ``empirical``: the empirical term of the located shapes (:func:`_empirical`), which a law must beat.
+    ``out.empirical``: the empirical term of the located shapes (:func:`_empirical`), which a law must beat.
     """
     pattern = location.located not in ('none', 'spectrum')
     mismatch = baseline_test.significant or pattern or bool(baseline.unphysical())
@@ -1246,34 +1312,33 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
         found = baseline_test.finding or 'the constants are unphysical'
         out.notes.append(f'{found}; on {conditions} conditions this may be scatter between units or set-ups as '
                          'well as a model error')
-    located = _located_law(table, ranked, location, empirical) if mismatch and pattern else None
+    located = _located_law(table, ranked, location, out.empirical, rules) if mismatch and pattern else None
     # Two effects may leave the condition means on the model and nothing located, yet one alone predicts held-out
-    # runs better (two 199 of the fresh random study: a resonance 14 % and thermal viscosity 8 %, neither earning
-    # alone; together 29 % better than the resonance alone, BIC -24): the gate of _second_effect.
-    gains = any(c.fit is not None and c.gain >= MIN_GAIN and not c.fit.unphysical() for c in ranked)
-    together = (_pair_when_none_earns(table, ranked, baseline, folds, location)
+    # runs better (docs/diagnosis-rules.md, "pairs"): the gate of _second_effect.
+    gains = any(c.fit is not None and c.gain >= rules.min_gain and not c.fit.unphysical() for c in ranked)
+    together = (_pair_when_none_earns(table, ranked, baseline, folds, location, rules)
                 if (mismatch or gains) and located is None else None)
     if located is not None:
         out.best = located
-        located.status = Status.EARNS
         fit = cast(ModelFit, located.fit)
-        located.reason = (f'named as the law of the mismatch located on {location.located}: its fit leaves no '
-                          f'pattern there and the empirical term of the located shape does not explain it better; '
-                          f'held-out error {100 * located.gain:.1f} % lower, BIC {located.delta_bic:+.1f}')
-        if _located_by_bic(located):
-            located.reason += f' ({LOCATED_LAW_BIC:g} suffices once located)'
+        text = (f'named as the law of the mismatch located on {location.located}: its fit leaves no '
+                f'pattern there and the empirical term of the located shape does not explain it better; '
+                f'held-out error {100 * located.gain:.1f} % lower, BIC {located.delta_bic:+.1f}')
+        if _located_by_bic(located, rules):
+            text += f' ({rules.located_law_bic:g} suffices once located)'
         else:
-            located.reason += '; ' + _within_runs_note(table, location.located, located.within_delta_bic,
-                                                       located.within_gain)
-        out.verdict = located.effect.id
+            text += '; ' + _within_runs_note(table, location.located, located.scores.within_delta_bic,
+                                             located.scores.within_gain, rules)
+        located.decide(Decision('located_law_bic', Status.EARNS, text, restart=True))
+        out.verdict = Verdict(located.effect.id)
         out.notes.append(f'no candidate earns by the BIC margin, but the mismatch follows {location.located} and '
                          f'{located.effect.id}\'s law of {location.located} explains it (held-out error '
                          f'{100 * fit.cv_rmse:.2f} % against {100 * baseline.cv_rmse:.2f} % for the paper\'s model)')
     elif together is not None:
         out.best, out.second = together
-        out.best.status = Status.EARNS
-        out.best.reason += f'; with {out.second.effect.id} it does: the two explain the mismatch only together'
-        out.verdict = out.best.effect.id
+        out.best.decide(Decision('pair_pool', Status.EARNS, f'with {out.second.effect.id} it does: the two explain '
+                                 'the mismatch only together'))
+        out.verdict = Verdict(out.best.effect.id)
     elif mismatch:
         out.verdict = UNEXPLAINED
         out.advice = _unexplained_advice(pattern, baseline_test)
@@ -1303,30 +1368,30 @@ def _qualify_verdict(out: _Outcome, confounded: bool, conditions: int, baseline_
         out.notes.append(f'no lack-of-fit test on this plan: {baseline_test.reason}')
 
 
-def _let_empirical_overrule(table: WindowTable, out: _Outcome, empirical: EmpiricalFit | None) -> None:
+def _let_empirical_overrule(table: WindowTable, out: _Outcome, rules: DiagnosisRules) -> None:
     """A named (or tied) effect gives way to an empirical term that predicts held-out runs better.
 
     Not to a smooth term in a covariate the named effects follow, or in one
     collinear with it over runs (:func:`same_shape_covariates`; a note says so).
     """
-    best = out.best
+    best, empirical = out.best, out.empirical
     if empirical is not None and best is not None and out.verdict in (best.effect.id, AMBIGUOUS):
         second = out.second if out.verdict == best.effect.id else None
         named_fit = second.fit if second is not None else cast(ModelFit, best.fit)
         followed = {best.effect.covariate} | ({second.effect.covariate} if second is not None else set())
         followed |= {registered()[name].covariate for name in out.tied if name in registered()}
-        collinear = same_shape_covariates(table, followed) - followed
+        collinear = same_shape_covariates(table, followed, rules) - followed
         if empirical.term.covariate in collinear and empirical.beats(named_fit, followed):
             out.notes.append(f'an empirical {empirical.term.form} in {empirical.term.covariate} predicts held-out '
                              f'runs better ({100 * empirical.fit.cv_rmse:.2f} % against '
                              f'{100 * named_fit.cv_rmse:.2f} %), but {empirical.term.covariate} is collinear over '
                              f'runs with what {best.effect.id} follows: a curve in one is a curve in the other')
         if empirical.beats(named_fit, followed | collinear):
-            empirical.overrules = best.effect.id
-            best.status = Status.DROPPED
-            best.reason += (f'; predicts held-out runs worse than an empirical {empirical.term.form} in '
-                            f'{empirical.term.covariate} (held-out error {100 * named_fit.cv_rmse:.2f} % against '
-                            f'{100 * empirical.fit.cv_rmse:.2f} %): the located shape is not its law')
+            empirical = out.empirical = replace(empirical, overrules=best.effect.id)
+            best.decide(Decision('empirical', Status.DROPPED, f'predicts held-out runs worse than an empirical '
+                                 f'{empirical.term.form} in {empirical.term.covariate} (held-out error '
+                                 f'{100 * named_fit.cv_rmse:.2f} % against {100 * empirical.fit.cv_rmse:.2f} %): the '
+                                 'located shape is not its law'))
             out.verdict, out.second, out.tied = UNEXPLAINED, None, []
             out.advice = 'a candidate for the located mismatch is missing from the catalogue'
             out.notes.append(f'{best.effect.id} is not named: an empirical {empirical.term.form} in '
@@ -1336,13 +1401,13 @@ def _let_empirical_overrule(table: WindowTable, out: _Outcome, empirical: Empiri
 
 
 def _name_second_and_test(table: WindowTable, out: _Outcome, candidates: list[Candidate], folds: list[int],
-                          location: Location) -> LackOfFit | None:
+                          location: Location, rules: DiagnosisRules) -> LackOfFit | None:
     """With one effect named: the second effect (forward selection) and the lack of fit of what is named."""
     best = out.best
     if best is None or out.verdict != best.effect.id:
         return None
     if out.second is None:
-        out.second, tie = _second_effect(table, best, candidates, folds, location)
+        out.second, tie = _second_effect(table, best, candidates, folds, location, rules)
         if tie:
             a, b = tie
             out.notes.append(f'{best.effect.id} leaves a mismatch that {a.effect.id} and {b.effect.id} explain '
@@ -1355,7 +1420,7 @@ def _name_second_and_test(table: WindowTable, out: _Outcome, candidates: list[Ca
     if second is not None:
         out.notes.append(f'two effects at once: {second.effect.id} ({second.form}) explains part of what '
                          f'{best.effect.id} leaves: {second.basis}')
-    chosen_test = lack_of_fit(table, final.log_residual, final.n_params)
+    chosen_test = lack_of_fit(table, final.log_residual, final.n_params, rules)
     if chosen_test.significant:
         out.notes.append(f'{named} leaves a misfit ({chosen_test.finding}): it explains part of the mismatch, '
                          'not all')

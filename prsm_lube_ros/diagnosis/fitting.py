@@ -33,10 +33,10 @@ from scipy.optimize import least_squares
 
 from ..estimation.calibration import operating_levels, run_level_covariance
 from ..physics.vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
-from .effects import Effect
 from .table import WindowTable
 
 if TYPE_CHECKING:
+    from .effects import Effect
     from .table import Columns
 
 __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_START', 'UNPHYSICAL_SIGMAS', 'bic',

@@ -9,7 +9,7 @@ strongly, with windows of one run treated as correlated:
 * ``position`` — nut position inside runs (residual and position centred per
   run, so only the within-run trend counts);
 * ``revolutions``, ``time`` and ``temperature`` — linear trend over all
-  windows (temperature only when it spans :data:`MIN_TEMPERATURE_SPAN` K,
+  windows (temperature only when it spans ``DiagnosisRules.min_temperature_span`` K,
   the floor the thermal candidate needs too: less is the sensor's noise);
 * ``speed`` and ``load`` — residual means per operating level (what the
   model's speed and load laws leave over);
@@ -23,14 +23,14 @@ sample size of :func:`~.fitting.effective_sample_size`.
 
 A straight line misses arches, steps and curvature, so every continuous
 covariate (position within runs, revolutions, time, temperature) is also
-tested for *any* shape: residual means in :data:`BINS` quantile bins, their
+tested for *any* shape: residual means in ``DiagnosisRules.bins`` quantile bins, their
 equality tested by a Wald test with a run-clustered (sandwich) covariance and
 the small-sample Hotelling correction ``F = W (G - q) / (q (G - 1))`` on
 ``(q, G - q)`` degrees of freedom, G runs and q = bins - 1, so the runs, not
 the windows, are the units of evidence.  A covariate that moves mostly between
 runs (revolutions, time and temperature usually do) puts few runs in a bin,
 which makes that covariance far too small; it is tested on run means instead,
-binned by run (up to :data:`BINS` bins of at least three runs), with a one-way
+binned by run (up to ``DiagnosisRules.bins`` bins of at least three runs), with a one-way
 ANOVA F on ``(bins - 1, runs - bins)`` degrees of freedom.  The bin profile is reported as the
 amplitude relative to its mean per bin, with its shape in words (an arch, a
 trough, a steady rise or fall, or a step) and, for nut position, in how many
@@ -85,63 +85,21 @@ from scipy import stats
 from scipy.ndimage import median_filter, uniform_filter1d
 
 from ..estimation.calibration import operating_levels
-from .effects.thermal_viscosity import MIN_SPREAD
 from .fitting import effective_sample_size
+from .rules import DEFAULT_RULES, DEFAULT_SPECTRAL_RULES, DiagnosisRules
+from ..validation import finite_or_none
 from .table import WindowTable
 
-__all__ = ['BINS', 'COVARIATE_UNITS', 'CovariateTest', 'FLOOR_HALF_WIDTH', 'LINE_CONSTANCY', 'LINE_MEASURABLE',
-           'LINE_PROMINENCE', 'Location', 'MIN_SEGMENT_RUNS', 'MIN_TEMPERATURE_SPAN', 'MODE_BROAD_PROMINENCE',
-           'MODE_FLOOR_HALF_WIDTH', 'MODE_MAX_ORDER', 'MODE_MIN_SHARE', 'MODE_MIN_SPEEDS', 'MODE_ORDER_SHIFT_BINS',
-           'MODE_RING_RATIO', 'MODE_SHARE_SPREAD', 'MODE_UPPER_SKIRT', 'POWER_SPREAD', 'SHAPE_ADDED_BANDS',
-           'SHAPE_MIN_BINS', 'SHAPE_MIN_DISTANCE', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE', 'SpectralLines',
-           'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate', 'order_tracked_mode',
-           'spectral_lines', 'spectral_shape', 'time_segment']
+__all__ = ['COVARIATE_UNITS', 'CovariateTest', 'Location', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
+           'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate',
+           'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
 
-#: A covariate carries the mismatch when its p-value is below this.
-SIGNIFICANCE = 1e-3
-#: Temperature is a covariate when it spans this many K (the floor the thermal candidate needs too).
-MIN_TEMPERATURE_SPAN = MIN_SPREAD
-#: Quantile bins of the flexible (any-shape) covariate tests.
-BINS = 6
-#: A spectral line stands out when it exceeds its neighbourhood's median by this factor (at two speeds at least).
-LINE_PROMINENCE = 4.0
-#: A line's power is measured at the speeds where it exceeds its neighbourhood's median by this factor.
-LINE_MEASURABLE = 2.0
-#: Half width, bins, of the neighbourhood a line is compared with.
-FLOOR_HALF_WIDTH = 8
-#: Fixed lines count as constant when their power varies by less than this factor between speeds ...
-LINE_CONSTANCY = 2.5
-#: ... while the total power varies by more than this factor.
-POWER_SPREAD = 1.5
-#: Half width, bins, of the neighbourhood a mode's band (2 zeta f_r wide) is compared with.
-MODE_FLOOR_HALF_WIDTH = 32
-#: A band stands out of the spectrum an octave either side of it by this factor (a mode's ringing over its
-#: excitation peaks at 1 / (4 zeta^2): 6.25 at zeta 0.2, and the octave's median holds some of the band).
-MODE_BROAD_PROMINENCE = 2.5
-#: Highest rotation order taken to excite a well-damped mode (rollers times thread starts stay below it) ...
-MODE_MAX_ORDER = 50.0
-#: ... which rings appreciably from this frequency ratio on (|H|^2 >= 1.2): a wide band above
-#: MODE_MAX_ORDER f_rot / MODE_RING_RATIO at the top speed is out of the orders' reach (the contact's own mode).
-MODE_RING_RATIO = 0.4
-#: A wide band counts only where this many times its frequency lies inside the spectrum: its upper skirt (a mode
-#: damped 20 % rings over 2 zeta f_r, and falls back to the floor by about half an octave above f_r).
-MODE_UPPER_SKIRT = math.sqrt(2.0)
-#: Third-octave bands of the shape test hold this many spectrum bins at least (medians step over lines).
-SHAPE_MIN_BINS = 8
-#: The shape changes when its distance exceeds this many times the distance between halves of one speed's runs ...
-SHAPE_NOISE_FACTOR = 3.0
-#: ... and this total variation.
-SHAPE_MIN_DISTANCE = 0.03
-#: Bands (where the lowest speed's share is up most) whose power is compared between the speeds.
-SHAPE_ADDED_BANDS = 3
-#: A mode's band stands out at this many speeds at least.
-MODE_MIN_SPEEDS = 3
-#: A mode's band: its share of the mean square varies between speeds by at least this factor.
-MODE_SHARE_SPREAD = 2.0
-#: ... and it carries at least this share of the mean square at the speed where it is strongest.
-MODE_MIN_SHARE = 0.02
-#: Bins a rotation order must move between the slowest and fastest speed a mode band is seen at.
-MODE_ORDER_SHIFT_BINS = 3
+#: The spectral measurements' thresholds (:class:`.rules.SpectralRules`: each with where its value comes from).
+_SPECTRAL = DEFAULT_SPECTRAL_RULES
+#: Kept for the effect plug-ins that read it (:attr:`.rules.SpectralRules.shape_noise_factor`).
+SHAPE_NOISE_FACTOR = _SPECTRAL.shape_noise_factor
+#: The covariate tests' defaults (:class:`.rules.DiagnosisRules`; :func:`locate` takes the diagnosis' policy).
+SIGNIFICANCE = DEFAULT_RULES.significance
 
 COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
                    'speed': 'rad/s', 'load': 'N', 'direction': 'sign of the screw speed'}
@@ -163,12 +121,14 @@ class CovariateTest:
 
     def as_json(self) -> dict:
         """Plain mapping."""
-        out = {'covariate': self.covariate, 'test': self.kind, 'r_squared': _finite(self.r_squared),
-               'statistic': _finite(self.statistic), 'p_value': _finite(self.p_value),
-               'slope_per_unit': _finite(self.slope), 'unit': COVARIATE_UNITS.get(self.covariate, '')}
+        out: dict[str, Any] = {'covariate': self.covariate, 'test': self.kind,
+                               'r_squared': finite_or_none(self.r_squared),
+                               'statistic': finite_or_none(self.statistic), 'p_value': finite_or_none(self.p_value),
+                               'slope_per_unit': finite_or_none(self.slope),
+                               'unit': COVARIATE_UNITS.get(self.covariate, '')}
         if self.kind in ('binned means', 'segment of runs', 'paired by direction'):
-            out.update({'shape': self.shape, 'bin_centres': [_finite(v) for v in self.bin_centres],
-                        'bin_amplitudes': [_finite(v) for v in self.bin_amplitudes]})
+            out.update({'shape': self.shape, 'bin_centres': [finite_or_none(v) for v in self.bin_centres],
+                        'bin_amplitudes': [finite_or_none(v) for v in self.bin_amplitudes]})
         return out
 
 
@@ -200,7 +160,7 @@ class SpectralLines:
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'testable': self.testable, 'frequencies_hz': [float(f) for f in self.frequencies],
-                'order_tracked_mode': {k: (_finite(v) if isinstance(v, float) else v)
+                'order_tracked_mode': {k: (finite_or_none(v) if isinstance(v, float) else v)
                                        for k, v in self.order_mode.items()},
                 'line_powers': [float(p) for p in self.powers], 'total_power': float(self.total_power),
                 'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note,
@@ -223,8 +183,9 @@ class SpectralShape:
 
     @property
     def changes(self) -> bool:
-        """The shape differs beyond :data:`SHAPE_NOISE_FACTOR` times the noise and :data:`SHAPE_MIN_DISTANCE`."""
-        return self.testable and self.distance > max(SHAPE_NOISE_FACTOR * self.noise, SHAPE_MIN_DISTANCE)
+        """The shape differs beyond ``SpectralRules.shape_noise_factor`` times the noise and ``shape_min_distance``."""
+        return self.testable and self.distance > max(_SPECTRAL.shape_noise_factor * self.noise,
+                                                     _SPECTRAL.shape_min_distance)
 
     @property
     def floor_added(self) -> bool:
@@ -233,12 +194,13 @@ class SpectralShape:
         Where the lowest speed's share is up, the band power does not fall as the
         speed rises (a mode past which the orders move makes it fall).
         """
-        return self.changes and self.added_ratio >= 1.0 / LINE_CONSTANCY
+        return self.changes and self.added_ratio >= 1.0 / _SPECTRAL.line_constancy
 
     def as_json(self) -> dict:
         """Plain mapping."""
-        return {'testable': self.testable, 'distance': _finite(self.distance), 'noise': _finite(self.noise),
-                'structure': _finite(self.structure), 'added_power_ratio': _finite(self.added_ratio),
+        return {'testable': self.testable, 'distance': finite_or_none(self.distance),
+                'noise': finite_or_none(self.noise),
+                'structure': finite_or_none(self.structure), 'added_power_ratio': finite_or_none(self.added_ratio),
                 'bands': self.bands, 'changes': self.changes, 'floor_added': self.floor_added, 'note': self.note}
 
 
@@ -261,10 +223,6 @@ class Location:
         return {'located': self.located, 'summary': self.summary,
                 'tests': [t.as_json() for t in self.tests], 'spectrum': self.spectrum.as_json(),
                 'spectral_shape': self.shape.as_json()}
-
-
-def _finite(value: float | None) -> Any:
-    return float(value) if value is not None and math.isfinite(value) else None
 
 
 def _cluster_trend(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray, name: str,
@@ -318,7 +276,7 @@ def _shape_words(name: str, amplitude: np.ndarray) -> str:
 
 
 def _binned_run_means(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray,
-                      name: str) -> CovariateTest | None:
+                      name: str, bins: int) -> CovariateTest | None:
     """Any-shape test of a covariate that moves between runs: one-way ANOVA of run means over run bins."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
@@ -327,7 +285,7 @@ def _binned_run_means(residual: np.ndarray, covariate: np.ndarray, groups: np.nd
     ry = np.bincount(g_index, weights=y) / counts
     rx = np.bincount(g_index, weights=x) / counts
     n_runs = labels.size
-    b = max(2, min(BINS, n_runs // 3))
+    b = max(2, min(bins, n_runs // 3))
     if n_runs < 6 or np.unique(rx).size < b:
         return None
     index = np.minimum((np.argsort(np.argsort(rx, kind='stable')) * b) // n_runs, b - 1)
@@ -347,22 +305,22 @@ def _binned_run_means(residual: np.ndarray, covariate: np.ndarray, groups: np.nd
 
 
 def _binned_means(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarray, name: str,
-                  within_run: bool) -> CovariateTest | None:
+                  within_run: bool, bins: int) -> CovariateTest | None:
     """Any-shape test: equal residual means over quantile bins, run-clustered Wald test (see module doc)."""
     ok = np.isfinite(residual) & np.isfinite(covariate)
     y, x, g = residual[ok], covariate[ok], groups[ok]
-    if y.size < 2 * BINS:
+    if y.size < 2 * bins:
         return None
     if not within_run:
         spread = np.array([np.ptp(x[g == label]) for label in np.unique(g)])
         if np.median(spread) < 0.25 * np.ptp(x):
             # The covariate moves mostly between runs: the runs are the units (few runs per bin would
             # make the clustered covariance far too small).
-            return _binned_run_means(residual, covariate, groups, name)
+            return _binned_run_means(residual, covariate, groups, name, bins)
     labels, g_index = np.unique(g, return_inverse=True)
-    if y.size < 2 * BINS or np.unique(x).size < 3:
+    if y.size < 2 * bins or np.unique(x).size < 3:
         return None
-    edges = np.unique(np.quantile(x, np.linspace(0, 1, BINS + 1)[1:-1]))
+    edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)[1:-1]))
     index = np.searchsorted(edges, x, side='right')
     used = np.unique(index)
     index = np.searchsorted(used, index)
@@ -406,7 +364,6 @@ def _binned_means(residual: np.ndarray, covariate: np.ndarray, groups: np.ndarra
 
 
 #: Fewest runs inside a segment and outside it.
-MIN_SEGMENT_RUNS = 2
 
 
 def _segment_statistics(cumulative: np.ndarray, starts: np.ndarray, stops: np.ndarray, total: int) -> np.ndarray:
@@ -416,8 +373,11 @@ def _segment_statistics(cumulative: np.ndarray, starts: np.ndarray, stops: np.nd
     return sums ** 2 * total / (inside * (total - inside))
 
 
-def time_segment(table: WindowTable, residual: np.ndarray) -> dict[str, Any] | None:
+def time_segment(table: WindowTable, residual: np.ndarray,
+                 min_runs: int = DEFAULT_RULES.min_segment_runs) -> dict[str, Any] | None:
     """The stretch of runs in recording order whose residual level differs most from the rest (see below).
+
+    The stretch and the rest hold ``min_runs`` runs or more each.
 
     Returns None when there are too few runs, else a mapping: ``runs`` (run
     numbers in recording order), ``levels`` (their centred residual means),
@@ -430,7 +390,7 @@ def time_segment(table: WindowTable, residual: np.ndarray) -> dict[str, Any] | N
     recordings = table.run_means(table.recording.astype(float))
     ok = np.isfinite(levels) & np.isfinite(times)
     n_runs = int(ok.sum())
-    if n_runs < 2 * MIN_SEGMENT_RUNS + 2:
+    if n_runs < 2 * min_runs + 2:
         return None
     order = np.lexsort((times[ok], recordings[ok]))
     y = levels[ok][order]
@@ -438,8 +398,8 @@ def time_segment(table: WindowTable, residual: np.ndarray) -> dict[str, Any] | N
     total_ss = float(y @ y)
     if total_ss <= 0:
         return None
-    starts, stops = np.triu_indices(n_runs + 1, k=MIN_SEGMENT_RUNS)
-    keep = (stops - starts) <= n_runs - MIN_SEGMENT_RUNS
+    starts, stops = np.triu_indices(n_runs + 1, k=min_runs)
+    keep = (stops - starts) <= n_runs - min_runs
     starts, stops = starts[keep], stops[keep]
     between = _segment_statistics(np.r_[0.0, np.cumsum(y)], starts, stops, n_runs)
     best = int(np.argmax(between))
@@ -453,18 +413,18 @@ def time_segment(table: WindowTable, residual: np.ndarray) -> dict[str, Any] | N
             'share': float(between[best] / total_ss)}
 
 
-def _segment_run_means(table: WindowTable, residual: np.ndarray) -> CovariateTest | None:
+def _segment_run_means(table: WindowTable, residual: np.ndarray, min_runs: int) -> CovariateTest | None:
     """A step or a segment in time: run levels in recording order, one stretch of runs against the rest.
 
     Runs are ordered by recording (as given) and time inside it.  For every
-    stretch of consecutive runs (at least :data:`MIN_SEGMENT_RUNS` inside and
+    stretch of consecutive runs (at least ``min_runs`` inside and
     outside) the two-group F of the stretch against the rest is computed on
     ``(1, runs - 2)`` degrees of freedom; the largest F is kept and its p-value
     multiplied by the number of stretches tried (Bonferroni), so that looking
     everywhere does not make chance stretches significant.  A stretch touching
     either end is a step.
     """
-    segment = time_segment(table, residual)
+    segment = time_segment(table, residual, min_runs)
     if segment is None:
         return None
     y, inside, first, stop, run_times = (segment[k] for k in ('levels', 'inside', 'first', 'stop', 'times'))
@@ -551,35 +511,39 @@ def _level_means(residual: np.ndarray, values: np.ndarray, groups: np.ndarray, n
     return CovariateTest(name, 'level means', r2, f, float(stats.f.sf(f, dof1, dof2)))
 
 
-def _drifting_covariates(table: WindowTable) -> tuple[str, ...]:
-    """Revolutions and time, and temperature when it spans :data:`MIN_TEMPERATURE_SPAN` K or more.
+def _drifting_covariates(table: WindowTable, min_temperature_span: float) -> tuple[str, ...]:
+    """Revolutions and time, and temperature when it spans ``min_temperature_span`` K or more.
 
     A smaller span is the sensor's noise and drift, not a condition the
     actuator ran at: binned by it, the windows fall into bins by chance and
     the run scatter can pass for a pattern.
     """
-    spans = table.temperature_span >= MIN_TEMPERATURE_SPAN      # False when none is recorded (NaN)
+    spans = table.temperature_span >= min_temperature_span      # False when none is recorded (NaN)
     return ('revolutions', 'time', 'temperature') if spans else ('revolutions', 'time')
 
 
-def covariate_tests(table: WindowTable, residual: np.ndarray) -> list[CovariateTest]:
-    """Every test the table supports: trends and level means, then binned means, strongest evidence first."""
+def covariate_tests(table: WindowTable, residual: np.ndarray,
+                    rules: DiagnosisRules = DEFAULT_RULES) -> list[CovariateTest]:
+    """Every test the table supports: trends and level means, then binned means, strongest evidence first.
+
+    ``rules``: the bins, the temperature span and the runs a stretch in time needs.
+    """
     residual = np.asarray(residual, dtype=float)
     tests: list[Any] = []   # CovariateTest or None, then the tests found
     centred_r = residual - table.run_means(residual)[np.searchsorted(table.runs, table.run)]
     centred_x = table.position - table.run_means('position')[np.searchsorted(table.runs, table.run)]
     tests.append(_cluster_trend(centred_r, centred_x, table.run, 'position', 'within-run trend'))
-    drifting = _drifting_covariates(table)
+    drifting = _drifting_covariates(table, rules.min_temperature_span)
     for name in drifting:
         tests.append(_cluster_trend(residual, getattr(table, name), table.run, name, 'trend'))
     for name in ('speed', 'load'):
         tests.append(_level_means(residual, getattr(table, name), table.run, name))
     tests = [t for t in tests if t is not None]
     tests.sort(key=lambda t: (t.p_value, -t.r_squared))
-    flexible: list[Any] = [_binned_means(centred_r, table.position, table.run, 'position', True)]
+    flexible: list[Any] = [_binned_means(centred_r, table.position, table.run, 'position', True, rules.bins)]
     for name in drifting:
-        flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False))
-    flexible.append(_segment_run_means(table, residual))
+        flexible.append(_binned_means(residual, getattr(table, name), table.run, name, False, rules.bins))
+    flexible.append(_segment_run_means(table, residual, rules.min_segment_runs))
     flexible.append(_direction_test(table, residual))
     flexible = [t for t in flexible if t is not None]
     flexible.sort(key=lambda t: (t.p_value, -t.r_squared))
@@ -628,7 +592,7 @@ def _speed_spectra(table: WindowTable) -> str | tuple[np.ndarray, np.ndarray, np
     if any(not np.any(valid & (index == i)) for i in range(len(levels))):
         return 'a screw speed without a window spectrum'
     medians = np.array([np.median(table.spectra[valid & (index == i)], axis=0) for i in range(len(levels))])
-    floors, excess, widened = _excess(medians, FLOOR_HALF_WIDTH)
+    floors, excess, widened = _excess(medians, _SPECTRAL.floor_half_width)
     return edges, index, medians, floors, excess, widened, lowest
 
 
@@ -682,7 +646,7 @@ def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, sp
     for level, speed in enumerate(speeds):
         rotation = speed / (2.0 * math.pi)
         row = excess[level]
-        local = (row[1:-1] >= LINE_PROMINENCE) & (row[1:-1] >= row[:-2]) & (row[1:-1] > row[2:])
+        local = (row[1:-1] >= _SPECTRAL.line_prominence) & (row[1:-1] >= row[:-2]) & (row[1:-1] > row[2:])
         for peak in np.flatnonzero(local) + 1:
             if peak < 3:
                 continue
@@ -703,7 +667,7 @@ def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, sp
             if j not in used and peaks[j][1] not in group:
                 group[peaks[j][1]] = peaks[j][2]
                 used.add(j)
-        if len(group) >= MODE_MIN_SPEEDS:
+        if len(group) >= _SPECTRAL.mode_min_speeds:
             lines.append((order, group))
     return lines
 
@@ -719,7 +683,7 @@ def order_tracked_mode(medians: np.ndarray, floors: np.ndarray, excess: np.ndarr
     background in the total, lubrication), so only a gain that depends on the
     frequency in Hz, the same for every order, counts.  f_r and zeta on a grid
     (f_r within a factor 2 of the lines, zeta 0.02-0.3); evidence when the F
-    test gives p < :data:`SIGNIFICANCE` and the residual sum of squares falls by
+    test gives p < ``DiagnosisRules.significance`` and the residual sum of squares falls by
     half, also without the point the order and speed terms leave furthest out (a
     tone from elsewhere on one order's frequency at one speed).  Returns {} when
     untestable, else the fit and its test.
@@ -810,38 +774,38 @@ def _fixed_lines(result: SpectralLines, medians: np.ndarray, floors: np.ndarray,
     """Lines prominent at two speeds or more whose power stays put while the total power moves.
 
     The power is compared over every speed where the line is measurable
-    (:data:`LINE_MEASURABLE`) or where a line of its (median) power would
-    carry ``LINE_PROMINENCE - 1`` times the floor's power in its bins.  Only
+    (``SpectralRules.line_measurable``) or where a line of its (median) power would
+    carry ``_SPECTRAL.line_prominence - 1`` times the floor's power in its bins.  Only
     lines below ``highest`` (Hz, the RMS band's upper edge; NaN: no edge)
     count: content above it is not in the window RMS the model is fitted to;
     nor does one whose peak lies below ``lowest`` (Hz), where rotation orders
     of neighbouring speeds share bins.  ``slowest``: the row of the lowest speed.
     """
-    candidate = (np.count_nonzero(widened >= LINE_PROMINENCE, axis=0) >= 2) & (freqs >= lowest)
-    candidate &= excess.max(axis=0) >= LINE_PROMINENCE
+    candidate = (np.count_nonzero(widened >= _SPECTRAL.line_prominence, axis=0) >= 2) & (freqs >= lowest)
+    candidate &= excess.max(axis=0) >= _SPECTRAL.line_prominence
     if math.isfinite(highest):
         candidate &= freqs < highest
     for group in _line_groups(candidate):
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
-        measured = widened[:, lo:hi].max(axis=1) >= LINE_MEASURABLE
+        measured = widened[:, lo:hi].max(axis=1) >= _SPECTRAL.line_measurable
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
         if np.count_nonzero(measured) < 2:
             continue
         # Also compared where a line of its power would stand out but may not: two rotation orders on one bin at
         # two speeds, or a mode ringing at two speeds, are absent (power 0) where a fixed line would show.
         floor_power = np.sum(floors[:, lo:hi], axis=1) * df
-        should_show = float(np.median(power[measured])) >= (LINE_PROMINENCE - 1.0) * floor_power
+        should_show = float(np.median(power[measured])) >= (_SPECTRAL.line_prominence - 1.0) * floor_power
         compared = measured | should_show
         power = power[compared]
         if power.min() <= 0:
             continue
-        constant = power.max() / power.min() <= LINE_CONSTANCY
+        constant = power.max() / power.min() <= _SPECTRAL.line_constancy
         spread = mean_square[compared].max() / mean_square[compared].min()
         # Where the line stands must be above ``lowest`` too, not only the bins that flagged it: the bins around
-        # them reach one below, where orders of neighbouring speeds share bins (resonance 295 of the fresh random
-        # study: orders 1 and 3.3 of two speeds read as a line at 3.9 Hz, 1.95 Hz bins, ``lowest`` 5.9 Hz).
+        # them reach one below, where orders of neighbouring speeds share bins (docs/diagnosis-rules.md, spectral
+        # evidence).
         peak = lo + int(np.argmax(medians[measured, lo:hi].mean(axis=0)))
-        if constant and spread >= POWER_SPREAD and freqs[peak] >= lowest:
+        if constant and spread >= _SPECTRAL.power_spread and freqs[peak] >= lowest:
             result.frequencies.append(float(freqs[peak]))
             result.powers.append(float(np.median(power)))
     result.total_power = float(sum(result.powers))
@@ -862,7 +826,7 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     response (a fixed mode it excites broadband) keeps its share of it even when a
     background floor changes its share of the recorded power.  A band counts
     only where a rotation order at its peak would have moved by
-    :data:`MODE_ORDER_SHIFT_BINS` bins between the slowest and the fastest speed
+    ``SpectralRules.mode_order_shift_bins`` bins between the slowest and the fastest speed
     it is seen at (``f (omega_max / omega_min - 1) >= 3 df``, more than the 2 bins
     its peak may wander), so closely spaced speeds do not hide a mode the whole
     band sweeps past, and an order that barely moves is not taken for one.
@@ -872,26 +836,25 @@ def _mode_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
     an order crossing the window looks fixed within 2 bins.
 
     Bands are sought twice: over the running median of
-    :data:`MODE_FLOOR_HALF_WIDTH` bins a side (narrow bands, lines beside them),
+    ``SpectralRules.mode_floor_half_width`` bins a side (narrow bands, lines beside them),
     and over the spectrum an octave either side (:func:`_octave_excess`),
     where a well-damped mode's band, wider than that running median, stands
-    out by :data:`MODE_BROAD_PROMINENCE`, when an order up to :data:`MODE_MAX_ORDER`
-    can reach it (a frequency ratio of :data:`MODE_RING_RATIO` at the top speed):
+    out by ``SpectralRules.mode_broad_prominence``, when an order up to ``SpectralRules.mode_max_order``
+    can reach it (a frequency ratio of ``SpectralRules.mode_ring_ratio`` at the top speed):
     the contact's own mode, far above, is broad too and needs no order to ring;
-    and only when the band's upper skirt, to :data:`MODE_UPPER_SKIRT` times
+    and only when the band's upper skirt, to ``SpectralRules.mode_upper_skirt`` times
     its frequency, lies inside the spectrum: near the top the octave above is
     cut off, and a spectrum rising to its edge (the skirt of a mode above the
     top, an anti-alias filter's shape) stands out of the octave below alone
-    (background 198 of the fresh random study: a "band" at 396 Hz sampled at
-    1 kHz, its share growing with speed as the contact's own mode at 1024 Hz
-    is approached).
+    (the study case: ``docs/diagnosis-rules.md``, spectral evidence).
     Such a band's place at each speed is where its power over the floor is
     centred (its flat top puts the largest bin anywhere), and that is the
     frequency reported.
     """
-    reach = MODE_MAX_ORDER * float(np.max(edges)) / (2.0 * math.pi) / MODE_RING_RATIO
-    for floors, widened, prominence, broad in ((*_excess(medians, MODE_FLOOR_HALF_WIDTH)[::2], LINE_PROMINENCE, False),
-                                               (*_octave_excess(medians)[::2], MODE_BROAD_PROMINENCE, True)):
+    reach = _SPECTRAL.mode_max_order * float(np.max(edges)) / (2.0 * math.pi) / _SPECTRAL.mode_ring_ratio
+    narrow = _excess(medians, _SPECTRAL.mode_floor_half_width)[::2]
+    for floors, widened, prominence, broad in ((*narrow, _SPECTRAL.line_prominence, False),
+                                               (*_octave_excess(medians)[::2], _SPECTRAL.mode_broad_prominence, True)):
         within = np.ones(freqs.size, dtype=bool) if not broad else freqs <= reach
         _mode_bands_over(result, medians, freqs, mean_square, edges, df, floors,
                          (widened >= prominence) & within[None, :], broad)
@@ -906,7 +869,7 @@ def _octave_excess(medians: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     """(floors, excess, widened) as :func:`_excess`, each bin's floor the median of the spectrum an octave either side.
 
     A well-damped mode's band is ``2 zeta f_r`` wide (0.4 f_r at zeta 0.2):
-    wider than the running median of :data:`MODE_FLOOR_HALF_WIDTH` bins at
+    wider than the running median of ``SpectralRules.mode_floor_half_width`` bins at
     fine resolution, which then takes the band for the floor.  Floors are
     medians over ``[f / 2, 2 f]``, computed at 24 centres an octave and
     interpolated in log frequency.
@@ -932,7 +895,7 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
     paper's model), while the orders approaching a mode give it share.
     """
     # Two speeds can put two different orders on one bin; three seldom do.
-    candidate = (prominent.sum(axis=0) >= MODE_MIN_SPEEDS) & (freqs >= 3 * df)
+    candidate = (prominent.sum(axis=0) >= _SPECTRAL.mode_min_speeds) & (freqs >= 3 * df)
     for group in _line_groups(candidate):
         if any(abs(freqs[group[0]] - f) <= 3 * df for f in result.frequencies):
             continue
@@ -945,7 +908,7 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         # sixth of the band, where the noise of single bins does not move it.
         top = lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
         seen &= (top > lo) & (top < hi - 1)
-        if seen.sum() < MODE_MIN_SPEEDS or power[seen].min() <= 0:
+        if seen.sum() < _SPECTRAL.mode_min_speeds or power[seen].min() <= 0:
             continue
         # A broad band's flat top puts its largest bin anywhere on it (a mode at zeta 0.2: the smoothed top of
         # one band wandered by 16 Hz between speeds); the band sits where its power over the floor is centred.
@@ -957,16 +920,16 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         if _follows_an_order(peaks, edges[seen]):
             continue
         centre = float(freqs[int(np.median(peaks))])
-        if broad and centre * MODE_UPPER_SKIRT > freqs[-1]:
+        if broad and centre * _SPECTRAL.mode_upper_skirt > freqs[-1]:
             continue            # its upper skirt is cut off by the spectrum's top (see _mode_bands)
         span = float(np.max(edges[seen]) / np.min(edges[seen]))
-        if centre * (span - 1.0) < MODE_ORDER_SHIFT_BINS * df:
+        if centre * (span - 1.0) < _SPECTRAL.mode_order_shift_bins * df:
             continue
-        varies = power[seen].max() / power[seen].min() > LINE_CONSTANCY
-        share_varies = share[seen].max() / share[seen].min() >= MODE_SHARE_SPREAD
+        varies = power[seen].max() / power[seen].min() > _SPECTRAL.line_constancy
+        share_varies = share[seen].max() / share[seen].min() >= _SPECTRAL.mode_share_spread
         if broad and np.argmax(np.where(seen, share, -np.inf)) == np.argmin(np.where(seen, edges, np.inf)):
             continue
-        if varies and share_varies and share.max() >= MODE_MIN_SHARE:
+        if varies and share_varies and share.max() >= _SPECTRAL.mode_min_share:
             if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):
                 continue
             if broad:
@@ -1003,12 +966,12 @@ def _follows_an_order(peaks: np.ndarray, speeds: np.ndarray) -> bool:
 
 
 def _band_edges(resolution: float, bins: int) -> list:
-    """(first, stop) bin ranges of third-octave bands holding :data:`SHAPE_MIN_BINS` bins or more."""
+    """(first, stop) bin ranges of third-octave bands holding ``SpectralRules.shape_min_bins`` bins or more."""
     width = 2 ** (1 / 6) - 2 ** (-1 / 6)            # a third-octave band's width over its centre
-    centre, edges = SHAPE_MIN_BINS / width * resolution, []
+    centre, edges = _SPECTRAL.shape_min_bins / width * resolution, []
     while centre * 2 ** (1 / 6) < bins * resolution:
         lo, hi = int(math.ceil(centre * 2 ** (-1 / 6) / resolution)), int(centre * 2 ** (1 / 6) / resolution)
-        if hi - lo >= SHAPE_MIN_BINS:
+        if hi - lo >= _SPECTRAL.shape_min_bins:
             edges.append((lo, hi))
         centre *= 2 ** (1 / 3)
     return edges
@@ -1050,7 +1013,7 @@ def spectral_shape(table: WindowTable, exclude: Sequence[float] = ()) -> Spectra
     distance = 0.5 * float(np.abs(shapes[0] - shapes[1]).sum())
     white = np.array([hi - lo for lo, hi in edges], dtype=float)
     structure = 0.5 * float(np.abs(shapes[1] - white / white.sum()).sum())
-    up = np.argsort(shapes[1] - shapes[0])[:SHAPE_ADDED_BANDS]     # where the lowest speed's share is up most
+    up = np.argsort(shapes[1] - shapes[0])[:_SPECTRAL.shape_added_bands]     # where the lowest speed's share is up most
     added = float(np.median(powers[1][up] / np.maximum(powers[0][up], 1e-300)))
     result = SpectralShape(testable=True, distance=distance, noise=noise, structure=structure, added_ratio=added,
                            bands=len(edges))
@@ -1064,11 +1027,11 @@ def spectral_shape(table: WindowTable, exclude: Sequence[float] = ()) -> Spectra
     return result
 
 
-def locate(table: WindowTable, residual: np.ndarray) -> Location:
-    """Test the baseline residual against every covariate and the spectrum."""
-    tests = covariate_tests(table, residual)
+def locate(table: WindowTable, residual: np.ndarray, rules: DiagnosisRules = DEFAULT_RULES) -> Location:
+    """Test the baseline residual against every covariate and the spectrum (``rules``: the covariate tests')."""
+    tests = covariate_tests(table, residual, rules)
     spectrum = spectral_lines(table, residual)
-    significant = [t for t in tests if t.p_value < SIGNIFICANCE]
+    significant = [t for t in tests if t.p_value < rules.significance]
     if significant:
         top = max(significant, key=lambda t: t.r_squared)
         located = top.covariate

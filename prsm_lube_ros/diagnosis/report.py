@@ -44,6 +44,15 @@ LABELS = {'position': 'nut position along the stroke, mm', 'revolutions': 'revol
           'direction': 'direction of travel (+1 out, -1 back)'}
 
 
+def _finish(fig: Any, ax: Any, path: Path, plt: ModuleType, legend_size: int) -> None:
+    """Legend, grid, layout; the figure written to ``path`` and closed."""
+    ax.legend(fontsize=legend_size)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def _pyplot() -> ModuleType:
     """matplotlib's pyplot, drawing without a display."""
     import matplotlib
@@ -121,11 +130,7 @@ def _empirical_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> bool
     ax.set_ylabel('%')
     ax.set_title(f'outside the catalogue: {term.form} in {term.covariate}, held-out error '
                  f'{100 * empirical.gain:.0f} % lower', fontsize=9)
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _finish(fig, ax, path, plt, legend_size=7)
     return True
 
 
@@ -149,11 +154,7 @@ def _runs_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
                   fontsize=7)
     ax.set_xlabel('run in recorded order (r/min / N)')
     ax.set_ylabel('mean RMS, m/s$^2$')
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _finish(fig, ax, path, plt, legend_size=8)
 
 
 def _candidates_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
@@ -197,11 +198,7 @@ def _spectrum_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> bool:
     ax.set_xlabel('frequency, Hz (dotted: fixed lines with constant power; dashed: a band fixed in Hz whose power '
                   'follows the speed)', fontsize=8)
     ax.set_ylabel('PSD, (m/s$^2$)$^2$/Hz')
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _finish(fig, ax, path, plt, legend_size=8)
     return True
 
 

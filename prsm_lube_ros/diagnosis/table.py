@@ -32,17 +32,27 @@ from ..estimation.windowing import AT_REST, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOA
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
 if TYPE_CHECKING:
+    from ..estimation.conditioning import AnalysisBand
+    from ..estimation.domain import CalibrationDomain
     from ..estimation.pipeline import RecordingWindows
     from ..estimation.windowing import Window
     from ..physics.defect_orders import DefectOrder
 
-__all__ = ['COLUMNS', 'Columns', 'INDICATOR_COLUMNS', 'REST_SPEED', 'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED',
-           'TEMPERATURE_GAP', 'WindowTable', 'band_high_of', 'table_from_windows']
+__all__ = ['COLUMNS', 'Columns', 'DRIFT_COVARIATES', 'INDICATOR_COLUMNS', 'PLAN_COVARIATES', 'REST_SPEED',
+           'REST_WINDOWS_NEEDED', 'SPECTRA_NEEDED', 'TEMPERATURE_GAP', 'WindowTable', 'band_high_of', 'band_of',
+           'table_from_windows']
 
 #: Longest time between two windows holding a temperature across which it is interpolated, s.
 TEMPERATURE_GAP = 30.0
 #: Columns every table has, in SI units (temperature in degC, time in s).
 COLUMNS = ('speed', 'load', 'rms', 'position', 'revolutions', 'time', 'temperature', 'run', 'recording')
+
+#: The plan's set-points: columns that take a few levels, one per (speed, load) condition.  A law of them alone is
+#: tested by the conditions (as many as its parameters and the constants), never by a located pattern: a law of
+#: two or three parameters follows a few level means whatever the physics.
+PLAN_COVARIATES = ('speed', 'load')
+#: Columns that drift over a session, run after run (compared over runs for confounding and collinearity).
+DRIFT_COVARIATES = ('revolutions', 'time', 'temperature')
 
 #: Optional columns of condition indicators (NaN where a window has none).
 INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'run_defect_db')
@@ -162,6 +172,10 @@ class WindowTable:
     run_defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
     #: The actuator's defect orders the envelope lines were labelled with.
     defect_orders: tuple[DefectOrder, ...] = ()
+    #: The analysis band the RMS was taken in (None: raw RMS, or not known) and the ranges of the windows kept
+    #: (speed, load, temperature, sample rate): what a calibration fitted on this table must carry.
+    band: AnalysisBand | None = field(default=None, compare=False, repr=False)
+    domain: CalibrationDomain | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         """Coerce the columns to arrays of one length."""
@@ -247,25 +261,34 @@ class WindowTable:
         return out
 
 
+def band_of(recordings: Sequence[RecordingWindows]) -> AnalysisBand | None:
+    """The RMS band the recordings were read in (the first with a band; None: raw RMS)."""
+    return next((recording.band for recording in recordings if recording.band is not None), None)
+
+
 def band_high_of(recordings: Sequence[RecordingWindows]) -> float:
     """Upper edge (Hz) of the RMS band the recordings were read in (the first with a band; NaN: raw RMS)."""
-    for recording in recordings:
-        if recording.band is not None:
-            return float(recording.band.high)
-    return math.nan
+    band = band_of(recordings)
+    return math.nan if band is None else float(band.high)
 
 
 def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, theta: float = 1.0,
                        min_axial_load: float = MIN_AXIAL_LOAD, sources: Sequence[str] = (),
-                       band_high: float = math.nan,
+                       band_high: float = math.nan, band: AnalysisBand | None = None,
                        defect_orders: Sequence[DefectOrder] = DEFAULT_DEFECT_ORDERS) -> WindowTable:
     """Build a :class:`WindowTable` from lists of windows (``estimation.windowing.Window``), one per recording.
 
     Keeps steady windows with a finite positive RMS, speed and load of at least
     ``min_axial_load``; raises :class:`InputError` when none is left.
-    ``band_high``: the upper edge (Hz) of the RMS's analysis band, if any;
-    ``defect_orders`` the actuator's, which labelled the windows' envelope lines.
+    ``band``: the RMS's analysis band, if any (``band_high``: only its upper
+    edge, Hz, when the band itself is not at hand); ``defect_orders`` the
+    actuator's, which labelled the windows' envelope lines.  The table keeps
+    the band and the domain of the windows kept (:attr:`WindowTable.domain`).
     """
+    from ..estimation.domain import CalibrationDomain
+    if band is not None:
+        band_high = band.high
+    kept: list[Window] = []
     rows: dict[str, list] = {name: [] for name in COLUMNS + INDICATOR_COLUMNS}
     directions: list[float] = []
     orders: tuple[DefectOrder, ...] = tuple(defect_orders)
@@ -275,6 +298,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         chosen = usable_windows(windows, min_axial_load)
         if not chosen:
             continue
+        kept.extend(chosen)
         t0 = min(w.start for w in windows)
         travel = np.array([w.nut_position for w in chosen], dtype=float)
         run_ids = np.array([w.run_index for w in chosen])
@@ -312,7 +336,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
                        band_high=float(band_high), rest_windows=int(rest.size),
                        rest_rms=float(np.median(rest)) if rest.size >= REST_WINDOWS_NEEDED else math.nan,
-                       defect_orders=orders, **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+                       defect_orders=orders, band=band, domain=CalibrationDomain.of_windows(kept),
+                       **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
 
 
 def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> list[float]:

@@ -41,8 +41,10 @@ The envelope spectrum is also kept on the fixed order grid :data:`ORDER_GRID`
 (float32), so windows of different speeds average into one run spectrum
 (:mod:`.defect_screen` does it) and a report can draw a waterfall.
 
-Costs about a band-RMS FFT plus one inverse FFT per band of the tree (each as
-long as its band), a few ms for a 1 s window at 25.6 kHz.  Pure numpy.
+Costs one inverse FFT per band of the tree (each as long as its band) and the
+envelope's transforms, a few ms for a 1 s window at 25.6 kHz; the window's own
+FFT is the band RMS's, which the window builder hands over (``spectra``), and
+every transform runs over the windows of one size at once.  Pure numpy.
 """
 from __future__ import annotations
 
@@ -171,15 +173,18 @@ def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float
 
 def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: Sequence[float],
                                band: tuple[float, float], orders: Sequence[DefectOrder],
-                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None
-                               ) -> list[ConditionIndicators]:
+                               tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]] | None = None,
+                               *, spectra: np.ndarray | None = None) -> list[ConditionIndicators]:
     """Indicators of windows of one length and rate at once: ``samples`` is (windows x samples), m/s^2.
 
     ``screw_speeds`` rad/s per window; ``tracks`` per window the
     ``(angle_times, angles)`` of order tracking (None: none).  The FFTs run
     over the whole array (the cost is the numpy calls, not the windows).
+    ``spectra``: the rows' ``numpy.fft.rfft`` when the caller has it already
+    (the window builder's band RMS), used instead of transforming again
+    (it is not changed); ``samples`` then only gives the windows' length.
     """
-    x = np.asarray(samples, dtype=float)
+    x = np.asarray(samples) if spectra is not None else np.asarray(samples, dtype=float)
     count, n = x.shape
     if n < MIN_SAMPLES or not rate > 0:
         return [NO_INDICATORS] * count
@@ -187,37 +192,34 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     chunk = max(1, BATCH_SAMPLES // n)
     if count > chunk:    # arrays that stay in cache: a few hundred thousand samples at a time
         return [item for start in range(0, count, chunk)
-                for item in condition_indicators_batch(x[start:start + chunk], rate,
-                                                       screw_speeds[start:start + chunk], band, orders,
-                                                       tracks[start:start + chunk])]
-    spec = np.fft.rfft(x, axis=1)
+                for item in condition_indicators_batch(
+                    x[start:start + chunk], rate, screw_speeds[start:start + chunk], band, orders,
+                    tracks[start:start + chunk], spectra=None if spectra is None else spectra[start:start + chunk])]
+    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra.copy()
     spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
     hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
     if hi_bin - lo_bin < 8:
         return [NO_INDICATORS] * count
-    in_band = np.zeros_like(spec)
-    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n, axis=1)
-    squares = signal * signal
-    power = squares.mean(axis=1)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
-        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    kurt, crest = _impulsiveness(spec, lo_bin, hi_bin, n)
     shaft_hz = np.abs(np.asarray(screw_speeds, dtype=float)) / (2.0 * math.pi)
     moving = np.isfinite(shaft_hz) & (shaft_hz > 0)
     highest = max((o.order for o in orders), default=MAX_ORDER / 3)
     min_bins = np.maximum(np.ceil(ENVELOPE_HARMONICS * highest * np.where(moving, shaft_hz, 0.0) / df), 8)
     sk, first, last = _demodulation_bands(spec, lo_bin, hi_bin, min_bins.astype(int))
+    enveloped = [k for k in range(count) if moving[k] and math.isfinite(sk[k])]
+    envelopes = _envelopes(spec, first, last, n, enveloped)
+    order_spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate,
+                                   [float(shaft_hz[k]) for k in enveloped], [tracks[k] for k in enveloped])
+    by_window = dict(zip(enveloped, order_spectra))
     out = []
     for k in range(count):
-        if not moving[k] or not math.isfinite(sk[k]):
+        if k not in by_window:
             out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
                                            math.nan))
             continue
-        envelope = np.abs(_complex_envelope(spec[k], int(first[k]), int(last[k]), n))
-        grid, resolution = _order_spectrum(envelope, n / rate, float(shaft_hz[k]), *tracks[k])
+        grid, resolution = by_window[k]
         out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
                                        (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
     spectral = [k for k, item in enumerate(out) if item.envelope is not None]
@@ -226,6 +228,19 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
         for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
             out[k] = replace(out[k], envelope_peaks=peaks)
     return out
+
+
+def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Kurtosis and crest factor of each window's signal in bins ``lo_bin..hi_bin`` of its rfft ``spec`` (n samples)."""
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
+    signal = np.fft.irfft(in_band, n, axis=1)
+    squares = signal * signal
+    power = squares.mean(axis=1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        kurt = np.where(power > 0, (squares * squares).mean(axis=1) / power ** 2, math.nan)
+        crest = np.where(power > 0, np.abs(signal).max(axis=1) / np.sqrt(power), math.nan)
+    return kurt, crest
 
 
 def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
@@ -256,14 +271,19 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
         allowed = bins >= min_bins
         if not allowed.any():
             break
+        rows = np.flatnonzero(allowed)      # the windows this level still serves
         size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        shifted = np.zeros((count, parts, size), dtype=complex)
-        shifted[:, :, :bins] = spec[:, lo_bin:lo_bin + parts * bins].reshape(count, parts, bins)
-        power = np.abs(np.fft.ifft(shifted, axis=2)) ** 2
+        shifted = np.zeros((rows.size, parts, size), dtype=complex)
+        shifted[:, :, :bins] = spec[rows, lo_bin:lo_bin + parts * bins].reshape(rows.size, parts, bins)
+        envelope = np.fft.ifft(shifted, axis=2)
+        power = np.multiply(envelope.real, envelope.real)      # |z|^2, in place of temporaries
+        power += np.square(envelope.imag)
         mean = power.mean(axis=2)
         with np.errstate(divide='ignore', invalid='ignore'):
-            sk = np.where(mean > 0, (power * power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
-        sk -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+            sk_rows = np.where(mean > 0, np.square(power, out=power).mean(axis=2) / mean ** 2 - 2.0, -np.inf)
+        sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
+        sk = np.full((count, parts), -np.inf)
+        sk[rows] = sk_rows
         part = np.argmax(sk, axis=1)
         value = sk[np.arange(count), part]
         better = allowed & (value > best_sk + 1e-12)
@@ -274,24 +294,58 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     return best_sk, first, last
 
 
-def _complex_envelope(spec: np.ndarray, first: int, last: int, n: int) -> np.ndarray:
-    """The band's analytic signal shifted to 0 Hz and decimated, m/s^2: bins ``first..last`` inverse-transformed.
+def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
+               rows: Sequence[int]) -> dict[int, np.ndarray]:
+    """Hilbert envelope ``|z|`` (m/s^2) of band ``first[k]..last[k]`` of each window ``k`` in ``rows``.
 
-    ``spec`` is the rfft of ``n`` samples; ``|z|`` is the band's Hilbert envelope.
+    ``spec`` holds the rfft of ``n`` samples a row; ``z`` is the band's analytic
+    signal shifted to 0 Hz and decimated: its bins inverse-transformed (the
+    windows whose bands are equally wide in one inverse FFT).
     """
-    count = last - first + 1
-    size = 1 << int(math.ceil(math.log2(max(2 * count, 8))))
-    shifted = np.zeros(size, dtype=complex)
-    shifted[:count] = spec[first:last + 1]
-    return np.fft.ifft(shifted) * (2.0 * size / n)
+    by_width: dict[int, list[int]] = {}
+    for k in rows:
+        by_width.setdefault(int(last[k] - first[k] + 1), []).append(k)
+    envelopes: dict[int, np.ndarray] = {}
+    for width, members in by_width.items():
+        size = 1 << int(math.ceil(math.log2(max(2 * width, 8))))
+        index = np.array(members)
+        shifted = np.zeros((index.size, size), dtype=complex)
+        shifted[:, :width] = spec[index[:, None], first[index][:, None] + np.arange(width)]
+        found = np.abs(np.fft.ifft(shifted, axis=1) * (2.0 * size / n))
+        envelopes.update(zip(members, found))
+    return envelopes
 
 
-def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
-                    angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
-    """Envelope power spectrum on :data:`ORDER_GRID` and its resolution in orders.
+def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: Sequence[float],
+                   tracks: Sequence[tuple[npt.ArrayLike | None, npt.ArrayLike | None]]
+                   ) -> list[tuple[np.ndarray, float]]:
+    """Envelope power spectrum on :data:`ORDER_GRID` and its resolution in orders, per envelope.
 
     With the screw angle through the window the envelope is first resampled
-    to uniform angle (order tracking); otherwise orders are Hz / ``shaft_hz``.
+    to uniform angle (order tracking, :func:`_angle_resampled`); otherwise
+    orders are Hz / ``shaft_hz``.  Envelopes of one length are transformed together.
+    """
+    resampled = [_angle_resampled(envelope, duration, hz, *track)
+                 for envelope, hz, track in zip(envelopes, shaft_hz, tracks)]
+    by_size: dict[int, list[int]] = {}
+    for k, (values, _) in enumerate(resampled):
+        by_size.setdefault(values.size, []).append(k)
+    out: list[tuple[np.ndarray, float]] = [(np.zeros(0), math.nan)] * len(resampled)
+    for m, members in by_size.items():
+        values = np.vstack([resampled[k][0] for k in members])
+        power = np.abs(np.fft.rfft(values - values.mean(axis=1, keepdims=True), axis=1)) ** 2 / m ** 2
+        bins = np.arange(power.shape[1])
+        for k, row in zip(members, power):
+            revolutions = resampled[k][1]
+            out[k] = (np.interp(ORDER_GRID, bins / revolutions, row, right=math.nan), 1.0 / revolutions)
+    return out
+
+
+def _angle_resampled(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
+                     angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
+    """The envelope at uniform screw angle where the angle through the window is known, and the revolutions.
+
+    Otherwise the envelope as it is and ``duration * shaft_hz`` revolutions.
     """
     m = envelope.size
     times = np.arange(m) * (duration / m)
@@ -306,10 +360,7 @@ def _order_spectrum(envelope: np.ndarray, duration: float, shaft_hz: float, angl
                 uniform = np.linspace(angle[0], angle[-1], m)
                 values = np.interp(uniform, angle, envelope)
                 revolutions = (angle[-1] - angle[0]) / (2.0 * math.pi) * m / max(m - 1, 1)
-    power = np.abs(np.fft.rfft(values - values.mean())) ** 2 / m ** 2
-    bin_orders = np.arange(power.size) / revolutions
-    grid = np.interp(ORDER_GRID, bin_orders, power, right=math.nan)
-    return grid, 1.0 / revolutions
+    return values, revolutions
 
 
 def envelope_floor(grid: np.ndarray) -> float:
@@ -320,9 +371,26 @@ def envelope_floor(grid: np.ndarray) -> float:
 def _floors(grids: np.ndarray) -> np.ndarray:
     """:func:`envelope_floor` of each row."""
     part = grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER]
-    with np.errstate(invalid='ignore'), warnings.catch_warnings():
-        warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
-        return np.nanmedian(part, axis=1)
+    # An order spectrum is NaN only above the highest order it holds: the median of each row's finite head,
+    # rows of one head length at once (np.nanmedian goes row by row); other rows the general way.
+    finite = np.isfinite(part)
+    heads = finite.sum(axis=1)
+    plain = finite[np.arange(part.shape[0]), np.maximum(heads - 1, 0)] & (heads > 0)
+    plain &= ~finite[np.arange(part.shape[0]), np.minimum(heads, part.shape[1] - 1)] | (heads == part.shape[1])
+    floors = np.full(part.shape[0], math.nan)
+    for head in np.unique(heads[plain]).tolist():
+        rows = np.flatnonzero(plain & (heads == head))
+        head_rows = part[rows, :head]
+        if np.isfinite(head_rows).all():
+            floors[rows] = np.median(head_rows, axis=1)
+        else:
+            plain[rows] = False
+    other = np.flatnonzero(~plain)
+    if other.size:
+        with np.errstate(invalid='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore', RuntimeWarning)     # an all-NaN row: no floor
+            floors[other] = np.nanmedian(part[other], axis=1)
+    return floors
 
 
 def order_spectrum_db(grid: np.ndarray) -> np.ndarray:

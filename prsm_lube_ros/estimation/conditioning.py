@@ -57,7 +57,7 @@ from ..errors import InputError
 
 __all__ = ['ANTI_ALIAS_MARGIN', 'AnalysisBand', 'COMMON_BAND_HIGH', 'CONTINUITY_BLOCK_SHARE', 'CONTINUITY_PERIODS',
            'DEFAULT_BAND', 'HIGHPASS_CORNER', 'HIGHPASS_ORDER', 'HighPassFilter', 'LOWEST_ORDER_FREQUENCY',
-           'RAW_BAND_TEXT', 'band_mean_square', 'band_text', 'rate_refusal', 'spectrum_segment']
+           'RAW_BAND_TEXT', 'band_mean_square', 'band_mean_squares', 'band_text', 'rate_refusal', 'spectrum_segment']
 
 #: Lower band edge and high-pass corner, Hz: 0.3 x shaft order 1 at the paper's slowest 100 r/min.
 HIGHPASS_CORNER = 0.5
@@ -147,10 +147,12 @@ def band_text(band: AnalysisBand | None) -> str:
 
 
 def rate_refusal(band: AnalysisBand, rate: float) -> str:
-    """One line: a recording at ``rate`` Hz cannot give the RMS in ``band``."""
+    """One line: a recording at ``rate`` Hz cannot give the RMS in ``band``, and how to choose a band it covers."""
     return (f'sample rate {rate:g} Hz cannot cover the analysis band {band.low:g}-{band.high:g} Hz '
             f'(needs at least {band.min_sample_rate:g} Hz: upper edge at most {band.margin:g} x the Nyquist '
-            'frequency); record faster or calibrate at this rate')
+            f'frequency); record faster, or calibrate in a band every recording covers (prsm-lube calibrate '
+            f'--band-high HZ, at most {band.margin * rate / 2:g} Hz for this rate; {COMMON_BAND_HIGH:g} Hz serves '
+            f'every rate from {2 * COMMON_BAND_HIGH / band.margin:g} Hz up)')
 
 
 def band_mean_square(samples: np.ndarray, rate: float, band: AnalysisBand) -> float:
@@ -162,13 +164,22 @@ def band_mean_square(samples: np.ndarray, rate: float, band: AnalysisBand) -> fl
     n = samples.size
     if n < 2:
         return math.nan
-    power = np.abs(np.fft.rfft(samples)) ** 2
-    frequencies = np.arange(power.size) * (rate / n)
+    return float(band_mean_squares(np.fft.rfft(samples).reshape(1, -1), n, rate, band)[0])
+
+
+def band_mean_squares(spectra: np.ndarray, n: int, rate: float, band: AnalysisBand) -> np.ndarray:
+    """:func:`band_mean_square` of windows of ``n`` samples at ``rate`` Hz from their rfft, one window a row.
+
+    The window builder transforms the windows of a size together once and
+    hands the same spectra to the condition indicators.
+    """
+    frequencies = np.arange(spectra.shape[1]) * (rate / n)
     weights = np.where((frequencies >= band.low) & (frequencies <= band.high), 2.0, 0.0)
     weights[0] = 0.0
     if n % 2 == 0:
         weights[-1] /= 2.0
-    return float(weights @ power) / (n * n)
+    power = spectra.real ** 2 + spectra.imag ** 2
+    return (power @ weights) / (n * n)
 
 
 class HighPassFilter:

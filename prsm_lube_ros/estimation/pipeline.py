@@ -29,8 +29,8 @@ from .windowing import (DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_w
                         WindowSettings)
 
 __all__ = ['ASSESSMENT_SLICE_SECONDS', 'RecordingAssessment', 'RecordingWindows', 'analysis_settings',
-           'assess_recording', 'assessment_json', 'calibrate_recordings', 'condition_baseline', 'recording_windows',
-           'require_usable',
+           'assess_recording', 'assessment_json', 'calibrate_recordings', 'condition_baseline', 'read_recordings',
+           'recording_windows', 'require_usable',
            'with_band_and_domain']
 
 #: Seconds of recording per slice streamed through the windows: long enough that per-slice numpy call
@@ -141,6 +141,37 @@ def recording_windows(path: str | Path, *, lead: float, settings: WindowSettings
         raise InputError(f'{path}: {builder.band_refusal}')
     return RecordingWindows(str(path), windows, problems, messages_read, max_speed, builder.band,
                             builder.settings.defect_orders)
+
+
+def read_recordings(paths: Sequence[str | Path], *, lead: float, settings: WindowSettings | None = None,
+                    namespace: str = '/prsm', on_problem: ProblemSink | None = None, root: str | Path | None = None,
+                    before_each: Callable[[int, int], None] | None = None,
+                    progress: Callable[[int], Callable[[float], None] | None] | None = None) \
+        -> list[RecordingWindows]:
+    """The windows of each recording, as ``calibrate``, ``diagnose`` and the calibrate service read them.
+
+    The band rule: the first recording's band (its upper edge chosen for its
+    sample rate, unless ``settings`` fixes it) is every later one's, so one
+    calibration holds one band; a later recording too slow for it gives no
+    usable window and is refused in one line that says how to choose a band
+    every recording covers (:func:`.conditioning.rate_refusal`).  Every
+    recording must have a steady window (:func:`require_usable`).
+    ``before_each(index, steady_windows_so_far)`` is called before each
+    recording is read, ``progress(index)`` gives its progress callback;
+    ``root`` confines every file read (:func:`recording_windows`).
+    """
+    recordings: list[RecordingWindows] = []
+    steady = 0
+    for index, path in enumerate(paths):
+        if before_each is not None:
+            before_each(index, steady)
+        recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
+                                      on_problem=on_problem, progress=progress(index) if progress else None,
+                                      root=root)
+        recordings.append(require_usable(recording, settings))
+        steady += sum(1 for w in recording.windows if w.steady)
+        settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
+    return recordings
 
 
 def require_usable(recording: RecordingWindows, settings: WindowSettings | None = None) -> RecordingWindows:

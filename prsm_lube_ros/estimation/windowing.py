@@ -39,8 +39,8 @@ from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from ..physics.actuator import Actuator
 from ..physics.defect_orders import defect_orders as actuator_defect_orders, DefectOrder
-from .condition_indicators import condition_indicators_batch, ConditionIndicators
-from .conditioning import AnalysisBand, band_mean_square, DEFAULT_BAND, rate_refusal, spectrum_segment
+from .condition_indicators import BATCH_SAMPLES, condition_indicators_batch, ConditionIndicators
+from .conditioning import AnalysisBand, band_mean_squares, DEFAULT_BAND, rate_refusal, spectrum_segment
 from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AXIAL_LOAD, MAX_SCREW_SPEED,
                                       plausible_durations, plausible_magnitudes, plausible_rates,
                                       plausible_temperatures, rate_problem, TEMPERATURE_RANGE)
@@ -748,8 +748,9 @@ class WindowBuilder:
         conditions: list[ConditionIndicators | None] = [None] * keys.size
         spectral = s.spectrum_segment > 0 or s.spectrum_lowest_frequency > 0
         indicators = s.condition_indicators and self.band is not None
-        #: windows whose indicators are computed together, by (sample count, rate): (row, samples, speed, track)
-        jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]] = {}
+        #: windows of the band, transformed together by (sample count, rate): (row, samples, speed, track); the
+        #: track is None for a window that gets no condition indicators
+        jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any] | None]]] = {}
         row: Any   # an index in the first loop, a row of ``table`` in the second
         if self._keeps_samples():
             for row, (k, rate_k) in enumerate(zip(keys.tolist(), rate.tolist())):
@@ -760,15 +761,14 @@ class WindowBuilder:
                 samples = np.concatenate([c for _, c in chunks]) if len(chunks) > 1 else chunks[0][1]
                 first_time = chunks[0][0]
                 if self.band is not None and count[row] > 0:   # non-finite samples are zeros in ``samples``
-                    rms[row] = math.sqrt(band_mean_square(samples, rate_k, self.band) * samples.size / count[row])
-                if indicators and count[row] > 0 and maybe_steady[row] and k % s.condition_every == 0:
+                    wanted = indicators and maybe_steady[row] and k % s.condition_every == 0
                     jobs.setdefault((samples.size, rate_k), []).append(
-                        (row, samples, float(speed[row]), self._window_angles(k, first_time)))
+                        (row, samples, float(speed[row]), self._window_angles(k, first_time) if wanted else None))
                 if spectral:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
                     spectra[row] = _power_spectrum(samples, rate_k, segment)
-        self._conditions(jobs, conditions)
+        self._band_and_conditions(jobs, rms, count, conditions)
         for k in keys.tolist():
             self._angle_chunks.pop(k, None)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
@@ -785,17 +785,41 @@ class WindowBuilder:
                                   rate_k if rate_k > 0 else math.nan, condition))
         return windows
 
-    def _conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, tuple[Any, Any]]]],
-                    conditions: list[ConditionIndicators | None]) -> None:
-        """Indicators of the windows in ``jobs`` (by sample count and rate), a size at once, into ``conditions``."""
+    def _band_and_conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, Any]]],
+                             rms: np.ndarray, count: np.ndarray, conditions: list[ConditionIndicators | None]) -> None:
+        """Band RMS of the windows in ``jobs`` into ``rms``, and their indicators (where asked) into ``conditions``.
+
+        The windows of one sample count and rate are transformed together, a
+        cache-sized batch (:data:`~.condition_indicators.BATCH_SAMPLES`) at a
+        time, in one ``rfft``: the band's mean square is summed over its bins
+        (:func:`~.conditioning.band_mean_squares`, Parseval) and the same
+        spectra go to :func:`~.condition_indicators.condition_indicators_batch`,
+        so no window is transformed twice.  Rows of ``rms`` and ``count``
+        (finite samples: non-finite ones are zeros in the samples) are the
+        windows' rows in the closing table.
+        """
         if not jobs or self.band is None:
             return
-        band = (self.band.low, self.band.high)
-        for (_, rate), group in jobs.items():
-            found = condition_indicators_batch(np.vstack([job[1] for job in group]), rate, [job[2] for job in group],
-                                               band, self.settings.defect_orders, [job[3] for job in group])
-            for job, condition in zip(group, found):
-                conditions[job[0]] = condition
+        band = self.band
+        for (n, rate), group in jobs.items():
+            if n < 2:
+                rms[[job[0] for job in group]] = math.nan
+                continue
+            step = max(1, BATCH_SAMPLES // n)
+            for start in range(0, len(group), step):
+                part = group[start:start + step]
+                x = np.vstack([job[1] for job in part])
+                spectra = np.fft.rfft(x, axis=1)
+                rows = np.array([job[0] for job in part])
+                rms[rows] = np.sqrt(band_mean_squares(spectra, n, rate, band) * n / count[rows])
+                wanted = [i for i, job in enumerate(part) if job[3] is not None]
+                if not wanted:
+                    continue
+                found = condition_indicators_batch(x[wanted], rate, [part[i][2] for i in wanted],
+                                                   (band.low, band.high), self.settings.defect_orders,
+                                                   [part[i][3] for i in wanted], spectra=spectra[wanted])
+                for i, condition in zip(wanted, found):
+                    conditions[part[i][0]] = condition
 
     def _window_angles(self, key: int, first_time: float) -> tuple[np.ndarray | None, np.ndarray | None]:
         """Stamps (s from ``first_time``, the window's first sample) and turned screw angle (rad) in window ``key``."""

@@ -10,8 +10,8 @@ freedom and noncentrality ``lambda = runs * ratio**2``
 paper's constants cannot absorb over the run scatter).
 
 The engine names an effect from its amplitudes when its BIC falls by
-:data:`~prsm_lube_ros.diagnosis.engine.BIC_MARGIN`: a statistic of at least
-``BIC_MARGIN + k ln(n_eff)`` for ``k`` parameters over ``n_eff`` effective
+:attr:`~prsm_lube_ros.diagnosis.rules.DiagnosisRules.bic_margin`: a statistic of at least
+``_BIC_MARGIN + k ln(n_eff)`` for ``k`` parameters over ``n_eff`` effective
 windows.  The ideal test gets that threshold with ``k = 1`` and ``ln(runs)``
 (``n_eff >= runs``), the window scatter in the run means neglected: its chance
 (:func:`ideal_detection`) bounds what the engine's amplitude test can reach on
@@ -41,7 +41,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import stats
 
-from ..diagnosis.engine import BIC_MARGIN
+from ..diagnosis.rules import DEFAULT_RULES
+
+_BIC_MARGIN = DEFAULT_RULES.bic_margin
 
 if TYPE_CHECKING:
     from .effect_size import EffectSize
@@ -58,7 +60,7 @@ def _threshold(size: EffectSize, margin: float) -> float:
     return margin + math.log(max(size.runs, 2))
 
 
-def ideal_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
+def ideal_detection(size: EffectSize, margin: float = _BIC_MARGIN) -> float:
     """Chance that the ideal test (module doc) names an effect of ``size`` with a BIC guard of ``margin``."""
     noncentrality = size.noncentrality
     if not math.isfinite(noncentrality):
@@ -68,7 +70,7 @@ def ideal_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
     return float(stats.ncx2.sf(_threshold(size, margin), df=1, nc=noncentrality))
 
 
-def one_sided_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
+def one_sided_detection(size: EffectSize, margin: float = _BIC_MARGIN) -> float:
     """Chance that a one-sided test (the effect's sign known) names ``size``, false names as :func:`ideal_detection`."""
     noncentrality = size.noncentrality
     if not math.isfinite(noncentrality):
@@ -77,7 +79,7 @@ def one_sided_detection(size: EffectSize, margin: float = BIC_MARGIN) -> float:
     return float(stats.norm.sf(critical - math.sqrt(max(noncentrality, 0.0))))
 
 
-def names_on_recording(size: EffectSize, margin: float = BIC_MARGIN) -> bool | None:
+def names_on_recording(size: EffectSize, margin: float = _BIC_MARGIN) -> bool | None:
     """Whether the ideal test names the effect on the recording of ``size`` (None: statistic not known)."""
     if not math.isfinite(size.recorded_statistic):
         return None
@@ -89,7 +91,7 @@ def on_recording(size: EffectSize) -> str:
     recorded = names_on_recording(size)
     if recorded is None:
         return '-'
-    return (f'{size.recorded_statistic:.1f} of {_threshold(size, BIC_MARGIN):.1f}: '
+    return (f'{size.recorded_statistic:.1f} of {_threshold(size, _BIC_MARGIN):.1f}: '
             f'{"names" if recorded else "misses"}')
 
 
@@ -113,7 +115,7 @@ def power_markdown(records: Sequence[dict], sizes: Sequence[dict], command: str)
     lines = ['# What an ideal test would name', '', f'Command: `{command}`', '',
              'Each case simulated again from its seed. The ideal test knows the effect\'s form and the run scatter '
              'and fits its strength only; "ideal" is the chance it names the effect with the engine\'s guard (BIC '
-             f'drop of {BIC_MARGIN:g}), "one-sided" the same knowing the effect\'s sign (same false-name rate), '
+             f'drop of {_BIC_MARGIN:g}), "one-sided" the same knowing the effect\'s sign (same false-name rate), '
              '"plain BIC" without the guard (see `prsm_lube_ros/experiments/detection_power.py`, also for what the '
              'ideal test leaves out). "On this recording": the ideal test\'s statistic computed from the recorded '
              'run means, against its threshold (the guard plus ln(runs)), and whether it names the effect there.', '',

@@ -58,6 +58,8 @@ if TYPE_CHECKING:
 __all__ = ['NONE', 'confusion', 'main', 'run_case', 'write_outputs']
 
 NONE = 'none'
+#: Seeds searched per kind for cases of one drawn form (``--form-contains``).
+FORM_SEARCH = 5000
 
 
 def _simulate_rig(effect: str, seed: int, order: str, sessions: int) -> tuple[WindowTable, dict | None]:
@@ -181,8 +183,11 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
         kinds = list(args.kinds)
     elif args.effects:      # effects chosen by name: those, none and two; the other kinds only when asked
         kinds = [kind for kind in kinds if kind not in OUTSIDE_KINDS and kind != THERMAL_FREE]
-    seeds = range(args.first_seed, args.first_seed + args.seeds)
-    cases = [(kind, seed, tuple(effects), args.quick) for seed in seeds for kind in kinds]
+    if args.form_contains:
+        cases = _cases_of_form(kinds, effects, args)
+    else:
+        seeds = range(args.first_seed, args.first_seed + args.seeds)
+        cases = [(kind, seed, tuple(effects), args.quick) for seed in seeds for kind in kinds]
     records, start = [], time.time()
     with ProcessPoolExecutor(max_workers=max(args.jobs, 1)) as pool:
         futures = [pool.submit(_safe_random_case, case) for case in cases]
@@ -198,6 +203,26 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
     records.sort(key=lambda r: (r['kind'], r['seed']))
     print(write_random_outputs(Path(args.out), records, command, time.time() - start, args.jobs))
     return 0
+
+
+def _cases_of_form(kinds: Sequence[str], effects: list[str], args: argparse.Namespace) -> list[tuple]:
+    """``--seeds`` cases per kind whose drawn form has ``--form-contains`` in its words, seeds from ``--first-seed``.
+
+    The draws are those of every case (nothing is drawn differently): the
+    seeds whose drawn effects do not have that form are skipped, up to
+    :data:`FORM_SEARCH` seeds a kind.
+    """
+    from .random_study import case_forms
+    cases = []
+    for kind in kinds:
+        found = 0
+        for seed in range(args.first_seed, args.first_seed + FORM_SEARCH):
+            if found == args.seeds:
+                break
+            if any(args.form_contains in form for form in case_forms(kind, seed, effects, quick=args.quick)):
+                cases.append((kind, seed, tuple(effects), args.quick))
+                found += 1
+    return sorted(cases, key=lambda case: (case[1], case[0]))
 
 
 def _study_cases(out: Path) -> tuple[list[dict], bool] | None:
@@ -350,6 +375,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='random design: the kinds to run (default: every effect, none, two, step_in_time, '
                              'direction_factor, thermal_free)')
     parser.add_argument('--first-seed', type=int, default=0, help='random design: seeds from this one on')
+    parser.add_argument('--form-contains', default=None, metavar='WORDS',
+                        help='random design: per kind the first --seeds seeds (from --first-seed) whose drawn effect '
+                             'form has these words, e.g. "below the mesh band"; the other seeds are skipped')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     parser.add_argument('--explain-misses', action='store_true',

@@ -18,6 +18,18 @@ does).  Writes ``results.json`` and ``coverage.md`` to ``--results``
 
     python -m prsm_lube_ros.experiments.fleet_study --out out/fleet_study [--actuators 20] [--days 10]
         [--seeds 0 1 2] [--results DIR] [--jobs N | --scheduler ADDRESS]
+
+``--horizons`` runs the horizon study instead (:func:`horizon_study`): each
+fleet's conditions drawn from its seed over wide ranges
+(:func:`draw_conditions`: depletion rates, usage scatter, relubrication
+habits down past the error level, put-off relubrications, missed recordings,
+measurement noise), a rolling backtest (cuts every ``--step`` days up to 30
+days before the newest recording) scored at the warn and error levels per
+horizon class (3, 7, 14, 30 days) against the measured values and against
+the simulator's true theta_Oil, and the count of estimates outside their own
+interval.  ``--synthetic`` takes each recording's true theta_Oil plus the
+drawn noise instead of simulating and assessing the signals (minutes instead
+of hours for a long fleet).
 """
 from __future__ import annotations
 
@@ -28,18 +40,36 @@ from pathlib import Path
 import sys
 import time
 from typing import TYPE_CHECKING
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 if TYPE_CHECKING:
-    from ..fleet.forecast import ActuatorForecast
+    from ..fleet.forecast import ActuatorForecast, RecordingPoint
+    from ..simulation.fleet import FleetPlan
+    from ..fleet.backtest import HorizonCoverage
 
-__all__ = ['backtest_history', 'backtest_summary', 'compare_with_truth', 'coverage_rows', 'coverage_table', 'main',
-           'simulate_and_assess', 'synthetic_points']
+__all__ = ['CONDITION_RANGES', 'backtest_history', 'backtest_summary', 'compare_with_truth', 'coverage_rows',
+           'coverage_table', 'draw_conditions', 'horizon_study', 'horizon_table', 'main', 'simulate_and_assess',
+           'synthetic_points', 'true_points']
+
+#: the ranges :func:`draw_conditions` draws a fleet's conditions from (uniformly)
+CONDITION_RANGES = {
+    'days_to_reference_low': (3.0, 15.0),        # d a full lubrication lasts down to 0.85, fastest actuator
+    'days_to_reference_spread': (1.5, 4.0),      # slowest over fastest
+    'usage_scatter': (0.05, 0.45),               # sigma of the log-normal day-to-day usage factor
+    'relubricate_below_low': (0.55, 0.72),       # the laxest operator's level (below 0.70: error reached)
+    'relubricate_below_high': (0.72, 0.84),      # the most careful one's
+    'relubrication_put_off': (0.0, 0.6),         # chance a due relubrication waits for a later recording
+    'recording_missed': (0.0, 0.5),              # chance a day has no recording
+    'noise': (0.002, 0.02),                      # one-sigma of a recording's theta_Oil (synthetic points)
+}
 
 
 def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, jobs: int = 1,
-                        scheduler: str | None = None, storage: str = 'mcap') -> dict:
-    """Simulate the fleet into ``out/fleet``, calibrate, assess into ``out/history``; return timings and counts."""
+                        scheduler: str | None = None, storage: str = 'mcap', fleet: FleetPlan | None = None) -> dict:
+    """Simulate the fleet into ``out/fleet``, calibrate, assess into ``out/history``; return timings and counts.
+
+    ``fleet`` replaces the default plan of ``actuators`` x ``days``.
+    """
     from ..estimation.calibration_file import save_calibration
     from ..estimation.pipeline import calibrate_recordings, recording_windows
     from ..fleet.history import history_writer
@@ -49,7 +79,8 @@ def simulate_and_assess(out: Path, *, actuators: int, days: int, seed: int = 0, 
     from ..simulation.fleet import FleetPlan, simulate_fleet
     fleet_dir, history = out / 'fleet', out / 'history'
     started = time.perf_counter()
-    paths = simulate_fleet(fleet_dir, fleet=FleetPlan(actuators=actuators, days=days), seed=seed, storage=storage)
+    paths = simulate_fleet(fleet_dir, fleet=fleet or FleetPlan(actuators=actuators, days=days), seed=seed,
+                           storage=storage)
     simulated = time.perf_counter()
     lead = load_actuator(None).lead
     calibration = calibrate_recordings([recording_windows(bag_path(fleet_dir, 'reference', storage), lead=lead)])
@@ -119,6 +150,117 @@ def _study_fleet(folder: Path, seed: int, args: argparse.Namespace) -> tuple[dic
     return dict(run, seed=seed), rows, backtest, section
 
 
+def draw_conditions(seed: int, actuators: int, days: int) -> tuple[FleetPlan, float]:
+    """A fleet plan and a measurement noise drawn from ``seed`` over :data:`CONDITION_RANGES`."""
+    import numpy as np
+    from ..simulation.fleet import FleetPlan
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 37]))
+
+    def draw(name: str) -> float:
+        return float(rng.uniform(*CONDITION_RANGES[name]))
+    fastest = draw('days_to_reference_low')
+    slowest = fastest * draw('days_to_reference_spread')
+    plan = FleetPlan(actuators=actuators, days=days, days_to_reference=(fastest / days, slowest / days),
+                     usage_scatter=draw('usage_scatter'),
+                     relubricate_below_range=(draw('relubricate_below_low'), draw('relubricate_below_high')),
+                     relubrication_put_off=draw('relubrication_put_off'), recording_missed=draw('recording_missed'))
+    return plan, draw('noise')
+
+
+def true_points(truth: dict) -> dict[str, list[RecordingPoint]]:
+    """Each actuator's recordings at their true theta_Oil (zero one-sigma): the process itself, for scoring."""
+    from ..fleet.forecast import RecordingPoint
+    return {actuator['actuator_id']: [RecordingPoint(r['start'], r['theta_oil'], 0.0, r['path'])
+                                      for r in actuator['recordings']] for actuator in truth['actuators']}
+
+
+def _fleet_points(folder: Path, seed: int, args: argparse.Namespace) -> tuple[dict, dict, dict]:
+    """One fleet of the horizon study: its conditions, measured points and truth."""
+    from dataclasses import asdict
+    from ..fleet.forecast import history_points
+    from ..simulation.fleet import simulate_fleet
+    plan, noise = draw_conditions(seed, args.actuators, args.days)
+    conditions = {**asdict(plan), 'noise': noise if args.synthetic else 'assessed'}
+    if args.synthetic:
+        simulate_fleet(folder, fleet=plan, seed=seed, write_recordings=False)
+        truth = json.loads((folder / 'truth.json').read_text())
+        return conditions, synthetic_points(truth, noise=noise, seed=seed), truth
+    run = simulate_and_assess(folder, actuators=args.actuators, days=args.days, seed=seed, jobs=args.jobs,
+                              scheduler=args.scheduler, fleet=plan)
+    conditions.update(recordings=run['recordings'], failed=len(run['failed']))
+    return conditions, history_points(folder / 'history'), json.loads((folder / 'fleet' / 'truth.json').read_text())
+
+
+def horizon_study(args: argparse.Namespace, command: str) -> tuple[dict, str]:
+    """Rolling backtests of every fleet, scored per level and horizon against measurements and truth."""
+    from ..fleet.backtest import horizon_coverage, rolling_backtest
+    levels = (0.85, 0.70)
+    measured, against_truth, fleets = [], [], []
+    for seed in args.seeds:
+        conditions, points, truth = _fleet_points(Path(args.out) / f'seed_{seed}', seed, args)
+        started = time.perf_counter()
+        cuts = rolling_backtest(points, horizons=args.horizons, step_days=args.step, levels=levels)
+        truth_cuts = rolling_backtest(points, horizons=args.horizons, step_days=args.step, levels=levels,
+                                      truth=true_points(truth))
+        measured += cuts
+        against_truth += truth_cuts
+        tables = {name: [c.as_json() for c in horizon_coverage(found, args.horizons, levels)]
+                  for name, found in (('measured', cuts), ('truth', truth_cuts))}
+        fleets.append({'seed': seed, 'conditions': conditions, 'cuts': len(cuts), 'coverage': tables,
+                       'backtest_s': time.perf_counter() - started})
+        print(f'seed {seed}: ' + ', '.join(f'{c["level"]:g}/{c["horizon_days"]:g} d {c["inside"]}/{c["scored"]}'
+                                           for c in tables['truth']), file=sys.stderr, flush=True)
+    overall = {name: horizon_coverage(found, args.horizons, levels)
+               for name, found in (('measured', measured), ('truth', against_truth))}
+    outside = sum(c.estimates_outside for c in overall['measured'])
+    scored = [c for table in overall.values() for c in table if c.scored]
+    worst = min(scored, key=lambda c: c.coverage) if scored else None
+    passed = bool(scored) and all(c.coverage >= 0.95 for c in scored) and outside == 0
+    summary = (f'{len(args.seeds)} fleets of {args.actuators} actuators x {args.days} days, conditions drawn over wide '
+               f'ranges, {"synthetic points" if args.synthetic else "simulated and assessed recordings"}; rolling '
+               f'backtest every {args.step:g} d: lowest coverage of the 95 % crossing intervals over both levels and '
+               f'the horizons {", ".join(f"{h:g}" for h in args.horizons)} d is '
+               + (f'{worst.coverage:.1%} ({worst.level:g} within {worst.horizon_days:g} d, '
+                  f'{worst.inside}/{worst.scored})' if worst else 'none scored')
+               + f'; {outside} estimates outside their interval; {"PASS" if passed else "FAIL"} (>= 95 % everywhere).')
+    document = {'command': command, 'summary': summary, 'pass': passed, 'horizons': list(args.horizons),
+                'levels': list(levels), 'estimates_outside': outside,
+                'coverage': {name: [c.as_json() for c in table] for name, table in overall.items()},
+                'condition_ranges': CONDITION_RANGES, 'fleets': fleets}
+    text = (f'# Fleet forecast: coverage per horizon\n\n`{command}`\n\n{summary}\n\n'
+            '## Against the measured values (what `trend --backtest` can score)\n\n'
+            + horizon_table(overall['measured']) + '\n\n## Against the simulator\'s true theta_Oil\n\n'
+            + horizon_table(overall['truth']) + '\n\n## Conditions per fleet\n\n' + _conditions_table(fleets) + '\n')
+    return document, text
+
+
+def horizon_table(table: Sequence[HorizonCoverage]) -> str:
+    """Markdown: coverage per level (rows) and horizon class (columns)."""
+    horizons = sorted({c.horizon_days for c in table})
+    previous = [0.0] + horizons[:-1]
+    lines = ['| level | ' + ' | '.join(f'{a:g}-{b:g} d' for a, b in zip(previous, horizons)) + ' |',
+             '|---' * (len(horizons) + 1) + '|']
+    for level in sorted({c.level for c in table}, reverse=True):
+        cells = [f'{c.inside}/{c.scored} ({c.coverage:.1%})' if c.scored else '–'
+                 for c in sorted((c for c in table if c.level == level), key=lambda c: c.horizon_days)]
+        lines.append(f'| {level:g} | ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines)
+
+
+def _conditions_table(fleets: Sequence[dict]) -> str:
+    """Markdown: the drawn conditions of each fleet."""
+    lines = ['| seed | days to 0.85 | usage scatter | relubricate below | put off | missed | noise |',
+             '|---|---|---|---|---|---|---|']
+    for fleet in fleets:
+        c = fleet['conditions']
+        low, high = (v * c['days'] for v in c['days_to_reference'])
+        noise = c['noise'] if isinstance(c['noise'], str) else f'{c["noise"]:.4f}'
+        lines.append(f'| {fleet["seed"]} | {low:.1f}-{high:.1f} | {c["usage_scatter"]:.2f} | '
+                     f'{c["relubricate_below_range"][0]:.2f}-{c["relubricate_below_range"][1]:.2f} | '
+                     f'{c["relubrication_put_off"]:.2f} | {c["recording_missed"]:.2f} | {noise} |')
+    return '\n'.join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line of the study."""
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.fleet_study',
@@ -131,11 +273,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--jobs', type=int, default=1)
     parser.add_argument('--scheduler', default=None)
     parser.add_argument('--backtest', type=float, default=3.0, metavar='DAYS')
+    parser.add_argument('--horizons', type=float, nargs='+', default=None, metavar='DAYS',
+                        help='horizon study: conditions drawn per seed, rolling backtest scored per horizon class '
+                        '(e.g. 3 7 14 30)')
+    parser.add_argument('--step', type=float, default=3.0, metavar='DAYS', help='horizon study: days between cuts')
+    parser.add_argument('--synthetic', action='store_true',
+                        help='horizon study: true theta_Oil plus drawn noise instead of simulated recordings')
     args = parser.parse_args(argv)
     out = Path(args.out)
     results = Path(args.results) if args.results else out
     arguments = sys.argv[1:] if argv is None else argv
     command = 'python -m prsm_lube_ros.experiments.fleet_study ' + ' '.join(arguments)
+    if args.horizons:
+        document, text = horizon_study(args, command)
+        results.mkdir(parents=True, exist_ok=True)
+        (results / 'coverage.md').write_text(text)
+        (results / 'results.json').write_text(json.dumps(document, indent=1))
+        print(document['summary'])
+        return 0 if document['pass'] else 1
     sections: list[str] = []
     runs: list[dict] = []
     all_rows: list[dict] = []

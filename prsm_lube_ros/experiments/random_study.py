@@ -42,7 +42,8 @@ if TYPE_CHECKING:
     from .study_draws import CaseSetup
 
 __all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
-           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_recordings', 'case_rng', 'case_table',
+           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_forms', 'case_recordings', 'case_rng',
+           'case_table', 'draw_case',
            'confusion_markdown', 'explain_miss', 'misses_markdown', 'run_random_case', 'simulate_case', 'summarise',
            'truth_form', 'write_random_outputs']
 
@@ -107,10 +108,10 @@ def _chosen_form(document: dict) -> str:
     return str(form) if form else _forms(best.get('params') or {})
 
 
-def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False,
-                  folder: Path) -> tuple[list[Path], CaseSetup, list[str], dict[str, dict | None]]:
-    """Bags of one case in ``folder``; returns (paths, setup, effect names, truth of each effect)."""
-    from ..simulation.recordings import draw_effects, simulate_experiment
+def draw_case(kind: str, seed: int, effect_pool: list[str], *,
+              quick: bool = False) -> tuple[CaseSetup, list[str], Effects]:
+    """The set-up, effect names and drawn effects of one case, nothing simulated yet."""
+    from ..simulation.recordings import draw_effects
     from .study_draws import draw_setup
     rng = case_rng(kind, seed)
     setup = draw_setup(rng, quick=quick)
@@ -124,7 +125,21 @@ def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool =
     else:
         names = [kind]
     effects = draw_effects(names, seed=seed, rig=setup.rig, plan=setup.plan)
-    setup = _outside_catalogue(kind, rng, setup, effects)
+    return _outside_catalogue(kind, rng, setup, effects), names, effects
+
+
+def case_forms(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False) -> list[str]:
+    """The drawn forms of a case's effects in words (:func:`truth_form`), without simulating it."""
+    setup, names, effects = draw_case(kind, seed, effect_pool, quick=quick)
+    truth = effects.as_dict()
+    return [truth_form(name, truth.get(name), setup.plan.speeds) for name in names]
+
+
+def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False,
+                  folder: Path) -> tuple[list[Path], CaseSetup, list[str], dict[str, dict | None]]:
+    """Bags of one case in ``folder``; returns (paths, setup, effect names, truth of each effect)."""
+    from ..simulation.recordings import simulate_experiment
+    setup, names, effects = draw_case(kind, seed, effect_pool, quick=quick)
     paths = simulate_experiment(folder / 'sim', plan=setup.plan, rig=setup.rig, seed=seed, effects=effects,
                                 nuisances=setup.nuisances)
     truth = effects.as_dict()

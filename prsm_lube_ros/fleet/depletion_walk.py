@@ -8,6 +8,13 @@ Gaussian likelihood of drift ``k`` and diffusion ``q`` (generalised least
 squares), the fleet's relative usage scatter ``s`` (q = s k^2, upper 95 %
 profile-likelihood bound over all actuators) and the Kalman filter of
 (ln theta, k) that gives the state at the last recording.
+
+The scatter is estimated over several spans (:data:`STRIDES`: the increments
+between consecutive recordings, every second, fourth and eighth of a cycle)
+and the largest kept (:func:`usage_scatter_over_strides`).  A walk is the
+right law only if the variance grows in proportion to the span; usage whose
+rate holds over part of a day or over weeks grows faster than the one-day
+increments say, and a forecast for 30 days needs the long-span figure.
 """
 from __future__ import annotations
 
@@ -20,8 +27,9 @@ from collections.abc import Sequence
 import numpy as np
 
 
-__all__ = ['Increments', 'PROFILE_DROP', 'USAGE_SCATTER_GRID', 'depletion_state', 'drift_and_diffusion',
-           'fleet_usage_scatter', 'increments']
+__all__ = ['Increments', 'PROFILE_DROP', 'STRIDES', 'STRIDE_MIN_INCREMENTS', 'USAGE_SCATTER_GRID', 'depletion_state',
+           'drift_and_diffusion', 'fleet_usage_scatter', 'increments', 'strided_increments',
+           'usage_scatter_over_strides']
 
 
 @dataclass(frozen=True)
@@ -113,6 +121,36 @@ def fleet_usage_scatter(sets: Sequence[Increments | None]) -> float:
                            for data in cast('list[Increments]', sets))   # filtered above
                        for scatter in USAGE_SCATTER_GRID])
     return float(USAGE_SCATTER_GRID[np.flatnonzero(totals >= totals.max() - PROFILE_DROP)[-1]])
+
+
+#: strides of recordings (within a lubrication cycle) whose increments each estimate the usage scatter
+STRIDES = (1, 2, 4, 8)
+#: increments a stride needs over the fleet for its estimate to count
+STRIDE_MIN_INCREMENTS = 20
+
+
+def strided_increments(days: np.ndarray, y: np.ndarray, sigma: np.ndarray, cycles: np.ndarray,
+                       stride: int) -> Increments | None:
+    """:func:`increments` between every ``stride``-th recording of each cycle (from the cycle's first)."""
+    position = np.zeros(len(y), dtype=int)
+    for j in range(1, len(y)):
+        position[j] = position[j - 1] + 1 if cycles[j] == cycles[j - 1] else 0
+    keep = position % stride == 0
+    return increments(days[keep], y[keep], sigma[keep], cycles[keep])
+
+
+def usage_scatter_over_strides(sets_by_stride: Sequence[Sequence[Increments | None]]) -> float:
+    """The largest :func:`fleet_usage_scatter` over strides with :data:`STRIDE_MIN_INCREMENTS` increments or more.
+
+    ``sets_by_stride``: per stride (the first: every recording, always
+    counted), each actuator's increments.
+    """
+    found = []
+    for number, sets in enumerate(sets_by_stride):
+        count = sum(data.steps.size for data in sets if data is not None)
+        if number == 0 or count >= STRIDE_MIN_INCREMENTS:
+            found.append(fleet_usage_scatter(sets))
+    return max(found, default=0.0)
 
 
 def drift_and_diffusion(data: Increments | None, usage_scatter: float | None = None

@@ -13,7 +13,9 @@ moment of the relubrication and the oil put in) and one drift ``k`` shared by
 the cycles of an actuator.  Day-to-day scatter of the usage makes ln theta a
 random walk with that drift and a diffusion ``q = s k^2`` per day, ``s`` the
 relative variance of a day's revolutions: a property of how the fleet is
-operated, estimated over all actuators (:func:`fleet_usage_scatter`).
+operated, estimated over all actuators and over spans of one to eight
+recordings, the largest kept
+(:func:`~.depletion_walk.usage_scatter_over_strides`).
 
 Data.  One point per recording: its runs' theta_Oil averaged with
 inverse-variance weights.  Each run's one-sigma has a part of its own (the
@@ -64,12 +66,14 @@ from ..errors import InputError
 from ..estimation.health import HealthThresholds
 from ..validation import finite_or_none as _finite, utc_or_none
 from .defects import before_onsets, defect_marks, defect_onsets, DefectMark, DefectOnset
-from .depletion_walk import depletion_state, drift_and_diffusion, fleet_usage_scatter, Increments, increments
+from .depletion_walk import (depletion_state, drift_and_diffusion, Increments, increments, STRIDES,
+                             strided_increments, usage_scatter_over_strides)
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
-__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'FleetRecords', 'INTERVAL', 'KILO', 'ODOMETER_REACH',
+__all__ = ['ActuatorForecast', 'Crossing', 'DAY', 'DRAWS', 'FleetRecords', 'INTERVAL', 'KILO', 'MODEL_FORM_RATE',
+           'ODOMETER_REACH',
            'RecordingPoint', 'detect_relubrications', 'fit_depletion', 'fit_one', 'fit_revolutions', 'fleet_walk',
            'forecast_history', 'forecast_points', 'history_points', 'history_readers', 'history_records',
            'recording_points', 'two_sided_quantile', 'urgency_key', 'utc_minutes']
@@ -79,6 +83,10 @@ DAY = 86400.0            # s
 INTERVAL = 0.95
 #: parameter draws for the interval (seeded: a forecast is reproducible)
 DRAWS = 4000
+#: model-form uncertainty: relative one-sigma of the depletion rate k ahead beyond what the recordings say of it
+#: (usage that changes, a law not exactly exponential in time), added in quadrature to var(k): it widens the
+#: forecast in proportion to the horizon, as an error of the rate does
+MODEL_FORM_RATE = 0.10
 
 
 def two_sided_quantile(confidence: float) -> float:
@@ -155,7 +163,7 @@ class ActuatorForecast:
     revolution_crossings: list[Crossing] = field(default_factory=list)
     #: probability inside the stated intervals and the band
     confidence: float = INTERVAL
-    #: per level, draws of the days from the last recording to the first passage (0: already below; inf: never)
+    #: per level, draws of the days from the last recording to the first passage (< 0: already below; inf: never)
     passage_days: dict = field(default_factory=dict)
     #: why there is no fit against revolutions although an odometer was given
     revolutions_reason: str = ''
@@ -264,7 +272,7 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     """Fit ``theta = a_c exp(-t / tau)`` to an actuator's recordings and forecast the crossings of ``levels``.
 
     ``relubrications`` (s since the epoch) are detected from jumps when None.
-    ``usage_scatter`` is the fleet's (:func:`fleet_usage_scatter`); None fits
+    ``usage_scatter`` is the fleet's (:func:`fleet_walk`); None fits
     this actuator's alone.  ``odometer`` (cumulative screw revolutions at each
     point, in time order) adds the fit against revolutions:
     :func:`fit_revolutions`.  ``confidence`` is the probability inside the
@@ -304,7 +312,8 @@ def fit_depletion(actuator: str, points: Sequence[RecordingPoint], *, relubricat
     result.theta_now = float(math.exp(last_level - rate * (times[-1] - origin) / DAY))
     rng = np.random.default_rng(seed)
     pair = np.array([last, used.size])
-    block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, 0.0])   # the calibration moves the level
+    # the calibration moves the level; the law's form and changing usage the rate (MODEL_FORM_RATE)
+    block = covariance[np.ix_(pair, pair)] + np.diag([shared ** 2, (MODEL_FORM_RATE * rate) ** 2])
     draws = _posterior_draws(np.array([last_level, rate]), block, dof if scaled else 0, rng)
     _walk_state(result, (times, y, sigma, cycles), usage_scatter, shared)
     _level_crossings(result, levels, (times, y, sigma, cycles), draws, (origin, last_level, rate), rng, seed)
@@ -328,6 +337,7 @@ def _walk_state(result: ActuatorForecast, series: tuple[np.ndarray, np.ndarray, 
         result.state, result.state_covariance, result.state_dof = depletion_state(times / DAY, y, sigma, cycles,
                                                                                   walk[2])
         result.state_covariance[0, 0] += shared ** 2
+        result.state_covariance[1, 1] += (MODEL_FORM_RATE * result.state[1]) ** 2
 
 
 def _level_crossings(result: ActuatorForecast, levels: Sequence[float],
@@ -389,16 +399,24 @@ def _crossing_seen_or_fitted(level: float, draws: np.ndarray, tail: float, origi
     """
     with np.errstate(divide='ignore', invalid='ignore'):
         days = np.where(draws[:, 1] > 0, (draws[:, 0] - math.log(level)) / draws[:, 1], math.inf)
-        quantiles = np.quantile(days, [tail, 1.0 - tail])
-    low, high = (float(origin + v * DAY) if math.isfinite(v) else None for v in quantiles)
-    estimate = float(origin + (last_level - math.log(level)) / rate * DAY) if rate > 0 else None
+        quantiles = np.quantile(days, [tail, 0.5, 1.0 - tail])
+    low, estimate, high = (float(origin + v * DAY) if math.isfinite(v) else None for v in quantiles)
     times, y, sigma, cycles = series
     bracket = _crossed_between(times, y, sigma, cycles, math.log(level))
     if bracket is not None:     # seen in the recordings: there, or where the fitted law puts it
         estimate = bracket[0]
         low = bracket[1] if low is None else min(low, bracket[1])
         high = None if high is None else max(high, bracket[2])
-    return Crossing(float(level), estimate, low, high)
+    return _holding_estimate(Crossing(float(level), estimate, low, high))
+
+
+def _holding_estimate(crossing: Crossing) -> Crossing:
+    """The crossing with its interval widened to hold its estimate (an open end holds every later time)."""
+    if crossing.time is None:
+        return crossing
+    low = crossing.time if crossing.low is None else min(crossing.low, crossing.time)
+    high = None if crossing.high is None else max(crossing.high, crossing.time)
+    return Crossing(crossing.level, crossing.time, low, high)
 
 
 def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarray, sigma: np.ndarray,
@@ -428,8 +446,7 @@ def fit_revolutions(result: ActuatorForecast, odometer: np.ndarray, y: np.ndarra
         with np.errstate(divide='ignore', invalid='ignore'):
             remaining = np.where(draws[:, 1] > 0, np.maximum(draws[:, 0] - math.log(level), 0.0) / draws[:, 1],
                                  math.inf)
-            low, high = np.quantile(remaining, [tail, 1.0 - tail])
-        estimate = (state[0] - math.log(level)) / k if k > 0 else math.inf
+            low, estimate, high = np.quantile(remaining, [tail, 0.5, 1.0 - tail])   # the median: inside
         result.revolution_crossings.append(Crossing(float(level), *(
             float(odometer[-1] + v * KILO) if math.isfinite(v) else None for v in (estimate, low, high))))
 
@@ -476,7 +493,8 @@ def _passage_draws(forecast: ActuatorForecast, level: float, rng: np.random.Gene
     Gaussian (mean D/k with D = x - level, shape D^2/q); (x, k) are drawn from
     the filter's posterior (Student-t when its covariance was scaled).  A
     draw with k <= 0 never crosses (``inf``); a draw already below ``level``
-    crossed before the last recording (about 0 days).
+    crossed before the last recording, as long ago as its drift puts it (a
+    negative number of days; 0 without a drift).
     """
     assert forecast.state is not None and forecast.state_covariance is not None  # only forecasts with a state
     draws = _posterior_draws(forecast.state, forecast.state_covariance, forecast.state_dof, rng)
@@ -486,19 +504,22 @@ def _passage_draws(forecast: ActuatorForecast, level: float, rng: np.random.Gene
     mean = distance[falling] / draws[falling, 1]
     q = forecast.diffusion
     days[falling] = rng.wald(mean, distance[falling] ** 2 / q) if q > 0 else mean
-    days[draws[:, 0] <= level] = 0.0
+    below = draws[:, 0] <= level            # crossed before the last recording: when the draw's own drift says
+    days[below] = np.where(draws[below, 1] > 0, (draws[below, 0] - level) / np.maximum(draws[below, 1], 1e-12), 0.0)
     return days
 
 
 def _first_passage(forecast: ActuatorForecast, level: float, rng: np.random.Generator,
                    tail: float) -> tuple[float, float, float, np.ndarray]:
-    """Days from the last recording until ln theta first falls to ``level``: estimate, interval and the draws."""
+    """Days from the last recording until ln theta first falls to ``level``: estimate, interval and the draws.
+
+    The estimate is the draws' median, so it lies inside the central interval by construction (inf when
+    more than half the draws never cross).
+    """
     days = _passage_draws(forecast, level, rng)
     with np.errstate(invalid='ignore'):               # inf - inf between never-crossing draws: still inf
-        low, high = np.quantile(days, [tail, 1.0 - tail])
-    assert forecast.state is not None  # _passage_draws needed it too
-    x, k = forecast.state
-    return ((x - level) / k if k > 0 else math.inf), low, high, days
+        low, estimate, high = np.quantile(days, [tail, 0.5, 1.0 - tail])
+    return float(estimate), float(low), float(high), days
 
 
 def urgency_key(forecast: ActuatorForecast) -> tuple[int, float, float, str]:
@@ -606,7 +627,8 @@ def fleet_walk(points: Mapping[str, Sequence[RecordingPoint]], given: dict) -> t
     """Each actuator's relubrications (given, else detected) and the fleet's usage scatter."""
     found = {name: sorted(given[name]) if name in given else detect_relubrications(items)
              for name, items in points.items()}
-    return found, fleet_usage_scatter([_increments_of(items, found[name]) for name, items in points.items()])
+    by_stride = [[_increments_of(items, found[name], stride) for name, items in points.items()] for stride in STRIDES]
+    return found, usage_scatter_over_strides(by_stride)
 
 
 def fit_one(name: str, points: Sequence[RecordingPoint], relubrications: Sequence[float], levels: Sequence[float],
@@ -653,12 +675,13 @@ def _odometer_at(points: Sequence[RecordingPoint],
     return values.tolist()
 
 
-def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float]) -> Increments | None:
-    """The day-to-day increments of ln theta_Oil within each lubrication cycle of one actuator."""
+def _increments_of(points: Sequence[RecordingPoint], relubrications: Sequence[float],
+                   stride: int = 1) -> Increments | None:
+    """The increments of ln theta_Oil between every ``stride``-th recording of each lubrication cycle of an actuator."""
     times = np.array([p.time for p in points])
     cycles = np.searchsorted(np.array(relubrications, float), times, side='right')
-    return increments(times / DAY, np.log([p.theta_oil for p in points]),
-                      np.array([p.independent_std / p.theta_oil for p in points]), cycles)
+    return strided_increments(times / DAY, np.log([p.theta_oil for p in points]),
+                              np.array([p.independent_std / p.theta_oil for p in points]), cycles, stride)
 
 
 def history_readers() -> tuple[Callable[[str], str], Callable[..., pa.Table]]:

@@ -16,7 +16,6 @@ lost) is an outcome with ``error``, one line naming it; the others go on.
 """
 from __future__ import annotations
 
-from concurrent.futures import as_completed, ProcessPoolExecutor
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -105,6 +104,7 @@ def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int
 
 def _in_processes(paths: list[str], job: BagJob, jobs: int,
                   on_done: Callable[[BagOutcome], object] | None) -> dict[str, BagOutcome]:
+    from concurrent.futures import as_completed, ProcessPoolExecutor    # here: one recording needs no pool
     outcomes = {}
     with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
         futures = {pool.submit(assess_bag, path, job): path for path in dict.fromkeys(paths)}

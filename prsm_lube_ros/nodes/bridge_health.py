@@ -14,6 +14,10 @@ gives the level the bridge puts on ``/diagnostics``:
   the last :data:`RATE_SPAN` s;
 - OK otherwise.
 
+Each state has one fixed message (the terminal ERROR adds its reason; aggregators and loggers that de-duplicate
+on the message see a change only when the state does); the numbers (rates,
+silence, losses) and the last error are KeyValues.
+
 Times are s of a monotonic clock given by the caller.
 """
 from __future__ import annotations
@@ -116,19 +120,21 @@ class SourceHealth:
             values = [('source', self.source), ('blocks published', self.blocks),
                       ('block rate [1/s]', rate), ('expected block rate [1/s]', expected or math.nan),
                       ('sample rate [Hz]', self.sample_rate), ('lost samples', self.lost_samples),
-                      ('last error', self.last_error or 'none')]
+                      ('last error', self.last_error or 'none'),
+                      ('silent for [s]', now - self._last_block if self._last_block is not None else math.inf),
+                      ('stale timeout [s]', self.stale_timeout), ('rate span [s]', RATE_SPAN)]
             if self.failed:
+                # Terminal: the reason cannot flap, so it stays in the message.
                 return SourceStatus(ERROR, f'source {self.source} failed: {self.last_error}', values)
             if not self.active:
                 return SourceStatus(STALE, 'not active: the source is open, publishing is halted', values)
             if self._last_block is None:
                 return SourceStatus(STALE, 'no block published yet', values)
-            silent = now - self._last_block
-            if silent >= self.stale_timeout:
-                return SourceStatus(STALE, f'no block for {silent:.1f} s', values)
+            if now - self._last_block >= self.stale_timeout:
+                return SourceStatus(STALE, 'no block for stale_timeout', values)
             if self._loss_times:
-                return SourceStatus(WARN, f'lost data in the last {RATE_SPAN:g} s: {self.last_error}', values)
-            settled = now - self._first_block >= RATE_SPAN
+                return SourceStatus(WARN, 'data lost recently (last error in the values)', values)
+            settled = self._first_block is not None and now - self._first_block >= RATE_SPAN
             if expected and settled and rate < (1.0 - RATE_SLACK) * expected:
-                return SourceStatus(WARN, f'{rate:.3g} blocks/s, expected {expected:.3g}', values)
-            return SourceStatus(OK, f'{rate:.3g} blocks/s at {self.sample_rate:g} Hz', values)
+                return SourceStatus(WARN, 'block rate below the expected one', values)
+            return SourceStatus(OK, 'publishing', values)

@@ -22,12 +22,18 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
-from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from ..recording.batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
 from ..recording.plausibility import plausible_durations, plausible_rates
+
+if TYPE_CHECKING:
+    from ..recording.reader import Recording
+    from ..simulation.rig_acceleration import RigBlock
 
 __all__ = ['Event', 'KINDS', 'Pacer', 'batch_events', 'recording_events', 'rig_block_events', 'stamps_ns']
 
@@ -36,7 +42,7 @@ KINDS = ('vibration', 'joint_states', 'axial_load', 'temperature')
 _NS = 1_000_000_000
 
 
-def stamps_ns(seconds) -> np.ndarray:
+def stamps_ns(seconds: npt.ArrayLike) -> np.ndarray:
     """Int64 ns stamps whose ``sec + nanosec * 1e-9`` (as ROS readers compute it) equals ``seconds`` exactly.
 
     Float seconds since the epoch resolve about 0.24 us, so several ns values
@@ -66,7 +72,7 @@ def _search_ns(seconds: float, guess: int) -> int:
     return guess
 
 
-def batch_events(batches) -> list[Event]:
+def batch_events(batches: Iterable[InputBatch]) -> list[Event]:
     """Events of one slice of recorded batches (any mix of kinds), in due order (stable by stamp)."""
     events: list[Event] = []
     for batch in batches:
@@ -98,13 +104,13 @@ def batch_events(batches) -> list[Event]:
     return events
 
 
-def recording_events(recording, on_problem=None) -> Iterator[list[Event]]:
+def recording_events(recording: Recording, on_problem: Callable[[str], None] | None = None) -> Iterator[list[Event]]:
     """Events of a :class:`~prsm_lube_ros.recording.reader.Recording`, one sorted list per time slice."""
     for batches in recording.slices(on_problem=on_problem):
         yield batch_events(batches)
 
 
-def rig_block_events(block) -> list[Event]:
+def rig_block_events(block: RigBlock) -> list[Event]:
     """Events of one :class:`~prsm_lube_ros.simulation.rig_acceleration.RigBlock`: the block and its sensor data."""
     chunk = block.topics
     events: list[Event] = []
@@ -132,7 +138,7 @@ class Pacer:
     def __init__(self, rate: float, stop: threading.Event | None = None):
         self.rate = float(rate)
         self.stop = stop or threading.Event()
-        self._origin = None          # (monotonic start, first due)
+        self._origin: tuple[float, float] | None = None          # (monotonic start, first due)
         self._latest = -math.inf
 
     def restart(self) -> None:

@@ -8,13 +8,13 @@ swaps the result in; everything wrong with a request comes out as one
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import os
 from pathlib import Path
 import re
 from collections.abc import Callable, Sequence
 
-from ..errors import InputError
+from ..errors import InputError, NotIdentifiable
 from ..estimation.calibration import Calibration
 from ..estimation.windowing import WindowSettings
 from ..validation import reference_theta as checked_reference_theta
@@ -107,33 +107,28 @@ def calibrate_from_request(bag_paths: Sequence[str], theta: float, *, folder: st
     paths = resolve_bag_paths(bag_paths, folder)
     root = recordings_folder(str(folder))
     try:
-        from ..estimation.pipeline import calibrate_recordings, recording_windows, require_usable
+        from ..estimation.pipeline import calibrate_recordings, read_recordings
     except ImportError as exc:    # the bag reader is not installed with this build
         raise InputError(f'calibrate: cannot read recordings on this installation ({exc})') from None
     problems: list[str] = []
 
-    def report(line: str):
+    def report(line: str) -> None:
         problems.append(line)
         if on_problem:
             on_problem(line)
 
-    recordings = []
-    steady = 0
     checked = check or (lambda: None)
-    for read, path in enumerate(paths):
+
+    def before_each(read: int, steady: int) -> None:
         checked()
         if on_progress:
             on_progress('reading', read, len(paths), steady)
-        recording = recording_windows(path, lead=lead, settings=settings, namespace=namespace,
-                                      on_problem=report, root=root,       # its files inside the folder too
-                                      progress=lambda fraction: checked())
-        try:
-            require_usable(recording, settings)     # the command line's words for the same lack
-        except InputError as exc:
-            raise InputError(f'calibrate: {exc} (topics under {namespace})') from None
-        recordings.append(recording)
-        steady += sum(1 for w in recording.windows if w.steady)
-        settings = replace(settings or WindowSettings(), band=recording.band)   # the others in the first's band
+    try:      # the command line's reading and band rule; its files inside the folder too
+        recordings = read_recordings(paths, lead=lead, settings=settings, namespace=namespace, on_problem=report,
+                                     root=root, before_each=before_each, progress=lambda _: lambda _f: checked())
+    except NotIdentifiable as exc:      # the command line's words for the same lack
+        raise InputError(f'calibrate: {exc} (topics under {namespace})') from None
+    steady = sum(1 for recording in recordings for w in recording.windows if w.steady)
     checked()
     if on_progress:
         on_progress('fitting', len(paths), len(paths), steady)

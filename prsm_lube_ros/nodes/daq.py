@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import importlib
 import math
 import time
+from typing import Any
 from collections.abc import Callable
 
 import numpy as np
@@ -49,7 +50,7 @@ class DaqSettings:
     range_g: float = 50.0              # measurement range +/- g
     buffer_seconds: float = 10.0       # ring buffer of the continuous acquisition, s
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Reject settings the card cannot be set to."""
         checks = {'channel': bool(str(self.channel).strip()),
                   'sample_rate': self.sample_rate > 0 and math.isfinite(self.sample_rate),
@@ -68,7 +69,7 @@ class DaqSettings:
         return int(math.ceil(self.buffer_seconds * self.sample_rate))
 
 
-def import_nidaqmx():
+def import_nidaqmx() -> Any:
     """The ``nidaqmx`` package; InputError (one line) when it is not installed."""
     try:
         return importlib.import_module('nidaqmx')
@@ -82,7 +83,7 @@ def _one_line(exc: BaseException) -> str:
     return (lines[0] if lines else type(exc).__name__)[:300]
 
 
-def _member(enum, *names):
+def _member(enum: Any, *names: str) -> Any:
     """The first of ``names`` the enum has (member names differ between nidaqmx versions)."""
     for name in names:
         if hasattr(enum, name):
@@ -98,7 +99,7 @@ class NiDaqAccelerometer:
         self.settings = settings
         self._clock_ns = clock_ns
         nidaqmx = import_nidaqmx()
-        self._task = None
+        self._task: Any = None
         try:
             constants = importlib.import_module('nidaqmx.constants')
             task = nidaqmx.Task()
@@ -178,8 +179,8 @@ class NiDaqAccelerometer:
             except Exception:        # closing a task that failed half-way: nothing more to do
                 pass
 
-    def __enter__(self):
+    def __enter__(self) -> NiDaqAccelerometer:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()

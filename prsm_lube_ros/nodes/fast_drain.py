@@ -19,10 +19,13 @@ nothing.
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
 import inspect
+from typing import Any
 
 from rclpy.callback_groups import CallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import Executor
+from rclpy.impl.rcutils_logger import RcutilsLogger
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 
@@ -33,7 +36,7 @@ __all__ = ['DrainedCallbackGroup', 'FastDrain', 'missing_api']
 class DrainedCallbackGroup(ReentrantCallbackGroup):
     """Callback group whose entities the executor never waits on: the node takes their messages itself."""
 
-    def can_execute(self, entity) -> bool:
+    def can_execute(self, entity: object) -> bool:
         """Always False: executors leave the group's entities out of their wait sets."""
         return False
 
@@ -56,14 +59,14 @@ def missing_api() -> str:
     return ', '.join(missing)
 
 
-def _never_called(msg):
+def _never_called(msg: object) -> None:
     """Callback of a subscription in :class:`DrainedCallbackGroup` (its queue is drained, not spun)."""
 
 
 class FastDrain:
     """Start-up check of the drain API plus the drain itself; ``enabled`` False means plain callbacks."""
 
-    def __init__(self, logger):
+    def __init__(self, logger: RcutilsLogger) -> None:
         self._logger = logger
         missing = missing_api()
         self.enabled = not missing
@@ -74,7 +77,7 @@ class FastDrain:
             logger.warning(f'FAST DRAIN OFF: this rclpy lacks {missing}; joint states, load and temperature '
                            'are taken through plain subscription callbacks instead (more CPU, same windows)')
 
-    def drain(self, subscription, limit: int):
+    def drain(self, subscription: Subscription | None, limit: int) -> Iterator[Any]:
         """Messages already queued on ``subscription`` (at most ``limit``), oldest first; none when disabled."""
         if not self.enabled or subscription is None:
             return

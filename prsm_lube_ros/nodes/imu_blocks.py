@@ -167,10 +167,11 @@ class ImuBlockAssembler:
         Gaps and jitter are judged once the rate is checked (after :data:`RATE_WINDOW` intervals).
         """
         previous = self._last_stamp
+        assert previous is not None          # an interval ends on a stamp after a previous one
         if interval <= 0:
             return self._report('backwards', f'stamp {(previous + interval) * 1e-9:.6f} s is not after the '
                                 f'previous one ({previous * 1e-9:.6f} s)')
-        if not self._rate_checked:
+        if not self._rate_checked or self.period_ns is None:
             return None
         periods = interval / self.period_ns
         if periods >= GAP_PERIODS:

@@ -25,6 +25,7 @@ from pathlib import Path
 import random
 import signal
 import subprocess
+from typing import Any
 import sys
 import threading
 import time
@@ -55,7 +56,7 @@ class LiveResult:
     windows_before: list = field(default_factory=list)
     windows_after: list = field(default_factory=list)
     calibrated_at: float = math.nan          # s since start when the answer came
-    response: object = None
+    response: Any = None                      # Calibrate.Response (generated, untyped)
     statuses: list = field(default_factory=list)   # (wall s, level, message) of the estimator's status
     bridge_statuses: int = 0
     problem: str = ''
@@ -98,7 +99,9 @@ class Observer:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.start = time.monotonic()
-        self.windows, self.statuses, self.bridge_statuses = [], [], 0
+        self.windows: list[tuple[float, float, float, float]] = []      # (s since start, theta, speed, load)
+        self.statuses: list[tuple[float, int, str]] = []
+        self.bridge_statuses = 0
         self.lock = threading.Lock()
         self.node.create_subscription(LubricationState, STATE_TOPIC, self._state,
                                       QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE))
@@ -111,13 +114,13 @@ class Observer:
         """Wall seconds since the observer started."""
         return time.monotonic() - self.start
 
-    def _state(self, msg) -> None:
+    def _state(self, msg: Any) -> None:
         if math.isfinite(msg.theta_oil):
             with self.lock:
                 self.windows.append((self.now(), float(msg.theta_oil), float(msg.screw_speed),
                                      float(msg.axial_load)))
 
-    def _diagnostics(self, array) -> None:
+    def _diagnostics(self, array: Any) -> None:
         for status in array.status:
             if STATUS_PART in status.name:
                 with self.lock:
@@ -143,7 +146,7 @@ class Observer:
             time.sleep(0.1)
         return condition()
 
-    def calibrate(self, bag_names: list[str], theta: float, timeout: float):
+    def calibrate(self, bag_names: list[str], theta: float, timeout: float) -> Any:
         """Call the calibrate service as ``ros2 service call /prsm/calibrate prsm_lube_ros/srv/Calibrate`` does."""
         if not self.client.wait_for_service(timeout_sec=min(timeout, 30.0)):
             return None

@@ -77,8 +77,8 @@ import sys
 import threading
 import time
 import traceback
-from typing import TYPE_CHECKING
-from collections.abc import Callable
+from typing import Any, TYPE_CHECKING
+from collections.abc import Awaitable, Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
@@ -88,7 +88,7 @@ from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState, Temperature
@@ -109,23 +109,36 @@ from ..fleet.forecast_summary import forecast_summaries
 from ..msg import LubricationState, VibrationBlock
 from ..physics.actuator import load_actuator
 from ..physics.defect_orders import defect_orders as actuator_defect_orders
+from ..recording.batches import VibrationBatch
 from ..srv import Calibrate
 from .calibration_request import calibrate_from_request, recording_namespace
 from .fast_drain import FastDrain
-from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
-from .startup import run_node
+from .raw_inputs import join_blocks, raw_load_converter, raw_screw_converter, raw_vibration_converter, RAW_INPUTS
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, \
+    FORMER_DIAGNOSTIC_PERIOD, OVERRIDABLE, own_qos, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .startup import autostart, run_node
+from .topic_status import RateSettings, StampSettings, TopicStatus
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+    from diagnostic_msgs.msg import DiagnosticStatus
+    from rclpy.parameter import Parameter
+    from rclpy.publisher import Publisher
     from rclpy.service import Service
+
+    from ..estimation.health import HealthStatus
+    from ..estimation.surface_health import SurfaceStatus
+    from ..estimation.windowing import Window
+    from ..recording.batches import InputBatch
 
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
-           'HEALTH_PARAMETERS', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME', 'PARAMETERS', 'STATE_QOS',
-           'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments', 'calibration_path',
-           'health_thresholds', 'join_batches', 'main', 'window_settings']
+           'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME',
+           'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments',
+           'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds', 'join_batches', 'main',
+           'window_settings']
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -134,6 +147,7 @@ _DOUBLE = ParameterType.PARAMETER_DOUBLE
 _INTEGER = ParameterType.PARAMETER_INTEGER
 _STRING = ParameterType.PARAMETER_STRING
 _STRINGS = ParameterType.PARAMETER_STRING_ARRAY
+_BOOL = ParameterType.PARAMETER_BOOL
 
 #: Defaults of the window and health parameters: the dataclasses' own.
 _WINDOW, _HEALTH = WindowSettings(), HealthThresholds()
@@ -146,8 +160,16 @@ PARAMETERS = {
         '(reported resolved)', read_only=True),
     'hardware_ids': ParameterSpec(
         [''], _STRINGS,
-        'diagnostic hardware_id of each actuator, in the order of actuators (missing or empty: the actuator '
-        'name)', read_only=True),
+        'diagnostic hardware_id of each actuator, in the order of actuators: its serial or device id, unique in '
+        'the fleet (missing or empty: the actuator name, with one WARN at start-up)', read_only=True),
+    'autostart': ParameterSpec(
+        True, _BOOL,
+        'configure and activate at start-up (the node works at once); false: it waits unconfigured for a '
+        'lifecycle manager (ros2 lifecycle set, nav2_lifecycle_manager)', read_only=True),
+    'calibrate_enabled': ParameterSpec(
+        True, _BOOL,
+        'offer the calibrate service and action; false: neither exists on the graph (where swapping the live '
+        'calibration must not be reachable)', read_only=True),
     'calibration_file': ParameterSpec(
         '~/.ros/prsm_lube_ros/calibration_{actuator}.yaml', _STRING,
         'calibration YAML (prsm-lube calibrate); {actuator} is replaced by the actuator name with / as _ (e.g. '
@@ -222,9 +244,36 @@ PARAMETERS = {
         'last steady windows pooled for the surface defect screen (kurtosis, crest factor, envelope lines at the '
         "defect orders) against the calibration's healthy baseline; judged once that many are in, and a suspected "
         'defect clears only after that many clean judgements in a row', bounds=(1, 1000)),
-    'diagnostics_period': ParameterSpec(
-        1.0, _DOUBLE,
-        's of node clock between /diagnostics messages', bounds=(0.05, 60.0), read_only=True),
+    'diagnostic_period': ParameterSpec(
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
+        's of node clock between /diagnostics messages (also the period the input rates are counted in)',
+        bounds=(0.05, 60.0), read_only=True),
+    'diagnostics_period': FORMER_DIAGNOSTIC_PERIOD,
+    'vibration_rate': ParameterSpec(
+        10.0, _DOUBLE,
+        'expected VibrationBlocks per s on <ns>/vibration (input status: WARN below it by more than '
+        'rate_tolerance; 0: only silence is judged)', bounds=(0.0, 1.0e6), read_only=True),
+    'joint_states_rate': ParameterSpec(
+        100.0, _DOUBLE, 'expected JointStates per s on <ns>/joint_states (as vibration_rate)', bounds=(0.0, 1.0e6),
+        read_only=True),
+    'axial_load_rate': ParameterSpec(
+        50.0, _DOUBLE, 'expected WrenchStampeds per s on <ns>/axial_load (as vibration_rate)', bounds=(0.0, 1.0e6),
+        read_only=True),
+    'temperature_rate': ParameterSpec(
+        0.0, _DOUBLE, 'expected Temperatures per s on <ns>/temperature (as vibration_rate; 0: optional input, '
+        'only its silence is reported)', bounds=(0.0, 1.0e6), read_only=True),
+    'rate_tolerance': ParameterSpec(
+        0.1, _DOUBLE, 'relative shortfall of an input rate that is still OK (diagnostic_updater tolerance)',
+        bounds=(0.0, 1.0), read_only=True),
+    'rate_window': ParameterSpec(
+        5, _INTEGER, 'diagnostic periods an input rate is measured over (diagnostic_updater window_size)',
+        bounds=(1, 1000), read_only=True),
+    'max_stamp_age': ParameterSpec(
+        5.0, _DOUBLE, 's a header stamp may trail the node clock at arrival before the input status is ERROR',
+        bounds=(0.001, 86400.0), read_only=True),
+    'max_future_stamp': ParameterSpec(
+        1.0, _DOUBLE, 's a header stamp may lie ahead of the node clock before the input status is ERROR',
+        bounds=(0.0, 86400.0), read_only=True),
     'vibration_topic': ParameterSpec(
         'vibration', _STRING,
         'vibration topic below each actuator namespace', read_only=True),
@@ -277,6 +326,24 @@ FIXED_REASONS = {
 }
 
 
+#: The input streams of an actuator, as the ``<key>_topic`` and ``<key>_rate`` parameters name them.
+INPUT_KEYS = ('vibration', 'joint_states', 'axial_load', 'temperature')
+#: What an input status is called: '<node>: <actuator> <key> input'.
+INPUT_TASK = '{key} input'
+
+
+def hardware_ids(actuators: Sequence[str], configured: Sequence[str]) -> dict:
+    """actuator: its hardware_id, the ``hardware_ids`` entry at its index or (missing or empty) its name."""
+    return {name: configured_hardware_id(actuators, configured, name) or name.strip('/') or name
+            for name in actuators}
+
+
+def configured_hardware_id(actuators: Sequence[str], configured: Sequence[str], name: str) -> str:
+    """The ``hardware_ids`` entry of actuator ``name`` ('' when none is given)."""
+    i = list(actuators).index(name)
+    return str(configured[i]).strip() if i < len(configured) else ''
+
+
 def actuator_label(actuator: str) -> str:
     """Actuator name for files and ids: ``/ema_left/prsm`` -> ``ema_left_prsm``."""
     return actuator.strip('/').replace('/', '_') or 'root'
@@ -312,8 +379,8 @@ class ActuatorChannel:
     surface: SurfaceMonitor                          # the surface defect screen of the last steady windows
     assessor: Assessor | None = None
     calibration_note: str = 'no calibration loaded'
-    publisher: object = None
-    last_window: object = None
+    publisher: Any = None                            # rclpy Publisher of LubricationState, once configured
+    last_window: Window | None = None
     last_theta: float = math.nan
     last_theta_std: float = math.nan
     last_flag: str = ''                              # theta_range_flag of the last assessed theta
@@ -329,6 +396,8 @@ class ActuatorChannel:
     withheld_theta: float = math.nan                 # theta_Oil of the last window withheld for a surface defect
     withholding: bool = False                        # the last assessed window's theta was withheld
     last_surface_level: int | None = None
+    inputs: dict = field(default_factory=dict)       # input key: TopicStatus (rate and stamps), while active
+    subscriptions: dict = field(default_factory=dict)  # input key: its subscription, while active
 
     @property
     def status_name(self) -> str:
@@ -357,7 +426,7 @@ class CalibrationJob:
     written or swapped); one already fitting finishes.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._lock = threading.Lock()
         self.started = False
         self.withdrawn = False
@@ -375,12 +444,19 @@ class CalibrationJob:
             return self.started
 
 
-class LubricationEstimator(ReadOnlyAfterStartUp, Node):
-    """The estimator node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`."""
+class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
+    """The estimator node, a lifecycle node; see the module docstring.  ``kwargs`` go to :class:`rclpy.node.Node`.
+
+    Constructed with its parameters declared and checked; configure makes the
+    channels (calibrations loaded) and the publishers, activate the
+    subscriptions, calibrate services and actions and the timers; deactivate
+    takes those away again, cleanup the rest.  With ``autostart`` (the
+    default) the constructor configures and activates it: the node works at once.
+    """
 
     fixed_reasons = FIXED_REASONS
 
-    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs: Any) -> None:
         super().__init__(node_name, namespace=namespace, **kwargs)
         self._lock = threading.RLock()
         self._fit_lock = threading.Lock()
@@ -403,42 +479,150 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             raise InputError('parameter actuators: empty; name at least one namespace, e.g. [/prsm]')
         if len(set(actuators)) != len(actuators):
             raise InputError(f'parameter actuators: {actuators} names an actuator twice')
+        self._actuator_names = actuators
+        self._hardware_ids = self._checked_hardware_ids(actuators, list(values['hardware_ids']))
+        self._diagnostic_period = diagnostic_period(values)
+        self._rates = {key: RateSettings(expected=float(values[f'{key}_rate']),
+                                         tolerance=float(values['rate_tolerance']),
+                                         window=int(values['rate_window'])) for key in INPUT_KEYS}
+        self._stamp_settings = StampSettings(max_age=float(values['max_stamp_age']),
+                                             max_future=float(values['max_future_stamp']))
         self._input_group = MutuallyExclusiveCallbackGroup()
         self._service_group = ReentrantCallbackGroup()
-        self._fast = FastDrain(self.get_logger())
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
-                         reliability=ReliabilityPolicy.BEST_EFFORT)
-        hardware_ids = list(values['hardware_ids'])
+        self._fast = FastDrain(self.log)
+        self._arrival = 0.0                   # node-clock time of the input callback running (stamp ages)
         self.channels: list[ActuatorChannel] = []
         # Not self._services: that is rclpy's own list (it holds the parameter services).
         self._calibrate_services: list[Service] = []
         self._calibrate_actions: list[ActionServer] = []
-        for i, name in enumerate(actuators):
-            hw = hardware_ids[i] if i < len(hardware_ids) and hardware_ids[i] else name.strip('/') or name
-            self._add_actuator(name, hw, values, qos, first=i == 0)
-        self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], 10)
-        self._timer = self.create_timer(float(values['diagnostics_period']), self._publish_diagnostics,
-                                        callback_group=self._input_group)
-        # Steady clock: the auxiliary queues must be drained even when a simulated clock stands still.
-        self._drain_period = min(DRAIN_PERIOD, float(values['diagnostics_period']))
-        self._drain_timer = self.create_timer(self._drain_period, self._drain_idle, callback_group=self._input_group,
-                                              clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._input_subscriptions: list = []
+        self._timers_started: list = []
+        self._diagnostics: Publisher | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
+        self._forecast_wake = threading.Event()     # set on configure: the new channels' forecasts at once
         self._history_dir = str(values['history_dir']).strip()
         if self._history_dir:
             threading.Thread(target=self._forecast_loop, args=(float(values['forecast_period']),),
                              name='forecast', daemon=True).start()
-        self.get_logger().info(
-            f'watching {", ".join(c.name for c in self.channels)}; window {self._settings.window_length:g} s; '
-            f'WARN below {self._thresholds.warn_below:g}, ERROR below {self._thresholds.error_below:g}')
+        if values['autostart']:
+            autostart(self)
+        else:
+            self.log.info('autostart is false: unconfigured, waiting for a lifecycle manager '
+                          '(ros2 lifecycle set ... configure, then activate)')
+
+    def _checked_hardware_ids(self, actuators: list[str], configured: list[str]) -> dict:
+        """:func:`hardware_ids`, with one WARN naming the actuators left at their default."""
+        defaulted = [name for name in actuators if not configured_hardware_id(actuators, configured, name)]
+        if defaulted:
+            self.log.warning(
+                f'hardware_ids not set for {", ".join(defaulted)}: /diagnostics names them by actuator name, which '
+                "collides across a fleet; set hardware_ids to each actuator's serial or device id")
+        return hardware_ids(actuators, configured)
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """The actuators' channels (calibrations loaded) and the publishers: state and /diagnostics."""
+        try:
+            with self._lock:
+                self._open()
+        except InputError as exc:
+            self.log.error(f'configure failed: {exc}')
+            self._close()
+            return TransitionCallbackReturn.FAILURE
+        self.log.info(f'configure: {state.label} -> inactive')
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Subscriptions, calibrate services and actions, diagnostics and drain timers."""
+        with self._lock:
+            self._start()
+        self.log.info(
+            f'activate: {state.label} -> active; watching {", ".join(c.name for c in self.channels)}; window '
+            f'{self._settings.window_length:g} s; WARN below {self._thresholds.warn_below:g}, ERROR below '
+            f'{self._thresholds.error_below:g}')
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """No more input, calibration or diagnostics; channels and publishers stay."""
+        with self._lock:
+            self._halt()
+        self.log.info(f'deactivate: {state.label} -> inactive')
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Channels and publishers go."""
+        with self._lock:
+            self._close()
+        self.log.info(f'cleanup: {state.label} -> unconfigured')
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Everything goes, from any state."""
+        with self._lock:
+            self._halt()
+            self._close()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """A transition raised: everything goes, back to unconfigured."""
+        return self.on_shutdown(state)
 
     # -- set-up ------------------------------------------------------------------------------------
-    def _add_actuator(self, name: str, hardware_id: str, values: dict, qos: QoSProfile, *, first: bool) -> None:
-        """One actuator's channel: calibration, state publisher, subscriptions, calibrate services and actions.
+    def _open(self) -> None:
+        """configure: one channel and state publisher per actuator, and the /diagnostics publisher."""
+        values = self._values()
+        for name in self._actuator_names:
+            self.channels.append(self._open_actuator(name, self._hardware_ids[name], values))
+        self._forecast_wake.set()
+        self._diagnostics = self.create_publisher(DiagnosticArray, values['diagnostics_topic'], QoSProfile(depth=10),
+                                                  qos_overriding_options=OVERRIDABLE)
 
-        The first actuator also answers on the ``calibrate_service`` parameter's name.
-        """
+    def _start(self) -> None:
+        """activate: inputs, calibration interfaces, timers; the input statuses start counting now."""
+        values = self._values()
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=int(values['qos_depth']),
+                         reliability=ReliabilityPolicy.BEST_EFFORT)
+        now = self.now()
+        for i, channel in enumerate(self.channels):
+            self._subscribe(channel, values, qos, now)
+            if values['calibrate_enabled']:
+                self._serve_calibration(channel, values, first=i == 0)
+        self._timers_started.append(self.create_timer(self._diagnostic_period, self._publish_diagnostics,
+                                                      callback_group=self._input_group))
+        # Steady clock: the auxiliary queues must be drained even when a simulated clock stands still.
+        self._drain_period = min(DRAIN_PERIOD, self._diagnostic_period)
+        self._timers_started.append(self.create_timer(self._drain_period, self._drain_idle,
+                                                      callback_group=self._input_group,
+                                                      clock=Clock(clock_type=ClockType.STEADY_TIME)))
+
+    def _halt(self) -> None:
+        """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
+        for timer in self._timers_started:
+            self.destroy_timer(timer)
+        for subscription in self._input_subscriptions:
+            self.destroy_subscription(subscription)
+        for service in self._calibrate_services:
+            self.destroy_service(service)
+        for action in self._calibrate_actions:
+            action.destroy()
+        self._timers_started, self._input_subscriptions = [], []
+        self._calibrate_services, self._calibrate_actions = [], []
+        for channel in self.channels:
+            channel.auxiliary = []
+            channel.inputs = {}
+
+    def _close(self) -> None:
+        """cleanup: the channels and publishers go."""
+        for channel in self.channels:
+            if channel.publisher is not None:
+                self.destroy_publisher(channel.publisher)
+        if self._diagnostics is not None:
+            self.destroy_publisher(self._diagnostics)
+        self.channels, self._diagnostics = [], None
+
+    def _open_actuator(self, name: str, hardware_id: str, values: dict) -> ActuatorChannel:
+        """One actuator's channel: calibration loaded, state publisher."""
         prefix = '' if name == self.get_namespace() else name      # the node's own: relative names
         channel = ActuatorChannel(name=name, hardware_id=hardware_id, prefix=prefix,
                                   builder=WindowBuilder(self._settings, lead=self._lead),
@@ -448,10 +632,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                                   node_name=self.get_name())
         self._load_initial_calibration(channel)
         channel.publisher = self.create_publisher(
-            LubricationState, topic_name(prefix, values['state_topic']), STATE_QOS)
-        self._subscribe(channel, values, qos)
-        self.channels.append(channel)
-        service_names = [topic_name(prefix, 'calibrate')]
+            LubricationState, topic_name(prefix, values['state_topic']), own_qos(STATE_QOS),
+            qos_overriding_options=OVERRIDABLE)
+        return channel
+
+    def _serve_calibration(self, channel: ActuatorChannel, values: dict, *, first: bool) -> None:
+        """The actuator's calibrate service and action; the first actuator also on ``calibrate_service``."""
+        service_names = [topic_name(channel.prefix, 'calibrate')]
         extra = values['calibrate_service']
         if first and extra and extra != self.resolve_service_name(service_names[0]):
             service_names.insert(0, extra)
@@ -482,35 +669,46 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             raise InputError(f'parameter actuators: {entry!r} is not a ROS namespace or topic prefix ({exc})') \
                 from None
 
-    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile):
-        """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc)."""
+    def _subscribe(self, channel: ActuatorChannel, values: dict, qos: QoSProfile, now: float) -> None:
+        """Subscribe the actuator's inputs: vibration through the executor, the others drained (module doc).
+
+        Each subscription gets its own copy of ``qos`` (the QoS override parameters change the copy), and each
+        input its :class:`~.topic_status.TopicStatus`, counting from ``now``.
+        """
         joint = values['screw_joint']
-        topics = {key: topic_name(channel.prefix, values[f'{key}_topic'])
-                  for key in ('vibration', 'joint_states', 'axial_load', 'temperature')}
+        topics = {key: topic_name(channel.prefix, values[f'{key}_topic']) for key in INPUT_KEYS}
+        channel.inputs = {key: TopicStatus(self.resolve_topic_name(topic), self._rates[key], self._stamp_settings,
+                                           now) for key, topic in topics.items()}
         converters = {
-            'vibration': (VibrationBlock, lambda m: ros_convert.vibration_batch(m, topics['vibration'])),
-            'joint_states': (JointState, lambda m: ros_convert.screw_batch(m, topics['joint_states'], joint)),
-            'axial_load': (WrenchStamped, lambda m: ros_convert.load_batch(m, topics['axial_load'])),
+            # Raw CDR bytes, decoded straight into numpy (raw_inputs.py): no Python message is built.
+            'vibration': (VibrationBlock, raw_vibration_converter(topics['vibration'],
+                                                                  lambda frame: self._note_frame(channel, frame))),
+            'joint_states': (JointState, raw_screw_converter(topics['joint_states'], joint)),
+            'axial_load': (WrenchStamped, raw_load_converter(topics['axial_load'])),
             'temperature': (Temperature, lambda m: ros_convert.temperature_batch(m, topics['temperature'])),
         }
         msg_type, convert = converters.pop('vibration')
-        holder = {}
+        holder = channel.subscriptions
         holder['vibration'] = self.create_subscription(
-            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), qos,
-            callback_group=self._input_group)
+            msg_type, topics['vibration'], self._vibration_callback(channel, convert, holder), own_qos(qos),
+            callback_group=self._input_group, qos_overriding_options=OVERRIDABLE, raw=True)
         for key, (msg_type, convert) in converters.items():
+            raw = key in RAW_INPUTS
             if not self._fast.enabled:          # fallback (fast_drain.py): one callback per message
-                self.create_subscription(msg_type, topics[key], self._auxiliary_callback(channel, key, convert),
-                                         qos, callback_group=self._input_group)
+                holder[key] = self.create_subscription(
+                    msg_type, topics[key], self._auxiliary_callback(channel, key, convert), own_qos(qos),
+                    callback_group=self._input_group, qos_overriding_options=OVERRIDABLE, raw=raw)
                 continue
             # No event handlers: rmw_fastrtps wakes a wait set holding a subscription's events on every
             # message of that subscription, which would undo the point (measured: one core full at 4 actuators).
-            subscription = self.create_subscription(
-                msg_type, topics[key], self._fast.never_called, qos, callback_group=self._fast.group,
-                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
-            channel.auxiliary.append((key, subscription, convert))
+            holder[key] = self.create_subscription(
+                msg_type, topics[key], self._fast.never_called, own_qos(qos), callback_group=self._fast.group,
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False),
+                qos_overriding_options=OVERRIDABLE, raw=raw)
+            channel.auxiliary.append((key, holder[key], convert))
+        self._input_subscriptions.extend(holder.values())
 
-    def _load_initial_calibration(self, channel: ActuatorChannel):
+    def _load_initial_calibration(self, channel: ActuatorChannel) -> None:
         path = channel.calibration_file
         if not path:
             channel.calibration_note = 'no calibration: parameter calibration_file is empty; call the ' \
@@ -523,11 +721,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             except InputError as exc:
                 channel.calibration_note = f'no calibration: {exc}'
         if channel.assessor is None:
-            self.get_logger().warning(f'{channel.name}: {channel.calibration_note}')
+            self.log.warning(f'{channel.name}: {channel.calibration_note}')
         else:
-            self.get_logger().info(f'{channel.name}: calibration {path} loaded')
+            self.log.info(f'{channel.name}: calibration {path} loaded')
 
-    def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration):
+    def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration) -> None:
         band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load,
                                     defect_orders=self._defect_orders)
@@ -537,7 +735,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         if rebuilt:
             # Windows in the calibration's band (conditioning): open windows in another band are dropped.
             channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
-            self.get_logger().info(f'{channel.name}: windows now in the calibration\'s {band_note(calibration)}')
+            self.log.info(f'{channel.name}: windows now in the calibration\'s {band_note(calibration)}')
         channel.monitor.restart_smoothing()      # thetas of the old constants must not be averaged with the new
         # The new baseline judges afresh; the pooled indicators go with the band they were computed in.
         channel.surface.set_baseline(calibration.condition_baseline, keep_windows=not rebuilt)
@@ -553,7 +751,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         """Node-clock time in s (sim time when use_sim_time is set)."""
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _vibration_callback(self, channel: ActuatorChannel, convert: Callable, subscriptions: dict):
+    def _vibration_callback(self, channel: ActuatorChannel, convert: Callable,
+                            subscriptions: dict) -> Callable[[Any], None]:
         """Callback of one actuator's vibration topic: everything queued for the actuator, then closing.
 
         The auxiliary queues are drained with the block, and the vibration queue
@@ -562,25 +761,31 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         of it is one time slice: the builder closes windows once, after the
         slice, so no stream is judged silent halfway through it.
         """
-        def callback(msg):
+        def callback(data: Any) -> None:
             with self._lock:
-                channel.monitor.note_input(self.now())
-                channel.frame_id = msg.header.frame_id or channel.frame_id
+                self._arrival = self.now()
+                channel.monitor.note_input(self._arrival)
                 self._drain_auxiliary(channel)
-                self._take(channel, 'vibration', convert, msg)
-                for queued in self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN):
-                    self._take(channel, 'vibration', convert, queued)
+                # The blocks of this wake-up go to the builder as one batch (split where stamps go back).
+                self._take_queued(channel, 'vibration', convert,
+                                  [data, *self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN)])
                 self._close_windows(channel)
         return callback
 
-    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable):
+    @staticmethod
+    def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
+        """Keep the sensor frame of the actuator's last vibration block (its outputs' frame)."""
+        channel.frame_id = frame_id or channel.frame_id
+
+    def _auxiliary_callback(self, channel: ActuatorChannel, key: str, convert: Callable) -> Callable[[Any], None]:
         """Plain callback of one auxiliary input, used only when the fast drain is off."""
-        def callback(msg):
+        def callback(msg: Any) -> None:
             with self._lock:
+                self._arrival = self.now()
                 self._take(channel, key, convert, msg)
         return callback
 
-    def _drain_auxiliary(self, channel: ActuatorChannel):
+    def _drain_auxiliary(self, channel: ActuatorChannel) -> None:
         """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
         channel.last_drain = time.monotonic()
         for key, subscription, convert in channel.auxiliary:
@@ -588,29 +793,31 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             if messages:
                 self._take_queued(channel, key, convert, messages)
 
-    def _drain_idle(self):
+    def _drain_idle(self) -> None:
         """Drain timer: the auxiliary inputs of actuators whose vibration stopped (bounded queues, staleness)."""
         with self._lock:
+            self._arrival = self.now()
             limit = time.monotonic() - self._drain_period
             for channel in self.channels:
                 if channel.last_drain < limit:
                     self._drain_auxiliary(channel)
                     self._close_windows(channel)
 
-    def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+    def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> None:
         """Add one message to the actuator's builder (closing is left to :meth:`_close_windows`)."""
         batch = self._convert(channel, key, convert, msg)
         if batch is not None:
             self._add(channel, key, batch)
 
-    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list):
+    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> None:
         """Add messages drained from one auxiliary queue, joined into batches while their stamps rise.
 
         A message that cannot be read is left out and counted on its own.  A
         stamp going back starts a new batch, so back-steps and clock resets reach
         the builder where they happened, as with one message at a time.
         """
-        run, last = [], -math.inf
+        run: list[InputBatch] = []
+        last = -math.inf
         for msg in messages:
             batch = self._convert(channel, key, convert, msg)
             if batch is None:
@@ -624,7 +831,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         if run:
             self._add(channel, key, join_batches(run))
 
-    def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg):
+    def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> InputBatch | None:
         """The message as a one-entry batch, or None (counted, logged once per kind) when it cannot be read."""
         try:
             return convert(msg)
@@ -634,8 +841,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             self._internal_error(channel, key, exc)
         return None
 
-    def _add(self, channel: ActuatorChannel, key: str, batch):
-        """Add one batch to the actuator's builder; a batch it refuses is counted and left out."""
+    def _add(self, channel: ActuatorChannel, key: str, batch: InputBatch) -> None:
+        """Count one batch in the input's status, add it to the actuator's builder; a refused one is left out."""
+        status = channel.inputs.get(key)
+        if status is not None:
+            stamps = batch.stamps
+            status.tick(len(stamps), float(stamps[0]), float(stamps[-1]), self._arrival)
         try:
             channel.builder.add(batch)
         except (InputError, ValueError, TypeError, IndexError) as exc:
@@ -643,7 +854,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, key, exc)
 
-    def _close_windows(self, channel: ActuatorChannel):
+    def _close_windows(self, channel: ActuatorChannel) -> None:
         """Close the windows every live input has passed, assess and publish them; log new input problems."""
         try:
             windows = channel.builder.pop_closed()
@@ -654,27 +865,27 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             self._internal_error(channel, 'windows', exc)
             windows = []
         for line in channel.builder.take_problems():
-            self.get_logger().warning(f'{channel.name}: {line}')
+            self.log.warning(f'{channel.name}: {line}')
         for window in windows:
             self._evaluate(channel, window)
 
-    def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception):
+    def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception) -> None:
         """Count an unexpected exception; log the first with its traceback."""
         if channel.input_errors.get('internal', 0) == 0:
-            self.get_logger().error(f'{channel.name}: internal error on {key} (please report): '
-                                    f'{"".join(traceback.format_exception(exc)).strip()}')
+            self.log.error(f'{channel.name}: internal error on {key} (please report): '
+                           f'{"".join(traceback.format_exception(exc)).strip()}')
         channel.input_errors['internal'] = channel.input_errors.get('internal', 0) + 1
 
-    def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception):
+    def _input_problem(self, channel: ActuatorChannel, key: str, exc: Exception) -> None:
         """Count a message that could not be taken; log the first of each kind."""
         kind = f'{key}:{type(exc).__name__}'
         seen = channel.input_errors.get(kind, 0)
         channel.input_errors[kind] = seen + 1
         if seen == 0:
             text = str(exc) if isinstance(exc, InputError) else f'{key}: message left out ({exc})'
-            self.get_logger().warning(f'{channel.name}: {text} (further ones counted, not logged)')
+            self.log.warning(f'{channel.name}: {text} (further ones counted, not logged)')
 
-    def _screen(self, channel: ActuatorChannel, window) -> None:
+    def _screen(self, channel: ActuatorChannel, window: Window) -> None:
         """Add a steady window's condition indicators to the actuator's surface screen (never raises)."""
         if not window.steady or (window.condition is None and channel.builder.band is not None):
             return   # not steady, or no indicators on this window by design (condition_every)
@@ -683,7 +894,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, 'surface screen', exc)
 
-    def _evaluate(self, channel: ActuatorChannel, window):
+    def _evaluate(self, channel: ActuatorChannel, window: Window) -> None:
         assessor = channel.assessor      # one read: a calibration swapped meanwhile applies to the next window
         self._screen(channel, window)
         flag = ''
@@ -720,10 +931,10 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             channel.name, window, theta, std, status.level, message,
             frame_id=channel.frame_id or actuator_label(channel.name), theta_oil_flag=flag))
         if status.level != channel.last_level or self._surface(channel, now).level != channel.last_surface_level:
-            self._publish_diagnostics()
+            self._publish_diagnostics(inputs=False)    # the input rates are counted on the timer's beat only
 
     # -- diagnostics -------------------------------------------------------------------------------
-    def _health(self, channel: ActuatorChannel, now: float):
+    def _health(self, channel: ActuatorChannel, now: float) -> HealthStatus:
         """The monitor's status; without calibration at best WARN 'not calibrated'."""
         status = channel.monitor.status(now)
         if channel.assessor is None:
@@ -731,7 +942,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         status = outside_domain(out_of_range(status, channel.last_flag), channel.last_domain_flag)
         return withheld(status, self._surface(channel, now), channel.surface.pending)
 
-    def _surface(self, channel: ActuatorChannel, now: float):
+    def _surface(self, channel: ActuatorChannel, now: float) -> SurfaceStatus:
         """The surface monitor's status; STALE when the lubrication status is (no vibration for stale_timeout)."""
         silent = channel.monitor.stale_for(now)
         stale = ''
@@ -740,7 +951,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                      f'inputs stopped: no vibration for more than stale_timeout ({self._thresholds.stale_timeout:g} s)')
         return channel.surface.status(stale)
 
-    def _status(self, channel: ActuatorChannel, now: float):
+    def _status(self, channel: ActuatorChannel, now: float) -> DiagnosticStatus:
         status = self._health(channel, now)
         w = channel.last_window
         values = [
@@ -776,11 +987,11 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
     def _log_level(self, line: str, level: int) -> None:
         """Log a status's change of level: info for OK, warning otherwise."""
         if level == 0:      # two call sites: rclpy refuses a second severity at one line
-            self.get_logger().info(line)
+            self.log.info(line)
         else:
-            self.get_logger().warning(line)
+            self.log.warning(line)
 
-    def _surface_status(self, channel: ActuatorChannel, now: float):
+    def _surface_status(self, channel: ActuatorChannel, now: float) -> DiagnosticStatus:
         """The actuator's surface condition ``DiagnosticStatus``: the defect screen, its numbers in KeyValues."""
         surface = self._surface(channel, now)
         condition, finding = surface.condition, surface.finding
@@ -819,29 +1030,47 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         return ros_convert.diagnostic_status(channel.surface_status_name, channel.hardware_id, surface.level,
                                              surface.message, values)
 
-    def _publish_diagnostics(self):
+    def _input_statuses(self, channel: ActuatorChannel, now: float) -> list:
+        """One ``DiagnosticStatus`` per input stream: rate and stamps (:mod:`.topic_status`), while active."""
+        statuses = []
+        for key, topic in channel.inputs.items():
+            judged = topic.status(now)
+            statuses.append(ros_convert.diagnostic_status(
+                status_name(channel.node_name, channel.name, INPUT_TASK.format(key=key)), channel.hardware_id,
+                judged.level, judged.message, judged.values))
+        return statuses
+
+    def _publish_diagnostics(self, inputs: bool = True) -> None:
+        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat."""
         with self._lock:
+            if self._diagnostics is None:
+                return
             now = self.now()
             array = DiagnosticArray()
             array.header.stamp = self.get_clock().now().to_msg()
             array.status = [status for channel in self.channels
-                            for status in (self._status(channel, now), self._surface_status(channel, now))]
-        self._diagnostics.publish(array)
+                            for status in (self._status(channel, now), self._surface_status(channel, now))
+                            + (tuple(self._input_statuses(channel, now)) if inputs else ())]
+            publisher = self._diagnostics
+        publisher.publish(array)
 
     # -- forecast from the fleet history -----------------------------------------------------------
-    def _forecast_loop(self, period: float):
+    def _forecast_loop(self, period: float) -> None:
         """Worker thread: the actuators' depletion forecasts from ``history_dir``, every ``period`` s.
 
         An actuator is looked up in the history by its hardware id (what
         ``prsm-lube assess --actuator-id`` names it), else by its namespace
         (the default of ``assess``).  One read of the history serves all.
         """
-        told = set()
+        told: set[str] = set()
 
-        def tell(line: str, error: bool = False):
+        def tell(line: str, error: bool = False) -> None:
             if line not in told:
                 told.add(line)
-                (self.get_logger().error if error else self.get_logger().warning)(line)
+                if error:
+                    self.log.error(line)
+                else:
+                    self.log.warning(line)
 
         while not self._stop_forecast.is_set():
             with self._lock:
@@ -864,18 +1093,20 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                 values += [(f'forecast_{key}', value) for key, value in summary.items()]
                 with self._lock:
                     channel.forecast = values
-            self._stop_forecast.wait(period)
+            self._forecast_wake.wait(period)
+            self._forecast_wake.clear()
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         """Stop the forecast worker before the node goes."""
         stop = getattr(self, '_stop_forecast', None)
         if stop is not None:
             stop.set()
-        return super().destroy_node()
+            self._forecast_wake.set()
+        super().destroy_node()  # type: ignore[no-untyped-call]  # rclpy's destroy_node has no annotations
 
     # -- calibration service -----------------------------------------------------------------------
-    def _calibrate_handler(self, channel: ActuatorChannel):
-        async def handler(request, response):
+    def _calibrate_handler(self, channel: ActuatorChannel) -> Callable[[Any, Any], Awaitable[Any]]:
+        async def handler(request: Any, response: Any) -> Any:
             return await self._calibrate(channel, request, response)
         return handler
 
@@ -884,7 +1115,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         done = Future(executor=self.executor)
         done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
 
-        def run():
+        def run() -> None:
             try:
                 done.set_result(work())
             except BaseException as exc:   # never lose the answer: the request gets success=false
@@ -893,25 +1124,25 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         threading.Thread(target=run, name=f'calibrate {channel.name}', daemon=True).start()
         return done
 
-    async def _calibrate(self, channel: ActuatorChannel, request, response):
+    async def _calibrate(self, channel: ActuatorChannel, request: Any, response: Any) -> Any:
         """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
         arguments = calibration_arguments(request)
         outcome = await self._off_thread(channel, lambda: self._run_calibration(channel, *arguments))
         return self._answer(channel, response, outcome, persist=arguments[2])
 
-    def _calibrate_action(self, channel: ActuatorChannel):
+    def _calibrate_action(self, channel: ActuatorChannel) -> Callable[[Any], Awaitable[Any]]:
         """Execute callback of the Calibrate action: as the service, with feedback; see :class:`CalibrationJob`."""
-        async def execute(goal_handle):
+        async def execute(goal_handle: Any) -> Any:
             key = bytes(goal_handle.goal_id.uuid)
             job = self._jobs.setdefault(key, CalibrationJob())
             arguments = calibration_arguments(goal_handle.request)
 
-            def progress(stage: str, read: int, count: int, windows: int):
+            def progress(stage: str, read: int, count: int, windows: int) -> None:
                 try:
                     goal_handle.publish_feedback(CalibrateAction.Feedback(
                         stage=stage, bags_read=read, bag_count=count, windows_read=windows))
                 except Exception as exc:   # feedback is a courtesy: the calibration goes on without it
-                    self.get_logger().debug(f'calibrate: feedback not sent ({exc})')
+                    self.log.debug(f'calibrate: feedback not sent ({exc})')
 
             progress('queued', 0, len(arguments[0]), 0)
             try:
@@ -929,12 +1160,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             return result
         return execute
 
-    def _cancel_calibration(self, goal_handle) -> CancelResponse:
+    def _cancel_calibration(self, goal_handle: Any) -> CancelResponse:
         """Accept a cancel: the calibration stops before it starts or at its next check while reading."""
         self._jobs.setdefault(bytes(goal_handle.goal_id.uuid), CalibrationJob()).withdraw()
         return CancelResponse.ACCEPT
 
-    def _answer(self, channel: ActuatorChannel, response, outcome, persist: bool):
+    def _answer(self, channel: ActuatorChannel, response: Any, outcome: tuple[Calibration, str] | BaseException,
+                persist: bool) -> Any:
         """Fill a service response or action result (same fields) from a calibration's outcome."""
         if isinstance(outcome, BaseException):
             response.success = False
@@ -944,7 +1176,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                 response.message = f'calibrate: internal error {type(outcome).__name__}: {outcome}'
             for name in ('c_sys', 'c_f', 'c_lambda', 'fit_rmse', 'c_sys_std', 'c_f_std', 'c_lambda_std'):
                 setattr(response, name, math.nan)
-            self.get_logger().warning(f'{channel.name}: calibration refused: {response.message}')
+            self.log.warning(f'{channel.name}: calibration refused: {response.message}')
             return response
         calibration, message = outcome
         c = calibration.constants
@@ -957,12 +1189,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         response.fit_rmse = calibration.fit_rmse
         response.windows_used = int(calibration.windows_used)
         response.calibration_file = channel.calibration_file if persist else ''
-        self.get_logger().info(f'{channel.name}: {message}')
+        self.log.info(f'{channel.name}: {message}')
         return response
 
-    def _run_calibration(self, channel: ActuatorChannel, paths, theta: float, persist: bool,
+    def _run_calibration(self, channel: ActuatorChannel, paths: list[str], theta: float, persist: bool,
                          requested_namespace: str = '', progress: Callable | None = None,
-                         job: CalibrationJob | None = None):
+                         job: CalibrationJob | None = None) -> tuple[Calibration, str]:
         """Worker thread: check, fit, persist if asked, swap.  Returns (calibration, message).
 
         One calibration at a time: the others wait; a ``job`` withdrawn while
@@ -987,7 +1219,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         """What a running calibration calls as it reads: raises once cancelled or past ``calibration_timeout``."""
         timeout = self._calibration_timeout
 
-        def check():
+        def check() -> None:
             if job is not None and job.withdrawn:
                 raise CalibrationWithdrawn('calibrate: cancelled while reading the recordings; nothing was '
                                            'written or changed')
@@ -996,18 +1228,19 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                                  'recordings; nothing was written or changed (fewer or shorter recordings?)')
         return check
 
-    def _calibrate_now(self, channel: ActuatorChannel, paths, theta: float, persist: bool, namespace: str,
-                       progress: Callable | None, job: CalibrationJob | None = None):
+    def _calibrate_now(self, channel: ActuatorChannel, paths: list[str], theta: float, persist: bool,
+                       namespace: str, progress: Callable | None,
+                       job: CalibrationJob | None = None) -> tuple[Calibration, str]:
         """:meth:`_run_calibration` holding the fit lock."""
         with self._lock:
             settings, folder = self._settings, self._recordings_dir
             min_load = self._min_axial_load
-        logged = set()
+        logged: set[str] = set()
 
-        def on_problem(line: str):
+        def on_problem(line: str) -> None:
             if line not in logged and len(logged) < 20:
                 logged.add(line)
-                self.get_logger().warning(f'{channel.name}: calibrate: {line}')
+                self.log.warning(f'{channel.name}: calibrate: {line}')
 
         started = time.monotonic()
         outcome = calibrate_from_request(paths, theta, folder=folder, lead=self._lead, settings=settings,
@@ -1033,14 +1266,15 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
             + (f'; {len(outcome.problems)} problem(s) in the recordings' if outcome.problems else ''))
 
     # -- parameters --------------------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Validate and apply changed parameters; refuse with a reason and change nothing otherwise.
 
         A parameter set to its current value changes nothing (``ros2 param load`` of the node's own dump
         must not drop the open windows).
         """
         values = self._values()
-        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
+        # Only the node's own table: rclpy declares the read-only qos_overrides.* through here as well.
+        parameters = [p for p in parameters if p.name in PARAMETERS and not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             values[parameter.name] = parameter.value
         names = {p.name for p in parameters}
@@ -1057,8 +1291,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
                 self._settings = settings
                 for channel in self.channels:
                     channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
-                self.get_logger().info(f'window settings changed ({", ".join(sorted(names))}); open windows '
-                                       'dropped, starting over')
+                self.log.info(f'window settings changed ({", ".join(sorted(names))}); open windows '
+                              'dropped, starting over')
             if thresholds is not None:
                 self._thresholds = thresholds
                 for channel in self.channels:
@@ -1075,21 +1309,23 @@ class LubricationEstimator(ReadOnlyAfterStartUp, Node):
         return SetParametersResult(successful=True)
 
 
-def calibration_arguments(request) -> tuple:
+def calibration_arguments(request: Any) -> tuple[list[str], float, bool, str]:
     """(bag paths, reference theta, persist, recording namespace) of a Calibrate request or action goal."""
     return (list(request.bag_paths), float(request.reference_theta), bool(request.persist),
             str(getattr(request, 'recording_namespace', '')))
 
 
-def join_batches(batches: list):
+def join_batches(batches: list) -> InputBatch:
     """One input batch holding the entries of ``batches`` (all of one kind, one value per entry), in order."""
     if len(batches) == 1:
         return batches[0]
     first = batches[0]
+    if isinstance(first, VibrationBatch):       # blocks of many samples each: offsets shift
+        return join_blocks(batches)
     return type(first)(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(first)))
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros lubrication_estimator``; returns the exit status."""
     return run_node(LubricationEstimator, NODE_NAME, args)
 

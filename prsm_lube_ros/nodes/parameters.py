@@ -21,21 +21,38 @@ and the other parameters go on to rclpy and the node's own callback.
 """
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+import copy
+from typing import Any, NamedTuple, TYPE_CHECKING
 from collections.abc import Callable
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, \
     SetParametersResult
 from rclpy.exceptions import ParameterException
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
+from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from ..errors import InputError
 
-__all__ = ['DOUBLE', 'INTEGER', 'ParameterSpec', 'ReadOnlyAfterStartUp', 'declare_parameter_table',
+__all__ = ['DEFAULT_DIAGNOSTIC_PERIOD', 'DOUBLE', 'FORMER_DIAGNOSTIC_PERIOD', 'INTEGER', 'OVERRIDABLE',
+           'ParameterSpec', 'ReadOnlyAfterStartUp', 'declare_parameter_table', 'diagnostic_period', 'own_qos',
            'parameter_descriptor', 'resolved_names', 'same_value', 'value_problem']
+
+if TYPE_CHECKING:
+    from rclpy.impl.rcutils_logger import RcutilsLogger
+    from rclpy.node import Node
+    _NodeBase = Node              # the mixin goes before an rclpy Node: its methods are there
+else:
+    _NodeBase = object
 
 DOUBLE = ParameterType.PARAMETER_DOUBLE
 INTEGER = ParameterType.PARAMETER_INTEGER
+#: s between /diagnostics messages when neither diagnostic_period nor its former name diagnostics_period is given.
+DEFAULT_DIAGNOSTIC_PERIOD = 1.0
+#: Every publisher and subscription of the nodes offers the standard
+#: ``qos_overrides.<topic>.<publisher|subscription>.<policy>`` parameters (history, depth, reliability), read
+#: when the entity is created, as ros2_control, nav2 and drivers do (rclpy ``QoSOverridingOptions``).
+OVERRIDABLE = QoSOverridingOptions.with_default_policies()
 
 
 class ParameterSpec(NamedTuple):
@@ -53,7 +70,15 @@ class ParameterSpec(NamedTuple):
     read_only: bool = False
 
 
-def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_only: bool) -> ParameterDescriptor:
+#: Both nodes' former name of ``diagnostic_period`` (see :func:`diagnostic_period`).
+FORMER_DIAGNOSTIC_PERIOD = ParameterSpec(
+    DEFAULT_DIAGNOSTIC_PERIOD, DOUBLE,
+    'former name of diagnostic_period, still honoured when diagnostic_period is left at its default',
+    bounds=(0.05, 60.0), read_only=True)
+
+
+def parameter_descriptor(name: str, ptype: int, description: str, bounds: tuple | None,
+                         read_only: bool) -> ParameterDescriptor:
     """Descriptor with the description, read-only flag and (for numbers) the inclusive range ``bounds``."""
     descriptor = ParameterDescriptor(name=name, type=ptype, description=description, read_only=read_only)
     if bounds and ptype == DOUBLE:
@@ -64,7 +89,7 @@ def parameter_descriptor(name: str, ptype: int, description: str, bounds, read_o
     return descriptor
 
 
-def declare_parameter_table(node, table: dict, resolve: dict | None = None) -> dict:
+def declare_parameter_table(node: Node, table: dict, resolve: dict | None = None) -> dict:
     """Declare every parameter of ``table`` on ``node``; return their values by name.
 
     ``resolve`` maps names of read-only parameters that hold ROS names to a
@@ -95,7 +120,7 @@ def declare_parameter_table(node, table: dict, resolve: dict | None = None) -> d
     return {name: node.get_parameter(name).value for name in table}
 
 
-def value_problem(value, ptype: int, bounds) -> str | None:
+def value_problem(value: Any, ptype: int, bounds: tuple | None) -> str | None:
     """Why ``value`` does not fit a parameter of type ``ptype`` and inclusive range ``bounds`` (None: it fits)."""
     given = Parameter.Type.from_parameter_value(value)
     if given.value != ptype:
@@ -116,7 +141,7 @@ def same_value(parameter: Parameter, current: Parameter) -> bool:
     return new == old
 
 
-class ReadOnlyAfterStartUp:
+class ReadOnlyAfterStartUp(_NodeBase):
     """Mixin before an rclpy ``Node``: read-only parameters set to their value pass; a change gets its reason.
 
     See the module docstring.  ``fixed_reasons`` (name: why) adds why a
@@ -125,7 +150,13 @@ class ReadOnlyAfterStartUp:
 
     fixed_reasons: dict = {}
 
-    def set_parameters_atomically(self, parameter_list) -> SetParametersResult:
+    @property
+    def log(self) -> RcutilsLogger:
+        """The node's logger (rclpy's ``get_logger``, which carries no annotations, called as a Node's)."""
+        node: Node = self
+        return node.get_logger()
+
+    def set_parameters_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
         """rclpy's, after taking the read-only parameters out: unchanged ones pass, a change refuses all."""
         changing = []
         for parameter in parameter_list:
@@ -142,11 +173,23 @@ class ReadOnlyAfterStartUp:
             return SetParametersResult(successful=True)
         return super().set_parameters_atomically(changing)
 
-    def set_parameters(self, parameter_list) -> list:
+    def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
         """One :meth:`set_parameters_atomically` per parameter, as rclpy's own does."""
         return [self.set_parameters_atomically([parameter]) for parameter in parameter_list]
 
 
-def resolved_names(node) -> Callable[[str], str]:
+def resolved_names(node: Node) -> Callable[[str], str]:
     """A resolver for :func:`declare_parameter_table`: a service or topic name resolved in ``node``."""
     return lambda value: node.resolve_service_name(value) if str(value).strip() else value
+
+
+def own_qos(profile: QoSProfile) -> QoSProfile:
+    """A copy of ``profile`` for one entity: rclpy writes the entity's QoS overrides into the profile it is given."""
+    return copy.copy(profile)
+
+
+def diagnostic_period(values: dict) -> float:
+    """``diagnostic_period``; the former name ``diagnostics_period`` when only that one was changed."""
+    if values['diagnostic_period'] == DEFAULT_DIAGNOSTIC_PERIOD:
+        return float(values['diagnostics_period'])
+    return float(values['diagnostic_period'])

@@ -13,20 +13,24 @@ from __future__ import annotations
 
 import array
 import math
-from typing import Union
+from typing import Any, TYPE_CHECKING, Union
 from collections.abc import Iterable
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
+import numpy.typing as npt
 from sensor_msgs.msg import JointState, Temperature
 
 from ..contract import SCREW_JOINT
 from ..errors import InputError
 from ..estimation.health import format_value
 from ..msg import LubricationState, VibrationBlock
-from ..recording.batches import AxialLoadBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+from ..recording.batches import AxialLoadBatch, InputBatch, ScrewStateBatch, TemperatureBatch, VibrationBatch
+
+if TYPE_CHECKING:
+    from ..estimation.windowing import Window
 
 #: Name of the screw's entry in ``JointState`` (CONTRACT.md).
 
@@ -36,12 +40,12 @@ __all__ = ['Stamp', 'batch_messages', 'diagnostic_status', 'header_seconds', 'jo
            'temperature_msg', 'time_from_ns', 'time_msg', 'vibration_batch', 'vibration_block_msg', 'wrench_msg']
 
 
-def stamp_seconds(stamp) -> float:
+def stamp_seconds(stamp: Time) -> float:
     """``builtin_interfaces/Time`` as float seconds since the epoch."""
     return stamp.sec + stamp.nanosec * 1e-9
 
 
-def header_seconds(msg, topic: str) -> float:
+def header_seconds(msg: Any, topic: str) -> float:
     """``msg.header.stamp`` in s; InputError for an unset (zero) stamp.
 
     A zero stamp is a publisher that never filled the header; taken as a time
@@ -109,7 +113,7 @@ def temperature_batch(msg: Temperature, topic: str = 'temperature') -> Temperatu
 
 
 # -- batches -> inputs (sensor bridge, tests) --------------------------------------------------------
-def vibration_block_msg(stamp: Stamp, sample_rate: float, samples, frame_id: str = '') -> VibrationBlock:
+def vibration_block_msg(stamp: Stamp, sample_rate: float, samples: npt.ArrayLike, frame_id: str = '') -> VibrationBlock:
     """A ``VibrationBlock`` with samples (m/s^2) acquired from ``stamp`` at ``sample_rate`` (Hz).
 
     The samples go in as one float32 copy (``array.array``, rclpy's fast path).
@@ -152,7 +156,7 @@ def temperature_msg(stamp: Stamp, temperature: float, frame_id: str = '') -> Tem
     return msg
 
 
-def batch_messages(batch):
+def batch_messages(batch: InputBatch) -> list[Any]:
     """Messages of one input batch, one per entry (for publishing a synthetic or recorded slice)."""
     if isinstance(batch, VibrationBatch):
         return [vibration_block_msg(float(batch.stamps[k]), float(batch.sample_rates[k]),
@@ -168,7 +172,7 @@ def batch_messages(batch):
 
 
 # -- results -> outputs ------------------------------------------------------------------------------
-def lubrication_state_msg(actuator: str, window, theta: float, theta_std: float, level: int,
+def lubrication_state_msg(actuator: str, window: Window, theta: float, theta_std: float, level: int,
                           message: str, frame_id: str = '', theta_oil_flag: str = '') -> LubricationState:
     """``LubricationState`` of one closed window (see :class:`~prsm_lube_ros.estimation.windowing.Window`).
 

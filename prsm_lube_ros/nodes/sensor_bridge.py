@@ -38,7 +38,7 @@ Parameter ``source`` (read-only) chooses where the data come from:
   the relays below).
 
 The bridge reports its own health on ``/diagnostics`` (absolute, as
-diagnostic aggregators expect) every ``diagnostics_period`` s: one status
+diagnostic aggregators expect) every ``diagnostic_period`` s: one status
 named ``<node name>: <namespace> sensor source`` with ``hardware_id`` (the
 DAQ channel, bag, IMU topic or ``rig simulator`` unless set), the blocks
 published, block and sample rate, lost samples, and the last error; OK,
@@ -69,6 +69,8 @@ import sys
 import threading
 import time
 import traceback
+from typing import Any, TYPE_CHECKING
+from collections.abc import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
@@ -86,15 +88,25 @@ from ..msg import VibrationBlock
 from ..recording.reader import open_recording
 from ..simulation.rig_config import load_rig_config
 from ..simulation.rig_acceleration import RigSignalGenerator
-from .bridge_health import SourceHealth
+from .bridge_health import SourceHealth, SourceStatus
 from .bridge_sources import Pacer, recording_events, rig_block_events
 from .daq import DaqSettings, NiDaqAccelerometer
 from .fast_drain import FastDrain, missing_api
-from .imu_blocks import check_axis, ImuBlockAssembler
-from .parameters import declare_parameter_table, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
+from .imu_blocks import AssembledBlock, check_axis, ImuBlockAssembler
+from .parameters import declare_parameter_table, DEFAULT_DIAGNOSTIC_PERIOD, diagnostic_period, \
+    FORMER_DIAGNOSTIC_PERIOD, OVERRIDABLE, own_qos, ParameterSpec, ReadOnlyAfterStartUp, resolved_names, same_value
 from .ros_convert import (diagnostic_status, joint_state_msg, temperature_msg, time_from_ns, vibration_block_msg,
                           wrench_msg)
-from .startup import run_node
+from .startup import autostart, run_node
+
+if TYPE_CHECKING:
+    from rclpy.parameter import Parameter
+    from rclpy.publisher import Publisher
+    from rclpy.subscription import Subscription
+    from rclpy.timer import Timer
+
+    from ..recording.reader import Recording
+    from ..simulation.rig_config import RigConfig
 
 __all__ = ['BridgeCore', 'MAX_IMU_DRAIN', 'ManagedSensorBridge', 'NODE_NAME', 'PARAMETERS', 'SIMULATOR_PARAMETERS',
            'SOURCES', 'SensorBridge', 'create_node', 'main', 'main_managed', 'publisher_qos']
@@ -127,15 +139,20 @@ PARAMETERS = {
         "the IMU's when it sets one)", read_only=True),
     'hardware_id': ParameterSpec(
         '', _STRING,
-        'diagnostic hardware_id of the source status (empty: the DAQ channel, bag, IMU topic or rig simulator)',
-        read_only=True),
+        'diagnostic hardware_id of the source status: the serial or device id of the sensor, unique in the fleet '
+        '(empty: the DAQ channel, bag, IMU topic or rig simulator, with one WARN at start-up)', read_only=True),
+    'autostart': ParameterSpec(
+        False, _BOOL,
+        'sensor_bridge_managed: configure and activate at start-up (false: wait unconfigured for a lifecycle '
+        'manager or ros2 lifecycle set); the plain sensor_bridge always starts at once', read_only=True),
     'stale_timeout': ParameterSpec(
         2.0, _DOUBLE,
         's without a published vibration block before the source status is STALE',
         bounds=(0.01, 3600.0), read_only=True),
-    'diagnostics_period': ParameterSpec(
-        1.0, _DOUBLE,
+    'diagnostic_period': ParameterSpec(
+        DEFAULT_DIAGNOSTIC_PERIOD, _DOUBLE,
         's between the source status messages on /diagnostics', bounds=(0.05, 60.0), read_only=True),
+    'diagnostics_period': FORMER_DIAGNOSTIC_PERIOD,
     'bag': ParameterSpec('', _STRING, 'playback: rosbag2 directory or .mcap file to replay', read_only=True),
     'bag_namespace': ParameterSpec(
         '', _STRING,
@@ -241,11 +258,31 @@ class BridgeCore(ReadOnlyAfterStartUp):
     :class:`ManagedSensorBridge` does each step on a lifecycle transition.
     """
 
-    def destroy_node(self):
+    health: SourceHealth | None                      # from configure on
+    _recording: Recording | None                     # playback
+    _generator: RigSignalGenerator | None            # simulator
+    _daq: NiDaqAccelerometer | None                  # hardware
+    _assembler: ImuBlockAssembler | None             # imu
+    _pacer: Pacer | None                             # playback, simulator
+    _thread: threading.Thread | None                 # the worker, while active
+    _imu_subscription: Subscription | None
+    _timer: Timer | None
+    _outputs: dict[str, Publisher]
+    _relays: list[Subscription]
+    _clock_publisher: Publisher | None
+    _diagnostics: Publisher | None
+
+    @property
+    def _health(self) -> SourceHealth:
+        """The source's health record (made at configure: every caller runs after it)."""
+        assert self.health is not None, "the sensor bridge is not configured"
+        return self.health
+
+    def destroy_node(self) -> None:
         """Stop the worker (and the acquisition) and close the source before the node goes."""
         # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
         self._close()
-        return super().destroy_node()
+        super().destroy_node()  # type: ignore[no-untyped-call]  # rclpy's destroy_node has no annotations
 
     def _read_parameters(self) -> dict:
         """Declare the parameters; check the source; the values by name."""
@@ -290,25 +327,26 @@ class BridgeCore(ReadOnlyAfterStartUp):
         kinds = ['vibration', 'joint_states', 'axial_load', 'temperature']
         expected_rate = None
         if self.source == 'playback':
-            self._open_playback(values)
-            kinds = list(self._recording.selected)
+            kinds = list(self._open_playback(values).selected)
         elif self.source == 'simulator':
             rig = self._open_simulator(values)
             expected_rate = 1.0 / rig.vibration_block
         elif self.source == 'hardware':
-            self._open_hardware(values)
-            expected_rate = self._daq.settings.sample_rate / self._daq.settings.block_size
+            settings = self._open_hardware(values).settings
+            expected_rate = settings.sample_rate / settings.block_size
             kinds = ['vibration']
         else:
             self._open_imu(values)
             kinds = ['vibration']
         types = {'vibration': VibrationBlock, 'joint_states': JointState, 'axial_load': WrenchStamped,
                  'temperature': Temperature}
-        self._outputs = {kind: self.create_publisher(types[kind], topic_name(self._prefix, kind), qos)
+        self._outputs = {kind: self.create_publisher(types[kind], topic_name(self._prefix, kind), own_qos(qos),
+                                                     qos_overriding_options=OVERRIDABLE)
                          for kind in kinds}
         self.topics = {kind: publisher.topic_name for kind, publisher in self._outputs.items()}
         wants_clock = self.source == 'playback' and values['publish_clock']
-        self._clock_publisher = self.create_publisher(Clock, '/clock', QoSProfile(depth=10)) if wants_clock else None
+        self._clock_publisher = self.create_publisher(
+            Clock, '/clock', QoSProfile(depth=10), qos_overriding_options=OVERRIDABLE) if wants_clock else None
         self._relays = []
         if self.source in ('hardware', 'imu'):
             self._create_relays(values, qos)
@@ -321,10 +359,11 @@ class BridgeCore(ReadOnlyAfterStartUp):
             raise InputError('the source worker of the last activation has not stopped yet (a blocked read?); '
                              'deactivate again later or restart the node')
         self._stop = threading.Event()
-        self.health.active = True
+        self._health.active = True
         if self.source == 'imu':
             self._imu_subscription = self.create_subscription(Imu, self._imu_topic, self._on_imu,
-                                                              self._imu_qos)
+                                                              own_qos(self._imu_qos),
+                                                              qos_overriding_options=OVERRIDABLE)
             return
         if self._pacer is not None:
             self._pacer.stop = self._stop
@@ -332,8 +371,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self.finished.clear()
         if self._daq is not None:
             self._daq.start()
-        self._thread = threading.Thread(target=self._work, name='sensor_bridge source', daemon=True)
-        self._thread.start()
+        thread = self._thread = threading.Thread(target=self._work, name='sensor_bridge source', daemon=True)
+        thread.start()
 
     def _halt(self) -> None:
         """Stop publishing (the worker ends, the IMU subscription goes); the source stays open."""
@@ -343,8 +382,8 @@ class BridgeCore(ReadOnlyAfterStartUp):
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
             thread.join(timeout=5.0)
         if thread is not None and thread.is_alive() and thread is not threading.current_thread():
-            self.get_logger().error('the source worker did not stop within 5 s (a blocked read?); '
-                                    'it is not started again until it has')
+            self.log.error('the source worker did not stop within 5 s (a blocked read?); '
+                           'it is not started again until it has')
         else:
             self._thread = None
         daq = getattr(self, '_daq', None)
@@ -357,8 +396,9 @@ class BridgeCore(ReadOnlyAfterStartUp):
             if assembler is not None:    # the partial block goes out now; the pause is no gap
                 self._publish_imu_blocks(assembler.pause(), getattr(self, '_imu_frame_id', self.frame_id),
                                          time.monotonic())
-        if getattr(self, 'health', None) is not None:
-            self.health.active = False
+        health = getattr(self, 'health', None)
+        if health is not None:
+            health.active = False
 
     def _close(self) -> None:
         """Halt, close the source, and remove the publishers, relays and diagnostics."""
@@ -379,34 +419,37 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self._outputs, self._relays, self._clock_publisher, self._diagnostics = {}, [], None, None
 
     # -- sources -----------------------------------------------------------------------------------
-    def _open_playback(self, values):
+    def _open_playback(self, values: dict) -> Recording:
         bag = str(values['bag']).strip()
         if not bag:
             raise InputError('parameter bag: empty; name the rosbag2 directory or .mcap file to replay')
-        self._recording = open_recording(bag, namespace=str(values['bag_namespace']).strip() or self.namespace)
+        recording = self._recording = open_recording(bag, namespace=str(values['bag_namespace']).strip()
+                                                     or self.namespace)
         self._pacer = Pacer(values['playback_rate'], self._stop)
+        return recording
 
-    def _open_simulator(self, values):
+    def _open_simulator(self, values: dict) -> RigConfig:
         rig = load_rig_config(values['rig_config'] or None)
         start_ns = time.time_ns()
-        self._generator = RigSignalGenerator(rig, seed=int(values['seed']), theta_oil=float(values['theta_oil']),
-                                             start_stamp_ns=start_ns)
-        self._generator.set_load(float(values['load']))
-        self._generator.set_speed(float(values['speed']))
+        generator = self._generator = RigSignalGenerator(rig, seed=int(values['seed']),
+                                                         theta_oil=float(values['theta_oil']), start_stamp_ns=start_ns)
+        generator.set_load(float(values['load']))
+        generator.set_speed(float(values['speed']))
         self.frame_id = rig.vibration_frame_id
         self._load_frame, self._temperature_frame = rig.load_frame_id, rig.temperature_frame_id
         self._pacer = Pacer(1.0, self._stop)
         return rig
 
-    def _open_hardware(self, values):
+    def _open_hardware(self, values: dict) -> NiDaqAccelerometer:
         size = int(round(values['block_length'] * values['sample_rate']))
         settings = DaqSettings(channel=str(values['daq_channel']), sample_rate=float(values['sample_rate']),
                                block_size=max(size, 1), sensitivity=float(values['sensitivity']),
                                iepe_current=float(values['iepe_current']), range_g=float(values['range_g']),
                                buffer_seconds=float(values['buffer_seconds']))
-        self._daq = NiDaqAccelerometer(settings, start=False)      # started by _start
+        daq = self._daq = NiDaqAccelerometer(settings, start=False)      # started by _start
+        return daq
 
-    def _open_imu(self, values):
+    def _open_imu(self, values: dict) -> None:
         self._imu_axis = check_axis(values['imu_axis'])
         topic = str(values['imu_topic']).strip()
         if not topic:
@@ -421,26 +464,29 @@ class BridgeCore(ReadOnlyAfterStartUp):
         self._imu_unusable = 0
         # Each IMU callback also takes the messages queued behind it (fast_drain.py): one executor wake-up per
         # burst instead of per sample.  Without that rclpy API: one callback per message.
-        self._imu_drain = FastDrain(self.get_logger()) if not missing_api() else None
+        self._imu_drain = FastDrain(self.log) if not missing_api() else None
 
-    def _create_relays(self, values, qos):
+    def _create_relays(self, values: dict, qos: QoSProfile) -> None:
         sensor_qos = QoSProfile(depth=int(values['qos_depth']), reliability=ReliabilityPolicy.BEST_EFFORT)
         joint = str(values['relay_joint']).strip()
         if values['relay_joint_states']:
-            out = self.create_publisher(JointState, topic_name(self._prefix, 'joint_states'), qos)
+            out = self.create_publisher(JointState, topic_name(self._prefix, 'joint_states'), own_qos(qos),
+                                        qos_overriding_options=OVERRIDABLE)
 
-            def relay_joints(msg):
+            def relay_joints(msg: JointState) -> None:
                 if joint and joint in msg.name:
                     names = list(msg.name)
                     names[names.index(joint)] = 'screw'
                     msg.name = names
                 out.publish(msg)
             self._relays.append(self.create_subscription(JointState, values['relay_joint_states'], relay_joints,
-                                                         sensor_qos))
+                                                         own_qos(sensor_qos), qos_overriding_options=OVERRIDABLE))
         if values['relay_axial_load']:
-            out_load = self.create_publisher(WrenchStamped, topic_name(self._prefix, 'axial_load'), qos)
+            out_load = self.create_publisher(WrenchStamped, topic_name(self._prefix, 'axial_load'), own_qos(qos),
+                                             qos_overriding_options=OVERRIDABLE)
             self._relays.append(self.create_subscription(WrenchStamped, values['relay_axial_load'],
-                                                         out_load.publish, sensor_qos))
+                                                         out_load.publish, own_qos(sensor_qos),
+                                                         qos_overriding_options=OVERRIDABLE))
 
     # -- imu ----------------------------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
@@ -461,18 +507,18 @@ class BridgeCore(ReadOnlyAfterStartUp):
             if self._imu_unusable == 1:
                 self._imu_problem('no data', 'the IMU marks linear_acceleration as not measured '
                                   '(linear_acceleration_covariance[0] = -1); its samples are dropped')
-            self.health.loss(now, samples=1, why='linear_acceleration not measured')
+            self._health.loss(now, samples=1, why='linear_acceleration not measured')
             return
         lost_before = assembler.lost_samples + assembler.dropped_samples
         blocks = assembler.push(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
                                 getattr(msg.linear_acceleration, self._imu_axis))
         lost = assembler.lost_samples + assembler.dropped_samples - lost_before
         if lost:
-            self.health.loss(now, samples=lost, why=assembler.last_problem)
+            self._health.loss(now, samples=lost, why=assembler.last_problem)
         self._imu_frame_id = msg.header.frame_id or self.frame_id
         self._publish_imu_blocks(blocks, self._imu_frame_id, now)
 
-    def _publish_imu_blocks(self, blocks, frame_id: str, now: float) -> None:
+    def _publish_imu_blocks(self, blocks: list[AssembledBlock], frame_id: str, now: float) -> None:
         """Publish assembled IMU blocks as VibrationBlocks and count them for the bridge's status."""
         vibration = getattr(self, '_outputs', {}).get('vibration')
         if vibration is None:
@@ -482,28 +528,35 @@ class BridgeCore(ReadOnlyAfterStartUp):
             vibration.publish(vibration_block_msg(time_from_ns(block.stamp_ns), block.sample_rate, block.samples,
                                                   frame_id))
             self.messages_published += 1
-            self.health.block(now, block.sample_rate)
-            self.health.expected_block_rate = assembler.sample_rate / assembler.block_size
+            self._health.block(now, block.sample_rate)
+            if assembler is not None and assembler.sample_rate and assembler.block_size:
+                self._health.expected_block_rate = assembler.sample_rate / assembler.block_size
 
     def _imu_problem(self, kind: str, line: str) -> None:
         """First problem of a kind: one log line (later ones are counted on /diagnostics)."""
-        self.get_logger().warning(f'{self._imu_topic}: {kind}: {line} (logged once; counted on /diagnostics)')
-        self.health.note(f'{kind}: {line}')
+        self.log.warning(f'{self._imu_topic}: {kind}: {line} (logged once; counted on /diagnostics)')
+        self._health.note(f'{kind}: {line}')
 
     # -- diagnostics --------------------------------------------------------------------------------
-    def _open_diagnostics(self, values, expected_block_rate) -> None:
+    def _open_diagnostics(self, values: dict, expected_block_rate: float | None) -> None:
         defaults = {'playback': str(values['bag']).strip(), 'simulator': 'rig simulator',
                     'hardware': str(values['daq_channel']), 'imu': getattr(self, '_imu_topic', '')}
         self.hardware_id = str(values['hardware_id']).strip() or defaults[self.source]
+        if not str(values['hardware_id']).strip() and not getattr(self, '_hardware_id_told', False):
+            self._hardware_id_told = True      # once per process, not on every configure
+            self.log.warning(
+                f'hardware_id not set: /diagnostics names the source {self.hardware_id!r}, which collides across a '
+                "fleet; set hardware_id to the sensor's serial or device id")
         self.status_name = status_name(self.get_name(), self.namespace, SOURCE_TASK)
-        self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
-        self.health.active = False                          # until _start
-        self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
-        self._timer = self.create_timer(float(values['diagnostics_period']), self.publish_diagnostics)
+        health = self.health = SourceHealth(self.source, float(values['stale_timeout']), expected_block_rate)
+        health.active = False                               # until _start
+        self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, QoSProfile(depth=10),
+                                                  qos_overriding_options=OVERRIDABLE)
+        self._timer = self.create_timer(diagnostic_period(values), self.publish_diagnostics)
 
-    def source_status(self):
+    def source_status(self) -> SourceStatus:
         """The source's :class:`~.bridge_health.SourceStatus` now."""
-        return self.health.status(time.monotonic())
+        return self._health.status(time.monotonic())
 
     def publish_diagnostics(self) -> None:
         """One DiagnosticArray with the source status on /diagnostics."""
@@ -512,10 +565,11 @@ class BridgeCore(ReadOnlyAfterStartUp):
         array.header.stamp = self.get_clock().now().to_msg()
         array.status = [diagnostic_status(self.status_name, self.hardware_id, status.level, status.message,
                                           status.values)]
-        self._diagnostics.publish(array)
+        if self._diagnostics is not None:
+            self._diagnostics.publish(array)
 
     # -- the worker thread -------------------------------------------------------------------------
-    def _work(self):
+    def _work(self) -> None:
         try:
             if self.source == 'playback':
                 self._play()
@@ -524,19 +578,21 @@ class BridgeCore(ReadOnlyAfterStartUp):
             else:
                 self._acquire()
         except InputError as exc:
-            self.get_logger().error(str(exc))
-            self.health.fail(str(exc))
+            self.log.error(str(exc))
+            self._health.fail(str(exc))
             self.exit_status = 1
         except Exception as exc:      # a bug, not bad input: say so with the traceback
-            self.get_logger().error(f'internal error (please report): '
-                                    f'{"".join(traceback.format_exception(exc)).strip()}')
-            self.health.fail(f'internal error: {exc}')
+            self.log.error(f'internal error (please report): '
+                           f'{"".join(traceback.format_exception(exc)).strip()}')
+            self._health.fail(f'internal error: {exc}')
             self.exit_status = 1
         finally:
             self.finished.set()
 
-    def _play(self):
+    def _play(self) -> None:
         values = self._values
+        recording, pacer = self._recording, self._pacer
+        assert recording is not None and pacer is not None, "playback is open"
         rate, bag = values['playback_rate'], values['bag']
         deadline = time.monotonic() + values['wait_for_subscribers']
         vibration = self._outputs['vibration']
@@ -545,15 +601,15 @@ class BridgeCore(ReadOnlyAfterStartUp):
                 return
         if vibration.get_subscription_count():
             self._stop.wait(0.3)      # best-effort readers match the writer a little after it matches them
-        self.get_logger().info(f'playback of {bag} ({", ".join(self.topics.values())}) at {rate:g} x real time'
-                               + (', looping' if values['loop'] else ''))
+        self.log.info(f'playback of {bag} ({", ".join(self.topics.values())}) at {rate:g} x real time'
+                      + (', looping' if values['loop'] else ''))
         first_stamp = None
         while not self._stop.is_set():
             count = 0
             clock_at = -math.inf
-            for events in recording_events(self._recording, on_problem=self._problem):
+            for events in recording_events(recording, on_problem=self._problem):
                 for due, kind, stamp_ns, payload in events:
-                    if not self._pacer.wait(due):
+                    if not pacer.wait(due):
                         return
                     clock_due = due >= clock_at + values["clock_period"] or due < clock_at
                     if self._clock_publisher is not None and clock_due:
@@ -566,27 +622,30 @@ class BridgeCore(ReadOnlyAfterStartUp):
             if count == 0:
                 raise InputError(f'{bag}: no messages to replay on {", ".join(self.topics.values())}')
             if not values['loop']:
-                self.get_logger().info(f'playback of {bag} finished: {count} messages')
+                self.log.info(f'playback of {bag} finished: {count} messages')
                 return
             self.loops += 1
-            self.get_logger().info(f'loop {self.loops}: replaying {bag} from the start; header stamps go back '
-                                   f'to {first_stamp * 1e-9:.3f} (subscribers see a clock reset)')
-            self._pacer.restart()
+            self.log.info(f'loop {self.loops}: replaying {bag} from the start; header stamps go back '
+                          f'to {(first_stamp or 0) * 1e-9:.3f} (subscribers see a clock reset)')
+            pacer.restart()
 
-    def _simulate(self):
+    def _simulate(self) -> None:
+        generator, pacer = self._generator, self._pacer
+        assert generator is not None and pacer is not None, "the simulator is open"
         while not self._stop.is_set():
             with self._lock:
-                block = self._generator.next_block()
+                block = generator.next_block()
             for due, kind, stamp_ns, payload in rig_block_events(block):
-                if not self._pacer.wait(due):
+                if not pacer.wait(due):
                     return
                 self._publish(kind, stamp_ns, payload)
 
-    def _acquire(self):
+    def _acquire(self) -> None:
         daq = self._daq
+        assert daq is not None, "the acquisition is open"
         settings = daq.settings
-        self.get_logger().info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
-                               f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
+        self.log.info(f'acquiring {settings.channel} at {settings.sample_rate:g} Hz, '
+                      f'{settings.block_size} samples per block, {settings.sensitivity:g} mV/g')
         try:
             while not self._stop.is_set():
                 stamp_ns, samples = daq.read_block()
@@ -595,7 +654,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
             if not self._stop.is_set():      # a failed read: the acquisition is over (halted: it stays open)
                 daq.close()
 
-    def _publish(self, kind: str, stamp_ns: int, payload: tuple):
+    def _publish(self, kind: str, stamp_ns: int, payload: tuple) -> None:
         if kind == 'vibration':
             msg = vibration_block_msg(time_from_ns(stamp_ns), payload[0], payload[1], self.frame_id)
         elif kind == 'joint_states':
@@ -609,19 +668,20 @@ class BridgeCore(ReadOnlyAfterStartUp):
             publisher.publish(msg)
             self.messages_published += 1
             if kind == 'vibration':
-                self.health.block(time.monotonic(), payload[0])
+                self._health.block(time.monotonic(), payload[0])
 
-    def _problem(self, line: str):
-        self.get_logger().warning(f'{self._values["bag"]}: {line}')
-        self.health.note(line)
+    def _problem(self, line: str) -> None:
+        self.log.warning(f'{self._values["bag"]}: {line}')
+        self._health.note(line)
 
     # -- parameters --------------------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Simulator: speed, load and theta_oil act from the next block; playback: playback_rate at once.
 
         A value equal to the current one changes nothing and passes, also for another source's setting.
         """
-        parameters = [p for p in parameters if not same_value(p, self.get_parameter(p.name))]
+        # Only the node's own table: rclpy declares the read-only qos_overrides.* through here as well.
+        parameters = [p for p in parameters if p.name in PARAMETERS and not same_value(p, self.get_parameter(p.name))]
         for parameter in parameters:
             if parameter.name in SIMULATOR_PARAMETERS and self.source != 'simulator':
                 return SetParametersResult(successful=False,
@@ -635,7 +695,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
                     setter = {'speed': self._generator.set_speed, 'load': self._generator.set_load,
                               'theta_oil': self._generator.set_theta}[parameter.name]
                     setter(float(value))
-                self.get_logger().info(f'simulator: {parameter.name} set to {value:g}')
+                self.log.info(f'simulator: {parameter.name} set to {value:g}')
             elif parameter.name == 'playback_rate' and self._pacer is not None:
                 self._pacer.rate = float(value)
                 self._pacer.restart()
@@ -651,7 +711,7 @@ class SensorBridge(BridgeCore, Node):
     (playback done, acquisition failed), with :attr:`exit_status` 0 or 1.
     """
 
-    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs: Any) -> None:
         super().__init__(node_name, namespace=namespace, **kwargs)
         self._read_parameters()
         self._open()
@@ -661,7 +721,8 @@ class SensorBridge(BridgeCore, Node):
 class ManagedSensorBridge(BridgeCore, LifecycleNode):
     """The bridge as a lifecycle (managed) node: each step of :class:`BridgeCore` on a transition.
 
-    Constructed unconfigured (parameters declared and checked).  configure
+    Constructed unconfigured (parameters declared and checked), or with
+    ``autostart`` configured and activated at once (InputError when a step fails).  configure
     opens the source (the bag, the rig simulator, the DAQ task set up but not
     started, the IMU settings), creates the publishers and the status on
     /diagnostics; activate starts publishing (worker thread, acquisition or
@@ -673,24 +734,27 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
     wall clock by the time it was inactive).
     """
 
-    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs):
+    def __init__(self, node_name: str = NODE_NAME, namespace: str = DEFAULT_NAMESPACE, **kwargs: Any) -> None:
         super().__init__(node_name, namespace=namespace, **kwargs)
-        self._read_parameters()
+        values = self._read_parameters()
+        if values['autostart']:
+            autostart(self)
 
-    def _step(self, what: str, action) -> TransitionCallbackReturn:
+    def _step(self, what: str, action: Callable[[], None]) -> TransitionCallbackReturn:
         try:
             action()
         except InputError as exc:
-            self.get_logger().error(f'{what} failed: {exc}')
+            self.log.error(f'{what} failed: {exc}')
             return TransitionCallbackReturn.FAILURE
         return TransitionCallbackReturn.SUCCESS
 
-    def _transition(self, what: str, state: LifecycleState, goal: str, result) -> TransitionCallbackReturn:
+    def _transition(self, what: str, state: LifecycleState, goal: str,
+                    result: TransitionCallbackReturn) -> TransitionCallbackReturn:
         """Log a transition once: ``configure: unconfigured -> inactive`` (or that it failed)."""
         if result == TransitionCallbackReturn.SUCCESS:
-            self.get_logger().info(f'{what}: {state.label} -> {goal}')
+            self.log.info(f'{what}: {state.label} -> {goal}')
         else:
-            self.get_logger().warning(f'{what}: failed, stays {state.label}')
+            self.log.warning(f'{what}: failed, stays {state.label}')
         return result
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -728,25 +792,25 @@ class ManagedSensorBridge(BridgeCore, LifecycleNode):
         return self._transition('error', state, 'unconfigured', TransitionCallbackReturn.SUCCESS)
 
 
-def create_node(**kwargs) -> SensorBridge:
+def create_node(**kwargs: Any) -> SensorBridge:
     """The bridge node (``prsm-lube run`` starts it beside the estimator)."""
     return SensorBridge(**kwargs)
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros sensor_bridge``; returns the exit status.
 
     Bad configuration or an unusable source: one line on stderr, status 2.
     Playback without ``loop`` ends with status 0 after the last message
     (``exit_at_end``); an acquisition that fails while running ends with 1.
     """
-    def finished(node):
+    def finished(node: SensorBridge) -> bool:
         exit_at_end = node.source == 'playback' and node.get_parameter('exit_at_end').value
         return node.finished.is_set() and bool(exit_at_end or node.exit_status)
     return run_node(SensorBridge, NODE_NAME, args, done=finished, exit_status=lambda node: node.exit_status)
 
 
-def main_managed(args=None) -> int:
+def main_managed(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run prsm_lube_ros sensor_bridge_managed``: the lifecycle bridge, unconfigured.
 
     Drive it with ``ros2 lifecycle set <node> configure | activate | deactivate

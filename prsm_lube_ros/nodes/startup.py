@@ -17,15 +17,19 @@ from __future__ import annotations
 import signal
 import sys
 import threading
+from typing import Any
 from collections.abc import Callable, Sequence
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from ..errors import InputError
 
-__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'build_node', 'init_ros', 'run_node', 'spin_until_stopped']
+__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'autostart', 'build_node', 'init_ros', 'run_node',
+           'spin_until_stopped']
 
 #: Exit status of a node whose configuration or source cannot be used.
 EXIT_BAD_INPUT = 2
@@ -42,13 +46,13 @@ def init_ros(args: Sequence[str] | None = None) -> None:
     signals stay with whoever owns them.
     """
     _stop_requested.clear()
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(args=None if args is None else list(args), signal_handler_options=SignalHandlerOptions.NO)
     if threading.current_thread() is threading.main_thread():
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, _request_stop)
 
 
-def _request_stop(signum, frame) -> None:
+def _request_stop(signum: int, frame: object) -> None:
     """Signal handler: ask the spin loop to stop; a second signal of the kind ends the process at once.
 
     Nothing else happens here (it may run between any two bytecodes).  The
@@ -59,7 +63,15 @@ def _request_stop(signum, frame) -> None:
     signal.signal(signum, signal.SIG_DFL)
 
 
-def build_node(factory: Callable[[], object], node_name: str) -> object | None:
+def autostart(node: LifecycleNode) -> None:
+    """A lifecycle node's ``autostart``: configure, then activate; InputError when a step does not succeed."""
+    if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+        raise InputError('autostart: configure failed (see the log line before)')
+    if node.trigger_activate() != TransitionCallbackReturn.SUCCESS:
+        raise InputError('autostart: activate failed (see the log line before)')
+
+
+def build_node(factory: Callable[[], Node], node_name: str) -> Node | None:
     """``factory()``; on :class:`InputError` print ``<node_name>: error: <line>``, shut rclpy down, return None."""
     try:
         return factory()
@@ -69,9 +81,9 @@ def build_node(factory: Callable[[], object], node_name: str) -> object | None:
         return None
 
 
-def run_node(factory: Callable[[], object], node_name: str, args: Sequence[str] | None = None,
-             done: Callable[[object], bool] = lambda node: False,
-             exit_status: Callable[[object], int] = lambda node: 0) -> int:
+def run_node(factory: Callable[[], Node], node_name: str, args: Sequence[str] | None = None,
+             done: Callable[[Any], bool] = lambda node: False,
+             exit_status: Callable[[Any], int] = lambda node: 0) -> int:
     """A node process from start to end: :func:`init_ros`, :func:`build_node`, :func:`spin_until_stopped`.
 
     Returns :data:`EXIT_BAD_INPUT` when the node cannot be built, else
@@ -85,7 +97,8 @@ def run_node(factory: Callable[[], object], node_name: str, args: Sequence[str] 
     return exit_status(node)
 
 
-def spin_until_stopped(nodes, done: Callable[[], bool] = lambda: False, executor=None) -> None:
+def spin_until_stopped(nodes: Sequence[Node], done: Callable[[], bool] = lambda: False,
+                       executor: Executor | None = None) -> None:
     """Spin ``nodes`` until a stop signal, ``done()``, or shutdown; then tear everything down in order.
 
     The executor is shut down first (no callback runs after it), then each

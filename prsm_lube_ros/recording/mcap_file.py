@@ -51,8 +51,8 @@ __all__ = ['Channel', 'DataLayout', 'FIRST_USER_OPCODE', 'GATHER_BYTES', 'MAGIC'
            'MESSAGE_HEADER', 'McapFile', 'McapProblem', 'MessageGroup', 'OP_CHANNEL', 'OP_CHUNK', 'OP_CHUNK_INDEX',
            'OP_DATA_END', 'OP_FOOTER', 'OP_HEADER', 'OP_MESSAGE', 'OP_MESSAGE_INDEX', 'OP_SCHEMA', 'OP_STATISTICS',
            'Opcode', 'RECORD_PREFIX', 'RawChunk', 'ReadCheck', 'SMALL_CHUNK_BYTES', 'SMALL_CHUNK_MESSAGES',
-           'SUMMARY_OPCODES', 'Schema', 'Summary', 'bare_read', 'data_layout', 'decompress', 'parse_channel',
-           'parse_schema', 'raw_messages', 'signed', 'split_indexed', 'split_records', 'split_sequential',
+           'SUMMARY_OPCODES', 'Schema', 'Summary', 'channel_messages', 'data_layout', 'decompress', 'parse_channel',
+           'parse_schema', 'signed', 'split_indexed', 'split_records', 'split_sequential',
            'walk_records', 'zstd_file', 'zstd_frame']
 
 _zstandard: ModuleType | None
@@ -1115,7 +1115,8 @@ class ReadCheck:
         return lines
 
 
-def raw_messages(path: str | Path, on_problem: ProblemSink) -> Iterator[tuple[Channel | None, int, int, bytes]]:
+def channel_messages(path: str | Path,
+                     on_problem: ProblemSink) -> Iterator[tuple[Channel | None, int, int, bytes]]:
     """Every message of an MCAP file in file order: ``(channel, sequence, log_time, data)``, undecoded.
 
     ``channel`` is None for a message whose channel is nowhere defined.
@@ -1144,17 +1145,3 @@ def raw_messages(path: str | Path, on_problem: ProblemSink) -> Iterator[tuple[Ch
                    bytes(buffer[begin:begin + int(lengths[index])]))
     for line in check.lines():
         on_problem(line)
-
-
-def bare_read(path: str | Path) -> tuple[int, int]:
-    """Read, decompress and split every chunk without decoding; return (messages, message bytes).
-
-    The cheapest pass that touches every message of an MCAP file: the baseline
-    against which decoding is timed.
-    """
-    messages = payload = 0
-    for chunk in McapFile(path).chunks(lambda line: None):
-        for group in chunk.groups.values():
-            messages += group.data_lengths.size
-            payload += int(group.data_lengths.sum())
-    return messages, payload

@@ -908,7 +908,7 @@ def raw_messages(path: str | Path,
     """
     path = Path(path)
     try:
-        for channel, sequence, log_time, data in mcap_file.raw_messages(path, on_problem or (lambda line: None)):
+        for channel, sequence, log_time, data in mcap_file.channel_messages(path, on_problem or (lambda line: None)):
             yield (channel.topic if channel else None), sequence, log_time, data
     except mcap_file.McapProblem as problem:
         raise RecordingError(f'{path}: {problem}') from None

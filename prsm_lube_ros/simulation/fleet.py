@@ -14,7 +14,11 @@ actuator's depletion revolutions.  Once a day, at a random hour of the working
 day, a short contract recording is made (one forward run at the fleet's test
 condition and its rewind) at the theta_Oil of that moment.  The operator
 relubricates an actuator shortly after a recording whose true theta_Oil is
-below ``relubricate_below`` (never after the last recording).
+below ``relubricate_below`` (never after the last recording).  Habits vary
+when the plan says so: each operator's own ``relubricate_below`` drawn from
+``relubricate_below_range`` (down past the error level), due relubrications
+put off (``relubrication_put_off``) and days without a recording
+(``recording_missed``).
 
 ``odometer.csv`` lists each actuator's cumulative screw revolutions at each
 recording (``actuator,time,revolutions``), as a drive's revolution counter or a
@@ -73,6 +77,13 @@ class FleetPlan:
     initial_theta: tuple[float, float] = (0.82, 1.0)
     #: the operator relubricates after a recording whose true theta_Oil is below this
     relubricate_below: float = 0.78
+    #: relubrication habits: when given, each actuator's operator has its own ``relubricate_below`` drawn
+    #: uniformly in this range (below the error level 0.70 lets the error level be reached and recorded)
+    relubricate_below_range: tuple[float, float] | None = None
+    #: probability that a due relubrication is put off at a recording (the oil keeps depleting until a later one)
+    relubrication_put_off: float = 0.0
+    #: probability that a day's recording is not made (gaps in the recording; the operator only acts on recordings)
+    recording_missed: float = 0.0
     #: s after that recording when the oil is injected
     relubrication_delay: float = 3600.0
     #: recordings are made between these hours of the day (UTC)
@@ -92,6 +103,12 @@ class FleetPlan:
                 f'fleet revolutions_per_day must be an increasing positive range, got {self.revolutions_per_day}')
         require(0 < self.depletion_reference < min(self.relubricated_theta),
                 'fleet depletion_reference must lie below the relubricated theta')
+        require(self.relubricate_below_range is None
+                or 0 < self.relubricate_below_range[0] <= self.relubricate_below_range[1] < 1,
+                f'fleet relubricate_below_range must be an increasing range in (0, 1), got '
+                f'{self.relubricate_below_range}')
+        require(0 <= self.relubrication_put_off < 1 and 0 <= self.recording_missed < 1,
+                'fleet relubrication_put_off and recording_missed must be probabilities below 1')
 
 
 @dataclass
@@ -206,10 +223,13 @@ def _simulate_actuator(recorder: _FleetRecorder, actuator_id: str, sequence: np.
                        thresholds: Sequence[float]) -> tuple[dict[str, Any], list[tuple[str, str, float]]]:
     """One actuator in service: its law, daily recordings and relubrications; its truth and odometer rows."""
     fleet, epoch, out_dir = recorder.fleet, recorder.epoch, recorder.out_dir
-    usage_sequence, recording_sequence = sequence.spawn(2)
-    usage_rng = np.random.default_rng(usage_sequence)
+    # the third stream (habits) is spawned after the first two: those two draw what they always drew
+    usage_sequence, recording_sequence, habit_sequence = sequence.spawn(3)
+    usage_rng, habit_rng = np.random.default_rng(usage_sequence), np.random.default_rng(habit_sequence)
     service, initial_theta = _draw_service(actuator_id, fleet, usage_rng)
     rate, depletion, daily = service.revolutions_per_day, service.depletion_revolutions, service.daily_revolutions
+    relubricate_below = (fleet.relubricate_below if fleet.relubricate_below_range is None
+                         else float(habit_rng.uniform(*fleet.relubricate_below_range)))
     theta_r, cycle_start_revs, cycle_start_time = 1.0, -service.start_revolutions, None
     recordings: list[dict[str, Any]]
     relubrications: list[dict[str, Any]]
@@ -218,13 +238,17 @@ def _simulate_actuator(recorder: _FleetRecorder, actuator_id: str, sequence: np.
     for day in range(fleet.days):
         hour = usage_rng.uniform(*fleet.recording_hours)
         t = day * DAY + hour * 3600.0
+        missed = fleet.recording_missed > 0 and habit_rng.random() < fleet.recording_missed
+        if missed and 0 < day < fleet.days - 1:       # the first and last day are always recorded
+            continue
         theta = theta_r * float(theta_factor(service.revolutions(t) - cycle_start_revs, 1.0 / depletion))
         path = recorder.record(actuator_id, t, theta, int(seeds[day]))
         recordings.append({'path': str(path.relative_to(out_dir)), 'start': epoch + t,
                            'start_utc': _iso(epoch + t), 'theta_oil': theta,
                            'revolutions_since_lubrication': float(service.revolutions(t) - cycle_start_revs)})
         recorder.count()
-        if theta < fleet.relubricate_below and day < fleet.days - 1:
+        put_off = fleet.relubrication_put_off > 0 and habit_rng.random() < fleet.relubrication_put_off
+        if theta < relubricate_below and day < fleet.days - 1 and not put_off:
             cycle_start_time = t + fleet.relubrication_delay
             cycle_start_revs = float(service.revolutions(cycle_start_time))
             theta_r = usage_rng.uniform(*fleet.relubricated_theta)
@@ -236,7 +260,7 @@ def _simulate_actuator(recorder: _FleetRecorder, actuator_id: str, sequence: np.
                      for r in recordings]
     truth = {
         'actuator_id': actuator_id, 'revolutions_per_day': rate, 'depletion_revolutions': depletion,
-        'initial_theta': initial_theta, 'last_relubrication_theta': theta_r,
+        'initial_theta': initial_theta, 'last_relubrication_theta': theta_r, 'relubricate_below': relubricate_below,
         'last_relubrication': None if cycle_start_time is None else epoch + cycle_start_time,
         'relubrications': relubrications, 'recordings': recordings, 'crossings': crossings,
         'daily_revolutions': [float(v) for v in daily[:fleet.days]]}

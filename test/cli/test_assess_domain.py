@@ -96,7 +96,9 @@ def test_recordings_at_two_rates_calibrate_in_the_band_of_the_first_and_a_slower
     assert status == 2 and not (tmp_path / 'd.yaml').exists()
     assert err[-1] == (f'prsm-lube calibrate: error: {slow}: vibration: sample rate 2000 Hz cannot cover the '
                        'analysis band 0.5-3200 Hz (needs at least 8000 Hz: upper edge at most 0.8 x the Nyquist '
-                       'frequency); record faster or calibrate at this rate')
+                       'frequency); record faster, or calibrate in a band every recording covers '
+                       '(prsm-lube calibrate --band-high HZ, at most 800 Hz for this rate; '
+                       '1600 Hz serves every rate from 4000 Hz up)')
     # One calibration for both rates: the band both cover, asked for.
     assert main(['calibrate', str(fast), str(slow), '--band-high', '800', '--out', str(tmp_path / 'e.yaml')]) == 0
     assert 'band: 0.5-800 Hz' in capsys.readouterr().out

@@ -7,7 +7,7 @@ Calibrated on the 6 healthy early runs with the PRONOSTIA bearing's geometry,
 late runs before failure (14 when written; the textbook indicators of the
 data's README mark 11), each with the evidence, and the JSON carries the
 contract's ``defect_suspected`` and ``condition_indicators`` for every run and
-window.  ``benchmarks/femto_defects.py`` prints the table of the README.
+window.  ``benchmarks/femto_defects.py`` prints the table of docs/benchmarks.md.
 """
 import json
 from pathlib import Path

@@ -14,8 +14,9 @@ def test_trend_writes_json_table_and_plots_most_urgent_first(small_fleet, tmp_pa
     document = json.loads((report / 'trend.json').read_text())
     actuators = document['actuators']
     assert sorted(a['actuator'] for a in actuators) == ['A01', 'A02', 'A03', 'A04']
-    warn_times = [a['crossings'][0]['time'] for a in actuators]
-    assert warn_times == sorted(warn_times)
+    assert [a['rank'] for a in actuators] == [1, 2, 3, 4]            # by the next crossing of either level
+    assert all(a['next']['level'] in (0.85, 0.70) for a in actuators)
+    assert (report / 'trend.html').is_file() and (report / 'trend.csv').read_text().count('\n') == 5
     assert all((report / f'{a["actuator"]}.png').stat().st_size > 1000 for a in actuators)
     assert (report / 'trend.md').read_text().count('| A0') == 4
     out = capsys.readouterr().out

@@ -83,7 +83,7 @@ def test_a_suspected_defect_stops_the_forecast_comes_first_and_changes_no_other(
     assert first['reason'] == reason
     markdown = (report / 'trend.md').read_text()
     rows = table_rows(markdown)
-    assert rows[2].startswith('| A02 |') and reason in rows[2] and len({r.count('|') for r in rows}) == 1
+    assert rows[2].startswith('| 1 | A02 |') and reason in rows[2] and len({r.count('|') for r in rows}) == 1
     assert 'Surface defect suspected: inspect' in markdown and EVIDENCE in markdown
     assert reason in result.stdout and (report / 'A02.png').stat().st_size > 1000
     # the others: exactly the numbers of a history holding A02's recordings before the defect only

@@ -6,7 +6,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from prsm_lube_ros.diagnosis.engine import _held_out_tiebreak, COLLINEAR, diagnose_table
+from prsm_lube_ros.diagnosis import engine
+from prsm_lube_ros.diagnosis.engine import _held_out_tiebreak, diagnose_table
+from prsm_lube_ros.diagnosis.rules import DEFAULT_RULES
 from prsm_lube_ros.simulation.drive import DriveProgram, schedule_session
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, RigConfig
 from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
@@ -64,7 +66,7 @@ def test_temperature_not_following_revolutions_decides_thermal_against_depletion
     plan = SyntheticPlan(sessions=2, warm_start=20.0, cool_down_every=3, cool_down_pause=600.0)
     table, _ = synthetic_table(np.random.default_rng(1), effect, plan)
     result = diagnose_table(table)
-    assert abs(result.temperature_revolutions) < COLLINEAR
+    assert abs(result.temperature_revolutions) < DEFAULT_RULES.collinear
     assert result.verdict == effect
     assert result.as_json()['temperature_revolutions_correlation'] == pytest.approx(result.temperature_revolutions)
 
@@ -73,7 +75,7 @@ def test_collinear_temperature_and_revolutions_tie_is_ambiguous_with_the_correla
     plan = SyntheticPlan(sessions=1, rest=5.0, random_order=False)
     table, _ = synthetic_table(np.random.default_rng(2), 'thermal_viscosity', plan)
     result = diagnose_table(table)
-    assert result.temperature_revolutions > COLLINEAR
+    assert result.temperature_revolutions > DEFAULT_RULES.collinear
     if result.verdict == 'ambiguous':
         assert any('collinear over runs, r = +' in note for note in result.notes)
     else:
@@ -84,12 +86,17 @@ def _candidate(covariate, cv_rmse):
     return SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=SimpleNamespace(cv_rmse=cv_rmse))
 
 
-def test_held_out_tiebreak_only_between_uncorrelated_temperature_and_revolutions():
+@pytest.mark.parametrize('r, dropped', [(0.3, 'revolutions'), (-0.5, 'revolutions'), (0.95, None)])
+def test_held_out_tiebreak_only_between_uncorrelated_drift_covariates(monkeypatch, r, dropped):
+    monkeypatch.setattr(engine, 'drift_correlation', lambda table, a, b: r)
     thermal, depletion = _candidate('temperature', 0.030), _candidate('revolutions', 0.034)
-    assert _held_out_tiebreak(None, thermal, depletion, 0.3) is depletion
-    assert _held_out_tiebreak(None, depletion, thermal, -0.5) is depletion
-    assert _held_out_tiebreak(None, thermal, depletion, 0.95) is None
-    assert _held_out_tiebreak(None, thermal, _candidate('speed', 0.05), 0.0) is None
+    for first, second in ((thermal, depletion), (depletion, thermal)):
+        decided = _held_out_tiebreak(None, first, second, DEFAULT_RULES)
+        assert (decided[0].effect.covariate if decided else None) == dropped
+        if decided:
+            assert decided[1] == r
+    # a law of a set-point is no drift: never decided this way
+    assert _held_out_tiebreak(None, thermal, _candidate('speed', 0.05), DEFAULT_RULES) is None
 
 
 def test_cool_down_pauses_lengthen_a_session_and_keep_its_strokes():

@@ -167,11 +167,10 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
-    pair = SimpleNamespace(gain=gain, run_gain=run_gain, delta_bic=delta_bic, params={}, route=1, basis='',
-                           first_effect=None, fit=SimpleNamespace(log_residual=None, cv_log_residual=None),
-                           effect=SimpleNamespace(parameter_names=('a', 'b'), covariate='position',
-                                                  independent_evidence=lambda table, location, params,
-                                                  beside: evidence))
+    added = SimpleNamespace(parameter_names=('a', 'b'), covariate='position',
+                            independent_evidence=lambda table, location, params, beside: evidence)
+    pair = engine.SecondEffect(None, SimpleNamespace(log_residual=None, cv_log_residual=None), {}, gain, delta_bic,
+                               added, '', None, {}, '', run_gain=run_gain)
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     monkeypatch.setattr(engine, 'within_run_share', lambda table, covariate: 0.0 if within is None else 1.0)
     monkeypatch.setattr(engine, 'within_run_correlation', lambda table, covariate: 0.0)   # traverses out and back
@@ -181,10 +180,11 @@ def _second_case(monkeypatch, gain, delta_bic, located='none', evidence='', run_
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'),
                             fit=SimpleNamespace(vector=np.zeros(4), log_residual=None, cv_log_residual=None))
     # The other's fit alone showed no evidence: the pair's parameters decide (a floor a resonance absorbed alone).
-    other = SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}, evidence='',
-                            effect=SimpleNamespace(covariate='position'))
+    other = SimpleNamespace(scores=SimpleNamespace(family=SimpleNamespace(variants=lambda: []), form_vectors={}),
+                            evidence='', effect=SimpleNamespace(covariate='position'))
     left = Location([], None, located, '')
-    return engine._add_second(SimpleNamespace(runs=np.arange(runs)), first, other, None, None, left)
+    return engine._add_second(SimpleNamespace(runs=np.arange(runs)), first, other, None, None, left,
+                              engine.DEFAULT_RULES)
 
 
 @pytest.mark.parametrize('runs, added, tolerance', [
@@ -228,17 +228,17 @@ def test_a_tie_where_each_effect_shows_outside_the_amplitude_fit_names_both(monk
                                  parameter_names=('a',),
                                  independent_evidence=lambda table, location, params, beside: shown,
                                  contrary_evidence=lambda *args: '')
-        return engine.Candidate(effect, SimpleNamespace(cv_rmse=cv_rmse, params={}, vector=np.zeros(4)),
-                                Status.EARNS, gain=0.1, delta_bic=-50.0, evidence=shown,
-                                family=SimpleNamespace(variants=lambda: [effect]))
+        scores = engine.CandidateFit(effect, SimpleNamespace(cv_rmse=cv_rmse, params={}, vector=np.zeros(4)),
+                                     gain=0.1, delta_bic=-50.0, evidence=shown,
+                                     family=SimpleNamespace(variants=lambda: [effect]))
+        return engine.Candidate(scores, (engine.Decision('bic_margin', Status.EARNS, ''),))
     best, runner = candidate('background_vibration', evidence[0], 0.030), candidate('resonance', evidence[1], 0.031)
-    pair = SimpleNamespace(gain=-0.003, params={}, first_params={}, effect=runner.effect, first_effect=best.effect,
-                           route=1, basis='')
+    pair = engine.SecondEffect(None, None, {}, -0.003, 0.0, runner.effect, '', best.effect, {}, '')
     monkeypatch.setattr(engine, '_pair_test', lambda *args: (False, False))
     monkeypatch.setattr(engine, '_best_pair', lambda *args: pair)
     monkeypatch.setattr(engine, 'CombinedEffect', lambda *args: args)
     out = engine._Outcome()
-    engine._settle_earning(SimpleNamespace(runs=np.arange(48)), [best, runner], out, [], None, float('nan'))
+    engine._settle_earning(SimpleNamespace(runs=np.arange(48)), [best, runner], out, [], None, engine.DEFAULT_RULES)
     assert out.verdict == verdict
     assert (out.second.effect.id if out.second is not None else None) == second
     if second:
@@ -349,8 +349,8 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
         effect = SimpleNamespace(id=effect_id, covariate=covariate,
                                  independent_evidence=lambda table, location, params, beside: shown)
         candidate = SimpleNamespace(effect=effect, fit=object(), gain=0.1)
-        return SimpleNamespace(candidate=candidate, effect=effect, params={}, first_effect=None, route=1,
-                               basis='BIC', delta_bic=delta_bic, fit=SimpleNamespace(cv_rmse=cv_rmse))
+        return engine.SecondEffect(candidate, SimpleNamespace(cv_rmse=cv_rmse), {}, 0.1, delta_bic, effect, '', None,
+                                   {}, '', basis='BIC')
     seconds = {'resonance': second('resonance', 'speed', 0.030, -12.0),
                'position_dependent_stiffness': second('position_dependent_stiffness', 'position', 0.031, -8.0)}
     monkeypatch.setattr(engine, 'lack_of_fit', lambda *args: SimpleNamespace(significant=True))
@@ -359,7 +359,7 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
     first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'),
                             fit=SimpleNamespace(log_residual=np.zeros(3), n_params=5))
     candidates = [first] + [s.candidate for s in seconds.values()]
-    chosen, tied = engine._second_effect(None, first, candidates, None, None)
+    chosen, tied = engine._second_effect(None, first, candidates, None, None, engine.DEFAULT_RULES)
     if named is None:
         assert chosen is None and len(tied) == 2
     else:
@@ -374,17 +374,17 @@ def test_the_pair_pool_takes_candidates_with_spectral_evidence_first_then_the_la
     from prsm_lube_ros.diagnosis import engine
     tried = []
     monkeypatch.setattr(engine, 'CombinedEffect', lambda a, b, *vectors: (a, b))
-    monkeypatch.setattr(engine, '_best_pair', lambda table, combos, reference, other, folds, location:
+    monkeypatch.setattr(engine, '_best_pair', lambda table, combos, reference, other, folds, location, rules:
                         tried.append(tuple(e.id for e in combos[0])))
 
     def candidate(name, gain, evidence=''):
         effect = SimpleNamespace(id=name, form=name)
-        return SimpleNamespace(effect=effect, fit=SimpleNamespace(), gain=gain, evidence=evidence, form_vectors={},
-                               family=SimpleNamespace(variants=lambda: [effect]))
+        scores = SimpleNamespace(form_vectors={}, family=SimpleNamespace(variants=lambda: [effect]))
+        return SimpleNamespace(effect=effect, fit=SimpleNamespace(), gain=gain, evidence=evidence, scores=scores)
     ranked = [candidate('thermal_viscosity', 0.04), candidate('lubricant_depletion', 0.03),
               candidate('background_vibration', 0.02), candidate('resonance', 0.01, 'spectrum: a band at 13 Hz'),
               candidate('position_dependent_stiffness', float('nan'))]
-    assert engine._pair_when_none_earns(None, ranked, None, [], None) is None
+    assert engine._pair_when_none_earns(None, ranked, None, [], None, engine.DEFAULT_RULES) is None
     assert tried == [('resonance', 'thermal_viscosity'), ('resonance', 'lubricant_depletion'),
                      ('thermal_viscosity', 'lubricant_depletion')]
 
@@ -409,21 +409,22 @@ def test_a_law_of_the_located_covariate_is_named_with_a_smaller_bic_drop_when_no
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
     monkeypatch.setattr(engine, 'covariate_tests',
-                        lambda table, residual: [SimpleNamespace(covariate='revolutions', p_value=left)])
+                        lambda table, residual, rules: [SimpleNamespace(covariate='revolutions', p_value=left)])
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: unphysical)
     candidate = SimpleNamespace(effect=SimpleNamespace(covariate=covariate), fit=fit, delta_bic=delta_bic, gain=gain,
-                                within_delta_bic=float('nan'), within_gain=float('nan'))
+                                scores=SimpleNamespace(within_delta_bic=float('nan'), within_gain=float('nan')))
     cv_rmse, followed = empirical
     term = SimpleNamespace(earns=True, term=SimpleNamespace(form='smooth', covariate=followed),
-                           fit=SimpleNamespace(cv_rmse=cv_rmse))
+                           fit=SimpleNamespace(cv_rmse=cv_rmse), rules=engine.DEFAULT_RULES)
     term.beats = lambda named, covariates: engine.EmpiricalFit.beats(term, named, covariates)
     location = Location([], None, covariate if covariate == 'speed' else 'revolutions', '')
     # time and revolutions not collinear over runs (runs in random order of speed)
     means = {'revolutions': np.array([20.0, 91, 163, 235, 310, 379]), 'time': np.array([130.0, 6, 84, 28, 110, 54])}
     table = SimpleNamespace(has_temperature=False, run_means=lambda name: means[name])
-    assert (engine._located_law(table, [candidate], location, term) is candidate) is named
+    rules = engine.DEFAULT_RULES
+    assert (engine._located_law(table, [candidate], location, term, rules) is candidate) is named
     if named:       # without an empirical term (none located earns a place) the law is named too
-        assert engine._located_law(table, [candidate], location, None) is candidate
+        assert engine._located_law(table, [candidate], location, None, rules) is candidate
 
 
 @pytest.mark.parametrize('inside_physical, refit_spread, chosen', [
@@ -461,7 +462,7 @@ def test_a_form_with_unphysical_constants_is_fitted_again_physical_and_does_not_
                         log_residual=spread[form.form] * noise, cv_log_residual=noise, n_params=5, n_eff=200.0,
                         c_lambda_std=0.01)
     monkeypatch.setattr(engine, 'fit_model', fake_fit)
-    form, fit, bics, ties, _ = engine._choose_form(None, forms, [])
+    form, fit, bics, ties, _ = engine._choose_form(None, forms, [], engine.DEFAULT_RULES)
     assert sorted(refitted) == sorted(f for f, c in c_lambda.items() if c < 0)
     expected = 0.0 if refit_spread < 1 else c_lambda[chosen]
     assert form.form == chosen and fit.vector[2] == expected
@@ -484,17 +485,18 @@ def test_a_smooth_in_a_covariate_collinear_with_the_named_law_s_does_not_overrul
     means = {'revolutions': revolutions, 'time': np.array(time_means, dtype=float)}
     table = SimpleNamespace(has_temperature=False, run_means=lambda name: means[name])
     depletion = registered()['lubricant_depletion']
-    best = engine.Candidate(depletion, SimpleNamespace(cv_rmse=0.0459), engine.Status.EARNS)
+    best = engine.Candidate(engine.CandidateFit(depletion, SimpleNamespace(cv_rmse=0.0459)),
+                            (engine.Decision('bic_margin', engine.Status.EARNS, ''),))
     term = SimpleNamespace(form='smooth', covariate='time', describe=lambda params: 'a quadratic')
     fit = SimpleNamespace(cv_rmse=0.0371, n_eff=100.0, params={}, unphysical=lambda: [])
     empirical = engine.EmpiricalFit(term, fit, 0.66, -45.0)
-    out = engine._Outcome(verdict='lubricant_depletion', best=best)
-    engine._let_empirical_overrule(table, out, empirical)
+    out = engine._Outcome(verdict='lubricant_depletion', best=best, empirical=empirical)
+    engine._let_empirical_overrule(table, out, engine.DEFAULT_RULES)
     assert (out.verdict == 'lubricant_depletion') is named
     assert ('time' in engine.same_shape_covariates(table, {'revolutions'})) is named
     assert any('collinear over runs' in note for note in out.notes) is named
     if not named:
-        assert out.verdict == 'unexplained' and empirical.overrules == 'lubricant_depletion'
+        assert out.verdict == 'unexplained' and out.empirical.overrules == 'lubricant_depletion'
 
 
 @pytest.mark.parametrize('gain, unphysical, tried', [
@@ -514,7 +516,8 @@ def test_pairs_are_tried_when_a_candidate_alone_predicts_held_out_runs_better(mo
     baseline = SimpleNamespace(unphysical=lambda: [])
     test = SimpleNamespace(significant=False, lack_of_fit=False, excess_scatter=False)
     out = engine._Outcome()
-    engine._when_none_earns(None, [candidate], baseline, test, Location([], None, 'none', ''), [], 12, out)
+    engine._when_none_earns(None, [candidate], baseline, test, Location([], None, 'none', ''), [], 12, out,
+                            engine.DEFAULT_RULES)
     assert bool(calls) is tried
     assert out.verdict == engine.ADEQUATE      # the pair did not earn: nothing is named
 
@@ -617,7 +620,7 @@ def test_a_weak_arch_under_set_up_scatter_is_named_by_what_it_changes_within_run
                          params=params)
     assert result.verdict == 'position_dependent_stiffness'
     assert result.chosen.form == 'fixed-fixed'
-    assert result.chosen.within_delta_bic < -100
+    assert result.chosen.scores.within_delta_bic < -100
     assert result.as_json()['candidates'][0]['within_run_delta_bic'] < -100
 
 
@@ -635,14 +638,14 @@ def test_a_located_law_swept_within_runs_is_named_by_what_it_shows_within_runs(m
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
-    monkeypatch.setattr(engine, 'covariate_tests', lambda table, residual: [])
+    monkeypatch.setattr(engine, 'covariate_tests', lambda table, residual, rules: [])
     monkeypatch.setattr(engine, 'within_run_correlation', lambda table, covariate: time_r)
     fit = SimpleNamespace(cv_rmse=0.040, log_residual=np.zeros(3), unphysical=lambda: [])
     candidate = SimpleNamespace(effect=SimpleNamespace(covariate='position'), fit=fit, delta_bic=delta_bic, gain=gain,
-                                within_delta_bic=within[0], within_gain=within[1])
+                                scores=SimpleNamespace(within_delta_bic=within[0], within_gain=within[1]))
     location = Location([], None, 'position', '')
-    assert (engine._located_law(None, [candidate], location, None) is candidate) is named
-    note = engine._within_runs_note(None, 'position', *within)
+    assert (engine._located_law(None, [candidate], location, None, engine.DEFAULT_RULES) is candidate) is named
+    note = engine._within_runs_note(None, 'position', *within, engine.DEFAULT_RULES)
     assert f'BIC {within[0]:+.0f}, the shape of held-out runs {100 * within[1]:.1f} % closer' in note
     assert ('position and time are collinear within runs (r = +0.97' in note) == (time_r == 0.97)
 

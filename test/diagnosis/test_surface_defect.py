@@ -75,6 +75,26 @@ def test_impulsive_windows_are_evidence_and_gaussian_ones_are_evidence_against()
     assert 'not impulsive' in effect.contrary_evidence(healthy, None)
 
 
+def test_envelope_lines_at_one_speed_of_several_are_no_defect_evidence():
+    # a band fixed in Hz (a mode ringing) meets a defect order at one speed only; strikes keep their order
+    effect = get_effect('surface_defect')
+    speeds = np.repeat([10.0, 15.0, 22.0], 14)[:40]
+    one_speed = table_of(3.0, defect_db=np.where(speeds == 10.0, 15.0, 4.0))
+    one_speed.speed = speeds
+    assert effect.independent_evidence(one_speed, None) == ''
+    two_speeds = table_of(3.0, defect_db=np.where(speeds < 20.0, 15.0, 4.0))
+    two_speeds.speed = speeds
+    assert 'envelope peaks 15 dB' in effect.independent_evidence(two_speeds, None)
+
+
+def test_beside_a_defect_a_spectral_shape_change_is_no_background_evidence():
+    background = get_effect('background_vibration')
+    location = SimpleNamespace(spectrum=None, shape=SimpleNamespace(floor_added=True, note='the shape changes'))
+    table = table_of(3.0)
+    assert background.spectral_evidence(table, location) == 'spectrum: the shape changes'
+    assert background.spectral_evidence(table, location, beside=get_effect('surface_defect')) == ''
+
+
 def _verdict(kind, seed):
     table, truth = synthetic_table(np.random.default_rng(seed), kind,
                                    plan=SyntheticPlan(condition_indicators=True, sessions=2))

@@ -81,3 +81,22 @@ def test_too_few_samples_or_no_speed_give_nan_not_an_error():
     found = condition_indicators(np.random.default_rng(0).standard_normal(4000), RATE, 0.0, BAND, ORDERS)
     assert math.isfinite(found.kurtosis) and found.envelope_peaks == ()
     assert found.as_dict()['envelope_peaks'] == []
+
+
+def test_the_floors_are_nanmedians_of_every_row_whatever_its_nans():
+    """The floor's fast path (rows' finite heads at once) gives np.nanmedian's value on every kind of row."""
+    import warnings
+    from prsm_lube_ros.estimation.condition_indicators import _floors, FLOOR_LOWEST_ORDER, ORDER_GRID
+    rng = np.random.default_rng(1)
+    grids = rng.exponential(size=(60, ORDER_GRID.size))
+    for k in range(50):
+        grids[k, ORDER_GRID.size - 7 * k:] = np.nan          # heads of every length, the full row included
+    grids[50, 100] = np.nan                                   # a hole
+    grids[51, :] = np.nan                                     # nothing
+    grids[52, 40:] = np.nan                                   # nothing above the floor's lowest order
+    grids[53, 500:510] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)
+        expected = np.nanmedian(grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER], axis=1)
+    assert np.array_equal(_floors(grids), expected, equal_nan=True)
+    assert np.isnan(_floors(grids)[51]) and np.isfinite(_floors(grids)[:50]).all()

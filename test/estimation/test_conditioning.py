@@ -113,7 +113,9 @@ def test_the_band_edge_follows_the_first_rate_and_a_slower_one_is_refused_in_one
     assert DEFAULT_BAND.resolved(2000.0).high == 800.0
     _, builder = steady_windows(0.0, 2000.0, band=BAND_4K)
     line = ('vibration: sample rate 2000 Hz cannot cover the analysis band 0.5-1600 Hz (needs at least 4000 Hz: '
-            'upper edge at most 0.8 x the Nyquist frequency); record faster or calibrate at this rate')
+            'upper edge at most 0.8 x the Nyquist frequency); record faster, or calibrate in a band every recording '
+            'covers (prsm-lube calibrate --band-high HZ, at most 800 Hz for this rate; 1600 Hz serves every rate from '
+            '4000 Hz up)')
     assert builder.band_refusal == line
     assert builder.take_problems() == [line + '; 7 block(s) left out']
     with pytest.raises(InputError, match='analysis band'):
@@ -128,8 +130,10 @@ def test_a_recording_below_the_band_is_refused_by_the_pipeline(paper_experiment)
         recording_windows(paper_experiment / 'stage_1', lead=0.005, settings=WindowSettings(band=band))
     assert str(refused.value) == (
         f'{paper_experiment / "stage_1"}: vibration: sample rate 4000 Hz cannot cover the analysis band '
-        '0.5-4000 Hz (needs at least 10000 Hz: upper edge at most 0.8 x the Nyquist frequency); record faster or '
-        'calibrate at this rate')
+        '0.5-4000 Hz (needs at least 10000 Hz: upper edge at most 0.8 x the Nyquist frequency); '
+        'record faster, or calibrate in a band every recording covers '
+        '(prsm-lube calibrate --band-high HZ, at most 1600 Hz for this rate; '
+        '1600 Hz serves every rate from 4000 Hz up)')
 
 
 def test_spectrum_segments_resolve_the_lowest_order_at_the_lowest_speed():

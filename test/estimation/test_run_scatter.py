@@ -9,7 +9,8 @@ import pytest
 
 from prsm_lube_ros.estimation.assessment import Assessor
 from prsm_lube_ros.estimation.calibration import fit_windows
-from prsm_lube_ros.estimation.run_scatter import ASSUMED_RUN_STD, estimate_run_scatter, ols_covariance, RunScatter
+from prsm_lube_ros.estimation.run_scatter import (ASSUMED_RUN_STD, estimate_run_scatter, ols_covariance, RunScatter,
+                                                  student_t_quantile)
 from prsm_lube_ros.estimation.windowing import Window
 from prsm_lube_ros.physics.vibration_model import acceleration_amplitude, ModelConstants
 
@@ -125,3 +126,18 @@ def test_a_condition_recorded_in_one_run_never_gets_sigma_zero():
     assessor = Assessor(calibration)
     run = assessor.assess_run([window(*PAPER[0], 0.1, 0)] * 2)
     assert run.theta_oil_std > 0.01
+
+
+@pytest.mark.parametrize('dof', [1, 2, 3, 4, 5, 9, 10, 57, 299, 300, 301, 1000, 10 ** 6])
+@pytest.mark.parametrize('probability', [0.5, 0.6, 0.8413447460685429, 0.9, 0.975])
+def test_the_pure_python_t_quantile_is_scipys(dof, probability):
+    """The predictive factor's quantile, computed without importing scipy, equals scipy.special.stdtrit."""
+    from scipy.special import stdtrit
+    expected = float(stdtrit(dof, probability))
+    assert student_t_quantile(dof, probability) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize('dof, probability', [(0, 0.8), (2.5, 0.8), (3, 1.0), (3, 0.2)])
+def test_the_t_quantile_refuses_what_it_cannot_compute(dof, probability):
+    with pytest.raises(ValueError, match='Student t quantile'):
+        student_t_quantile(dof, probability)

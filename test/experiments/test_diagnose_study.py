@@ -153,3 +153,15 @@ def test_misses_say_what_the_ideal_test_does_on_the_recording():
     size = EffectSize(0.026, 0.0005, 0.039, 40, recorded_statistic=5.75).as_json()
     text = misses_markdown(records, [{'kind': 'lubricant_depletion', 'seed': 13, 'size': size}], 'cmd')
     assert '| 2.6 % | 3.9 % | 0.67 | 0.1 % | 5.8 of 13.7: misses |' in text
+
+
+def test_cases_of_one_drawn_form_are_chosen_from_the_draws_alone():
+    from prsm_lube_ros.experiments.random_study import case_forms
+    args = diagnose_study._parser().parse_args(['--kinds', 'resonance', '--seeds', '2', '--first-seed', '50',
+                                                '--form-contains', 'below the mesh band'])
+    cases = diagnose_study._cases_of_form(['resonance'], ['resonance', 'background_vibration'], args)
+    assert len(cases) == 2 and all(seed >= 50 for _, seed, _, _ in cases)
+    for kind, seed, pool, quick in cases:
+        assert 'below the mesh band' in case_forms(kind, seed, list(pool), quick=quick)[0]
+    skipped = [seed for seed in range(50, max(seed for _, seed, _, _ in cases)) if seed not in {c[1] for c in cases}]
+    assert all('below the mesh band' not in case_forms('resonance', seed, ['resonance'])[0] for seed in skipped)

@@ -18,7 +18,7 @@ pytest.importorskip('rclpy')
 pytest.importorskip('prsm_lube_ros.msg')
 
 from prsm_lube_ros.contract import LUBRICATION_TASK, SOURCE_TASK, status_name, SURFACE_TASK  # noqa: E402
-from prsm_lube_ros.nodes.lubrication_estimator import ActuatorChannel  # noqa: E402
+from prsm_lube_ros.nodes.lubrication_estimator import ActuatorChannel, INPUT_KEYS, INPUT_TASK  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[2] / 'config' / 'diagnostic_aggregator.yaml'
 
@@ -44,7 +44,7 @@ def estimator_status_name(node_name, actuator):
 
 def test_every_analyzer_is_a_generic_analyzer_with_a_path():
     found = analyzers()
-    assert set(found) == {'lubrication', 'surface_condition', 'sensor_sources'}
+    assert set(found) == {'lubrication', 'surface_condition', 'sensor_sources', 'inputs'}
     for analyzer in found.values():
         assert analyzer['type'] == 'diagnostic_aggregator/GenericAnalyzer' and analyzer['path']
 
@@ -71,3 +71,10 @@ def test_a_surface_condition_status_is_claimed_by_the_surface_analyzer_only(node
 def test_a_bridge_status_is_claimed_by_the_sensor_analyzer_only(node_name, namespace):
     name = status_name(node_name, namespace, SOURCE_TASK)
     assert [key for key, a in analyzers().items() if claims(a, name)] == ['sensor_sources']
+
+
+@pytest.mark.parametrize('node_name, actuator', NAMES)
+@pytest.mark.parametrize('key', INPUT_KEYS)
+def test_an_input_status_is_claimed_by_the_inputs_analyzer_only(node_name, actuator, key):
+    name = status_name(node_name, actuator, INPUT_TASK.format(key=key))
+    assert [k for k, a in analyzers().items() if claims(a, name)] == ['inputs']

@@ -455,9 +455,10 @@ def test_several_actuators_each_have_topics_status_and_service(graph, tmp_path):
     assert not other
     wait_for(lambda: status_of(diagnostics[-1], left).level == bytes([WARN]), 5, 'left WARN')
     last = diagnostics[-1]
-    assert [s.name for s in last.status] == [f'lubrication_estimator: {a} {task}' for a in (left, right)
-                                             for task in ('lubrication', 'surface condition')]
-    assert [s.hardware_id for s in last.status] == ['EMA-L 0042'] * 2 + ['ema_right/prsm'] * 2
+    judged = [s for s in last.status if not s.name.endswith(' input')]      # the input statuses: test_ros_stack
+    assert [s.name for s in judged] == [f'lubrication_estimator: {a} {task}' for a in (left, right)
+                                        for task in ('lubrication', 'surface condition')]
+    assert [s.hardware_id for s in judged] == ['EMA-L 0042'] * 2 + ['ema_right/prsm'] * 2
     assert status_of(last, f'{right} surface').level == bytes([STALE])
     assert status_of(last, left).hardware_id == 'EMA-L 0042'
     assert status_of(last, right).hardware_id == 'ema_right/prsm'
@@ -1106,7 +1107,8 @@ def test_a_spall_is_an_error_with_its_component_and_theta_is_withheld_not_insuff
     assert judged and all(math.isnan(s.theta_oil) and s.message.startswith('theta_oil withheld') for s in judged)
     for array in arrays:
         for s in array.status:
-            if ros_convert.status_level(s) == ERROR and 'surface' not in s.name:
+            # the input statuses judge the synthetic 2026-01-01 stamps as too old: not the lubrication's
+            if ros_convert.status_level(s) == ERROR and not s.name.endswith((' surface condition', ' input')):
                 assert False, f'lubrication ERROR while the spall was being screened: {s.message}'
     assert node.channels[0].surface.suspected
 

@@ -25,7 +25,7 @@ from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from prsm_lube_ros.errors import InputError  # noqa: E402
-from prsm_lube_ros.nodes.launch_arguments import bringup_plan, LAUNCH_ARGUMENTS  # noqa: E402
+from prsm_lube_ros.nodes.launch_arguments import LAUNCH_ARGUMENTS  # noqa: E402
 from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator  # noqa: E402
 from prsm_lube_ros.nodes.sensor_bridge import ManagedSensorBridge, SensorBridge  # noqa: E402
 from prsm_lube_ros.srv import Calibrate  # noqa: E402
@@ -199,7 +199,7 @@ def test_an_actuator_entry_that_is_not_a_name_is_one_line():
         rclpy.try_shutdown(context=context)
 
 
-# -- 2. lifecycle transitions are logged once; the launch file's arguments ----------------------------
+# -- 2. lifecycle transitions are logged once (the launch file's arguments: test_launch_arguments.py) ----
 def test_each_lifecycle_transition_is_logged_once(sides):
     nodes, probe = sides
     lines = []
@@ -218,27 +218,6 @@ def test_each_lifecycle_transition_is_logged_once(sides):
                 'deactivate: active -> inactive', 'cleanup: inactive -> unconfigured']
     wait_for(lambda: all(e in lines for e in expected), TIMEOUT, 'the transitions logged')
     assert [line for line in lines if ' -> ' in line] == expected
-
-
-def test_the_launch_arguments_become_namespace_log_level_parameter_files_and_autostart(tmp_path):
-    site = tmp_path / 'site.yaml'
-    site.write_text("'/**/lubrication_estimator':\n  ros__parameters:\n    warn_below: 0.9\n")
-    names = [a[0] for a in LAUNCH_ARGUMENTS]
-    assert names[:5] == ['namespace', 'log_level', 'use_sim_time', 'params_file', 'autostart']
-    default = bringup_plan({}, '/share/config')
-    assert default.autostart and default.estimator.namespace == 'prsm' == default.bridge.namespace
-    assert default.estimator.parameters == ('/share/config/estimator.yaml', {'use_sim_time': False})
-    assert default.bridge.executable == 'sensor_bridge_managed'
-    plan = bringup_plan({'namespace': '/rig/left', 'log_level': 'DEBUG', 'use_sim_time': 'true',
-                         'params_file': str(site), 'autostart': 'false'}, '/share/config')
-    assert plan.estimator.namespace == '/rig/left' and not plan.autostart
-    assert plan.bridge.ros_arguments == ('--log-level', 'debug')
-    assert plan.estimator.parameters == ('/share/config/estimator.yaml', str(site), {'use_sim_time': True})
-    assert bringup_plan({'bridge': 'false'}, '/c').bridge is None
-    for bad, word in (({'log_level': 'loud'}, 'log_level'), ({'autostart': 'yes please'}, 'autostart'),
-                      ({'namespace': 'rig left'}, 'namespace'), ({'params_file': str(tmp_path / 'no')}, 'params_file')):
-        with pytest.raises(InputError, match=word):
-            bringup_plan(bad, '/c')
 
 
 def test_the_launch_file_loads_where_launch_is_installed():

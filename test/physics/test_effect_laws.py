@@ -102,3 +102,30 @@ def test_resonance_band_position_and_natural_frequency_per_order():
     assert resonance.band_position(15.0, 10.0, 20.0) == 'inside the speed band'
     assert resonance.band_position(25.0, 10.0, 20.0) == 'above the speed band'
     assert resonance.natural_frequency(2 * math.pi, 3) == pytest.approx(3.0)
+
+
+def test_a_mode_below_the_mesh_band_lies_between_the_low_orders_and_the_mesh():
+    rng = np.random.default_rng(7)
+    top, bottom, mesh = 20.0, 10.0, (3.75, 11.25, 22.5)
+    for _ in range(50):
+        law = resonance.draw_below_mesh(rng, mesh_orders=mesh, top_speed=top, bottom_speed=bottom)
+        assert law is not None and law.order in mesh[1:]      # 3.75 x 10 rad/s lies below 3 x 20 rad/s: no gap
+        assert max(resonance.LOW_ORDERS) * top / (2 * math.pi) < law.natural_frequency \
+            < law.order * bottom / (2 * math.pi)
+        assert law.frequency_ratio(bottom) > 1.0               # every speed past resonance for the mesh order
+    # a speed band so wide that every mesh order overlaps the low orders: no such mode
+    assert resonance.draw_below_mesh(rng, mesh_orders=(3.75,), top_speed=40.0, bottom_speed=10.0) is None
+
+
+def test_the_simulation_hook_draws_modes_below_the_mesh_band_too():
+    from prsm_lube_ros.physics.effects import simulation, SimulationContext
+    from prsm_lube_ros.physics.actuator import Actuator
+    context = SimulationContext(actuator=Actuator(), speeds=(10.0, 20.0), loads=(100.0,), stroke=0.1,
+                                session_revolutions=100.0, reference_amplitude=1.0, sample_rate=10000.0,
+                                band_high=4000.0)
+    hook = simulation('resonance')
+    words = [hook.form_words(vars(hook.draw(np.random.default_rng(seed), context)), context.speeds)[0]
+             for seed in range(80)]
+    below_mesh = sum('below the mesh band' in w for w in words)
+    assert 0 < below_mesh < len(words)
+    assert any(w.startswith('mode above') for w in words) and any(w.startswith('mode inside') for w in words)

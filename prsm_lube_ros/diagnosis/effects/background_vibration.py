@@ -58,6 +58,7 @@ class BackgroundVibration(Effect, law.Extension):
     equations = 'A = sqrt(A_22^2 + B^2)'
     parameter_names = ('background_fraction',)
     covariate = 'speed'
+    adds_power = True
     form = law.FORMS[0]
     to_separate = ('lower screw speeds (the background dominates there), a record at standstill with the drive '
                    'on, and vibration spectra')

@@ -65,6 +65,9 @@ class Effect(Extension):
     #: The law can mimic other effects in the amplitudes (free exponents of speed, load and revolutions), so the
     #: effect is a candidate only where :meth:`independent_evidence` shows its signature on the recording.
     requires_evidence: bool = False
+    #: The law adds power beside the contacts' (A^2 = A_22^2 + B^2): its gain depends on the amplitude it is added
+    #: to, so a combination of two effects applies it last (:class:`~prsm_lube_ros.diagnosis.combined.CombinedEffect`).
+    adds_power: bool = False
 
     def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""

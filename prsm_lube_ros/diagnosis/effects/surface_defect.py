@@ -91,6 +91,22 @@ def _line_levels(columns: dict[str, np.ndarray]) -> np.ndarray:
     return columns['run_defect_db'] if _pooled(columns) else columns['defect_db']
 
 
+def _follows_the_order(table: WindowTable, peaked: np.ndarray) -> bool:
+    """Whether the envelope lines at a defect order show at two screw speeds or more (or one is all recorded).
+
+    Strikes come at a fixed order of the rotation, so a defect's line stays at
+    its order at every speed; a band fixed in Hz (a structural mode ringing, a
+    line from elsewhere) meets a given order at one speed only, and there its
+    envelope can read as a line at that order.  One speed level alone cannot
+    tell them apart and is taken as it is.
+    """
+    from ...estimation.calibration import operating_levels
+    speeds = np.abs(table.speed)
+    if len(operating_levels(speeds)) < 2:
+        return True
+    return len(operating_levels(speeds[peaked])) >= 2 if peaked.any() else False
+
+
 @register
 class SurfaceDefect(Effect, law.Extension):
     """A spall or pit struck by every passing contact: impulsive power adding to the contacts' (steady form)."""
@@ -108,6 +124,10 @@ class SurfaceDefect(Effect, law.Extension):
                    'several speeds and loads, and repeated conditions early and late in the session')
     grows = False
     requires_evidence = True
+    #: The strikes ring a structural mode fixed in Hz, and the impulsive power grows with speed by its own exponent
+    #: (impact velocity, strike rate), not the contacts' omega^2 law: its share of the power, and so the spectrum's
+    #: shape, changes between the speeds by the defect alone (a shape change beside it is no background evidence).
+    changes_spectral_shape = True
 
     def applicable(self, table: WindowTable) -> str:
         """Needs the condition indicators (impulsiveness is what tells a defect apart) and known revolutions."""
@@ -165,7 +185,7 @@ class SurfaceDefect(Effect, law.Extension):
 
         :data:`IMPULSIVE_SHARE` of the windows with band kurtosis over
         :data:`IMPULSIVE_KURTOSIS`, or envelope peaks of :data:`DEFECT_DB` at a
-        defect order in as many.
+        defect order in as many, at two screw speeds or more (:func:`_follows_the_order`).
         """
         columns = indicators(table)
         if columns is None:
@@ -173,6 +193,8 @@ class SurfaceDefect(Effect, law.Extension):
         kurtosis, peaks = columns['kurtosis'], _line_levels(columns)
         impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
         peaked = np.isfinite(peaks) & (peaks >= DEFECT_DB)
+        if not _follows_the_order(table, peaked):
+            peaked = np.zeros_like(peaked)
         parts = []
         if impulsive >= IMPULSIVE_SHARE:
             parts.append(f'{100 * impulsive:.0f} % of the windows impulsive (band kurtosis over '

@@ -40,8 +40,8 @@ if TYPE_CHECKING:
 
     from . import ContactState, SampleState, SimulationContext, StreamRandom
 
-__all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension', 'HIGHEST_RINGING',
-           'INSIDE_RANGE', 'Law',
+__all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_MESH_SHARE', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension',
+           'HIGHEST_RINGING', 'INSIDE_RANGE', 'LOW_ORDERS', 'Law', 'MESH_GAP_MARGIN',
            'MODE_STREAM_KEY', 'RATIO_RANGE', 'Resonance', 'Simulation', 'band_position', 'draw', 'magnification',
            'natural_frequency']
 
@@ -53,6 +53,12 @@ BELOW_RATIO_RANGE = (1.3, 3.0)
 INSIDE_RANGE = (0.25, 0.75)
 #: Where the mode lies against the speed band.
 BANDS = ('above', 'inside', 'below')
+#: The low rotation orders (run-out, misalignment): they sweep 1-3 times the screw frequency.
+LOW_ORDERS = (1.0, 2.0, 3.0)
+#: Share of the drawn modes placed below the band the mesh orders sweep, above the low orders' band.
+BELOW_MESH_SHARE = 0.25
+#: A mode below the mesh band keeps this ratio from the low orders' top and the mesh order's bottom frequency.
+MESH_GAP_MARGIN = 1.1
 #: Drawn range of the damping ratio of the structural mode.
 DAMPING_RANGE = (0.02, 0.20)
 #: Key of the mode's own random stream in a simulated recording (:meth:`.StreamRandom.keyed`).
@@ -157,6 +163,29 @@ def draw(rng: np.random.Generator, *, order: float, top_speed: float, bottom_spe
     return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(damping))
 
 
+def draw_below_mesh(rng: np.random.Generator, *, mesh_orders: Sequence[float], top_speed: float,
+                    bottom_speed: float) -> Resonance | None:
+    """A mode between the low orders' band and the band a mesh order sweeps, or None where they overlap.
+
+    The low orders (:data:`LOW_ORDERS`) reach ``3 f_S`` at the top speed, a
+    mesh order m (roller pass n_p and its multiples) starts at ``m f_S`` at the
+    lowest speed; the mode's natural frequency f_r is drawn log-uniform between
+    them (each :data:`MESH_GAP_MARGIN` away), excited by that mesh order from
+    above: every recorded speed is past resonance for it (r > 1 throughout, up
+    to ``m f_min / (3 f_max)`` at the lowest speed), while the low orders stay
+    below f_r.  Speeds in rad/s.
+    """
+    top, bottom = abs(top_speed), abs(bottom_speed)
+    low_top = max(LOW_ORDERS) * top / (2.0 * math.pi) * MESH_GAP_MARGIN
+    gaps = [float(m) for m in mesh_orders if m * bottom / (2.0 * math.pi) / MESH_GAP_MARGIN > low_top]
+    if not gaps:
+        return None
+    order = float(choose(rng, tuple(gaps)))
+    high = order * bottom / (2.0 * math.pi) / MESH_GAP_MARGIN
+    natural = math.exp(rng.uniform(math.log(low_top), math.log(high)))
+    return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(rng.uniform(*DAMPING_RANGE)))
+
+
 class _Mode(Waveform):
     """The mode ringing at f_r in the contact signal: a resonator driven by its own white noise."""
 
@@ -199,13 +228,23 @@ class Simulation(EffectSimulation):
         """:func:`draw` against the plan's speed band.
 
         The exciting order is one of 1, 2, 3, the roller pass order n_p (Eq. 1), 6, 3 n_p and 6 n_p.
+        Then, in :data:`BELOW_MESH_SHARE` of the draws, the mode is placed
+        below the band the mesh orders n_p, 3 n_p, 6 n_p sweep and above the
+        low orders' (:func:`draw_below_mesh`) where the plan leaves such a gap.
+        That choice is drawn last, so the other draws stay those of the studies
+        recorded before it.
         """
         from ..kinematics import roller_revolution_speed
         actuator = context.actuator
         roller_pass = float(actuator.roller_count * roller_revolution_speed(
             1.0, actuator.screw_mean_diameter, actuator.roller_mean_diameter))
-        return draw(rng, order=roller_pass, top_speed=max(context.speeds), bottom_speed=min(context.speeds),
-                    orders=(1, 2, 3, roller_pass, 6, 3 * roller_pass, 6 * roller_pass))
+        top, bottom = max(context.speeds), min(context.speeds)
+        law = draw(rng, order=roller_pass, top_speed=top, bottom_speed=bottom,
+                   orders=(1, 2, 3, roller_pass, 6, 3 * roller_pass, 6 * roller_pass))
+        if rng.uniform() < BELOW_MESH_SHARE:
+            return draw_below_mesh(rng, mesh_orders=(roller_pass, 3 * roller_pass, 6 * roller_pass),
+                                   top_speed=top, bottom_speed=bottom) or law
+        return law
 
     def amplitude_factor(self, law: Resonance, state: ContactState) -> np.ndarray | float:
         """``|H(r)|`` at the screw speed."""
@@ -217,6 +256,8 @@ class Simulation(EffectSimulation):
             return []
         resonant = 2.0 * math.pi * params['natural_frequency'] / params['order']
         band = band_position(resonant, min(speeds), max(speeds)).replace('speed band', 'band')
+        if band.startswith('below') and (params['natural_frequency'] > max(LOW_ORDERS) * max(speeds) / (2.0 * math.pi)):
+            band = 'below the mesh band, above the low orders'
         return [f'mode {band}, order {params["order"]:.3g}']
 
     def waveform(self, law: Resonance, sample_rate: float, random: StreamRandom) -> Waveform | None:
