@@ -8,10 +8,12 @@ id) recordings in a loop, each with 2 runs and 600 windows, through
 :func:`prsm_lube_ros.fleet.history.add_assessment`; it is killed with SIGKILL
 at a random moment (uniform over 0.05-1.5 s after it starts writing), ``--kills``
 times on the same history.  After every kill plain DuckDB reads
-``recordings/*/*/runs.parquet`` and ``windows.parquet`` (no package code) and
-counts duplicate rows (a recording's run or window twice) and half-written
+``runs/*/*.parquet`` and ``windows/*/*.parquet`` (layout 4, no package code)
+and counts duplicate rows (a recording's run or window twice) and half-written
 recordings (a content hash or assessment time in one table and not the other,
-or runs without their windows).  The next writer must leave no stale
+or runs without their windows: each table is renamed into place on its own,
+so a kill between the two renames of one commit leaves the windows one
+assessment ahead until the next writer).  The next writer must leave no stale
 temporary of a killed one.
 
 Calibration: a writer calls :func:`save_calibration` on one ``--out`` path in a
@@ -91,9 +93,9 @@ def run_killed(script: str, rng: random.Random) -> None:
 def plain_read(history: Path) -> dict:
     """Duplicate rows and half-written recordings as plain DuckDB sees them."""
     import duckdb
-    table = {name: f"read_parquet('{history}/recordings/*/*/{name}.parquet', hive_partitioning = true)"
+    table = {name: f"read_parquet('{history}/{name}/*/*.parquet', hive_partitioning = true)"
              for name in ('runs', 'windows')}
-    if not list(history.glob('recordings/*/*/runs.parquet')):
+    if not list(history.glob('runs/*/*.parquet')) or not list(history.glob('windows/*/*.parquet')):
         return {'recordings': 0, 'duplicate_rows': 0, 'half_written': 0}
     duplicates = 0
     for name, key in (('runs', 'run_index'), ('windows', 'start')):

@@ -176,15 +176,15 @@ def size_bound(work: Path, seeds: dict, rng: random.Random) -> tuple[str, str]:
 
 
 def _huge_parquet(work: Path, seeds: dict) -> tuple[str, str]:
-    from prsm_lube_ros.fleet.history import read_table, RECORDINGS
-    folder = work / 'history' / RECORDINGS / 'actuator=a' / f'recording={"0" * 16}'
-    folder.mkdir(parents=True)
-    shutil.copy(seeds['huge_parquet'], folder / 'runs.parquet')
+    from prsm_lube_ros.fleet.history import read_table
+    file = work / 'history' / 'runs' / 'actuator=a' / f'{"0" * 16}.parquet'
+    file.parent.mkdir(parents=True)
+    shutil.copy(seeds['huge_parquet'], file)
     problems: list[str] = []
     table = read_table(work / 'history', on_problem=problems.append)
     if table.num_rows:
         return 'silent', f'{table.num_rows} rows loaded'
-    return _refusal(problems[0], str(folder / 'runs.parquet')) if problems else ('silent', 'nothing said')
+    return _refusal(problems[0], str(file)) if problems else ('silent', 'nothing said')
 
 
 def truncation(work: Path, seeds: dict, rng: random.Random) -> tuple[str, str]:
@@ -215,19 +215,18 @@ def _commit(history: str, bag: str, actuator: str, barrier: str, writers: int) -
 
 
 def concurrent_writers(work: Path, seeds: dict, rng: random.Random) -> tuple[str, str]:
-    """4 writers commit one recording under two actuator ids at once: one folder, no error."""
+    """4 writers commit one recording under two actuator ids at once: one runs file, no error."""
     from concurrent.futures import ProcessPoolExecutor
     import multiprocessing
-    from prsm_lube_ros.fleet.history import RECORDINGS
     bag = work / 'a.mcap'
     bag.write_bytes(rng.randbytes(64))
     (work / 'barrier').mkdir()
     with ProcessPoolExecutor(4, mp_context=multiprocessing.get_context('fork')) as pool:
         errors = [e for e in pool.map(_commit, [str(work / 'history')] * 4, [str(bag)] * 4,
                                       ['/left', '/right'] * 2, [str(work / 'barrier')] * 4, [4] * 4) if e]
-    folders = list((work / 'history' / RECORDINGS).glob('actuator=*/recording=*'))
-    if errors or len(folders) != 1:
-        return 'damaged_output', f'{len(folders)} folders; {errors[:1]}'
+    files = list((work / 'history' / 'runs').glob('actuator=*/*.parquet'))
+    if errors or len(files) != 1:
+        return 'damaged_output', f'{len(files)} runs files; {errors[:1]}'
     return 'ok', ''
 
 

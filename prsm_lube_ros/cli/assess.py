@@ -40,14 +40,23 @@ def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser])
     parser.add_argument('--history', metavar='DIR',
                         help='add runs and windows to this Parquet history (re-assessed recordings replace theirs)')
     parser.add_argument('--actuator-id', default=None, metavar='ID',
-                        help='actuator the recordings belong to in the history: an id, "folder" for the name of '
-                        'the folder holding each recording, or (default) the namespace, refused when the '
+                        help='actuator the recordings belong to in the history: an id; "folder" for the name of '
+                        'the real folder holding each recording (symlinks resolved; two folders of one name are '
+                        'refused); "recording" for the id each bag carries (custom_data actuator_id in its '
+                        'metadata.yaml). Default: the id the bag carries, else its folder\'s, refused when the '
                         'recordings lie in more than one folder')
+    parser.add_argument('--actuator-map', default=None, metavar='FILE',
+                        help='actuator of each recording from FILE: lines "PATH,ID" (a recording or a folder '
+                        'holding recordings, relative to FILE); a recording it does not cover is refused')
     parser.add_argument('--jobs', type=int, default=1, metavar='N',
                         help='assess N recordings at a time in local processes (default 1)')
     parser.add_argument('--scheduler', default=None, metavar='ADDRESS',
                         help='assess on a Dask distributed cluster at ADDRESS, or "local" for a local cluster '
-                        'of --jobs workers; a tcp:// address that sends no Dask handshake within 10 s is refused')
+                        'of --jobs workers; a tcp:// address that sends no Dask handshake, or a scheduler without a '
+                        'worker, within --scheduler-timeout is refused')
+    parser.add_argument('--scheduler-timeout', type=float, default=None, metavar='S',
+                        help='s to wait on --scheduler: to connect, for a first worker, and without any worker while '
+                        'recordings are left (default 10)')
     parser.set_defaults(func=run)
 
 
@@ -77,8 +86,11 @@ def run(args: argparse.Namespace) -> int:
     to_history = None
     if args.history:
         from ..fleet.history import history_writer
-        to_history = history_writer(args.history, args.calibration, calibration,
-                                    actuator_id=_actuator_id(args), namespace=args.namespace)
+        from ..fleet.identity import name_actuators
+        identities = name_actuators(args.bags, given=args.actuator_id, actuator_map=args.actuator_map,
+                                    namespace=args.namespace)
+        to_history = history_writer(args.history, args.calibration, calibration, identities=identities,
+                                    namespace=args.namespace)
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
     refused = []
 
@@ -91,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
         bar.update(1)
 
     try:
-        outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler, on_done=done)
+        outcomes = assess_bags(args.bags, job, jobs=args.jobs, scheduler=args.scheduler, on_done=done,
+                               timeout=_scheduler_timeout(args))
     finally:
         bar.close()
     results = [outcome.assessment for outcome in outcomes if outcome.assessment is not None]
@@ -197,21 +210,9 @@ def _condition_report(calibration: Calibration, settings: WindowSettings, bags: 
                                             if note) + '.'], paths=bags)
 
 
-def _actuator_id(args: argparse.Namespace) -> str:
-    """The history's actuator id: ``--actuator-id``, else the namespace when all recordings share one folder.
-
-    Recordings from several folders under the default id would merge distinct
-    actuators into one (invented relubrications, a confident wrong forecast):
-    refused in one line.
-    """
-    from pathlib import Path
-    from ..errors import InputError
-    if args.actuator_id:
-        return args.actuator_id
-    folders = sorted({str(Path(bag).resolve().parent) for bag in args.bags})
-    if len(folders) > 1:
-        names = ', '.join(Path(folder).name for folder in folders[:3]) + (', ...' if len(folders) > 3 else '')
-        raise InputError(f'--history: the recordings lie in {len(folders)} folders ({names}) and would all be '
-                         f'actuator {args.namespace.strip("/") or args.namespace!r}; say which actuator each is: '
-                         '--actuator-id folder (the folder\'s name) or --actuator-id ID')
-    return args.namespace
+def _scheduler_timeout(args: argparse.Namespace) -> float:
+    """``--scheduler-timeout``, checked (a positive number of seconds)."""
+    from ..fleet.scheduler import CONNECT_TIMEOUT
+    from ..validation import require_positive
+    return CONNECT_TIMEOUT if args.scheduler_timeout is None else require_positive('--scheduler-timeout',
+                                                                                   args.scheduler_timeout)

@@ -25,6 +25,7 @@ from ..errors import InputError
 from ..estimation.calibration import Calibration
 from ..estimation.pipeline import assess_recording, recording_windows, RecordingAssessment, require_usable
 from ..estimation.windowing import WindowSettings
+from .scheduler import CONNECT_TIMEOUT
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
@@ -74,18 +75,22 @@ def assess_bag(path: str, job: BagJob) -> BagOutcome:
 
 
 def assess_bags(paths: Sequence[str] | Sequence[Path], job: BagJob, *, jobs: int = 1, scheduler: str | None = None,
-                on_done: Callable[[BagOutcome], object] | None = None) -> list[BagOutcome]:
+                on_done: Callable[[BagOutcome], object] | None = None,
+                timeout: float = CONNECT_TIMEOUT) -> list[BagOutcome]:
     """:func:`assess_bag` for every path; outcomes in the order of ``paths``.
 
     ``jobs`` > 1 runs that many local processes; ``scheduler`` (an address or
     ``'local'``) runs on Dask instead (``jobs`` workers for ``'local'``).
     ``on_done(outcome)`` is called in the calling process as each one finishes.
+    ``timeout`` (s) bounds each wait on Dask: to connect, for a first worker,
+    and without any worker while recordings are left (those then fail, one
+    line each).
     """
     paths = [str(p) for p in paths]
     if not isinstance(jobs, int) or jobs < 1:
         raise InputError(f'--jobs must be a whole number >= 1, got {jobs!r}')
     if scheduler:
-        outcomes = _on_dask(paths, job, scheduler, jobs, on_done)
+        outcomes = _on_dask(paths, job, scheduler, jobs, on_done, timeout)
     elif jobs > 1 and len(paths) > 1:
         outcomes = _in_processes(paths, job, jobs, on_done)
     else:
@@ -135,31 +140,32 @@ def batches(paths: Sequence[str], workers: int) -> list[list[str]]:
 
 
 def _on_dask(paths: list[str], job: BagJob, scheduler: str, jobs: int,
-             on_done: Callable[[BagOutcome], object] | None) -> dict[str, BagOutcome]:
+             on_done: Callable[[BagOutcome], object] | None, timeout: float) -> dict[str, BagOutcome]:
     """Each recording on Dask, sent as its absolute path (remote workers do not share our working folder).
 
     The outcomes carry the paths as given, so they equal the serial ones.
     """
-    from distributed import as_completed as dask_completed
-    from .scheduler import dask_client
+    from .scheduler import dask_client, finished_batches, scattered
     given = {str(Path(path).resolve()): path for path in dict.fromkeys(paths)}
-    with dask_client(scheduler, jobs) as client:
-        job_future = client.scatter(job, broadcast=True)
-        work = batches(list(given), len(client.scheduler_info().get('workers', {})) or jobs)
-        futures = client.map(assess_batch, work, job=job_future, pure=False)
+    outcomes = {}
+    with dask_client(scheduler, jobs, timeout) as client:
+        workers = len(client.scheduler_info().get('workers', {})) or jobs
+        work = batches(list(given), workers)
+        futures = client.map(assess_batch, work, job=scattered(client, job, scheduler, timeout), pure=False)
         by_key = dict(zip((f.key for f in futures), work))
-        outcomes = {}
-        for future in dask_completed(futures):
-            for sent, outcome in zip(by_key[future.key], _batch_outcomes(by_key[future.key], future)):
+        for future, lost in finished_batches(client, futures, scheduler, timeout):
+            for sent, outcome in zip(by_key[future.key], _batch_outcomes(by_key[future.key], future, lost)):
                 path = given[sent]
                 outcomes[path] = _as_given(outcome, path)
                 if on_done is not None:
                     on_done(outcomes[path])
-        return outcomes
+    return outcomes
 
 
-def _batch_outcomes(paths: Sequence[str], future: distributed.Future) -> list[BagOutcome]:
-    """The batch's outcomes, or an error line for each of its recordings when its worker was lost."""
+def _batch_outcomes(paths: Sequence[str], future: distributed.Future, lost: str = '') -> list[BagOutcome]:
+    """The batch's outcomes, or an error line for each of its recordings when its worker was lost (``lost``: why)."""
+    if lost:
+        return [BagOutcome(path, error=f'{path}: not assessed: {lost}') for path in paths]
     try:
         return future.result()
     except Exception as exc:  # noqa: BLE001 -- a lost worker fails its recordings, not the fleet
@@ -167,11 +173,15 @@ def _batch_outcomes(paths: Sequence[str], future: distributed.Future) -> list[Ba
 
 
 def _as_given(outcome: BagOutcome, path: str) -> BagOutcome:
-    """``outcome`` named by the path as the user gave it (the worker saw the absolute one)."""
+    """``outcome`` named by the path as the user gave it (the worker saw the absolute one): the recording, each
+    run's ``bag``, and its problem and error lines, so that every output equals the serial one."""
+    sent = outcome.path
     assessment = outcome.assessment
     if assessment is not None:
-        assessment = replace(assessment, path=path)
-    return replace(outcome, path=path, assessment=assessment)
+        assessment = replace(assessment, path=path, runs=[replace(run, bag=path) if run.bag == sent else run
+                                                          for run in assessment.runs],
+                             problems=[line.replace(sent, path) for line in assessment.problems])
+    return replace(outcome, path=path, assessment=assessment, error=outcome.error.replace(sent, path))
 
 
 def _compared(item: DataclassInstance) -> tuple:

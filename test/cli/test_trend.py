@@ -89,16 +89,14 @@ def test_a_recording_assessed_twice_at_one_start_time_does_not_break_the_trend(s
     from prsm_lube_ros.fleet.history import read_table
     history = tmp_path / 'history'
     shutil.copytree(small_fleet['history'], history)
-    for folder in sorted((history / 'recordings' / 'actuator=A02').glob('recording=*')):
-        twin_folder = folder.with_name('recording=f' + folder.name[len('recording=') + 1:])
-        twin_folder.mkdir()
+    for runs in sorted((history / 'runs' / 'actuator=A02').glob('*.parquet')):
         for table in ('runs', 'windows'):
-            rows = pq.read_table(folder / f'{table}.parquet')
+            rows = pq.read_table(history / table / runs.parent.name / runs.name)
             twin = rows.set_column(rows.schema.get_field_index('content_hash'), 'content_hash',
                                    pa.array(['f' + h[1:] for h in rows.column('content_hash').to_pylist()]))
             twin = twin.set_column(twin.schema.get_field_index('recording_path'), 'recording_path',
                                    pa.array([p + '.db3' for p in twin.column('recording_path').to_pylist()]))
-            pq.write_table(twin, twin_folder / f'{table}.parquet')
+            pq.write_table(twin, history / table / runs.parent.name / f'f{runs.name[1:]}')
     starts = read_table(history, actuator='A02').column('start').to_pylist()
     assert len(starts) == 2 * len(set(starts))
     report = tmp_path / 'report'

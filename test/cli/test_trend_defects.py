@@ -24,9 +24,9 @@ OTHERS = ('A01', 'A03', 'A04')
 
 
 def recordings(history, actuator):
-    """An actuator's recording folders in time order."""
-    folders = (history / 'recordings' / f'actuator={actuator}').glob('recording=*')
-    return sorted(folders, key=lambda f: min(pq.read_table(f / 'runs.parquet').column('start').to_pylist()))
+    """An actuator's runs files (history layout 4: one per recording) in time order."""
+    files = (history / 'runs' / f'actuator={actuator}').glob('*.parquet')
+    return sorted(files, key=lambda f: min(pq.read_table(f).column('start').to_pylist()))
 
 
 def set_columns(path, **values):
@@ -45,16 +45,17 @@ def histories(small_fleet, tmp_path_factory):
     spalled, cut, old = root / 'spalled', root / 'cut', root / 'old'
     for copy in (spalled, cut, old):
         shutil.copytree(small_fleet['history'], copy)
-    for folder in recordings(spalled, 'A02')[3:]:
-        set_columns(folder / 'runs.parquet', defect_suspected=True, kurtosis=8.3, crest_factor=7.9,
+    for runs in recordings(spalled, 'A02')[3:]:
+        set_columns(runs, defect_suspected=True, kurtosis=8.3, crest_factor=7.9,
                     defect_component='screw raceway', defect_order=6.25, defect_evidence=EVIDENCE)
-    for folder in recordings(cut, 'A02')[3:]:
-        shutil.rmtree(folder)
-    for path in (old / 'recordings').glob('*/*/*.parquet'):
+    for runs in recordings(cut, 'A02')[3:]:
+        runs.unlink()
+        (cut / 'windows' / runs.parent.name / runs.name).unlink()
+    for path in (*(old / 'runs').glob('*/*.parquet'), *(old / 'windows').glob('*/*.parquet')):
         table = pq.read_table(path).drop_columns(list(DEFECT_COLUMNS))
         pq.write_table(table.replace_schema_metadata({**table.schema.metadata,
                                                       b'prsm_lube_ros.history_layout': b'2'}), path)
-    onset = min(pq.read_table(recordings(spalled, 'A02')[3] / 'runs.parquet').column('start').to_pylist())
+    onset = min(pq.read_table(recordings(spalled, 'A02')[3]).column('start').to_pylist())
     return {'spalled': spalled, 'cut': cut, 'old': old, 'onset': onset}
 
 

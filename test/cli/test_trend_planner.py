@@ -18,9 +18,9 @@ from trend_command import actuators, error_lines, table_rows, trend
 def test_a_corrupt_file_and_a_stray_file_are_named_and_the_rest_reported(small_fleet, tmp_path):
     history = tmp_path / 'history'
     shutil.copytree(small_fleet['history'], history)
-    broken = sorted((history / 'recordings' / 'actuator=A02').glob('*/runs.parquet'))[0]
+    broken = sorted((history / 'runs' / 'actuator=A02').glob('*.parquet'))[0]
     broken.write_bytes(b'PAR1 this is not parquet PAR1')
-    (history / 'recordings' / 'README.txt').write_text('notes')
+    (history / 'runs' / 'README.txt').write_text('notes')
     report = tmp_path / 'report'
     result = trend(history, '--report', report, '--as-of', '2026-01-07')
     lines = error_lines(result)

@@ -1,6 +1,6 @@
 # Copyright 2026 prsm_lube_ros developers
 # SPDX-License-Identifier: Apache-2.0
-"""The Parquet history: one folder per recording, re-assessment replaces it, a killed writer leaves it consistent."""
+"""The Parquet history: a file per recording and table, re-assessment replaces it, a killed writer leaves it sound."""
 from concurrent.futures import ProcessPoolExecutor
 import datetime
 import math
@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from prsm_lube_ros.estimation.assessment import RunAssessment
-from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, RECORDINGS, STAGING
+from prsm_lube_ros.fleet.history import add_assessment, actuator_key, content_hash, read_table, STAGING
 
 from fleet_histories import assessment, recording, START
 
@@ -27,9 +27,10 @@ def add(history, path, theta, actuator='/ema_left/prsm', **options):
 def test_rows_land_in_one_folder_per_recording_and_read_back(tmp_path):
     history = tmp_path / 'history'
     bag = recording(tmp_path, 'a.mcap')
-    folder = add(history, bag, 0.9)
-    assert folder.relative_to(history).parts == ('recordings', 'actuator=ema_left.prsm',
-                                                 f'recording={content_hash(bag)[:16]}')
+    runs_file = add(history, bag, 0.9)
+    key = content_hash(bag)[:16]
+    assert runs_file.relative_to(history).parts == ('runs', 'actuator=ema_left.prsm', f'{key}.parquet')
+    assert (history / 'windows' / 'actuator=ema_left.prsm' / runs_file.name).is_file()
     runs = read_table(history, 'runs')
     assert runs.num_rows == 2 and set(runs.column('actuator').to_pylist()) == {'ema_left.prsm'}
     assert runs.column('theta_oil').to_pylist() == [0.9, 0.9]
@@ -37,7 +38,7 @@ def test_rows_land_in_one_folder_per_recording_and_read_back(tmp_path):
     assert read_table(history, 'windows', actuator='/ema_left/prsm').num_rows == 6
     assert read_table(history, 'runs', actuator='other').num_rows == 0
     # each file is plain Parquet, readable without this package's reader, and says what it holds
-    alone = pq.read_table(folder / 'runs.parquet')
+    alone = pq.read_table(runs_file)
     assert alone.num_rows == 2 and str(alone.schema.field('date').type) == 'date32[day]'
     metadata = alone.schema.metadata
     assert metadata[b'prsm_lube_ros.actuator'] == b'/ema_left/prsm' and metadata[b'prsm_lube_ros.table'] == b'runs'
@@ -58,7 +59,7 @@ def test_reassessing_a_recording_replaces_its_rows(tmp_path):
     for path, theta in zip(runs.column('recording_path').to_pylist(), runs.column('theta_oil').to_pylist()):
         by_path.setdefault(Path(path).name, []).append(theta)
     assert by_path == {'a.mcap': [0.7, 0.7], 'b.mcap': [0.8, 0.8]}
-    assert len(list(history.rglob('runs.parquet'))) == 2 and len(list(history.rglob('windows.parquet'))) == 2
+    assert len(list(history.glob('runs/*/*.parquet'))) == 2 and len(list(history.glob('windows/*/*.parquet'))) == 2
     # the same content moved to another path is the same recording
     moved = tmp_path / 'moved'
     moved.mkdir()
@@ -110,7 +111,7 @@ def plain_duckdb(history, table='runs'):
     """(recording_path, theta_oil) rows as plain DuckDB reads them, without this package."""
     duckdb = pytest.importorskip('duckdb')
     return sorted(duckdb.sql(f"select recording_path, theta_oil from read_parquet("
-                             f"'{history}/recordings/*/*/{table}.parquet', hive_partitioning = true)").fetchall())
+                             f"'{history}/{table}/*/*.parquet', hive_partitioning = true)").fetchall())
 
 
 def test_a_writer_killed_before_its_commit_leaves_the_old_rows_and_the_next_one_cleans_up(tmp_path):
@@ -186,9 +187,9 @@ def test_a_recording_moved_to_another_actuator_is_never_in_two_places(tmp_path):
 def test_a_file_that_is_not_parquet_or_not_in_the_layout_is_named_and_skipped(tmp_path):
     history = tmp_path / 'history'
     add(history, recording(tmp_path, 'a.mcap'), 0.9)
-    broken = add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8) / 'runs.parquet'
+    broken = add(history, recording(tmp_path, 'b.mcap', b'b'), 0.8)
     broken.write_bytes(b'PAR1 not really')
-    (history / 'recordings' / 'notes.txt').write_text('hello')
+    (history / 'runs' / 'notes.txt').write_text('hello')
     problems = []
     runs = read_table(history, on_problem=problems.append)
     assert runs.column('theta_oil').to_pylist() == [0.9, 0.9]
@@ -198,7 +199,7 @@ def test_a_file_that_is_not_parquet_or_not_in_the_layout_is_named_and_skipped(tm
         read_table(history)
 
 
-@pytest.mark.parametrize('layout', ['missing', 'empty', 'recordings', 'earlier'])
+@pytest.mark.parametrize('layout', ['missing', 'empty', 'recordings'])
 def test_a_folder_that_is_not_a_history_is_one_line(tmp_path, layout):
     from prsm_lube_ros.errors import ConfigError
     folder = tmp_path / 'h'
@@ -206,8 +207,6 @@ def test_a_folder_that_is_not_a_history_is_one_line(tmp_path, layout):
         folder.mkdir()
     if layout == 'recordings':
         (folder / 'day1.mcap').write_bytes(b'x')
-    if layout == 'earlier':
-        (folder / 'runs').mkdir()
     with pytest.raises(ConfigError, match=str(folder)) as caught:
         read_table(folder)
     assert '\n' not in str(caught.value)
@@ -264,8 +263,9 @@ def test_two_writers_committing_together_never_split_or_double_a_recording(tmp_p
             actuators = ['/left/prsm', '/right/prsm', '/left/prsm', '/right/prsm']
             errors = list(pool.map(_commit_at_once, [history] * 4, [bag] * 4, actuators, [barrier] * 4, [4] * 4))
             assert errors == [''] * 4, errors
-            folders = list((history / RECORDINGS).glob('actuator=*/recording=*'))
-            assert len(folders) == 1, folders
+            files = list(history.glob('runs/actuator=*/*.parquet'))
+            assert len(files) == 1, files
+            assert [f.name for f in history.glob('windows/actuator=*/*.parquet')] == [files[0].name]
             assert read_table(history).num_rows == 2
 
 

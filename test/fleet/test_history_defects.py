@@ -11,14 +11,15 @@ from prsm_lube_ros.fleet.history import DEFECT_COLUMNS, LAYOUT_VERSION, read_tab
 from fleet_histories import assessment, recording, screened, SPALL, write
 
 
-def as_layout_2(folder):
+def as_layout_2(runs_file):
     """Rewrite a recording's files as a writer before the defect screen wrote them (no defect columns, layout 2)."""
     for name in ('runs', 'windows'):
-        table = pq.read_table(folder / f'{name}.parquet')
+        file = runs_file.parents[2] / name / runs_file.parent.name / runs_file.name
+        table = pq.read_table(file)
         table = table.drop_columns(list(DEFECT_COLUMNS))
         metadata = dict(table.schema.metadata)
         metadata[b'prsm_lube_ros.history_layout'] = b'2'
-        pq.write_table(table.replace_schema_metadata(metadata), folder / f'{name}.parquet')
+        pq.write_table(table.replace_schema_metadata(metadata), file)
 
 
 def test_the_defect_columns_are_written_and_read_back_for_runs_and_windows(tmp_path):
@@ -35,8 +36,8 @@ def test_the_defect_columns_are_written_and_read_back_for_runs_and_windows(tmp_p
     assert [w['defect_suspected'] for w in windows] == [False] * 3 + [True] * 3
     assert windows[3]['kurtosis'] == pytest.approx(9.5) and windows[3]['defect_component'] == 'screw raceway'
     # plain Parquet: typed columns, the layout version and units in the metadata
-    alone = pq.read_table(folder / 'runs.parquet')
-    assert alone.schema.metadata[b'prsm_lube_ros.history_layout'] == LAYOUT_VERSION.encode() == b'3'
+    alone = pq.read_table(folder)
+    assert alone.schema.metadata[b'prsm_lube_ros.history_layout'] == LAYOUT_VERSION.encode() == b'4'
     assert str(alone.schema.field('defect_suspected').type) == 'bool'
     assert {str(alone.schema.field(n).type) for n in ('kurtosis', 'crest_factor', 'defect_order')} == {'double'}
     assert json.loads(alone.schema.metadata[b'prsm_lube_ros.units'])['defect_order'] == 'x screw speed'
@@ -58,7 +59,7 @@ def test_a_history_written_before_the_screen_reads_with_the_columns_filled_and_s
     old = write(history, old_bag, screened(old_bag))
     as_layout_2(old)
     write(history, new_bag, screened(new_bag, days=1.0))
-    assert 'defect_suspected' not in pq.read_table(old / 'runs.parquet').column_names
+    assert 'defect_suspected' not in pq.read_table(old).column_names
     for table, rows in (('runs', 2), ('windows', 6)):
         notes = []
         found = read_table(history, table, on_note=notes.append)
@@ -85,7 +86,7 @@ def test_plain_duckdb_reads_a_history_of_both_layouts_by_name(tmp_path):
     as_layout_2(write(history, old_bag, screened(old_bag)))
     write(history, new_bag, screened(new_bag, days=1.0))
     rows = duckdb.sql(f"select recording_path, defect_suspected, defect_component from read_parquet("
-                      f"'{history}/recordings/*/*/runs.parquet', hive_partitioning = true, union_by_name = true) "
+                      f"'{history}/runs/*/*.parquet', hive_partitioning = true, union_by_name = true) "
                       "order by start").fetchall()
     assert rows == [(str(old_bag), None, None), (str(old_bag), None, None),
                     (str(new_bag), False, ''), (str(new_bag), True, 'screw raceway')]
