@@ -55,7 +55,7 @@ if TYPE_CHECKING:
     from ..diagnosis.fitting import ModelFit
     from ..diagnosis.table import WindowTable
 
-__all__ = ['NONE', 'confusion', 'main', 'run_case', 'write_outputs']
+__all__ = ['FORM_SEARCH', 'NONE', 'confusion', 'main', 'run_case', 'write_outputs']
 
 NONE = 'none'
 #: Seeds searched per kind for cases of one drawn form (``--form-contains``).
