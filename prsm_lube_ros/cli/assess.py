@@ -10,7 +10,7 @@ from .common import add_recording_options, EXIT_USER_ERROR
 
 if TYPE_CHECKING:
     import argparse
-    from collections.abc import Sequence
+    from collections.abc import Callable, Sequence
 
     from ..diagnosis.condition_report import ConditionReport
     from ..estimation.calibration import Calibration
@@ -83,14 +83,7 @@ def run(args: argparse.Namespace) -> int:
     report = _condition_report(calibration, settings, args.bags) if args.report else None
     job = BagJob(calibration, actuator.lead, settings, args.namespace,
                  hash_content=bool(args.history))
-    to_history = None
-    if args.history:
-        from ..fleet.history import history_writer
-        from ..fleet.identity import name_actuators
-        identities = name_actuators(args.bags, given=args.actuator_id, actuator_map=args.actuator_map,
-                                    namespace=args.namespace)
-        to_history = history_writer(args.history, args.calibration, calibration, identities=identities,
-                                    namespace=args.namespace)
+    to_history = _history_writer(args, calibration) if args.history else None
     bar = progress_bar(len(args.bags), 'assessing', unit='recording')
     refused = []
 
@@ -121,6 +114,16 @@ def run(args: argparse.Namespace) -> int:
     _print_table(results, calibration, args.calibration)
     _write_outputs(args, results, calibration, report, len(results) - len(refused))
     return EXIT_USER_ERROR if len(results) < len(outcomes) or refused else 0
+
+
+def _history_writer(args: argparse.Namespace, calibration: Calibration) -> Callable[[BagOutcome], str]:
+    """The writer of ``args.history``, each recording's actuator named first (refused in one line if it cannot be)."""
+    from ..fleet.history import history_writer
+    from ..fleet.identity import name_actuators
+    identities = name_actuators(args.bags, given=args.actuator_id, actuator_map=args.actuator_map,
+                                namespace=args.namespace)
+    return history_writer(args.history, args.calibration, calibration, identities=identities,
+                          namespace=args.namespace)
 
 
 def _window_settings(args: argparse.Namespace, calibration: Calibration, actuator: Actuator) -> WindowSettings:

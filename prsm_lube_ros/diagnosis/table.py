@@ -292,8 +292,8 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
     rows: dict[str, list] = {name: [] for name in COLUMNS + INDICATOR_COLUMNS}
     directions: list[float] = []
     orders: tuple[DefectOrder, ...] = tuple(defect_orders)
-    spectra, resolution = [], math.nan
-    run_offset = 0
+    spectra: list[np.ndarray | None] = []
+    resolution, run_offset = math.nan, 0
     for rec_index, windows in enumerate(windows_per_recording):
         chosen = usable_windows(windows, min_axial_load)
         if not chosen:
@@ -319,25 +319,30 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         for name, values in zip(INDICATOR_COLUMNS, zip(*(_indicators(w, orders) for w in chosen))):
             rows[name].extend(values)
         rows['run_defect_db'].extend(_run_lines(chosen, orders))
-        for w in chosen:
-            spectra.append(w.spectrum)
-            if math.isfinite(w.spectrum_resolution):
-                resolution = w.spectrum_resolution
+        spectra.extend(w.spectrum for w in chosen)
+        resolution = next((w.spectrum_resolution for w in reversed(chosen) if math.isfinite(w.spectrum_resolution)),
+                          resolution)
     if not rows['speed']:
         raise InputError('diagnose: no steady window under load in the recordings; record runs at constant '
                          'speed under axial load')
-    spectrum_array = None
-    sizes = [s.size for s in spectra if s is not None]
-    if sizes and len(set(sizes)) == 1 and len(sizes) >= SPECTRA_NEEDED * len(spectra):
-        # Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
-        spectrum_array = np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
     rest = _rest_rms_values(windows_per_recording)
-    return WindowTable(theta=float(theta), spectra=spectrum_array, spectrum_resolution=resolution,
+    return WindowTable(theta=float(theta), spectra=_spectrum_array(spectra), spectrum_resolution=resolution,
                        sources=tuple(str(s) for s in sources), direction=cast(Any, directions),
                        band_high=float(band_high), rest_windows=int(rest.size),
                        rest_rms=float(np.median(rest)) if rest.size >= REST_WINDOWS_NEEDED else math.nan,
                        defect_orders=orders, band=band, domain=CalibrationDomain.of_windows(kept),
                        **cast(dict[str, Any], rows))   # __post_init__ makes arrays of the lists
+
+
+def _spectrum_array(spectra: Sequence[np.ndarray | None]) -> np.ndarray | None:
+    """The windows' spectra as rows, when enough of them have one of one size (else None).
+
+    Windows without a spectrum (too few samples) are NaN rows, which the spectral tests skip.
+    """
+    sizes = [s.size for s in spectra if s is not None]
+    if sizes and len(set(sizes)) == 1 and len(sizes) >= SPECTRA_NEEDED * len(spectra):
+        return np.vstack([s if s is not None else np.full(sizes[0], np.nan) for s in spectra])
+    return None
 
 
 def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> list[float]:

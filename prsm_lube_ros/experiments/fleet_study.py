@@ -261,8 +261,8 @@ def _conditions_table(fleets: Sequence[dict]) -> str:
     return '\n'.join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Command line of the study."""
+def _parser() -> argparse.ArgumentParser:
+    """The study's options."""
     parser = argparse.ArgumentParser(prog='python -m prsm_lube_ros.experiments.fleet_study',
                                      description=__doc__.split('\n')[0])
     parser.add_argument('--out', default='out/fleet_study', help='folder for the fleets and histories')
@@ -279,7 +279,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--step', type=float, default=3.0, metavar='DAYS', help='horizon study: days between cuts')
     parser.add_argument('--synthetic', action='store_true',
                         help='horizon study: true theta_Oil plus drawn noise instead of simulated recordings')
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line of the study."""
+    args = _parser().parse_args(argv)
     out = Path(args.out)
     results = Path(args.results) if args.results else out
     arguments = sys.argv[1:] if argv is None else argv

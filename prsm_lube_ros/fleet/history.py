@@ -573,8 +573,11 @@ def _empty(table: str) -> pa.Table:
 
 
 def _read_file(file: str, table: str, report: Callable[[str], None]) -> pa.Table | None:
-    """One file's rows in this layout's schema (columns by name, missing ones null) with ``actuator``; its bad
-    rows reported and left out.  None (reported) when unreadable or a column has a type it cannot be read as."""
+    """One file's rows in this layout's schema (columns by name, missing ones null) with ``actuator``.
+
+    Its bad rows are reported and left out.  None (reported) when unreadable
+    or a column has a type it cannot be read as.
+    """
     path = Path(file)
     try:
         raw = pq.read_table(file)

@@ -173,8 +173,11 @@ def _batch_outcomes(paths: Sequence[str], future: distributed.Future, lost: str 
 
 
 def _as_given(outcome: BagOutcome, path: str) -> BagOutcome:
-    """``outcome`` named by the path as the user gave it (the worker saw the absolute one): the recording, each
-    run's ``bag``, and its problem and error lines, so that every output equals the serial one."""
+    """``outcome`` named by the path as the user gave it (the worker saw the absolute one).
+
+    The recording, each run's ``bag``, and its problem and error lines, so
+    that every output equals the serial one.
+    """
     sent = outcome.path
     assessment = outcome.assessment
     if assessment is not None:

@@ -25,7 +25,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from ..contract import PACKAGE
 
 
-__all__ = ['STANDARD_DEFINITIONS', 'contract_fielddef', 'contract_typestore', 'interface_dir', 'message_definition']
+__all__ = ['CONTRACT_MESSAGES', 'STANDARD_DEFINITIONS',
+           'contract_fielddef', 'contract_typestore', 'interface_dir', 'message_definition']
 
 #: The standard ROS 2 types the contract's topics and messages use, as their ``.msg`` text (unchanged since ROS 2's
 #: first release; a test compares them with rosbags' store).

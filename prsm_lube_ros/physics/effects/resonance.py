@@ -42,8 +42,8 @@ if TYPE_CHECKING:
 
 __all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_MESH_SHARE', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension',
            'HIGHEST_RINGING', 'INSIDE_RANGE', 'LOW_ORDERS', 'Law', 'MESH_GAP_MARGIN',
-           'MODE_STREAM_KEY', 'RATIO_RANGE', 'Resonance', 'Simulation', 'band_position', 'draw', 'magnification',
-           'natural_frequency']
+           'MODE_STREAM_KEY', 'RATIO_RANGE', 'Resonance', 'Simulation', 'band_position', 'draw', 'draw_below_mesh',
+           'magnification', 'natural_frequency']
 
 #: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).
 RATIO_RANGE = (0.5, 0.9)
