@@ -83,11 +83,15 @@ def assert_live_equals_offline(states, stage):
     """Every assessed offline window arrived live with its theta within 0.01, and no live theta is extra."""
     expected = offline_thetas(stage)
     assert len(expected) >= 8, 'the stage should give several steady windows'
-    live = {}
-    for msg in states:
-        end = round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) * 1e6)
-        if math.isfinite(msg.theta_oil):
-            live[end] = msg.theta_oil
+
+    def live_thetas():
+        return {round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) * 1e6): msg.theta_oil
+                for msg in list(states) if math.isfinite(msg.theta_oil)}
+    # The last windows close on the estimator's timer once the inputs fall silent: on a loaded machine
+    # that can come later than the caller's quiet period, so wait for them (bounded) before judging.
+    deadline = time.monotonic() + 15.0
+    while not set(expected) <= set(live := live_thetas()) and time.monotonic() < deadline:
+        time.sleep(0.1)
     missing = sorted(set(expected) - set(live))
     assert not missing, f'{len(missing)} assessed offline windows not published live: {missing[:3]}'
     extra = sorted(set(live) - set(expected))
