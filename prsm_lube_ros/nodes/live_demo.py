@@ -106,7 +106,7 @@ class Observer:
         self.node.create_subscription(LubricationState, STATE_TOPIC, self._state,
                                       QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE))
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._diagnostics, 50)
-        self.client = self.node.create_client(Calibrate, CALIBRATE_SERVICE)
+        self.client: Any = self.node.create_client(Calibrate, CALIBRATE_SERVICE)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
 

@@ -1102,7 +1102,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if stop is not None:
             stop.set()
             self._forecast_wake.set()
-        super().destroy_node()  # type: ignore[no-untyped-call]  # rclpy's destroy_node has no annotations
+        super().destroy_node()  # type: ignore[no-untyped-call, unused-ignore]  # untyped in Jazzy
 
     # -- calibration service -----------------------------------------------------------------------
     def _calibrate_handler(self, channel: ActuatorChannel) -> Callable[[Any, Any], Awaitable[Any]]:
@@ -1112,7 +1112,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
 
     def _off_thread(self, channel: ActuatorChannel, work: Callable) -> Future:
         """Run ``work()`` on a worker thread; a future (woken on this node's executor) of its result or exception."""
-        done = Future(executor=self.executor)
+        done: Any = Future(executor=self.executor)
         done.add_done_callback(lambda _: None)    # wakes the executor when the worker sets the result
 
         def run() -> None:
@@ -1127,7 +1127,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
     async def _calibrate(self, channel: ActuatorChannel, request: Any, response: Any) -> Any:
         """Fit on a worker thread and await it, so the executor keeps serving the subscriptions."""
         arguments = calibration_arguments(request)
-        outcome = await self._off_thread(channel, lambda: self._run_calibration(channel, *arguments))
+        outcome: Any = await self._off_thread(channel, lambda: self._run_calibration(channel, *arguments))
         return self._answer(channel, response, outcome, persist=arguments[2])
 
     def _calibrate_action(self, channel: ActuatorChannel) -> Callable[[Any], Awaitable[Any]]:
@@ -1146,7 +1146,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
 
             progress('queued', 0, len(arguments[0]), 0)
             try:
-                outcome = await self._off_thread(channel, lambda: self._run_calibration(
+                outcome: Any = await self._off_thread(channel, lambda: self._run_calibration(
                     channel, *arguments, progress=progress, job=job))
             finally:
                 self._jobs.pop(key, None)

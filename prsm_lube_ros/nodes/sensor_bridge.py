@@ -282,7 +282,7 @@ class BridgeCore(ReadOnlyAfterStartUp):
         """Stop the worker (and the acquisition) and close the source before the node goes."""
         # Also called (by rclpy's shutdown on Kilted) for a bridge whose constructor failed half-way.
         self._close()
-        super().destroy_node()  # type: ignore[no-untyped-call]  # rclpy's destroy_node has no annotations
+        super().destroy_node()  # type: ignore[no-untyped-call, unused-ignore]  # untyped in Jazzy
 
     def _read_parameters(self) -> dict:
         """Declare the parameters; check the source; the values by name."""
