@@ -35,6 +35,7 @@ import numpy as np
 from .defects import defect_onsets, DefectMark
 from .forecast import (ActuatorForecast, DAY, detect_relubrications, forecast_points, INTERVAL, RecordingPoint,
                        two_sided_quantile)
+from ..validation import finite_or_none
 
 
 __all__ = ['ActuatorBacktest', 'Backtest', 'CrossingScore', 'HORIZONS', 'HorizonCoverage', 'backtest',
@@ -92,7 +93,8 @@ class Backtest:
         """Plain mapping for the backtest JSON."""
         errors = [abs(c.error_days) for a in self.actuators for c in a.crossings if c.error_days is not None]
         return {'days': self.days, 'cut': self.cut, 'confidence': self.confidence,
-                'band_coverage': _finite(self.band_coverage), 'crossing_coverage': _finite(self.crossing_coverage),
+                'band_coverage': finite_or_none(self.band_coverage),
+                'crossing_coverage': finite_or_none(self.crossing_coverage),
                 'recordings_scored': sum(a.later for a in self.actuators),
                 'crossings_scored': sum(len(a.crossings) for a in self.actuators),
                 'by_horizon': [c.as_json() for c in horizon_coverage([self])],
@@ -100,10 +102,6 @@ class Backtest:
                 'actuators': [{'actuator': a.actuator, 'reason': a.reason, 'later': a.later,
                                'inside_band': a.inside_band,
                                'crossings': [vars(c) for c in a.crossings]} for a in self.actuators]}
-
-
-def _finite(value: float) -> float | None:
-    return value if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)
@@ -124,7 +122,7 @@ class HorizonCoverage:
     def as_json(self) -> dict:
         """Plain mapping."""
         return {'level': self.level, 'horizon_days': self.horizon_days, 'scored': self.scored, 'inside': self.inside,
-                'coverage': _finite(self.coverage), 'estimates_outside': self.estimates_outside}
+                'coverage': finite_or_none(self.coverage), 'estimates_outside': self.estimates_outside}
 
 
 def horizon_class(days: float, horizons: Sequence[float] = HORIZONS) -> float | None:
