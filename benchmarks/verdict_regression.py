@@ -50,12 +50,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _rig_table(kind: str, seed: int) -> Any:
     """The window table of one random-study case, as the study reads its bags (None when diagnose refuses it)."""
-    from prsm_lube_ros.diagnosis.effects import effect_ids
+    from prsm_lube_ros.diagnosis.effects import candidate_ids
     from prsm_lube_ros.errors import InputError
     from prsm_lube_ros.experiments.random_study import case_recordings, case_table, simulate_case
     folder = Path(tempfile.mkdtemp(prefix='prsm_verdicts_'))
     try:
-        paths, setup, _, _ = simulate_case(kind, seed, list(effect_ids()), folder=folder)
+        paths, setup, _, _ = simulate_case(kind, seed, list(candidate_ids()), folder=folder)
         try:
             return case_table(paths, case_recordings(paths, setup))
         except InputError:
@@ -81,9 +81,9 @@ def _synthetic_table(case: tuple) -> Any:
 def cases(rig_seeds: range, synthetic_seeds: range) -> list[tuple]:
     """Every case: ``('rig', kind, seed)`` or ``('synthetic', 'single'|'pair', effect(s), form, seed, warm)``."""
     import diagnose_forms as forms
-    from prsm_lube_ros.diagnosis.effects import effect_ids
+    from prsm_lube_ros.diagnosis.effects import candidate_ids
     from prsm_lube_ros.experiments.random_study import NONE, OUTSIDE_KINDS, THERMAL_FREE, TWO
-    effects = list(effect_ids())
+    effects = list(candidate_ids())
     kinds = effects + [NONE, TWO] + list(OUTSIDE_KINDS) + [THERMAL_FREE]
     out: list[tuple] = []
     for seed in synthetic_seeds:

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from ..estimation.windowing import DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD
-from .effects import Effect, effect_ids, get_effect, register, registered
+from .effects import Effect, candidate_ids, get_effect, register, registered
 from .engine import ADEQUATE, AMBIGUOUS, Candidate, diagnose_table, Diagnosis, UNEXPLAINED, Verdict
 from .rules import DEFAULT_RULES, DiagnosisRules
 from .table import band_of, table_from_windows, WindowTable
@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from ..estimation.pipeline import RecordingWindows
 
 __all__ = ['ADEQUATE', 'AMBIGUOUS', 'DEFAULT_RULES', 'UNEXPLAINED', 'Candidate', 'Diagnosis', 'DiagnosisRules',
-           'Effect', 'Verdict', 'WindowTable', 'diagnose_recordings', 'diagnose_table', 'effect_ids', 'get_effect',
+           'Effect', 'Verdict', 'WindowTable', 'diagnose_recordings', 'diagnose_table', 'candidate_ids', 'get_effect',
            'register', 'registered', 'table_from_windows', 'write_report']
 
 

@@ -283,8 +283,8 @@ def _margins(out: Path, command: str) -> int:
 def _simulate_again(records: list[dict], quick: bool, jobs: int, case_function: Callable[[tuple], dict]) \
         -> list[dict]:
     """``case_function`` on each of ``records``' cases, simulated again from its (kind, seed) as the study drew it."""
-    from ..diagnosis.effects import effect_ids
-    pool_effects = tuple(e for e in effect_ids() if e != NONE)
+    from ..diagnosis.effects import candidate_ids
+    pool_effects = tuple(e for e in candidate_ids() if e != NONE)
     cases = [(r['kind'], r['seed'], pool_effects, quick) for r in records]
     with ProcessPoolExecutor(max_workers=max(jobs, 1)) as pool:
         return list(pool.map(case_function, cases))
@@ -339,13 +339,13 @@ def _rerun_misses(out: Path, jobs: int, command: str) -> int:
 
 def _power(out: Path, kinds: Sequence[str], jobs: int, command: str) -> int:
     """``--power``: every case of ``kinds`` against what an ideal test would name, to ``out``/power.md."""
-    from ..diagnosis.effects import effect_ids
+    from ..diagnosis.effects import candidate_ids
     from .detection_power import power_markdown
     study = _study_cases(out)
     if study is None:
         return 2
     records, quick = study
-    single = set(effect_ids()) - {NONE}
+    single = set(candidate_ids()) - {NONE}
     wrong = sorted(set(kinds) - single)
     if wrong:
         print(f'diagnose_study: --power takes single catalogue effects, not {", ".join(wrong)}; '
@@ -400,11 +400,11 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command line of the study."""
-    from ..diagnosis.effects import effect_ids
+    from ..diagnosis.effects import candidate_ids
     args = _parser().parse_args(argv)
     if args.seeds is None:
         args.seeds = 1 if args.quick else (30 if args.design == 'random' else 20)
-    effects = list(args.effects) if args.effects else list(effect_ids())
+    effects = list(args.effects) if args.effects else list(candidate_ids())
     command = ('python -m prsm_lube_ros.experiments.diagnose_study '
                + ' '.join(argv if argv is not None else sys.argv[1:]))
     if args.design == 'random' and args.explain_misses:

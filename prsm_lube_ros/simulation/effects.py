@@ -26,7 +26,7 @@ __all__ = ['Effects']
 class Effects:
     """Which physical effects act on the simulated rig, by ID, each with its law (absent = off).
 
-    ``Effects(resonance=Resonance(...))``; ``effects.resonance`` is the law or
+    ``Effects(resonance=ResonanceLaw(...))``; ``effects.resonance`` is the law or
     ``None``.  The IDs and law types come from :mod:`prsm_lube_ros.physics.effects`.
     """
 

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from prsm_lube_ros.diagnosis.effects import Effect, effect_ids, get_effect, register, registered
+from prsm_lube_ros.diagnosis.effects import Effect, candidate_ids, get_effect, register, registered
 from prsm_lube_ros.physics.effects import CONTRACT_ORDER
 from prsm_lube_ros.physics.effects.resonance import magnification
 from prsm_lube_ros.errors import InputError
@@ -28,7 +28,7 @@ def covariates(**values):
 
 
 def test_registry_holds_the_contract_effects_and_rejects_unknown_ids():
-    assert CONTRACT_IDS <= set(effect_ids())
+    assert CONTRACT_IDS <= set(candidate_ids())
     with pytest.raises(InputError, match='unknown effect'):
         get_effect('gremlins')
 
@@ -92,7 +92,7 @@ def test_background_adds_in_power_and_is_removed_in_power():
     assert mapped == pytest.approx([0.4, math.nan], nan_ok=True)
 
 
-@pytest.mark.parametrize('effect_id', effect_ids())
+@pytest.mark.parametrize('effect_id', candidate_ids())
 def test_every_effect_describes_itself(effect_id):
     effect = get_effect(effect_id)
     assert effect.physics and effect.equations and effect.to_separate and effect.covariate

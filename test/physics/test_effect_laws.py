@@ -47,7 +47,7 @@ def test_walther_is_a_straight_line_in_astm_d341_coordinates():
 
 def test_thermal_law_rejects_an_unknown_viscosity_law():
     with pytest.raises(ConfigError, match='viscosity_law'):
-        thermal.ThermalViscosity(10.0, 300.0, 0.03, viscosity_law='arrhenius')
+        thermal.ThermalViscosityLaw(10.0, 300.0, 0.03, viscosity_law='arrhenius')
 
 
 def test_linear_depletion_falls_by_equal_steps_and_stops_at_a_residual_film():
@@ -77,9 +77,9 @@ def test_loss_recovers_at_rest_only():
 
 @pytest.mark.parametrize('arrangement', stiffness.ARRANGEMENTS)
 def test_every_arrangement_profile_is_exact(arrangement):
-    law = stiffness.PositionDependentStiffness(contact_stiffness=2e8, reference_load=100.0, youngs_modulus=2.1e11,
-                                               root_diameter=0.02, free_length_at_start=0.2,
-                                               arrangement=arrangement, near_length_at_start=0.04)
+    law = stiffness.PositionDependentStiffnessLaw(contact_stiffness=2e8, reference_load=100.0, youngs_modulus=2.1e11,
+                                                  root_diameter=0.02, free_length_at_start=0.2,
+                                                  arrangement=arrangement, near_length_at_start=0.04)
     x = np.linspace(0.0, 0.17, 18)
     area = math.pi * 0.02 ** 2 / 4
     ratios = stiffness.arrangement_ratios(arrangement, 2e8 / (2.1e11 * area), 0.17, 0.04, 0.03)
@@ -92,9 +92,9 @@ def test_every_arrangement_profile_is_exact(arrangement):
 
 
 def test_background_form_follows_its_power_shares():
-    assert background.BackgroundVibration(1.0).form == 'lines and broadband floor'
-    assert background.BackgroundVibration(1.0, (), (), 1.0).form == 'broadband floor'
-    assert background.BackgroundVibration(1.0, (50.0,), (1.0,), 0.0).form == 'fixed-frequency lines'
+    assert background.BackgroundVibrationLaw(1.0).form == 'lines and broadband floor'
+    assert background.BackgroundVibrationLaw(1.0, (), (), 1.0).form == 'broadband floor'
+    assert background.BackgroundVibrationLaw(1.0, (50.0,), (1.0,), 0.0).form == 'fixed-frequency lines'
 
 
 def test_resonance_band_position_and_natural_frequency_per_order():

@@ -107,11 +107,11 @@ def test_surface_defect_draws_lie_inside_the_documented_ranges():
 
 def _defect(component='screw raceway', size=1.0, **changes):
     context = simulation_context(RIG, PLAN)
-    law = defect.SurfaceDefect(component=component, strike_order=defect.defect_orders(RIG.actuator)[component],
-                               impulsive_rms=size * context.reference_amplitude, reference_speed=min(PLAN.speeds),
-                               reference_load=max(PLAN.loads), speed_exponent=1.5, load_exponent=0.6,
-                               natural_frequency=1100.0, damping_ratio=0.05)
-    return defect.SurfaceDefect(**{**law.__dict__, **changes})
+    law = defect.SurfaceDefectLaw(component=component, strike_order=defect.defect_orders(RIG.actuator)[component],
+                                  impulsive_rms=size * context.reference_amplitude, reference_speed=min(PLAN.speeds),
+                                  reference_load=max(PLAN.loads), speed_exponent=1.5, load_exponent=0.6,
+                                  natural_frequency=1100.0, damping_ratio=0.05)
+    return defect.SurfaceDefectLaw(**{**law.__dict__, **changes})
 
 
 def _band_windows(samples, speeds, speed):

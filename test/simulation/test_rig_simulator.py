@@ -22,11 +22,11 @@ from prsm_lube_ros.simulation.recordings import draw_effects, simulate_endurance
 from prsm_lube_ros.simulation.rig_config import ExperimentPlan, load_experiment_plan, load_rig_config, RigConfig
 from prsm_lube_ros.simulation.rig_acceleration import RigSignalGenerator, RigStream, thread_contact_amplitude
 from prsm_lube_ros.simulation.effects import Effects
-from prsm_lube_ros.physics.effects.background_vibration import BackgroundVibration
-from prsm_lube_ros.physics.effects.lubricant_depletion import LubricantDepletion
-from prsm_lube_ros.physics.effects.position_dependent_stiffness import PositionDependentStiffness
-from prsm_lube_ros.physics.effects.resonance import Resonance
-from prsm_lube_ros.physics.effects.thermal_viscosity import ThermalViscosity
+from prsm_lube_ros.physics.effects.background_vibration import BackgroundVibrationLaw
+from prsm_lube_ros.physics.effects.lubricant_depletion import LubricantDepletionLaw
+from prsm_lube_ros.physics.effects.position_dependent_stiffness import PositionDependentStiffnessLaw
+from prsm_lube_ros.physics.effects.resonance import ResonanceLaw
+from prsm_lube_ros.physics.effects.thermal_viscosity import ThermalViscosityLaw
 
 ROOT = Path(__file__).resolve().parents[2]
 RPM = 2 * math.pi / 60
@@ -318,7 +318,7 @@ def test_endurance_bag_cycles_the_conditions(tmp_path):
 def test_past_resonance_the_whole_signal_is_attenuated_by_the_forced_response():
     speed = 200 * RPM
     order, ratio, zeta = 3.75, 2.0, 0.05
-    effect = Resonance(order=order, natural_frequency=order * speed / (2 * math.pi) / ratio, damping_ratio=zeta)
+    effect = ResonanceLaw(order=order, natural_frequency=order * speed / (2 * math.pi) / ratio, damping_ratio=zeta)
     base, _ = steady(speed, 100.0, 2.0, 1.0)
     shifted, _ = steady(speed, 100.0, 2.0, 1.0, effects=Effects(resonance=effect))
     magnification = 1 / math.sqrt((1 - ratio ** 2) ** 2 + (2 * zeta * ratio) ** 2)    # 0.333
@@ -330,7 +330,7 @@ def test_near_resonance_the_mode_rings_at_its_natural_frequency_with_the_extra_p
     speed = 200 * RPM
     order, ratio, zeta = 20.0, 0.9, 0.1              # the 20th order meets a mode at 74 Hz
     natural = order * speed / (2 * math.pi) / ratio
-    effect = Resonance(order=order, natural_frequency=natural, damping_ratio=zeta)
+    effect = ResonanceLaw(order=order, natural_frequency=natural, damping_ratio=zeta)
     base, _ = steady(speed, 100.0, 10.0, 1.0)
     shifted, _ = steady(speed, 100.0, 10.0, 1.0, effects=Effects(resonance=effect))
     ring = (shifted.samples.astype(float) - base.samples).ravel()   # the rest of the signal is unchanged
@@ -346,9 +346,9 @@ def test_position_dependent_stiffness_lowers_the_amplitude_along_the_stroke():
     area = math.pi * 0.0215 ** 2 / 4
     length0 = 0.21                                           # 180 mm stroke + 30 mm to the fixed bearing
     contact = 0.3 * 2.06e11 * area / length0                 # k_c / k_s = 0.3 at the start
-    effect = PositionDependentStiffness(contact_stiffness=contact, reference_load=100.0,
-                                        youngs_modulus=2.06e11, root_diameter=0.0215,
-                                        free_length_at_start=length0)
+    effect = PositionDependentStiffnessLaw(contact_stiffness=contact, reference_load=100.0,
+                                           youngs_modulus=2.06e11, root_diameter=0.0215,
+                                           free_length_at_start=length0)
     plan = ExperimentPlan(speeds=(100 * RPM,), loads=(100.0,), stage_thetas=(1.0,))
     speed, lead = 100 * RPM, 0.005
     program = DriveProgram()
@@ -374,7 +374,7 @@ def test_position_dependent_stiffness_lowers_the_amplitude_along_the_stroke():
 
 
 def test_thermal_viscosity_warms_the_oil_and_raises_the_amplitude():
-    effect = ThermalViscosity(temperature_rise=20.0, time_constant=20.0, viscosity_temperature_coefficient=0.03)
+    effect = ThermalViscosityLaw(temperature_rise=20.0, time_constant=20.0, viscosity_temperature_coefficient=0.03)
     speed, load = 150 * RPM, 100.0
     chunk, stream = steady(speed, load, 40.0, 1.0, effects=Effects(thermal_viscosity=effect))
     base, _ = steady(speed, load, 40.0, 1.0)
@@ -396,7 +396,7 @@ def test_thermal_viscosity_warms_the_oil_and_raises_the_amplitude():
 
 
 def test_lubricant_depletion_lowers_theta_with_revolutions():
-    effect = LubricantDepletion(depletion_revolutions=100.0)
+    effect = LubricantDepletionLaw(depletion_revolutions=100.0)
     speed, load = 200 * RPM, 100.0                            # 3.33 rev/s: 100 rev after 30 s
     chunk, stream = steady(speed, load, 30.0, 1.0, effects=Effects(lubricant_depletion=effect))
     base, _ = steady(speed, load, 30.0, 1.0)
@@ -409,7 +409,7 @@ def test_lubricant_depletion_lowers_theta_with_revolutions():
 
 
 def test_background_vibration_adds_a_fixed_line_in_power():
-    effect = BackgroundVibration(rms=0.3)
+    effect = BackgroundVibrationLaw(rms=0.3)
     still, _ = steady(0.0, 0.0, 4.0, 1.0, effects=Effects(background_vibration=effect))
     quiet, _ = steady(0.0, 0.0, 4.0, 1.0)
     assert rms(still.samples) == pytest.approx(math.hypot(0.3, 0.003), rel=0.02)

@@ -15,14 +15,14 @@ from ...errors import ConfigError
 from ...physics.effects import effect_ids as physics_effect_ids
 from .base import Effect, register, registered
 
-__all__ = ['Effect', 'register', 'registered', 'get_effect', 'effect_ids']
+__all__ = ['Effect', 'register', 'registered', 'get_effect', 'candidate_ids']
 
 for _effect_id in physics_effect_ids():
     importlib.import_module(f'{__name__}.{_effect_id}')
 
 
-def effect_ids() -> tuple[str, ...]:
-    """IDs of the registered effects."""
+def candidate_ids() -> tuple[str, ...]:
+    """IDs of the registered diagnosis candidates (:func:`..physics.effects.effect_ids` lists the effects' modules)."""
     return tuple(registered())
 
 

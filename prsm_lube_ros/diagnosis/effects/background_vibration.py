@@ -4,9 +4,9 @@
 
 ``A = sqrt(A_22^2 + B^2)``; B shows most at low speed.  Its forms differ in
 the spectrum only: lines at fixed frequencies, a broadband floor, or both
-(:meth:`BackgroundVibration.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2), at least the RMS
-of the fixed lines the spectrum measures and of the vibration at standstill (the larger); internally the rest of B
-(added in power) over the smallest RMS recorded.
+(:meth:`BackgroundVibrationCandidate.form_name` compares the lines' power with B^2).  Parameter: B (m/s^2),
+at least the RMS of the fixed lines the spectrum measures and of the vibration at standstill (the larger);
+internally the rest of B (added in power) over the smallest RMS recorded.
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ..locate import Location
     from ..table import WindowTable
 
-__all__ = ['BackgroundVibration', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE',
+__all__ = ['BackgroundVibrationCandidate', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE',
            'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
            'rest_share']
 
@@ -47,7 +47,7 @@ SHAPE_MIN_EXPECTED = 0.1
 
 
 @register
-class BackgroundVibration(Effect, law.Extension):
+class BackgroundVibrationCandidate(Effect, law.Extension):
     """Vibration from elsewhere adds in power; at low speed the amplitude stops following the model."""
 
     id = 'background_vibration'

@@ -27,8 +27,8 @@ from .base import Effect, register
 if TYPE_CHECKING:
     from ..table import WindowTable
 
-__all__ = ['LINEAR_RATE_RANGE', 'LinearDepletion', 'LubricantDepletion', 'MIN_RESTS', 'RATE_RANGE', 'RECOVERY_RANGE',
-           'RecoveringDepletion', 'RecoveringLinearDepletion']
+__all__ = ['LINEAR_RATE_RANGE', 'LinearDepletionCandidate', 'LubricantDepletionCandidate', 'MIN_RESTS', 'RATE_RANGE',
+           'RECOVERY_RANGE', 'RecoveringDepletionCandidate', 'RecoveringLinearDepletionCandidate']
 
 #: Bounds of N_max / N_d (exponential: theta falls by 1 - exp(-x) over the longest recording).
 RATE_RANGE = (0.0, 3.0)
@@ -41,7 +41,7 @@ MIN_RESTS = 3
 
 
 @register
-class LubricantDepletion(Effect, law.Extension):
+class LubricantDepletionCandidate(Effect, law.Extension):
     """theta_Oil falls with revolutions run since the last lubrication (exponential form)."""
 
     id = 'lubricant_depletion'
@@ -104,7 +104,7 @@ class LubricantDepletion(Effect, law.Extension):
 
     def variants(self) -> list[Effect]:
         """Exponential and linear, each without and with recovery at rest."""
-        return [self, LinearDepletion(), RecoveringDepletion(), RecoveringLinearDepletion()]
+        return [self, LinearDepletionCandidate(), RecoveringDepletionCandidate(), RecoveringLinearDepletionCandidate()]
 
     def describe(self, params: dict[str, float]) -> str:
         """N_d, the fall of theta over the longest recording and the recovery."""
@@ -122,7 +122,7 @@ class LubricantDepletion(Effect, law.Extension):
         return text + '. ' + self.physics
 
 
-class LinearDepletion(LubricantDepletion):
+class LinearDepletionCandidate(LubricantDepletionCandidate):
     """A fixed amount of oil lost per revolution: ``theta_eff = theta_Oil (1 - N_rev / N_d)``."""
 
     form = 'linear in revolutions'
@@ -134,7 +134,7 @@ class LinearDepletion(LubricantDepletion):
         return [self]
 
 
-class RecoveringDepletion(LubricantDepletion):
+class RecoveringDepletionCandidate(LubricantDepletionCandidate):
     """Exponential loss, partly recovered at rest."""
 
     form = 'exponential in revolutions, partial recovery at rest'
@@ -147,7 +147,7 @@ class RecoveringDepletion(LubricantDepletion):
         return [self]
 
 
-class RecoveringLinearDepletion(LubricantDepletion):
+class RecoveringLinearDepletionCandidate(LubricantDepletionCandidate):
     """Linear loss, partly recovered at rest."""
 
     form = 'linear in revolutions, partial recovery at rest'

@@ -42,8 +42,8 @@ from .base import Effect, register
 if TYPE_CHECKING:
     from ..table import WindowTable
 
-__all__ = ['FixedBeforeStartStiffness', 'FixedFixedStiffness', 'OFFSET_RANGE', 'PositionDependentStiffness',
-           'SCALE_RANGE']
+__all__ = ['FixedBeforeStartStiffnessCandidate', 'FixedFixedStiffnessCandidate', 'OFFSET_RANGE',
+           'PositionDependentStiffnessCandidate', 'SCALE_RANGE']
 
 #: Bounds of c s = k_c s / (E A), the contact-to-shaft stiffness ratio over one stroke length of shaft.
 SCALE_RANGE = (0.0, 5.0)
@@ -52,7 +52,7 @@ OFFSET_RANGE = (0.0, 5.0)
 
 
 @register
-class PositionDependentStiffness(Effect, law.Extension):
+class PositionDependentStiffnessCandidate(Effect, law.Extension):
     """Series shaft compliance that changes as the nut travels; the fixed bearing beyond the far end."""
 
     id = 'position_dependent_stiffness'
@@ -121,7 +121,7 @@ class PositionDependentStiffness(Effect, law.Extension):
 
     def variants(self) -> list[Effect]:
         """Fixed bearing beyond the far end, before the start, and both ends fixed."""
-        return [self, FixedBeforeStartStiffness(), FixedFixedStiffness()]
+        return [self, FixedBeforeStartStiffnessCandidate(), FixedFixedStiffnessCandidate()]
 
     def describe(self, params: dict[str, float]) -> str:
         """Arrangement, amplitude change along the stroke and where the bearing(s) would be."""
@@ -137,7 +137,7 @@ class PositionDependentStiffness(Effect, law.Extension):
                 f'{params["stroke"] * 1e3:.0f} mm stroke. ' + self.physics)
 
 
-class FixedBeforeStartStiffness(PositionDependentStiffness):
+class FixedBeforeStartStiffnessCandidate(PositionDependentStiffnessCandidate):
     """The axially fixed bearing before the stroke start: compliance grows as the nut travels away from it."""
 
     form = 'fixed-free, fixed bearing before the stroke start'
@@ -154,7 +154,7 @@ class FixedBeforeStartStiffness(PositionDependentStiffness):
         return [self]
 
 
-class FixedFixedStiffness(PositionDependentStiffness):
+class FixedFixedStiffnessCandidate(PositionDependentStiffnessCandidate):
     """The shaft held axially at both ends: compliance ``a b / (E A (a + b))``, an arch along the stroke."""
 
     form = 'fixed-fixed'

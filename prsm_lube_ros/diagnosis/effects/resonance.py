@@ -33,8 +33,8 @@ if TYPE_CHECKING:
     from ..locate import Location, SpectralLines
     from ..table import WindowTable
 
-__all__ = ['BOTTOM_RATIO_RANGE', 'DAMPING_RANGE', 'REPORTED_ORDERS', 'Resonance', 'ResonanceBelowBand',
-           'ResonanceInBand', 'TOP_RATIO_RANGE']
+__all__ = ['BOTTOM_RATIO_RANGE', 'DAMPING_RANGE', 'REPORTED_ORDERS', 'ResonanceCandidate',
+           'ResonanceBelowBandCandidate', 'ResonanceInBandCandidate', 'TOP_RATIO_RANGE']
 
 #: Bounds of the frequency ratio at the highest recorded speed (mode above the band).
 TOP_RATIO_RANGE = (0.05, 0.98)
@@ -47,7 +47,7 @@ REPORTED_ORDERS = (1, 2, 3, 4)
 
 
 @register
-class Resonance(Effect, law.Extension):
+class ResonanceCandidate(Effect, law.Extension):
     """The excitation frequency approaches a structural mode above the speed band."""
 
     id = 'resonance'
@@ -149,7 +149,7 @@ class Resonance(Effect, law.Extension):
 
     def variants(self) -> list[Effect]:
         """Mode above, inside and below the speed band."""
-        return [self, ResonanceInBand(), ResonanceBelowBand()]
+        return [self, ResonanceInBandCandidate(), ResonanceBelowBandCandidate()]
 
     def describe(self, params: dict[str, float]) -> str:
         """Where the resonance lies, the natural frequency per order and the magnification at the band's ends."""
@@ -165,7 +165,7 @@ class Resonance(Effect, law.Extension):
                 f'x{gains[1]:.2f}. ' + self.physics)
 
 
-class ResonanceInBand(Resonance):
+class ResonanceInBandCandidate(ResonanceCandidate):
     """The mode inside the recorded speed band: a peak between two speeds."""
 
     form = 'mode inside the speed band'
@@ -187,7 +187,7 @@ class ResonanceInBand(Resonance):
         return [self]
 
 
-class ResonanceBelowBand(Resonance):
+class ResonanceBelowBandCandidate(ResonanceCandidate):
     """The mode below the recorded speed band: every speed past resonance."""
 
     form = 'mode below the speed band'

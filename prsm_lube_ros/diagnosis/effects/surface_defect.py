@@ -33,8 +33,9 @@ if TYPE_CHECKING:
     from ..locate import Location
     from ..table import WindowTable
 
-__all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefect', 'IMPULSIVE_KURTOSIS',
-           'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SIZE_RANGE', 'SurfaceDefect', 'indicators']
+__all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefectCandidate', 'IMPULSIVE_KURTOSIS',
+           'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SIZE_RANGE', 'SurfaceDefectCandidate',
+           'indicators']
 
 #: Bounds of A_imp over the smallest window RMS.
 SIZE_RANGE = (0.0, 3.0)
@@ -108,7 +109,7 @@ def _follows_the_order(table: WindowTable, peaked: np.ndarray) -> bool:
 
 
 @register
-class SurfaceDefect(Effect, law.Extension):
+class SurfaceDefectCandidate(Effect, law.Extension):
     """A spall or pit struck by every passing contact: impulsive power adding to the contacts' (steady form)."""
 
     id = 'surface_defect'
@@ -165,7 +166,7 @@ class SurfaceDefect(Effect, law.Extension):
 
     def variants(self) -> list[Effect]:
         """Steady and growing with the revolutions."""
-        return [self, GrowingSurfaceDefect()]
+        return [self, GrowingSurfaceDefectCandidate()]
 
     def describe(self, params: dict[str, Any]) -> str:
         """A_imp at the reference condition, the exponents and the growth over the recordings."""
@@ -229,7 +230,7 @@ class SurfaceDefect(Effect, law.Extension):
                 'the envelope spectra show no defect order')
 
 
-class GrowingSurfaceDefect(SurfaceDefect):
+class GrowingSurfaceDefectCandidate(SurfaceDefectCandidate):
     """The defect grows with the revolutions run: ``g(N) = exp(N / N_g)``."""
 
     form = 'growing with revolutions'

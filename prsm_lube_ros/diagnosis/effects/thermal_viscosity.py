@@ -24,7 +24,7 @@ from .base import Effect, register
 if TYPE_CHECKING:
     from ..table import WindowTable
 
-__all__ = ['BETA_RANGE', 'LOG_VISCOSITY_RANGE', 'MIN_SPREAD', 'ThermalViscosity', 'VOGEL_DISTANCE_RANGE',
+__all__ = ['BETA_RANGE', 'LOG_VISCOSITY_RANGE', 'MIN_SPREAD', 'ThermalViscosityCandidate', 'VOGEL_DISTANCE_RANGE',
            'VogelViscosity', 'WaltherViscosity']
 
 #: Bounds of the viscosity-temperature coefficient beta, 1/K (mineral oils: about 0.02-0.05).
@@ -38,7 +38,7 @@ MIN_SPREAD = 0.5
 
 
 @register
-class ThermalViscosity(Effect, law.Extension):
+class ThermalViscosityCandidate(Effect, law.Extension):
     """The oil warms in service and thins; amplitude follows temperature (exponential law)."""
 
     id = 'thermal_viscosity'
@@ -95,13 +95,13 @@ class ThermalViscosity(Effect, law.Extension):
 
 
 class _Temperature:
-    """Covariates of one temperature (for :meth:`ThermalViscosity.describe`)."""
+    """Covariates of one temperature (for :meth:`ThermalViscosityCandidate.describe`)."""
 
     def __init__(self, temperature: float) -> None:
         self.temperature = float(temperature)
 
 
-class VogelViscosity(ThermalViscosity):
+class VogelViscosity(ThermalViscosityCandidate):
     """Vogel's law ``eta = a exp(b / (T - T_V))``: ln eta convex in T."""
 
     form = 'Vogel'
@@ -130,7 +130,7 @@ class VogelViscosity(ThermalViscosity):
                 'degC')
 
 
-class WaltherViscosity(ThermalViscosity):
+class WaltherViscosity(ThermalViscosityCandidate):
     """Walther / ASTM D341 ``log10 log10(nu + 0.7) = A - B log10 T_K``."""
 
     form = 'Walther (ASTM D341)'

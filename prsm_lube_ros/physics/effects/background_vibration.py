@@ -39,8 +39,8 @@ if TYPE_CHECKING:
 
     from . import ContactState, SampleState, SimulationContext, StreamRandom
 
-__all__ = ['BackgroundVibration', 'Extension', 'FORMS', 'FRACTION_RANGE', 'Law', 'Simulation', 'TONE_FREQUENCY_RANGE',
-           'contact_amplitude', 'draw', 'log_gain', 'total_amplitude']
+__all__ = ['BackgroundVibrationLaw', 'Extension', 'FORMS', 'FRACTION_RANGE', 'Law', 'Simulation',
+           'TONE_FREQUENCY_RANGE', 'contact_amplitude', 'draw', 'log_gain', 'total_amplitude']
 
 #: Spectral forms of the background (see module doc).
 FORMS = ('fixed-frequency lines', 'broadband floor', 'lines and broadband floor')
@@ -78,7 +78,7 @@ def contact_amplitude(total_rms: npt.ArrayLike, background_rms: npt.ArrayLike) -
 
 
 @dataclass(frozen=True)
-class BackgroundVibration:
+class BackgroundVibrationLaw:
     """Vibration not from the thread contacts (drive, bearings, frame), adding in power.
 
     ``rms`` B in m/s^2 is split by power shares between fixed-frequency tones
@@ -112,7 +112,7 @@ class BackgroundVibration:
         return FORMS[2] if lines and floor else FORMS[0] if lines else FORMS[1]
 
 
-Law = BackgroundVibration
+Law = BackgroundVibrationLaw
 
 
 class Extension(EffectExtension):
@@ -130,7 +130,7 @@ class Extension(EffectExtension):
 
 
 def draw(rng: np.random.Generator, *, reference_amplitude: float, form: str | None = None,
-         highest_frequency: float = math.inf) -> BackgroundVibration:
+         highest_frequency: float = math.inf) -> BackgroundVibrationLaw:
     """Random background: B = 50-150 % of reference_amplitude (m/s^2, thread contacts at the lowest speed).
 
     ``form`` (default: drawn) is one of :data:`FORMS`: two fixed tones (drive
@@ -147,17 +147,17 @@ def draw(rng: np.random.Generator, *, reference_amplitude: float, form: str | No
     low, high = TONE_FREQUENCY_RANGE
     tones = tuple(float(f) for f in np.sort(rng.uniform(low, max(min(high, highest_frequency), low), size=2)))
     if form == FORMS[1]:
-        return BackgroundVibration(rms=float(fraction * reference_amplitude), tone_frequencies=(), tone_shares=(),
-                                   broadband_share=1.0)
+        return BackgroundVibrationLaw(rms=float(fraction * reference_amplitude), tone_frequencies=(), tone_shares=(),
+                                      broadband_share=1.0)
     shares = (0.5, 0.5) if form == FORMS[0] else (0.2, 0.2)
-    return BackgroundVibration(rms=float(fraction * reference_amplitude), tone_frequencies=tones,
-                               tone_shares=shares, broadband_share=1.0 - sum(shares))
+    return BackgroundVibrationLaw(rms=float(fraction * reference_amplitude), tone_frequencies=tones,
+                                  tone_shares=shares, broadband_share=1.0 - sum(shares))
 
 
 class _Background(Waveform):
     """Fixed tones (phases drawn when the recording starts) and white noise, B in power, added to the samples."""
 
-    def __init__(self, law: BackgroundVibration, random: StreamRandom) -> None:
+    def __init__(self, law: BackgroundVibrationLaw, random: StreamRandom) -> None:
         """One random phase per tone, from the recording's phase stream."""
         self.law, self.rng = law, random.added
         self.phases = random.phases.uniform(0.0, 2.0 * math.pi, len(law.tone_frequencies))
@@ -178,11 +178,11 @@ class Simulation(EffectSimulation):
 
     id = 'background_vibration'
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> BackgroundVibration:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> BackgroundVibrationLaw:
         """:func:`draw` against the contacts' RMS at the lowest speed, tones inside the analysis band."""
         return draw(rng, reference_amplitude=context.reference_amplitude, highest_frequency=context.band_high)
 
-    def added_power(self, law: BackgroundVibration, state: ContactState) -> float:
+    def added_power(self, law: BackgroundVibrationLaw, state: ContactState) -> float:
         """``B^2``."""
         return law.rms ** 2
 
@@ -191,6 +191,6 @@ class Simulation(EffectSimulation):
         lines = params.get('tone_frequencies') and params.get('broadband_share', 0.0) < 0.999
         return ['lines' if lines else 'floor']
 
-    def waveform(self, law: BackgroundVibration, sample_rate: float, random: StreamRandom) -> Waveform:
+    def waveform(self, law: BackgroundVibrationLaw, sample_rate: float, random: StreamRandom) -> Waveform:
         """The tones and the floor (:class:`_Background`)."""
         return _Background(law, random)

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
     from . import ContactState, SimulationContext
 
-__all__ = ['Extension', 'FALL_RANGE', 'FORMS', 'Law', 'LubricantDepletion', 'MIN_SUPPLY', 'REST_SLACK', 'Simulation',
+__all__ = ['Extension', 'FALL_RANGE', 'FORMS', 'Law', 'LubricantDepletionLaw', 'MIN_SUPPLY', 'REST_SLACK', 'Simulation',
            'draw', 'effective_revolutions', 'rest_durations', 'theta_factor']
 
 #: Forms of the loss (see module doc).
@@ -106,7 +106,7 @@ def effective_revolutions(revolutions: np.ndarray, rest: npt.ArrayLike, recovery
 
 
 @dataclass(frozen=True)
-class LubricantDepletion:
+class LubricantDepletionLaw:
     """Oil flung out of the contacts: ``theta_eff = theta_Oil exp(-N_rev / N_d)`` or linear in N_rev.
 
     N_rev is the screw revolutions (either direction) run since the last
@@ -133,7 +133,7 @@ class LubricantDepletion:
         return theta_factor(revolutions, 1.0 / self.depletion_revolutions, self.form)
 
 
-Law = LubricantDepletion
+Law = LubricantDepletionLaw
 
 
 class Extension(EffectExtension):
@@ -160,7 +160,7 @@ class Extension(EffectExtension):
         return np.ones_like(np.asarray(covariates.speed, dtype=float))
 
 
-def draw(rng: np.random.Generator, *, session_revolutions: float, form: str | None = None) -> LubricantDepletion:
+def draw(rng: np.random.Generator, *, session_revolutions: float, form: str | None = None) -> LubricantDepletionLaw:
     """Random depletion: theta falls by 5-25 % over session_revolutions (one bag), exponentially or linearly.
 
     ``form`` (default: drawn) is ``exponential`` or ``linear``.  The rig
@@ -169,7 +169,7 @@ def draw(rng: np.random.Generator, *, session_revolutions: float, form: str | No
     form = choose(rng, FORMS, form)
     fall = rng.uniform(*FALL_RANGE)
     revolutions = session_revolutions / -math.log1p(-fall) if form == 'exponential' else session_revolutions / fall
-    return LubricantDepletion(depletion_revolutions=float(revolutions), form=form)
+    return LubricantDepletionLaw(depletion_revolutions=float(revolutions), form=form)
 
 
 class Simulation(EffectSimulation):
@@ -179,11 +179,11 @@ class Simulation(EffectSimulation):
     #: The supply factor multiplies theta_Oil before the other film factors (as the rig simulator always did).
     film_rank = -1
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> LubricantDepletion:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> LubricantDepletionLaw:
         """:func:`draw` over one session's revolutions."""
         return draw(rng, session_revolutions=context.session_revolutions)
 
-    def film_factor(self, law: LubricantDepletion, state: ContactState) -> np.ndarray | float:
+    def film_factor(self, law: LubricantDepletionLaw, state: ContactState) -> np.ndarray | float:
         """The supply factor at the revolutions since the last lubrication."""
         return law.theta_factor(state.revolutions)
 

@@ -54,7 +54,7 @@ if TYPE_CHECKING:
     from . import ContactState, SimulationContext
 
 __all__ = ['ARRANGEMENTS', 'CHANGE_RANGE', 'DRAWN_ARRANGEMENTS', 'Extension', 'FIXED_BEFORE_START', 'Law',
-           'MIN_FREE_LENGTH', 'PositionDependentStiffness', 'Simulation', 'draw',
+           'MIN_FREE_LENGTH', 'PositionDependentStiffnessLaw', 'Simulation', 'draw',
            'arrangement_ratios', 'compliance_ratio_profile', 'contact_stiffness_at', 'fixed_fixed_shaft_stiffness',
            'series_stiffness_amplification', 'shaft_axial_stiffness', 'shaft_stiffness_for']
 
@@ -153,7 +153,7 @@ def contact_stiffness_at(load: npt.ArrayLike, contact_stiffness: float, referenc
 
 
 @dataclass(frozen=True)
-class PositionDependentStiffness:
+class PositionDependentStiffnessLaw:
     """Shaft compliance in series with the thread contacts, for any bearing arrangement.
 
     Default (fixed-free, the fixed bearing beyond the far end of travel): the
@@ -200,7 +200,7 @@ class PositionDependentStiffness:
             self.shaft_stiffness(nut_position))
 
 
-Law = PositionDependentStiffness
+Law = PositionDependentStiffnessLaw
 
 
 class Extension(EffectExtension):
@@ -221,7 +221,8 @@ class Extension(EffectExtension):
 
 
 def draw(rng: np.random.Generator, *, youngs_modulus: float, root_diameter: float, stroke: float,
-         fixed_end_offset: float, reference_load: float, arrangement: str | None = None) -> PositionDependentStiffness:
+         fixed_end_offset: float, reference_load: float,
+         arrangement: str | None = None) -> PositionDependentStiffnessLaw:
     """Random shaft-compliance effect: 5-30 % amplitude change over the stroke at reference_load.
 
     ``arrangement`` (default: drawn) is one of :data:`DRAWN_ARRANGEMENTS`:
@@ -236,20 +237,20 @@ def draw(rng: np.random.Generator, *, youngs_modulus: float, root_diameter: floa
     """
     arrangement = choose(rng, DRAWN_ARRANGEMENTS, arrangement)
     change = rng.uniform(*CHANGE_RANGE)
-    shape = PositionDependentStiffness(contact_stiffness=1.0, reference_load=reference_load,
-                                       youngs_modulus=youngs_modulus, root_diameter=root_diameter,
-                                       free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
-                                       near_length_at_start=fixed_end_offset)
+    shape = PositionDependentStiffnessLaw(contact_stiffness=1.0, reference_load=reference_load,
+                                          youngs_modulus=youngs_modulus, root_diameter=root_diameter,
+                                          free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                          near_length_at_start=fixed_end_offset)
     compliance = 1.0 / shape.shaft_stiffness(np.linspace(0.0, stroke, 201))
     spread, largest = float(np.ptp(compliance)), float(np.max(compliance))
     if change >= spread / largest:
         raise ConfigError(f'position_dependent_stiffness: a {change:.0%} change is impossible with '
                           f'fixed_end_offset {fixed_end_offset} m ({arrangement})')
     contact = change / (spread - change * largest)
-    return PositionDependentStiffness(contact_stiffness=float(contact), reference_load=reference_load,
-                                      youngs_modulus=youngs_modulus, root_diameter=root_diameter,
-                                      free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
-                                      near_length_at_start=fixed_end_offset)
+    return PositionDependentStiffnessLaw(contact_stiffness=float(contact), reference_load=reference_load,
+                                         youngs_modulus=youngs_modulus, root_diameter=root_diameter,
+                                         free_length_at_start=stroke + fixed_end_offset, arrangement=arrangement,
+                                         near_length_at_start=fixed_end_offset)
 
 
 class Simulation(EffectSimulation):
@@ -257,13 +258,13 @@ class Simulation(EffectSimulation):
 
     id = 'position_dependent_stiffness'
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> PositionDependentStiffness:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> PositionDependentStiffnessLaw:
         """:func:`draw` for the actuator's shaft, the plan's stroke and its lowest load as the reference."""
         actuator = context.actuator
         return draw(rng, youngs_modulus=actuator.youngs_modulus, root_diameter=actuator.shaft_root_diameter,
                     stroke=context.stroke, fixed_end_offset=actuator.shaft_fixed_end_offset,
                     reference_load=min(context.loads))
 
-    def amplitude_factor(self, law: PositionDependentStiffness, state: ContactState) -> np.ndarray | float:
+    def amplitude_factor(self, law: PositionDependentStiffnessLaw, state: ContactState) -> np.ndarray | float:
         """``1 + k_c(F) / k_s(x)`` at the nut position and the contacts' load."""
         return law.amplitude_factor(state.nut_position, state.load)

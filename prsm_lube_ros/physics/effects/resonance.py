@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 
 __all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_MESH_SHARE', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension',
            'HIGHEST_RINGING', 'INSIDE_RANGE', 'LOW_ORDERS', 'Law', 'MESH_GAP_MARGIN',
-           'MODE_STREAM_KEY', 'RATIO_RANGE', 'Resonance', 'Simulation', 'band_position', 'draw', 'draw_below_mesh',
+           'MODE_STREAM_KEY', 'RATIO_RANGE', 'ResonanceLaw', 'Simulation', 'band_position', 'draw', 'draw_below_mesh',
            'magnification', 'natural_frequency']
 
 #: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).
@@ -96,7 +96,7 @@ def natural_frequency(resonant_speed: float, order: float) -> float:
 
 
 @dataclass(frozen=True)
-class Resonance:
+class ResonanceLaw:
     """A rotation-order excitation approaching a lightly damped structural mode.
 
     The excitation at ``order`` times the screw rotation frequency f_S drives
@@ -122,7 +122,7 @@ class Resonance:
         return magnification(self.frequency_ratio(screw_speed), self.damping_ratio)
 
 
-Law = Resonance
+Law = ResonanceLaw
 
 
 class Extension(EffectExtension):
@@ -137,7 +137,7 @@ class Extension(EffectExtension):
 
 
 def draw(rng: np.random.Generator, *, order: float, top_speed: float, bottom_speed: float | None = None,
-         orders: Sequence[float] | None = None, band: str | None = None) -> Resonance:
+         orders: Sequence[float] | None = None, band: str | None = None) -> ResonanceLaw:
     """Random resonance excited by rotation ``order`` (or one of ``orders`` at random), zeta in its range.
 
     ``band`` (default: drawn when bottom_speed is given, else ``above``): the
@@ -160,11 +160,11 @@ def draw(rng: np.random.Generator, *, order: float, top_speed: float, bottom_spe
         assert bottom_speed is not None  # the band is below or inside only with a bottom speed
         resonant = abs(bottom_speed) / rng.uniform(*BELOW_RATIO_RANGE)
     natural = order * resonant / (2.0 * math.pi)
-    return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(damping))
+    return ResonanceLaw(order=order, natural_frequency=float(natural), damping_ratio=float(damping))
 
 
 def draw_below_mesh(rng: np.random.Generator, *, mesh_orders: Sequence[float], top_speed: float,
-                    bottom_speed: float) -> Resonance | None:
+                    bottom_speed: float) -> ResonanceLaw | None:
     """A mode between the low orders' band and the band a mesh order sweeps, or None where they overlap.
 
     The low orders (:data:`LOW_ORDERS`) reach ``3 f_S`` at the top speed, a
@@ -183,13 +183,13 @@ def draw_below_mesh(rng: np.random.Generator, *, mesh_orders: Sequence[float], t
     order = float(choose(rng, tuple(gaps)))
     high = order * bottom / (2.0 * math.pi) / MESH_GAP_MARGIN
     natural = math.exp(rng.uniform(math.log(low_top), math.log(high)))
-    return Resonance(order=order, natural_frequency=float(natural), damping_ratio=float(rng.uniform(*DAMPING_RANGE)))
+    return ResonanceLaw(order=order, natural_frequency=float(natural), damping_ratio=float(rng.uniform(*DAMPING_RANGE)))
 
 
 class _Mode(Waveform):
     """The mode ringing at f_r in the contact signal: a resonator driven by its own white noise."""
 
-    def __init__(self, law: Resonance, sample_rate: float, random: StreamRandom) -> None:
+    def __init__(self, law: ResonanceLaw, sample_rate: float, random: StreamRandom) -> None:
         """The resonator at f_r, warmed up over ten decay times from its own stream."""
         from scipy.signal import iirpeak, lfilter
         self.law = law
@@ -224,7 +224,7 @@ class Simulation(EffectSimulation):
 
     id = 'resonance'
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> Resonance:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> ResonanceLaw:
         """:func:`draw` against the plan's speed band.
 
         The exciting order is one of 1, 2, 3, the roller pass order n_p (Eq. 1), 6, 3 n_p and 6 n_p.
@@ -246,7 +246,7 @@ class Simulation(EffectSimulation):
                                    top_speed=top, bottom_speed=bottom) or law
         return law
 
-    def amplitude_factor(self, law: Resonance, state: ContactState) -> np.ndarray | float:
+    def amplitude_factor(self, law: ResonanceLaw, state: ContactState) -> np.ndarray | float:
         """``|H(r)|`` at the screw speed."""
         return law.amplitude_factor(state.speed)
 
@@ -260,7 +260,7 @@ class Simulation(EffectSimulation):
             band = 'below the mesh band, above the low orders'
         return [f'mode {band}, order {params["order"]:.3g}']
 
-    def waveform(self, law: Resonance, sample_rate: float, random: StreamRandom) -> Waveform | None:
+    def waveform(self, law: ResonanceLaw, sample_rate: float, random: StreamRandom) -> Waveform | None:
         """The mode ringing in the contact signal (:class:`_Mode`), or None.
 
         None when f_r is not below :data:`HIGHEST_RINGING` times the sample

@@ -57,7 +57,7 @@ if TYPE_CHECKING:
 
 __all__ = ['COMPONENTS', 'DAMPING_RANGE', 'DEFECT_STREAM_KEY', 'ENVELOPE_GAIN', 'Extension', 'GROWTH_FACTOR_RANGE',
            'GROWTH_FORMS', 'JITTER_RANGE', 'LOAD_EXPONENT_RANGE', 'Law', 'MODULATION_RANGE', 'NATURAL_FREQUENCY_RANGE',
-           'SCATTER_RANGE', 'SIZE_RANGE', 'SPEED_EXPONENT_RANGE', 'Simulation', 'SurfaceDefect',
+           'SCATTER_RANGE', 'SIZE_RANGE', 'SPEED_EXPONENT_RANGE', 'Simulation', 'SurfaceDefectLaw',
            'cumulative_revolutions', 'defect_orders', 'growth_factor', 'impulsive_power', 'window_kurtosis']
 
 #: Where the defect sits (each with its strike order, :func:`defect_orders`).
@@ -152,7 +152,7 @@ def window_kurtosis(contact_power: npt.ArrayLike, impulsive_power: npt.ArrayLike
 
 
 @dataclass(frozen=True)
-class SurfaceDefect:
+class SurfaceDefectLaw:
     """A local defect struck ``strike_order`` times per screw revolution, each strike ringing a mode.
 
     ``impulsive_rms`` A_imp (m/s^2) at ``reference_speed`` (rad/s) and
@@ -210,7 +210,7 @@ class SurfaceDefect:
                                self.speed_exponent, self.load_exponent, growth)
 
 
-Law = SurfaceDefect
+Law = SurfaceDefectLaw
 
 
 class Extension(EffectExtension):
@@ -246,7 +246,7 @@ class Extension(EffectExtension):
 class _Strikes(Waveform):
     """The strike train ringing the mode, carrying the screw's turns, the strike count and the filter state."""
 
-    def __init__(self, law: SurfaceDefect, sample_rate: float, random: StreamRandom) -> None:
+    def __init__(self, law: SurfaceDefectLaw, sample_rate: float, random: StreamRandom) -> None:
         """The mode as a two-pole resonator ``h[n] = r^n sin(n omega_d T)``; the first strike's phase at random."""
         self.law, self.fs, self.rng = law, sample_rate, random.keyed(DEFECT_STREAM_KEY)
         omega = 2.0 * math.pi * law.natural_frequency / sample_rate
@@ -302,7 +302,7 @@ class Simulation(EffectSimulation):
 
     id = 'surface_defect'
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> SurfaceDefect:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> SurfaceDefectLaw:
         """A defect on one of :data:`COMPONENTS`, every parameter drawn in the module's ranges.
 
         Reference condition: the plan's lowest speed and highest load, where the
@@ -325,7 +325,7 @@ class Simulation(EffectSimulation):
         depth = rng.uniform(*MODULATION_RANGE) if rng.uniform() < 0.5 else 0.0
         carrier = float(roller_revolution_speed(1.0, context.actuator.screw_mean_diameter,
                                                 context.actuator.roller_mean_diameter))
-        return SurfaceDefect(
+        return SurfaceDefectLaw(
             component=component, strike_order=float(orders[component]),
             impulsive_rms=float(size * context.reference_amplitude), reference_speed=float(min(context.speeds)),
             reference_load=float(max(context.loads)), speed_exponent=float(rng.uniform(*SPEED_EXPONENT_RANGE)),
@@ -335,7 +335,7 @@ class Simulation(EffectSimulation):
             strike_scatter=float(rng.uniform(*SCATTER_RANGE)), timing_jitter=float(rng.uniform(*JITTER_RANGE)),
             modulation_depth=float(depth), modulation_order=carrier if depth > 0 else 0.0)
 
-    def added_power(self, law: SurfaceDefect, state: ContactState) -> np.ndarray:
+    def added_power(self, law: SurfaceDefectLaw, state: ContactState) -> np.ndarray:
         """P_imp at the speed, load and revolutions.
 
         The revolutions are those since the last lubrication; the strikes
@@ -343,11 +343,11 @@ class Simulation(EffectSimulation):
         """
         return law.power(state.speed, state.load, state.revolutions)
 
-    def waveform(self, law: SurfaceDefect, sample_rate: float, random: StreamRandom) -> Waveform:
+    def waveform(self, law: SurfaceDefectLaw, sample_rate: float, random: StreamRandom) -> Waveform:
         """The ringing strikes (:class:`_Strikes`)."""
         return _Strikes(law, sample_rate, random)
 
-    def window_indicators(self, law: SurfaceDefect, state: ContactState, contact_power: np.ndarray
+    def window_indicators(self, law: SurfaceDefectLaw, state: ContactState, contact_power: np.ndarray
                           ) -> dict[str, np.ndarray]:
         """Kurtosis of contact plus strikes (:func:`window_kurtosis`) and an envelope peak at the strike order.
 
@@ -364,7 +364,7 @@ class Simulation(EffectSimulation):
                 'defect_db': 10.0 * np.log10(1.0 + ENVELOPE_GAIN * power / contact),
                 'defect_order': np.full(contact.shape, law.strike_order)}
 
-    def extension_params(self, law: SurfaceDefect, context: SimulationContext) -> dict[str, float]:
+    def extension_params(self, law: SurfaceDefectLaw, context: SimulationContext) -> dict[str, float]:
         """The law as :class:`Extension` parameters."""
         return {'impulsive_rms': law.impulsive_rms, 'reference_speed': law.reference_speed,
                 'reference_load': law.reference_load, 'speed_exponent': law.speed_exponent,

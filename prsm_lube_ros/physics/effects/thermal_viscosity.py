@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from . import ContactState, SimulationContext
 
 __all__ = ['Extension', 'KELVIN', 'LAWS', 'Law', 'REFERENCE_VISCOSITY_RANGE', 'Simulation', 'TEMPERATURE_RISE_RANGE',
-           'THERMAL_TIME_CONSTANT_RANGE', 'ThermalViscosity', 'VOGEL_DISTANCE_RANGE', 'WALTHER_OFFSET', 'draw',
+           'THERMAL_TIME_CONSTANT_RANGE', 'ThermalViscosityLaw', 'VOGEL_DISTANCE_RANGE', 'WALTHER_OFFSET', 'draw',
            'film_factor',
            'law_viscosity_ratio', 'viscosity_ratio', 'vogel_viscosity_ratio', 'walther_slope',
            'walther_viscosity_ratio']
@@ -135,7 +135,7 @@ def film_factor(temperature: npt.ArrayLike, reference_temperature: float, viscos
 
 
 @dataclass(frozen=True)
-class ThermalViscosity:
+class ThermalViscosityLaw:
     """Nut and oil warm while running and cool at standstill; the oil thins.
 
     From cold ``T = T0 + dT (1 - exp(-t_run / tau))``; eta_ref is at the
@@ -172,7 +172,7 @@ class ThermalViscosity:
                            self.viscosity_law, self.shape)
 
 
-Law = ThermalViscosity
+Law = ThermalViscosityLaw
 
 
 def _params_law(params: Mapping[str, float]) -> tuple[str, float]:
@@ -207,7 +207,7 @@ class Extension(EffectExtension):
 
 
 def draw(rng: np.random.Generator, *, viscosity_temperature_coefficient: float,
-         law: str | None = None) -> ThermalViscosity:
+         law: str | None = None) -> ThermalViscosityLaw:
     """Random warming: dT and tau uniform in their ranges; beta (1/K) is the oil's slope at ambient.
 
     ``law`` (default: drawn) is one of :data:`LAWS`; Vogel's distance
@@ -215,11 +215,11 @@ def draw(rng: np.random.Generator, *, viscosity_temperature_coefficient: float,
     :data:`REFERENCE_VISCOSITY_RANGE`.
     """
     law = choose(rng, LAWS, law)
-    return ThermalViscosity(temperature_rise=float(rng.uniform(*TEMPERATURE_RISE_RANGE)),
-                            time_constant=float(rng.uniform(*THERMAL_TIME_CONSTANT_RANGE)),
-                            viscosity_temperature_coefficient=float(viscosity_temperature_coefficient),
-                            viscosity_law=law, vogel_distance=float(rng.uniform(*VOGEL_DISTANCE_RANGE)),
-                            reference_viscosity=float(rng.uniform(*REFERENCE_VISCOSITY_RANGE)))
+    return ThermalViscosityLaw(temperature_rise=float(rng.uniform(*TEMPERATURE_RISE_RANGE)),
+                               time_constant=float(rng.uniform(*THERMAL_TIME_CONSTANT_RANGE)),
+                               viscosity_temperature_coefficient=float(viscosity_temperature_coefficient),
+                               viscosity_law=law, vogel_distance=float(rng.uniform(*VOGEL_DISTANCE_RANGE)),
+                               reference_viscosity=float(rng.uniform(*REFERENCE_VISCOSITY_RANGE)))
 
 
 class Simulation(EffectSimulation):
@@ -227,16 +227,16 @@ class Simulation(EffectSimulation):
 
     id = 'thermal_viscosity'
 
-    def draw(self, rng: np.random.Generator, context: SimulationContext) -> ThermalViscosity:
+    def draw(self, rng: np.random.Generator, context: SimulationContext) -> ThermalViscosityLaw:
         """:func:`draw` with the actuator oil's viscosity-temperature coefficient."""
         return draw(rng, viscosity_temperature_coefficient=context.actuator.viscosity_temperature_coefficient)
 
-    def film_factor(self, law: ThermalViscosity, state: ContactState) -> np.ndarray | float:
+    def film_factor(self, law: ThermalViscosityLaw, state: ContactState) -> np.ndarray | float:
         """``(eta(T) / eta_ref)^0.68`` at the simulated temperature (1 when no temperature is simulated)."""
         if state.temperature is None:
             return 1.0
         return law.film_factor(state.temperature, state.ambient_temperature)
 
-    def heating(self, law: ThermalViscosity) -> tuple[float, float]:
+    def heating(self, law: ThermalViscosityLaw) -> tuple[float, float]:
         """The law's temperature rise (K) and time constant (s)."""
         return law.temperature_rise, law.time_constant
