@@ -147,6 +147,8 @@ class SpectralLines:
     mode_speeds: list = field(default_factory=list)        # rad/s, the speed levels of mode_shares
     mode_note: str = ''
     order_mode: dict = field(default_factory=dict)        # order-tracked line gains following a mode (see below)
+    ring_frequencies: list = field(default_factory=list)   # Hz, bands fixed in Hz standing out at every speed
+    ring_shares: list = field(default_factory=list)        # per ring band: power / the model's mean square per speed
 
     def band_note(self, band: int) -> str:
         """The mode band ``band`` (index into :attr:`mode_frequencies`) in words, its share at each speed."""
@@ -166,7 +168,17 @@ class SpectralLines:
                 'share_at_lowest_speed': float(self.share_at_lowest_speed), 'note': self.note,
                 'mode_frequencies_hz': [float(f) for f in self.mode_frequencies],
                 'mode_shares': [[float(v) for v in shares] for shares in self.mode_shares],
-                'mode_speed_levels': [float(v) for v in self.mode_speeds], 'mode_note': self.mode_note}
+                'mode_speed_levels': [float(v) for v in self.mode_speeds], 'mode_note': self.mode_note,
+                'ring_frequencies_hz': [float(f) for f in self.ring_frequencies],
+                'ring_shares': [[float(v) for v in shares] for shares in self.ring_shares]}
+
+    def ring_note(self, band: int) -> str:
+        """The ring band ``band`` (index into :attr:`ring_frequencies`) in words, its share at each speed."""
+        shares = self.ring_shares[band]
+        by_speed = ', '.join(f'{100 * shares[i]:.2g} % at {self.mode_speeds[i]:.1f} rad/s'
+                             for i in np.argsort(self.mode_speeds))
+        return (f'a band fixed at {self.ring_frequencies[band]:.1f} Hz at every recorded speed while the orders move, '
+                f'its power over the floor against the mean square the paper\'s model gives ({by_speed})')
 
 
 @dataclass
@@ -566,6 +578,7 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     modelled = table.rms if residual is None else table.rms * np.exp(residual)
     model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(edges))])
     _mode_bands(result, medians, np.arange(medians.shape[1]) * df, model_square, edges, df)
+    _ring_bands(result, medians, np.arange(medians.shape[1]) * df, model_square, edges, df)
     result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
     return result
 
@@ -938,6 +951,55 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
                 peak = float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))])
             result.mode_frequencies.append(peak)
             result.mode_shares.append([float(v) for v in share])
+
+
+def _ring_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, mean_square: np.ndarray,
+                edges: np.ndarray, df: float) -> None:
+    """Bands fixed in Hz standing out at every speed level (three or more) while the orders move past them.
+
+    A lightly damped mode is driven by every frequency component of the
+    contact force (Eq. 13), its broadband part included, so it rings at f_r
+    at every speed, in a band ``2 zeta f_r`` wide whose power follows the
+    contact excitation, even where the order that sweeps towards it has passed
+    (a mode below the band the orders sweep: the order's response is
+    attenuated, and :func:`_mode_bands`, which asks for a share that changes
+    with the speed, sees nothing).  Sought over the running median of
+    ``SpectralRules.mode_floor_half_width`` bins a side and over the octave
+    floor (:func:`_octave_excess`) as :func:`_mode_bands` does, with the same
+    tests that the band is fixed in Hz (its peak within 2 bins or an eighth of
+    the band, not an order crossing it, :func:`_follows_an_order`; an order at
+    its frequency would have moved ``SpectralRules.mode_order_shift_bins``
+    bins), none at a fixed line of constant power nor at a mode band already
+    found.  Whether a band is a mode's ring is the candidate's question (the
+    order its frequency implies at the fitted resonant speed): a fixed band
+    from elsewhere stands out at every speed too.
+    """
+    levels = medians.shape[0]
+    if levels < _SPECTRAL.mode_min_speeds:
+        return
+    narrow = _excess(medians, _SPECTRAL.mode_floor_half_width)[::2]
+    for floors, widened, broad in ((*narrow, False), (*_octave_excess(medians)[::2], True)):
+        prominent = widened >= (_SPECTRAL.mode_broad_prominence if broad else _SPECTRAL.line_prominence)
+        for group in _line_groups(prominent.all(axis=0) & (freqs >= 3 * df)):
+            lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
+            if any(freqs[lo] - 3 * df <= f <= freqs[hi - 1] + 3 * df
+                   for f in result.frequencies + result.mode_frequencies + result.ring_frequencies):
+                continue
+            top = lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
+            if not np.all((top > lo) & (top < hi - 1)):
+                continue
+            peaks = _centroids(medians[:, lo:hi] - floors[:, lo:hi], lo) if broad else top
+            if np.ptp(peaks) > max(2, (hi - lo) // 8) or _follows_an_order(peaks, edges):
+                continue
+            centre = float(freqs[int(np.median(peaks))])
+            if centre * (float(np.max(edges) / np.min(edges)) - 1.0) < _SPECTRAL.mode_order_shift_bins * df:
+                continue
+            power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
+            if power.min() <= 0:
+                continue
+            result.ring_frequencies.append(float(np.median(peaks)) * df if broad
+                                           else float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))]))
+            result.ring_shares.append([float(v) for v in power / mean_square])
 
 
 def _centroids(excess_power: np.ndarray, first: int) -> np.ndarray:

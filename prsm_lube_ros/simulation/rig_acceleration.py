@@ -12,7 +12,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.signal import iirpeak, lfilter
 
-from ..physics.effects import ContactState, resonator_energy, SampleState, StreamRandom
+from ..physics.effects import ContactBroadband, ContactState, resonator_energy, SampleState, StreamRandom
 from ..physics.vibration_model import acceleration_amplitude
 from ..validation import as_number, require
 from .drive import DriveProgram
@@ -146,7 +146,9 @@ class RigStream:
         self._harmonic_amplitudes = np.sqrt(2.0 * np.array(rig.harmonic_shares))
         self._harmonic_phases = phase_rng.uniform(0.0, 2.0 * math.pi, self._orders.size)
         # Each effect's own waveform (a ringing mode, added vibration), made in registry order.
-        random = StreamRandom(sequence=sequence, phases=phase_rng, added=self._background_rng)
+        random = StreamRandom(sequence=sequence, phases=phase_rng, added=self._background_rng,
+                              contact=ContactBroadband(rig.contact_share, rig.contact_mode_frequency,
+                                                       rig.contact_mode_damping))
         self._waveforms = [waveform for hook, law in self.effects.hooks()
                            if (waveform := hook.waveform(law, fs, random)) is not None]
         heating = [h for hook, law in self.effects.hooks() if (h := hook.heating(law)) is not None]

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...physics.effects import resonance as law
+from ..rules import DEFAULT_SPECTRAL_RULES
 from .base import Effect, register
 
 if TYPE_CHECKING:
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
     from ..table import WindowTable
 
 __all__ = ['BOTTOM_RATIO_RANGE', 'DAMPING_RANGE', 'REPORTED_ORDERS', 'ResonanceCandidate',
-           'ResonanceBelowBandCandidate', 'ResonanceInBandCandidate', 'TOP_RATIO_RANGE']
+           'ResonanceBelowBandCandidate', 'ResonanceInBandCandidate', 'TOP_RATIO_RANGE', 'exciting_order_values']
 
 #: Bounds of the frequency ratio at the highest recorded speed (mode above the band).
 TOP_RATIO_RANGE = (0.05, 0.98)
@@ -44,6 +45,17 @@ BOTTOM_RATIO_RANGE = (1.02, 20.0)
 DAMPING_RANGE = (0.005, 0.5)
 #: Rotation orders for which the report gives the mode's natural frequency.
 REPORTED_ORDERS = (1, 2, 3, 4)
+
+
+def exciting_order_values(table: WindowTable) -> tuple[float, ...]:
+    """Rotation orders that may excite a mode in ``table``'s recordings (:func:`law.exciting_orders`).
+
+    The roller pass order n_p (Eq. 1: rollers passing a point of the nut per
+    screw revolution) is the recording's nut raceway defect order; without it
+    only the low orders.
+    """
+    roller_pass = [d.order for d in table.defect_orders if d.component == 'nut raceway']
+    return law.exciting_orders(roller_pass[0]) if roller_pass else law.LOW_ORDERS
 
 
 @register
@@ -103,31 +115,61 @@ class ResonanceCandidate(Effect, law.Extension):
         if lines is None:
             return ''
         tracked = self._order_evidence(lines, params)
-        if tracked or not lines.mode_frequencies:
+        if tracked:
             return tracked
+        if not lines.mode_frequencies:
+            return self._ring_evidence(table, lines, params)
         if params is None:
             return 'spectrum: ' + lines.mode_note
         following = [band for band in range(len(lines.mode_frequencies)) if self._follows_transfer(lines, band, params)]
         if not following:
-            return ''
+            return self._ring_evidence(table, lines, params)
         band = max(following, key=lambda b: max(lines.mode_shares[b]))
         order = lines.mode_frequencies[band] * 2.0 * math.pi / params['resonant_speed']
         return (f'spectrum: {lines.band_note(band)}; at the fitted resonant speed it is order {order:.2f}, '
                 f'natural frequency {lines.mode_frequencies[band]:.1f} Hz')
 
     @staticmethod
+    def _ring_evidence(table: WindowTable, lines: SpectralLines, params: dict[str, float] | None) -> str:
+        """A band fixed in Hz at every speed implying, at the fitted omega_r, an order that excites the mode.
+
+        Only for a fitted mode below the band (every speed past resonance, where
+        the order's response is attenuated and no band follows the transfer):
+        the contacts' broadband rings the mode at f_r at every speed
+        (:func:`~prsm_lube_ros.physics.effects.resonance.broadband_ring_share`;
+        :attr:`.locate.SpectralLines.ring_frequencies`), and the order that meets
+        it at the fitted resonant speed, ``n = 2 pi f_r / omega_r``, must be
+        one that excites a mode (:func:`~prsm_lube_ros.physics.effects.resonance.exciting_orders`
+        of the recording's roller pass order) within ``SpectralRules.mode_order_tolerance``.
+        A fixed band from elsewhere, or the contacts' own mode far above, implies no such order.
+        """
+        if (params is None or not lines.ring_frequencies
+                or params['resonant_speed'] >= params.get('bottom_speed', math.inf)):
+            return ''
+        orders = exciting_order_values(table)
+        tolerance = DEFAULT_SPECTRAL_RULES.mode_order_tolerance
+        for band, frequency in enumerate(lines.ring_frequencies):
+            implied = frequency * 2.0 * math.pi / params['resonant_speed']
+            near = min(orders, key=lambda n: abs(implied / n - 1.0))
+            if abs(implied / near - 1.0) <= tolerance:
+                return (f'spectrum: {lines.ring_note(band)}; at the fitted resonant speed it is order {implied:.2f}, '
+                        f'{near:.3g} excites it (natural frequency {frequency:.1f} Hz)')
+        return ''
+
+    @staticmethod
     def _order_evidence(lines: SpectralLines, params: dict[str, float] | None) -> str:
         """Order-tracked line powers following one mode in Hz; with ``params``, at a tracked order's frequency.
 
         The fitted resonant speed omega_r and the spectrum's f_r must agree:
-        ``2 pi f_r / omega_r`` within 15 % of one of the tracked orders.
+        ``2 pi f_r / omega_r`` within ``SpectralRules.mode_order_tolerance`` of one of the tracked orders.
         """
         found = lines.order_mode or {}
         if not found.get('found'):
             return ''
         if params is not None:
             implied = found['natural_frequency_hz'] * 2.0 * math.pi / params['resonant_speed']
-            if not any(abs(implied / order - 1.0) <= 0.15 for order in found.get('order_values', ())):
+            tolerance = DEFAULT_SPECTRAL_RULES.mode_order_tolerance
+            if not any(abs(implied / order - 1.0) <= tolerance for order in found.get('order_values', ())):
                 return ''
             return f'spectrum: {found["note"]}; at the fitted resonant speed that is order {implied:.2f}'
         return 'spectrum: ' + found['note']

@@ -196,6 +196,21 @@ class SampleState:
 
 
 @dataclass(frozen=True)
+class ContactBroadband:
+    """The thread contacts' random (broadband) part of a simulated recording's contact signal.
+
+    White contact force through the contacts' own mode: ``frequency`` (Hz)
+    and ``damping`` (ratio) of that mode, ``share`` of the unit contact
+    signal's mean square it carries (the rest are rotation orders).  A
+    structural mode the same force drives rings by it (resonance).
+    """
+
+    share: float
+    frequency: float
+    damping: float
+
+
+@dataclass(frozen=True)
 class StreamRandom:
     """Random streams of one simulated recording that a :class:`Waveform` may draw from (all from its seed).
 
@@ -203,12 +218,14 @@ class StreamRandom:
     come first); ``added``: a stream of its own for vibration added to the
     signal, shared by the effects in registry order; :meth:`keyed` makes a
     stream keyed off the seed without spawning from it, so an effect's own
-    stream leaves every other stream as it was.
+    stream leaves every other stream as it was.  ``contact``: what drives the
+    contacts' broadband (None: not known, no effect is driven by it).
     """
 
     sequence: np.random.SeedSequence
     phases: np.random.Generator
     added: np.random.Generator
+    contact: ContactBroadband | None = None
 
     def keyed(self, key: int) -> np.random.Generator:
         """A generator keyed off the recording's seed by ``key`` (an integer the effect owns)."""

@@ -28,8 +28,8 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from . import (choose, Extension as EffectExtension, resonator_energy, Simulation as EffectSimulation,
-               Waveform)
+from . import (choose, ContactBroadband, Extension as EffectExtension, resonator_energy,
+               Simulation as EffectSimulation, Waveform)
 from ...validation import require, require_all_positive
 from ..vibration_model import forced_response_amplitude
 
@@ -42,7 +42,8 @@ if TYPE_CHECKING:
 
 __all__ = ['BANDS', 'BAND_POSITIONS', 'BELOW_MESH_SHARE', 'BELOW_RATIO_RANGE', 'DAMPING_RANGE', 'Extension',
            'HIGHEST_RINGING', 'INSIDE_RANGE', 'LOW_ORDERS', 'Law', 'MESH_GAP_MARGIN',
-           'MODE_STREAM_KEY', 'RATIO_RANGE', 'ResonanceLaw', 'Simulation', 'band_position', 'draw', 'draw_below_mesh',
+           'MODE_STREAM_KEY', 'RATIO_RANGE', 'ResonanceLaw', 'Simulation', 'band_position', 'broadband_ring_share',
+           'draw', 'draw_below_mesh', 'exciting_orders',
            'magnification', 'natural_frequency']
 
 #: Drawn range of the frequency ratio r = n f_S / f_r at the plan's top forward speed (mode above the band).
@@ -136,6 +137,14 @@ class Extension(EffectExtension):
         return np.log(magnification(ratio, params['damping_ratio']))
 
 
+def exciting_orders(roller_pass: float) -> tuple[float, ...]:
+    """The rotation orders that may excite a mode: :data:`LOW_ORDERS`, the roller pass n_p (Eq. 1), 6, 3 n_p, 6 n_p.
+
+    ``roller_pass`` = n_p, rollers passing a point of the nut per screw revolution.
+    """
+    return (*LOW_ORDERS, roller_pass, 6.0, 3.0 * roller_pass, 6.0 * roller_pass)
+
+
 def draw(rng: np.random.Generator, *, order: float, top_speed: float, bottom_speed: float | None = None,
          orders: Sequence[float] | None = None, band: str | None = None) -> ResonanceLaw:
     """Random resonance excited by rotation ``order`` (or one of ``orders`` at random), zeta in its range.
@@ -186,11 +195,39 @@ def draw_below_mesh(rng: np.random.Generator, *, mesh_orders: Sequence[float], t
     return ResonanceLaw(order=order, natural_frequency=float(natural), damping_ratio=float(rng.uniform(*DAMPING_RANGE)))
 
 
+def broadband_ring_share(law: ResonanceLaw, contact: ContactBroadband, sample_rate: float) -> float:
+    """rho: the mode's ringing by the contacts' broadband force over the contacts' response, dimensionless.
+
+    Eq. 13 holds for every frequency component of the contact force, not only
+    for the rotation order that sweeps towards f_r.  The contacts' random part
+    is a white force (density S_F, N^2/Hz, flat over the sample band) that
+    rings the contacts' own mode (f_c, zeta_c) into ``contact.share`` of the
+    unit contact signal's mean square.  The same force rings the structural
+    mode (f_r, zeta_r).  A mode of modal mass m driven by white force has the
+    acceleration mean square ``S_F / m^2 * integral r^4 |H(r)|^2 df`` =
+    ``S_F / m^2 * pi f / (4 zeta)`` ((m/s^2)^2: its noise bandwidth
+    ``pi f / (4 zeta)`` Hz, the peak gain ``1 / (2 zeta)`` squared times the
+    band ``pi zeta f``), so with equal modal masses (the nut's, an assumption)
+
+        rho = share * (f_r / zeta_r) / (f_c / zeta_c),
+
+    evaluated on the discrete resonators the simulator uses (``iirpeak`` of unit
+    peak gain, energy E ~ pi zeta f / (f_s / 2)): ``share (zeta_c / zeta_r)^2
+    E_r / E_c``.  Whatever law the contacts' broadband follows (Eq. 22's A_22
+    and the order's |H(r)|, the simulator's contact amplitude), the ring follows
+    too: both modes are driven by one force, so rho is one number per mode.
+    """
+    from scipy.signal import iirpeak
+    energies = [resonator_energy(*iirpeak(f, 1.0 / (2.0 * z), sample_rate))
+                for f, z in ((law.natural_frequency, law.damping_ratio), (contact.frequency, contact.damping))]
+    return float(contact.share * (contact.damping / law.damping_ratio) ** 2 * energies[0] / energies[1])
+
+
 class _Mode(Waveform):
     """The mode ringing at f_r in the contact signal: a resonator driven by its own white noise."""
 
     def __init__(self, law: ResonanceLaw, sample_rate: float, random: StreamRandom) -> None:
-        """The resonator at f_r, warmed up over ten decay times from its own stream."""
+        """The resonator at f_r, warmed up over ten decay times from its own stream; rho from the contacts."""
         from scipy.signal import iirpeak, lfilter
         self.law = law
         self.b, self.a = iirpeak(law.natural_frequency, 1.0 / (2.0 * law.damping_ratio), sample_rate)
@@ -199,6 +236,10 @@ class _Mode(Waveform):
         _, self.state = lfilter(self.b, self.a, self.rng.standard_normal(int(math.ceil(10.0 * decay * sample_rate))
                                                                          + 8), zi=np.zeros(2))
         self.energy = math.sqrt(resonator_energy(self.b, self.a))
+        #: The broadband-driven ring's power over the contacts' response (:func:`broadband_ring_share`).
+        self.ring_share = (broadband_ring_share(law, random.contact, sample_rate)
+                           if random.contact is not None and random.contact.frequency < HIGHEST_RINGING * sample_rate
+                           else 0.0)
 
     def shape(self, mix: np.ndarray, state: SampleState) -> np.ndarray:
         """The contact signal with the mode's response in it, same RMS as ``|H(r)|`` times ``mix``.
@@ -208,15 +249,22 @@ class _Mode(Waveform):
         ``g^2 - 1`` is the mode ringing at its natural frequency f_r (a band
         fixed in Hz, width 2 zeta f_r, whose power follows the order's approach
         to f_r and the contact excitation); where g < 1 (mass-controlled, past
-        resonance) the whole signal is attenuated.  Returns the signal to be
+        resonance) the order's response is attenuated.  At every speed the
+        contacts' broadband force rings the mode too, with the power rho times
+        the contacts' response (:func:`broadband_ring_share`): a band fixed in
+        Hz at every speed whose power follows the contact excitation (Eq. 22's
+        A_22 law of speed, load and theta_Oil, times g).  The sum is divided by
+        ``sqrt(1 + rho)``: the recorded RMS is ``A_22 |H(r)| sqrt(1 + rho)``
+        physically, a constant factor that C_sys absorbs, so the law the
+        candidate fits stays ``A_22 |H(r)|``.  Returns the signal to be
         multiplied by that amplitude (unit mean square where mix has it).
         """
         from scipy.signal import lfilter
         gain = self.law.amplitude_factor(state.speeds)
         ring, self.state = lfilter(self.b, self.a, self.rng.standard_normal(mix.size), zi=self.state)
         quasi_static = np.minimum(gain, 1.0) / gain
-        ringing = np.sqrt(np.maximum(gain ** 2 - 1.0, 0.0)) / gain
-        return quasi_static * mix + ringing * ring / self.energy
+        ringing = np.sqrt(np.maximum(gain ** 2 - 1.0, 0.0) / gain ** 2 + self.ring_share)
+        return (quasi_static * mix + ringing * ring / self.energy) / math.sqrt(1.0 + self.ring_share)
 
 
 class Simulation(EffectSimulation):
@@ -240,7 +288,7 @@ class Simulation(EffectSimulation):
             1.0, actuator.screw_mean_diameter, actuator.roller_mean_diameter))
         top, bottom = max(context.speeds), min(context.speeds)
         law = draw(rng, order=roller_pass, top_speed=top, bottom_speed=bottom,
-                   orders=(1, 2, 3, roller_pass, 6, 3 * roller_pass, 6 * roller_pass))
+                   orders=exciting_orders(roller_pass))
         if rng.uniform() < BELOW_MESH_SHARE:
             return draw_below_mesh(rng, mesh_orders=(roller_pass, 3 * roller_pass, 6 * roller_pass),
                                    top_speed=top, bottom_speed=bottom) or law
