@@ -182,9 +182,9 @@ class SpectralRules:
     mode_order_shift_bins: int = _rule(
         3, 'study: six speeds 9 % apart must not hide a 13 Hz mode (an order must move 3 bins)', 'test_locate.py')
     mode_order_tolerance: float = _rule(
-        0.15, 'convention (the order-tracked check had it before the rules were typed): a band\'s frequency f at the '
-        'fitted resonant speed omega_r implies the order 2 pi f / omega_r, which must lie within 15 % of an order '
-        'that excites the mode (omega_r from amplitudes is that uncertain)',
+        0.15, 'convention: a band\'s frequency f at the fitted resonant speed omega_r implies the order 2 pi f / '
+        'omega_r, which must lie within 15 % of an order that excites the mode (omega_r from amplitudes is that '
+        'uncertain; the order-tracked check had 15 % before the rules were typed)',
         'test_resonance_evidence.py::test_a_band_at_every_speed_is_evidence_when_it_implies_an_exciting_order')
 
 
