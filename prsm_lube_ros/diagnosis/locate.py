@@ -150,11 +150,14 @@ class SpectralLines:
     ring_frequencies: list = field(default_factory=list)   # Hz, bands fixed in Hz standing out at every speed
     ring_shares: list = field(default_factory=list)        # per ring band: power / the model's mean square per speed
 
+    def _shares_by_speed(self, shares: Sequence[float], digits: str) -> str:
+        """Shares (of the model's mean square) per speed level in words, slowest first."""
+        return ', '.join(f'{100 * shares[i]:{digits}} % at {self.mode_speeds[i]:.1f} rad/s'
+                         for i in np.argsort(self.mode_speeds))
+
     def band_note(self, band: int) -> str:
         """The mode band ``band`` (index into :attr:`mode_frequencies`) in words, its share at each speed."""
-        shares = self.mode_shares[band]
-        by_speed = ', '.join(f'{100 * shares[i]:.0f} % at {self.mode_speeds[i]:.1f} rad/s'
-                             for i in np.argsort(self.mode_speeds))
+        by_speed = self._shares_by_speed(self.mode_shares[band], '.0f')
         # Against the model's mean square, not the recorded power: a mode's band may exceed it (187 %).
         return (f'a band fixed at {self.mode_frequencies[band]:.1f} Hz while the orders move, its power over the '
                 f'floor against the mean square the paper\'s model gives at each speed ({by_speed})')
@@ -174,9 +177,7 @@ class SpectralLines:
 
     def ring_note(self, band: int) -> str:
         """The ring band ``band`` (index into :attr:`ring_frequencies`) in words, its share at each speed."""
-        shares = self.ring_shares[band]
-        by_speed = ', '.join(f'{100 * shares[i]:.2g} % at {self.mode_speeds[i]:.1f} rad/s'
-                             for i in np.argsort(self.mode_speeds))
+        by_speed = self._shares_by_speed(self.ring_shares[band], '.2g')
         return (f'a band fixed at {self.ring_frequencies[band]:.1f} Hz at every recorded speed while the orders move, '
                 f'its power over the floor against the mean square the paper\'s model gives ({by_speed})')
 
