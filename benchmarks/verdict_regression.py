@@ -170,6 +170,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--first-seed', type=int, default=300)
     parser.add_argument('--synthetic-seeds', type=int, default=2)
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--kinds', nargs='*', default=None, metavar='KIND',
+                        help='only these rig kinds (and no synthetic case unless --synthetic-seeds is given)')
     parser.add_argument('--only', nargs='*', default=None, metavar='KEY',
                         help='with --compare: only the cases recorded in the file (a stopped recording)')
     args = parser.parse_args(argv)
@@ -180,6 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     started = time.time()
     rig_seeds = range(args.first_seed, args.first_seed + args.rig_seeds)
     chosen = cases(rig_seeds, range(args.synthetic_seeds))
+    if args.kinds is not None:
+        chosen = [case for case in chosen if case[0] != 'rig' or case[1] in args.kinds]
     if args.compare and args.only is not None:      # --only with no key: the cases the file holds
         recorded = set(args.only) or set(json.loads(args.compare.read_text()))
         chosen = [case for case in chosen if case_key(case) in recorded]
