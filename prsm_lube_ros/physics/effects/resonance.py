@@ -19,6 +19,12 @@ above it (r < 1 throughout: the amplitude rises faster than omega^2).  The RMS
 amplitude only sees the screw speed at which the excitation meets the mode,
 ``omega_r = 2 pi f_r / n``; f_r and n separately need the spectrum
 (:data:`BAND_POSITIONS`, :func:`band_position`).
+
+Eq. 13 holds for every frequency component of the contact force: the
+contacts' broadband part rings the mode at f_r at every speed too, past
+resonance as well, with a power rho times the contacts' response
+(:func:`broadband_ring_share`): in the samples a band fixed in Hz at every
+speed, in the RMS a constant factor ``sqrt(1 + rho)`` (C_sys's).
 """
 from __future__ import annotations
 
