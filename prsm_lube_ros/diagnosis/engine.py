@@ -912,11 +912,22 @@ def _tie_both_shown(table: WindowTable, best: Candidate, runner: Candidate, fold
 
 def _spectral_tiebreak(table: WindowTable, location: Location, first: Candidate,
                        second: Candidate) -> tuple[Candidate, str] | None:
-    """The candidate to drop from a tie on evidence outside the amplitude fit, with the evidence against it; or None."""
+    """The candidate to drop from a tie on evidence outside the amplitude fit, with the evidence against it; or None.
+
+    Where both have evidence, only evidence that holds beside the rival
+    counts: what the rival's law produces by itself (a spectral shape change
+    beside an effect that changes the shape,
+    :attr:`.effects.Effect.changes_spectral_shape`) cannot tell the two apart,
+    as for a second effect (:func:`_earns_by_evidence`).
+    """
     # tied candidates both earn, so both were fitted
     against = [cand.effect.contrary_evidence(table, location, cast(ModelFit, cand.fit).params)
                for cand in (first, second)]
     support = [bool(first.evidence), bool(second.evidence)]
+    if all(support):
+        support = [bool(cand.effect.independent_evidence(table, location, cast(ModelFit, cand.fit).params,
+                                                         beside=rival.effect))
+                   for cand, rival in ((first, second), (second, first))]
     if support[0] and not support[1]:
         return second, against[1]
     if support[1] and not support[0]:

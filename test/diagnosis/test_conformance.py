@@ -5,8 +5,9 @@
 Parametrized over the registry, not over a list of names: an effect added as
 its two plug-in files is checked here with no test edited.  Each effect
 describes itself, is drawn and simulated through its simulation hook, improves
-the held-out error of its own simulated window table, and its fitted
-extension round-trips through a calibration file.
+the held-out error of its own simulated window table, is named by
+``diagnose`` on that table, and its fitted extension round-trips through a
+calibration file.
 """
 import math
 
@@ -79,6 +80,15 @@ def test_its_model_improves_the_held_out_error_of_its_own_table(effect_id):
     forms = [form for form in effect.variants() if not form.applicable(table)]
     best = min(fit_model(table, form, folds=folds).cv_rmse for form in forms)
     assert best < 0.9 * baseline.cv_rmse, f'{effect_id}: {best:.4f} vs the paper\'s model {baseline.cv_rmse:.4f}'
+
+
+@pytest.mark.parametrize('effect_id', EFFECTS)
+def test_diagnose_names_it_on_its_own_table(effect_id):
+    """Recovered: ``diagnose`` names the effect, confidently, where it alone is concealed."""
+    from prsm_lube_ros.diagnosis.engine import diagnose_table
+    table, _ = _own_table(effect_id)
+    result = diagnose_table(table)
+    assert (result.verdict, result.confident) == (effect_id, True), result.verdict
 
 
 @pytest.mark.parametrize('effect_id', EFFECTS)

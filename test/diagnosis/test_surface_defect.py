@@ -123,3 +123,22 @@ def test_window_indicators_leave_the_other_columns_of_a_synthetic_table_as_they_
     assert np.array_equal(plain.rms, marked.rms) and np.array_equal(plain.speed, marked.speed)
     assert not plain.has_indicators and marked.has_indicators
     assert abs(np.median(marked.kurtosis) - 3.0) < 0.05          # Gaussian contact vibration
+
+
+def test_a_shape_change_does_not_tie_background_with_a_defect():
+    """A steady roller spall (study case surface_defect 1307) against a background that only the shape supports.
+
+    Both fit the amplitudes alike and both have evidence alone: the defect its
+    impulsive windows and envelope lines at the roller order, the background a
+    spectral shape change, which the strikes give by themselves.  Counted
+    beside each other, only the defect's holds, so it is named (it was
+    ``ambiguous`` before).
+    """
+    from prsm_lube_ros.diagnosis.effects import candidate_ids
+    from prsm_lube_ros.experiments.random_study import run_random_case
+    record = run_random_case(('surface_defect', 1307, candidate_ids(), False))
+    assert record['forms'] == {'surface_defect': 'roller,steady'}
+    background = next(c for c in record['candidates'] if c['effect'] == 'background_vibration')
+    assert background['evidence'].startswith('spectrum: the spectral shape changes')   # evidence alone ...
+    assert (record['verdict'], record['confident']) == ('surface_defect', True)     # ... that does not tie
+    assert any('decided by evidence from outside the fit: surface_defect' in n for n in record['notes'])
