@@ -195,8 +195,8 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
                 for item in condition_indicators_batch(
                     x[start:start + chunk], rate, screw_speeds[start:start + chunk], band, orders,
                     tracks[start:start + chunk], spectra=None if spectra is None else spectra[start:start + chunk])]
-    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra.copy()
-    spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
+    # The window mean (DC, gravity) is bin 0, which no band below uses (they start at bin 1 or above).
+    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
     hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
@@ -232,9 +232,9 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
 
 def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Kurtosis and crest factor of each window's signal in bins ``lo_bin..hi_bin`` of its rfft ``spec`` (n samples)."""
-    in_band = np.zeros_like(spec)
-    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n, axis=1)
+    in_band = spec[:, :hi_bin + 1].copy()   # the bins above are zeros inside the transform
+    in_band[:, :lo_bin] = 0.0
+    signal = _irfft(in_band, n)
     peak = np.maximum(signal.max(axis=1), -signal.min(axis=1))     # max |x| without an |x| array
     squares = np.square(signal, out=signal)
     power = squares.mean(axis=1)
@@ -267,20 +267,24 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     first = np.full(count, lo_bin)
     last = np.full(count, hi_bin)
     width = hi_bin - lo_bin + 1
-    for parts in TREE_PARTS:
-        bins = width // parts
+    levels = [(parts, width // parts, 1 << int(math.ceil(math.log2(max(width // parts, 8)))))
+              for parts in TREE_PARTS]    # a complex band of ``bins`` bins needs no more than ``size`` samples
+    # One buffer for every level's padded bands and one for their |z|^2: the pages are touched once a call,
+    # not once a level (a fresh array of a few MB costs its page faults again each time).
+    buffer = np.empty(count * max(parts * size for parts, _, size in levels), dtype=complex)
+    squares = np.empty(buffer.size)
+    for parts, bins, size in levels:
         allowed = bins >= min_bins
         if not allowed.any():
             break
-        size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        if allowed.all():    # a view of the bins, no copy
-            rows, bands = None, spec[:, lo_bin:lo_bin + parts * bins]
-        else:                # the windows this level still serves
-            rows = np.flatnonzero(allowed)
-            bands = spec[rows, lo_bin:lo_bin + parts * bins]
-        # Each band's bins zero-padded to ``size`` inside the transform (no padded copy made here).
-        envelope = np.fft.ifft(bands.reshape(bands.shape[0], parts, bins), n=size, axis=2)
-        mean, fourth = _power_moments(envelope)
+        rows = None if allowed.all() else np.flatnonzero(allowed)    # None: every window; else those served
+        served = count if rows is None else rows.size
+        envelope = buffer[:served * parts * size].reshape(served, parts, size)
+        envelope[..., :bins] = (spec[:, lo_bin:lo_bin + parts * bins] if rows is None
+                                else spec[rows, lo_bin:lo_bin + parts * bins]).reshape(served, parts, bins)
+        envelope[..., bins:] = 0.0      # each band's bins zero-padded to ``size``
+        _ifft_in_place(envelope)
+        mean, fourth = _power_moments(envelope, squares[:envelope.size].reshape(envelope.shape))
         with np.errstate(divide='ignore', invalid='ignore'):
             sk_rows = np.where(mean > 0, fourth / mean ** 2 - 2.0, -np.inf)
         sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
@@ -299,17 +303,37 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     return best_sk, first, last
 
 
-def _power_moments(envelope: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _power_moments(envelope: np.ndarray, power: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``E|z|^2`` and ``E|z|^4`` over the last axis of the complex ``envelope`` (destroys ``envelope``).
 
     ``|z|^2`` is ``re^2 + im^2`` squared in place over the array's interleaved
-    floats (one contiguous pass instead of strided real and imaginary views).
+    floats (one contiguous pass instead of strided real and imaginary views),
+    written into ``power`` (a float array of the envelope's shape) when given.
     """
     interleaved = envelope.view(np.float64)     # re, im, re, im, ... along the last axis
     np.square(interleaved, out=interleaved)
-    power = interleaved[..., 0::2] + interleaved[..., 1::2]
+    power = np.add(interleaved[..., 0::2], interleaved[..., 1::2], out=power)
     mean = power.mean(axis=-1)
     return mean, np.square(power, out=power).mean(axis=-1)
+
+
+def _ifft_in_place(values: np.ndarray) -> np.ndarray:
+    """The inverse FFT of complex ``values`` along the last axis, written over them where numpy can (2.0 on)."""
+    if _FFT_TAKES_OUT:
+        return np.fft.ifft(values, axis=-1, out=values)
+    values[...] = np.fft.ifft(values, axis=-1)
+    return values
+
+
+def _irfft(values: np.ndarray, n: int) -> np.ndarray:
+    """``numpy.fft.irfft(values, n)`` along the last axis (numpy >= 2: into a fresh buffer, no temporary)."""
+    if _FFT_TAKES_OUT:
+        return np.fft.irfft(values, n, axis=-1, out=np.empty(values.shape[:-1] + (n,)))
+    return np.fft.irfft(values, n, axis=-1)
+
+
+#: numpy 2's FFTs write into a given ``out`` (numpy 1, e.g. Ubuntu 24.04's, do not).
+_FFT_TAKES_OUT = int(np.__version__.split('.')[0]) >= 2
 
 
 def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
@@ -329,7 +353,9 @@ def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
         index = np.array(members)
         shifted = np.zeros((index.size, size), dtype=complex)
         shifted[:, :width] = spec[index[:, None], first[index][:, None] + np.arange(width)]
-        found = np.abs(np.fft.ifft(shifted, axis=1) * (2.0 * size / n))
+        shifted = _ifft_in_place(shifted)
+        shifted *= 2.0 * size / n
+        found = np.abs(shifted)
         envelopes.update(zip(members, found))
     return envelopes
 
