@@ -471,28 +471,33 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     local = np.zeros(padded.shape, dtype=bool)
     local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
         padded[:, 1:-1] >= min_db)
+    # The local maxima of all rows, each row's from the largest level down (ties in grid order).
+    rows, columns = np.nonzero(local)
+    by_level = np.lexsort((columns, -padded[rows, columns], rows))
+    rows, columns = rows[by_level], columns[by_level]
+    row_starts = np.searchsorted(rows, np.arange(len(resolutions) + 1)).tolist()
+    columns_list = columns.tolist()
+    # The largest level within reach of each defect order's fundamental, all rows at once.
+    span_first, span_stop = _order_windows(orders, np.asarray(resolutions, dtype=float))
+    span_top = _span_argmax(padded, span_first, span_stop)
+    span_open = (span_stop > span_first).tolist()
+    span_top_list = span_top.tolist()
+    span_level = (np.take_along_axis(padded, span_top, axis=1) >= min_db).tolist()
     labels: dict[tuple[int, float], str] = {}
-    spans: dict[float, list[tuple[int, int]]] = {}
     out = []
     for row, resolution in enumerate(resolutions):
         levels = padded[row]
-        candidates = np.flatnonzero(local[row])
-        if candidates.size > 4 * count:
-            candidates = candidates[np.argpartition(-levels[candidates], 4 * count)[:4 * count]]
+        candidates = columns_list[row_starts[row]:row_starts[row + 1]][:4 * count]
         separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
         chosen: list[int] = []
-        for k in sorted(candidates.tolist(), key=lambda k: -levels[k]):
+        for k in candidates:
             if all(abs(k - j) > separation for j in chosen):
                 chosen.append(k)
             if len(chosen) == count:
                 break
-        if resolution not in spans:     # windows of one speed share their resolution
-            spans[resolution] = _order_windows(orders, resolution)
-        for first, stop in spans[resolution]:
-            if stop > first:
-                k = first + int(np.argmax(levels[first:stop]))
-                if levels[k] >= min_db and k not in chosen:
-                    chosen.append(k)
+        for k, is_open, reached in zip(span_top_list[row], span_open[row], span_level[row]):
+            if is_open and reached and k not in chosen:
+                chosen.append(k)
         peaks = []
         for k in sorted(chosen):
             key = (k, round(resolution, 6))
@@ -503,12 +508,22 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     return out
 
 
-def _order_windows(orders: Sequence[DefectOrder], resolution: float) -> list[tuple[int, int]]:
-    """Grid index ranges within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's fundamental."""
-    spans = []
-    for item in orders:
-        reach = max(ORDER_TOLERANCE * item.order, resolution / 2)
-        first = max(int(math.ceil((item.order - reach) / ORDER_STEP - 1e-9)), 0)
-        stop = min(int(math.floor((item.order + reach) / ORDER_STEP + 1e-9)) + 1, ORDER_GRID.size)
-        spans.append((first, stop))
-    return spans
+def _span_argmax(levels: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Per row and span, the index of the largest of ``levels[row, first:stop]`` (the first of equals; ``first``
+    where the span is empty)."""
+    length = max(int((stop - first).max(initial=0)), 1)
+    index = first[..., None] + np.arange(length)
+    inside = index < stop[..., None]
+    values = np.where(inside, np.take_along_axis(levels[:, None, :], np.minimum(index, levels.shape[1] - 1),
+                                                 axis=2), -np.inf)
+    return first + np.argmax(values, axis=2)
+
+
+def _order_windows(orders: Sequence[DefectOrder], resolutions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grid index ranges ``[first, stop)`` within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's
+    fundamental: arrays (resolutions x orders)."""
+    order = np.array([item.order for item in orders], dtype=float).reshape(1, -1)
+    reach = np.maximum(ORDER_TOLERANCE * order, resolutions.reshape(-1, 1) / 2)
+    first = np.maximum(np.ceil((order - reach) / ORDER_STEP - 1e-9).astype(np.int64), 0)
+    stop = np.minimum(np.floor((order + reach) / ORDER_STEP + 1e-9).astype(np.int64) + 1, ORDER_GRID.size)
+    return first, stop
