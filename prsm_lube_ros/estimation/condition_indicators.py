@@ -369,7 +369,9 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
     to uniform angle (order tracking, :func:`_angle_resampled`); otherwise
     orders are Hz / ``shaft_hz``.  Envelopes of one length are transformed together.
     """
-    resampled = [_angle_resampled(envelope, duration, hz, *track)
+    ramps: dict[int, np.ndarray] = {}     # 0, 1, ... m - 1 per envelope length m
+    resampled = [_angle_resampled(envelope, duration, hz, *track,
+                                  ramp=ramps.setdefault(envelope.size, np.arange(envelope.size, dtype=float)))
                  for envelope, hz, track in zip(envelopes, shaft_hz, tracks)]
     by_size: dict[int, list[int]] = {}
     for k, (values, _) in enumerate(resampled):
@@ -377,8 +379,9 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
     out: list[tuple[np.ndarray, float]] = [(np.zeros(0), math.nan)] * len(resampled)
     for m, members in by_size.items():
         values = np.vstack([resampled[k][0] for k in members])
-        power = np.abs(np.fft.rfft(values - values.mean(axis=1, keepdims=True), axis=1)) ** 2 / m ** 2
-        bins = np.arange(power.shape[1])
+        values -= values.mean(axis=1, keepdims=True)
+        power = np.abs(np.fft.rfft(values, axis=1)) ** 2 / m ** 2
+        bins = ramps[m][:power.shape[1]] if m in ramps else np.arange(power.shape[1], dtype=float)
         for k, row in zip(members, power):
             revolutions = resampled[k][1]
             out[k] = (np.interp(ORDER_GRID, bins / revolutions, row, right=math.nan), 1.0 / revolutions)
@@ -386,22 +389,30 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
 
 
 def _angle_resampled(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
-                     angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
+                     angles: npt.ArrayLike | None, *, ramp: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """The envelope at uniform screw angle where the angle through the window is known, and the revolutions.
 
     Otherwise the envelope as it is and ``duration * shaft_hz`` revolutions.
+    ``ramp``: ``0, 1, ... m - 1`` (float) for an envelope of ``m`` samples, when the caller keeps one.
     """
     m = envelope.size
-    times = np.arange(m) * (duration / m)
     revolutions = duration * shaft_hz
     values = envelope
     if angle_times is not None and angles is not None:
+        ramp = np.arange(m, dtype=float) if ramp is None else ramp
         t, a = np.asarray(angle_times, dtype=float), np.asarray(angles, dtype=float)
-        if t.size >= 2 and np.all(np.diff(t) > 0) and t[0] <= times[0] + 0.1 * duration \
-                and t[-1] >= times[-1] - 0.1 * duration:
-            angle = np.abs(np.interp(times, t, a) - np.interp(0.0, t, a))
-            if np.all(np.diff(angle) > 0):
-                uniform = np.linspace(angle[0], angle[-1], m)
+        last_time = (m - 1) * (duration / m)
+        if t.size >= 2 and (t[1:] > t[:-1]).all() and t[0] <= 0.1 * duration \
+                and t[-1] >= last_time - 0.1 * duration:
+            times = ramp * (duration / m)
+            angle = np.interp(times, t, a)
+            angle -= np.interp(0.0, t, a)
+            np.abs(angle, out=angle)
+            if (angle[1:] > angle[:-1]).all():
+                # np.linspace(angle[0], angle[-1], m), the same arithmetic on the kept ramp
+                uniform = ramp * ((angle[-1] - angle[0]) / (m - 1))
+                uniform += angle[0]
+                uniform[-1] = angle[-1]
                 values = np.interp(uniform, angle, envelope)
                 revolutions = (angle[-1] - angle[0]) / (2.0 * math.pi) * m / max(m - 1, 1)
     return values, revolutions
