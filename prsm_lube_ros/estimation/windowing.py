@@ -815,9 +815,11 @@ class WindowBuilder:
                 wanted = [i for i, job in enumerate(part) if job[3] is not None]
                 if not wanted:
                     continue
-                found = condition_indicators_batch(x[wanted], rate, [part[i][2] for i in wanted],
+                every = len(wanted) == len(part)     # the arrays as they are, no copy of their rows
+                found = condition_indicators_batch(x if every else x[wanted], rate, [part[i][2] for i in wanted],
                                                    (band.low, band.high), self.settings.defect_orders,
-                                                   [part[i][3] for i in wanted], spectra=spectra[wanted])
+                                                   [part[i][3] for i in wanted],
+                                                   spectra=spectra if every else spectra[wanted])
                 for i, condition in zip(wanted, found):
                     conditions[part[i][0]] = condition
 
