@@ -48,9 +48,9 @@ every transform runs over the windows of one size at once.  Pure numpy.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 import math
-from typing import Any, cast, TYPE_CHECKING
+from typing import Any, TYPE_CHECKING
 import warnings
 
 import numpy as np
@@ -212,21 +212,20 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     envelopes = _envelopes(spec, first, last, n, enveloped)
     order_spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate,
                                    [float(shaft_hz[k]) for k in enveloped], [tracks[k] for k in enveloped])
-    by_window = dict(zip(enveloped, order_spectra))
+    grids = {k: grid.astype(np.float32) for k, (grid, _) in zip(enveloped, order_spectra)}
+    resolutions = {k: resolution for k, (_, resolution) in zip(enveloped, order_spectra)}
+    peaks: dict[int, tuple[EnvelopePeak, ...]] = {}
+    if enveloped:    # the peaks of the float32 grids kept, all windows at once
+        peaks = dict(zip(enveloped, _peaks(np.vstack([grids[k] for k in enveloped]).astype(float),
+                                           [resolutions[k] for k in enveloped], orders)))
     out = []
     for k in range(count):
-        if k not in by_window:
+        if k not in grids:
             out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
                                            math.nan))
             continue
-        grid, resolution = by_window[k]
-        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
-                                       (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
-    spectral = [k for k, item in enumerate(out) if item.envelope is not None]
-    if spectral:
-        grids = np.vstack([cast(np.ndarray, out[k].envelope) for k in spectral]).astype(float)
-        for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
-            out[k] = replace(out[k], envelope_peaks=peaks)
+        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), peaks[k], float(sk[k]),
+                                       (first[k] * df, last[k] * df), resolutions[k], grids[k]))
     return out
 
 
