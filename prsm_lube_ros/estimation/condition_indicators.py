@@ -231,8 +231,9 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
 
 def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Kurtosis and crest factor of each window's signal in bins ``lo_bin..hi_bin`` of its rfft ``spec`` (n samples)."""
-    in_band = spec[:, :hi_bin + 1].copy()   # the bins above are zeros inside the transform
-    in_band[:, :lo_bin] = 0.0
+    # Every bin given (zeros outside the band): numpy's irfft pads a shorter input on a slower path.
+    in_band = np.zeros_like(spec)
+    in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
     signal = _irfft(in_band, n)
     peak = np.maximum(signal.max(axis=1), -signal.min(axis=1))     # max |x| without an |x| array
     squares = np.square(signal, out=signal)
