@@ -495,26 +495,31 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     span_top_list = span_top.tolist()
     span_level = (np.take_along_axis(padded, span_top, axis=1) >= min_db).tolist()
     labels: dict[tuple[int, float], str] = {}
+    grid_orders = ORDER_GRID.tolist()
     out = []
     for row, resolution in enumerate(resolutions):
-        levels = padded[row]
         candidates = columns_list[row_starts[row]:row_starts[row + 1]][:4 * count]
         separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
         chosen: list[int] = []
         for k in candidates:
             if all(abs(k - j) > separation for j in chosen):
                 chosen.append(k)
-            if len(chosen) == count:
-                break
+                if len(chosen) == count:
+                    break
         for k, is_open, reached in zip(span_top_list[row], span_open[row], span_level[row]):
             if is_open and reached and k not in chosen:
                 chosen.append(k)
+        if not chosen:
+            out.append(())
+            continue
+        chosen.sort()
+        key_resolution = round(resolution, 6)
         peaks = []
-        for k in sorted(chosen):
-            key = (k, round(resolution, 6))
+        for k, level in zip(chosen, padded[row, chosen].tolist()):
+            key = (k, key_resolution)
             if key not in labels:
-                labels[key] = label_order(float(ORDER_GRID[k]), orders, resolution / 2)
-            peaks.append(EnvelopePeak(float(ORDER_GRID[k]), float(levels[k]), labels[key]))
+                labels[key] = label_order(grid_orders[k], orders, resolution / 2)
+            peaks.append(EnvelopePeak(grid_orders[k], level, labels[key]))
         out.append(tuple(peaks))
     return out
 
