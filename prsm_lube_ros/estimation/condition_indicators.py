@@ -77,6 +77,7 @@ MAX_ORDER = 24.0
 ORDER_STEP = 0.025
 #: The fixed order grid the envelope spectra are kept on (0 to :data:`MAX_ORDER`).
 ORDER_GRID = np.arange(0.0, MAX_ORDER + ORDER_STEP / 2, ORDER_STEP)
+_GRID_ORDERS: list[float] = ORDER_GRID.tolist()    # the same as Python numbers, for the peaks
 #: Harmonics of the highest defect order a demodulation band must be wide enough to carry.
 ENVELOPE_HARMONICS = 2.5
 #: Deepest level of the band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
@@ -493,9 +494,8 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     span_top = _span_argmax(padded, span_first, span_stop)
     span_open = (span_stop > span_first).tolist()
     span_top_list = span_top.tolist()
-    span_level = (np.take_along_axis(padded, span_top, axis=1) >= min_db).tolist()
+    span_level = (padded[np.arange(padded.shape[0])[:, None], span_top] >= min_db).tolist()
     labels: dict[tuple[int, float], str] = {}
-    grid_orders = ORDER_GRID.tolist()
     out = []
     for row, resolution in enumerate(resolutions):
         candidates = columns_list[row_starts[row]:row_starts[row + 1]][:4 * count]
@@ -518,8 +518,8 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
         for k, level in zip(chosen, padded[row, chosen].tolist()):
             key = (k, key_resolution)
             if key not in labels:
-                labels[key] = label_order(grid_orders[k], orders, resolution / 2)
-            peaks.append(EnvelopePeak(grid_orders[k], level, labels[key]))
+                labels[key] = label_order(_GRID_ORDERS[k], orders, resolution / 2)
+            peaks.append(EnvelopePeak(_GRID_ORDERS[k], level, labels[key]))
         out.append(tuple(peaks))
     return out
 
@@ -529,9 +529,8 @@ def _span_argmax(levels: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.
     where the span is empty)."""
     length = max(int((stop - first).max(initial=0)), 1)
     index = first[..., None] + np.arange(length)
-    inside = index < stop[..., None]
-    values = np.where(inside, np.take_along_axis(levels[:, None, :], np.minimum(index, levels.shape[1] - 1),
-                                                 axis=2), -np.inf)
+    values = levels[np.arange(levels.shape[0])[:, None, None], np.minimum(index, levels.shape[1] - 1)]
+    values[index >= stop[..., None]] = -np.inf
     return first + np.argmax(values, axis=2)
 
 
