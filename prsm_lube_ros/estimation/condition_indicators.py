@@ -496,7 +496,7 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     span_top_list = span_top.tolist()
     span_level = (padded[np.arange(padded.shape[0])[:, None], span_top] >= min_db).tolist()
     labels: dict[tuple[int, float], str] = {}
-    out = []
+    out: list[tuple[EnvelopePeak, ...]] = []
     for row, resolution in enumerate(resolutions):
         candidates = columns_list[row_starts[row]:row_starts[row + 1]][:4 * count]
         separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
