@@ -525,8 +525,10 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
 
 
 def _span_argmax(levels: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Per row and span, the index of the largest of ``levels[row, first:stop]`` (the first of equals; ``first``
-    where the span is empty)."""
+    """Per row and span, the index of the largest of ``levels[row, first:stop]``.
+
+    The first of equals; ``first`` where the span is empty.
+    """
     length = max(int((stop - first).max(initial=0)), 1)
     index = first[..., None] + np.arange(length)
     values = levels[np.arange(levels.shape[0])[:, None, None], np.minimum(index, levels.shape[1] - 1)]
@@ -535,8 +537,10 @@ def _span_argmax(levels: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.
 
 
 def _order_windows(orders: Sequence[DefectOrder], resolutions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Grid index ranges ``[first, stop)`` within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's
-    fundamental: arrays (resolutions x orders)."""
+    """Grid index ranges ``[first, stop)`` near each defect order's fundamental, per resolution.
+
+    Within ``max(ORDER_TOLERANCE o, resolution / 2)`` of order ``o``; arrays (resolutions x orders).
+    """
     order = np.array([item.order for item in orders], dtype=float).reshape(1, -1)
     reach = np.maximum(ORDER_TOLERANCE * order, resolutions.reshape(-1, 1) / 2)
     first = np.maximum(np.ceil((order - reach) / ORDER_STEP - 1e-9).astype(np.int64), 0)
