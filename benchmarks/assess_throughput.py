@@ -32,8 +32,14 @@ with numpy (``benchmarks/bytes_floor.py``).  The ratios assess / rosbags script
 and assess / floor are printed beside them.  Results go to
 ``benchmarks/results/<--name>.{json,md}`` (default ``assess_throughput``).
 
+With ``--phases``, where the CPU of ``assess`` goes, with this code and the
+``--before`` checkout's, each in a fresh process, best of ``--repeat``: the
+imports of the command, reading and windowing the hour with the condition
+indicators off, the indicators (the same with them on, less that), assessing
+the windows and runs, and writing the JSON (compact, as ``--json`` does).
+
 Usage: ``python benchmarks/assess_throughput.py [--repeat 3] [--data DIR] [--before CHECKOUT]
-[--processes-only] [--name NAME]``
+[--processes-only] [--phases] [--name NAME]``
 """
 from __future__ import annotations
 
@@ -78,6 +84,49 @@ def child(kind: str, bag: str, calibration: str) -> None:
     peak_mib = peak_rss_mib()
     print(json.dumps({'kind': kind, 'seconds': elapsed, 'setup_seconds': setup, 'peak_rss_mib': peak_mib,
                       **detail}))
+
+
+def phases_child(bag: str, calibration: str) -> None:
+    """CPU seconds of each phase of ``assess`` on ``bag`` in this process; print them as a JSON line."""
+    start = time.process_time()
+    from dataclasses import replace
+    from prsm_lube_ros.cli import assess, common   # noqa: F401  (the command's imports)
+    from prsm_lube_ros.estimation.calibration_file import load_calibration
+    from prsm_lube_ros.estimation.pipeline import assess_recording, assessment_json, recording_windows
+    from prsm_lube_ros.estimation.windowing import WindowSettings
+    from prsm_lube_ros.physics.actuator import Actuator
+    lead = Actuator().lead
+    marks = {'imports': time.process_time() - start}
+    calib = load_calibration(calibration)
+    settings = WindowSettings(band=calib.band)
+    clock = time.process_time()
+    recording_windows(bag, lead=lead, settings=replace(settings, condition_indicators=False))
+    marks['reading and windowing'] = time.process_time() - clock
+    clock = time.process_time()
+    windows = recording_windows(bag, lead=lead, settings=settings)
+    marks['condition indicators'] = time.process_time() - clock - marks['reading and windowing']
+    clock = time.process_time()
+    result = assess_recording(windows, calib)
+    marks['assessing windows and runs'] = time.process_time() - clock
+    clock = time.process_time()
+    common.write_json(Path(bag).parent / 'phases.json', assessment_json([result], calib), indent=None)
+    marks['writing the JSON'] = time.process_time() - clock
+    print(json.dumps(marks))
+
+
+def phases(bag: Path, calibration: Path, repeat: int, checkouts: dict[str, Path]) -> dict[str, dict[str, float]]:
+    """Per checkout (name -> code), the least CPU seconds of each phase over ``repeat`` fresh processes."""
+    found: dict[str, dict[str, float]] = {}
+    for _ in range(repeat):
+        for name, code in checkouts.items():
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(code), os.environ.get('PYTHONPATH', '')]))
+            out = subprocess.run([sys.executable, __file__, '--phases-child', str(bag), str(calibration)],
+                                 check=True, capture_output=True, text=True, cwd=code, env=env).stdout
+            marks = json.loads(out.strip().splitlines()[-1])
+            best = found.setdefault(name, marks)
+            for phase, seconds in marks.items():
+                best[phase] = min(best[phase], seconds)
+    return found
 
 
 def measure(kind: str, bag: Path, calibration: Path, repeat: int) -> dict:
@@ -136,6 +185,9 @@ def main() -> int:
     if len(sys.argv) > 1 and sys.argv[1] == '--child':
         child(*sys.argv[2:5])
         return 0
+    if len(sys.argv) > 1 and sys.argv[1] == '--phases-child':
+        phases_child(*sys.argv[2:4])
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--repeat', type=int, default=3)
     parser.add_argument('--data', type=Path, default=Path('/tmp/prsm_lube_bench'),
@@ -144,6 +196,8 @@ def main() -> int:
                         help='also time prsm-lube assess with the code of this checkout (e.g. a worktree of main)')
     parser.add_argument('--processes-only', action='store_true',
                         help='only the whole processes (leave out the in-process throughput and memory table)')
+    parser.add_argument('--phases', action='store_true',
+                        help='also where the CPU of assess goes (imports, windowing, indicators, assessing, JSON)')
     parser.add_argument('--name', default='assess_throughput', help='results file name (default assess_throughput)')
     args = parser.parse_args()
     bags, calibration = prepare(args.data)
@@ -151,6 +205,10 @@ def main() -> int:
     hour_bag = bags['1 h'][0]
     processes = whole_processes(process_commands(hour_bag, calibration, args.data, args.before), args.repeat)
     ratios = process_ratios(processes)
+    phase_cpu = {}
+    if args.phases:
+        checkouts = {'this code': ROOT} | ({'before': args.before.resolve()} if args.before else {})
+        phase_cpu = phases(hour_bag, calibration, args.repeat, checkouts)
     goals = {'prsm-lube --help < 0.2 s': processes['prsm-lube --help']['wall_s'] < 0.2,
              'assess CPU <= 0.5 x the rosbags script\'s': ratios['assess (1 h)']['cpu_over_rosbags'] <= 0.5,
              'assess <= 0.5 x the rosbags script': ratios['assess (1 h)']['over_rosbags'] <= 0.5,
@@ -164,7 +222,7 @@ def main() -> int:
                 'machine': {'python': platform.python_version(), 'processor': platform.processor() or
                             platform.machine(), 'cpus': _cpus(), 'load_average_1min_at_end': os.getloadavg()[0]},
                 'repeat': args.repeat, 'rows': rows, 'whole_process': processes, 'ratios': ratios,
-                'before': str(args.before) if args.before else None, 'goals': goals}
+                'before': str(args.before) if args.before else None, 'phases_cpu_s': phase_cpu, 'goals': goals}
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f'{args.name}.json').write_text(json.dumps(document, indent=1))
     lines = [f'# Assessment throughput (`{document["command"]}`)', '',
@@ -191,6 +249,15 @@ def main() -> int:
         lines.append(f'| {name} | {measured["wall_s"]:.3f} | {measured["cpu_s"]:.3f} | '
                      f'{_ratio(ratio.get("over_rosbags"))} | {_ratio(ratio.get("over_floor"))} | '
                      f'{_ratio(ratio.get("cpu_over_rosbags"))} | {_ratio(ratio.get("cpu_over_floor"))} |')
+    if phase_cpu:
+        names = list(phase_cpu)
+        lines += ['', f'Where the CPU of assess goes on the hour, in-process, s, least of {args.repeat} fresh processes'
+                  ' (the indicators: windowing with them less windowing without):', '',
+                  '| phase | ' + ' | '.join(names) + ' |', '|---|' + '---|' * len(names)]
+        for phase in phase_cpu[names[0]]:
+            cells = [f'{phase_cpu[name].get(phase, float("nan")):.3f}' for name in names]
+            lines.append(f'| {phase} | ' + ' | '.join(cells) + ' |')
+        lines.append('| sum | ' + ' | '.join(f'{sum(phase_cpu[name].values()):.3f}' for name in names) + ' |')
     lines += ['', 'Goals: ' + ', '.join(f'{goal}: {"met" if ok else "NOT met"}' for goal, ok in goals.items())]
     (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
     print('\n'.join(lines))

@@ -48,9 +48,9 @@ every transform runs over the windows of one size at once.  Pure numpy.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 import math
-from typing import Any, cast, TYPE_CHECKING
+from typing import Any, TYPE_CHECKING
 import warnings
 
 import numpy as np
@@ -77,6 +77,7 @@ MAX_ORDER = 24.0
 ORDER_STEP = 0.025
 #: The fixed order grid the envelope spectra are kept on (0 to :data:`MAX_ORDER`).
 ORDER_GRID = np.arange(0.0, MAX_ORDER + ORDER_STEP / 2, ORDER_STEP)
+_GRID_ORDERS: list[float] = ORDER_GRID.tolist()    # the same as Python numbers, for the peaks
 #: Harmonics of the highest defect order a demodulation band must be wide enough to carry.
 ENVELOPE_HARMONICS = 2.5
 #: Deepest level of the band tree (2^level bands), the fast kurtogram's usual depth for 1 s windows.
@@ -195,8 +196,8 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
                 for item in condition_indicators_batch(
                     x[start:start + chunk], rate, screw_speeds[start:start + chunk], band, orders,
                     tracks[start:start + chunk], spectra=None if spectra is None else spectra[start:start + chunk])]
-    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra.copy()
-    spec[:, 0] = 0.0                     # the window mean (DC, gravity) out
+    # The window mean (DC, gravity) is bin 0, which no band below uses (they start at bin 1 or above).
+    spec = np.fft.rfft(x, axis=1) if spectra is None else spectra
     df = rate / n
     lo_bin = max(1, int(math.ceil(band[0] / df)))
     hi_bin = min(spec.shape[1] - 1, int(math.floor(band[1] / df)))
@@ -212,29 +213,29 @@ def condition_indicators_batch(samples: np.ndarray, rate: float, screw_speeds: S
     envelopes = _envelopes(spec, first, last, n, enveloped)
     order_spectra = _order_spectra([envelopes[k] for k in enveloped], n / rate,
                                    [float(shaft_hz[k]) for k in enveloped], [tracks[k] for k in enveloped])
-    by_window = dict(zip(enveloped, order_spectra))
+    grids = {k: grid.astype(np.float32) for k, (grid, _) in zip(enveloped, order_spectra)}
+    resolutions = {k: resolution for k, (_, resolution) in zip(enveloped, order_spectra)}
+    peaks: dict[int, tuple[EnvelopePeak, ...]] = {}
+    if enveloped:    # the peaks of the float32 grids kept, all windows at once
+        peaks = dict(zip(enveloped, _peaks(np.vstack([grids[k] for k in enveloped]).astype(float),
+                                           [resolutions[k] for k in enveloped], orders)))
     out = []
     for k in range(count):
-        if k not in by_window:
+        if k not in grids:
             out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), math.nan, (math.nan, math.nan),
                                            math.nan))
             continue
-        grid, resolution = by_window[k]
-        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), (), float(sk[k]),
-                                       (first[k] * df, last[k] * df), resolution, grid.astype(np.float32)))
-    spectral = [k for k, item in enumerate(out) if item.envelope is not None]
-    if spectral:
-        grids = np.vstack([cast(np.ndarray, out[k].envelope) for k in spectral]).astype(float)
-        for k, peaks in zip(spectral, _peaks(grids, [out[k].order_resolution for k in spectral], orders)):
-            out[k] = replace(out[k], envelope_peaks=peaks)
+        out.append(ConditionIndicators(float(kurt[k]), float(crest[k]), peaks[k], float(sk[k]),
+                                       (first[k] * df, last[k] * df), resolutions[k], grids[k]))
     return out
 
 
 def _impulsiveness(spec: np.ndarray, lo_bin: int, hi_bin: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Kurtosis and crest factor of each window's signal in bins ``lo_bin..hi_bin`` of its rfft ``spec`` (n samples)."""
+    # Every bin given (zeros outside the band): numpy's irfft pads a shorter input on a slower path.
     in_band = np.zeros_like(spec)
     in_band[:, lo_bin:hi_bin + 1] = spec[:, lo_bin:hi_bin + 1]
-    signal = np.fft.irfft(in_band, n, axis=1)
+    signal = _irfft(in_band, n)
     peak = np.maximum(signal.max(axis=1), -signal.min(axis=1))     # max |x| without an |x| array
     squares = np.square(signal, out=signal)
     power = squares.mean(axis=1)
@@ -267,20 +268,24 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     first = np.full(count, lo_bin)
     last = np.full(count, hi_bin)
     width = hi_bin - lo_bin + 1
-    for parts in TREE_PARTS:
-        bins = width // parts
+    levels = [(parts, width // parts, 1 << int(math.ceil(math.log2(max(width // parts, 8)))))
+              for parts in TREE_PARTS]    # a complex band of ``bins`` bins needs no more than ``size`` samples
+    # One buffer for every level's padded bands and one for their |z|^2: the pages are touched once a call,
+    # not once a level (a fresh array of a few MB costs its page faults again each time).
+    buffer = np.empty(count * max(parts * size for parts, _, size in levels), dtype=complex)
+    squares = np.empty(buffer.size)
+    for parts, bins, size in levels:
         allowed = bins >= min_bins
         if not allowed.any():
             break
-        size = 1 << int(math.ceil(math.log2(max(bins, 8))))   # a complex band of ``bins`` bins needs no more
-        if allowed.all():    # a view of the bins, no copy
-            rows, bands = None, spec[:, lo_bin:lo_bin + parts * bins]
-        else:                # the windows this level still serves
-            rows = np.flatnonzero(allowed)
-            bands = spec[rows, lo_bin:lo_bin + parts * bins]
-        # Each band's bins zero-padded to ``size`` inside the transform (no padded copy made here).
-        envelope = np.fft.ifft(bands.reshape(bands.shape[0], parts, bins), n=size, axis=2)
-        mean, fourth = _power_moments(envelope)
+        rows = None if allowed.all() else np.flatnonzero(allowed)    # None: every window; else those served
+        served = count if rows is None else rows.size
+        envelope = buffer[:served * parts * size].reshape(served, parts, size)
+        envelope[..., :bins] = (spec[:, lo_bin:lo_bin + parts * bins] if rows is None
+                                else spec[rows, lo_bin:lo_bin + parts * bins]).reshape(served, parts, bins)
+        envelope[..., bins:] = 0.0      # each band's bins zero-padded to ``size``
+        _ifft_in_place(envelope)
+        mean, fourth = _power_moments(envelope, squares[:envelope.size].reshape(envelope.shape))
         with np.errstate(divide='ignore', invalid='ignore'):
             sk_rows = np.where(mean > 0, fourth / mean ** 2 - 2.0, -np.inf)
         sk_rows -= SK_SIGMAS * 2.0 / math.sqrt(bins)      # a lower bound: Gaussian SK scatters by 2 / sqrt(samples)
@@ -299,17 +304,37 @@ def _demodulation_bands(spec: np.ndarray, lo_bin: int, hi_bin: int,
     return best_sk, first, last
 
 
-def _power_moments(envelope: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _power_moments(envelope: np.ndarray, power: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``E|z|^2`` and ``E|z|^4`` over the last axis of the complex ``envelope`` (destroys ``envelope``).
 
     ``|z|^2`` is ``re^2 + im^2`` squared in place over the array's interleaved
-    floats (one contiguous pass instead of strided real and imaginary views).
+    floats (one contiguous pass instead of strided real and imaginary views),
+    written into ``power`` (a float array of the envelope's shape) when given.
     """
     interleaved = envelope.view(np.float64)     # re, im, re, im, ... along the last axis
     np.square(interleaved, out=interleaved)
-    power = interleaved[..., 0::2] + interleaved[..., 1::2]
+    power = np.add(interleaved[..., 0::2], interleaved[..., 1::2], out=power)
     mean = power.mean(axis=-1)
     return mean, np.square(power, out=power).mean(axis=-1)
+
+
+def _ifft_in_place(values: np.ndarray) -> np.ndarray:
+    """The inverse FFT of complex ``values`` along the last axis, written over them where numpy can (2.0 on)."""
+    if _FFT_TAKES_OUT:
+        return np.fft.ifft(values, axis=-1, out=values)
+    values[...] = np.fft.ifft(values, axis=-1)
+    return values
+
+
+def _irfft(values: np.ndarray, n: int) -> np.ndarray:
+    """``numpy.fft.irfft(values, n)`` along the last axis (numpy >= 2: into a fresh buffer, no temporary)."""
+    if _FFT_TAKES_OUT:
+        return np.fft.irfft(values, n, axis=-1, out=np.empty(values.shape[:-1] + (n,)))
+    return np.fft.irfft(values, n, axis=-1)
+
+
+#: numpy 2's FFTs write into a given ``out`` (numpy 1, e.g. Ubuntu 24.04's, do not).
+_FFT_TAKES_OUT = int(np.__version__.split('.')[0]) >= 2
 
 
 def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
@@ -329,7 +354,9 @@ def _envelopes(spec: np.ndarray, first: np.ndarray, last: np.ndarray, n: int,
         index = np.array(members)
         shifted = np.zeros((index.size, size), dtype=complex)
         shifted[:, :width] = spec[index[:, None], first[index][:, None] + np.arange(width)]
-        found = np.abs(np.fft.ifft(shifted, axis=1) * (2.0 * size / n))
+        shifted = _ifft_in_place(shifted)
+        shifted *= 2.0 * size / n
+        found = np.abs(shifted)
         envelopes.update(zip(members, found))
     return envelopes
 
@@ -343,7 +370,9 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
     to uniform angle (order tracking, :func:`_angle_resampled`); otherwise
     orders are Hz / ``shaft_hz``.  Envelopes of one length are transformed together.
     """
-    resampled = [_angle_resampled(envelope, duration, hz, *track)
+    ramps: dict[int, np.ndarray] = {}     # 0, 1, ... m - 1 per envelope length m
+    resampled = [_angle_resampled(envelope, duration, hz, *track,
+                                  ramp=ramps.setdefault(envelope.size, np.arange(envelope.size, dtype=float)))
                  for envelope, hz, track in zip(envelopes, shaft_hz, tracks)]
     by_size: dict[int, list[int]] = {}
     for k, (values, _) in enumerate(resampled):
@@ -351,8 +380,9 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
     out: list[tuple[np.ndarray, float]] = [(np.zeros(0), math.nan)] * len(resampled)
     for m, members in by_size.items():
         values = np.vstack([resampled[k][0] for k in members])
-        power = np.abs(np.fft.rfft(values - values.mean(axis=1, keepdims=True), axis=1)) ** 2 / m ** 2
-        bins = np.arange(power.shape[1])
+        values -= values.mean(axis=1, keepdims=True)
+        power = np.abs(np.fft.rfft(values, axis=1)) ** 2 / m ** 2
+        bins = ramps[m][:power.shape[1]] if m in ramps else np.arange(power.shape[1], dtype=float)
         for k, row in zip(members, power):
             revolutions = resampled[k][1]
             out[k] = (np.interp(ORDER_GRID, bins / revolutions, row, right=math.nan), 1.0 / revolutions)
@@ -360,22 +390,30 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
 
 
 def _angle_resampled(envelope: np.ndarray, duration: float, shaft_hz: float, angle_times: npt.ArrayLike | None,
-                     angles: npt.ArrayLike | None) -> tuple[np.ndarray, float]:
+                     angles: npt.ArrayLike | None, *, ramp: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """The envelope at uniform screw angle where the angle through the window is known, and the revolutions.
 
     Otherwise the envelope as it is and ``duration * shaft_hz`` revolutions.
+    ``ramp``: ``0, 1, ... m - 1`` (float) for an envelope of ``m`` samples, when the caller keeps one.
     """
     m = envelope.size
-    times = np.arange(m) * (duration / m)
     revolutions = duration * shaft_hz
     values = envelope
     if angle_times is not None and angles is not None:
+        ramp = np.arange(m, dtype=float) if ramp is None else ramp
         t, a = np.asarray(angle_times, dtype=float), np.asarray(angles, dtype=float)
-        if t.size >= 2 and np.all(np.diff(t) > 0) and t[0] <= times[0] + 0.1 * duration \
-                and t[-1] >= times[-1] - 0.1 * duration:
-            angle = np.abs(np.interp(times, t, a) - np.interp(0.0, t, a))
-            if np.all(np.diff(angle) > 0):
-                uniform = np.linspace(angle[0], angle[-1], m)
+        last_time = (m - 1) * (duration / m)
+        if t.size >= 2 and (t[1:] > t[:-1]).all() and t[0] <= 0.1 * duration \
+                and t[-1] >= last_time - 0.1 * duration:
+            times = ramp * (duration / m)
+            angle = np.interp(times, t, a)
+            angle -= np.interp(0.0, t, a)
+            np.abs(angle, out=angle)
+            if (angle[1:] > angle[:-1]).all():
+                # np.linspace(angle[0], angle[-1], m), the same arithmetic on the kept ramp
+                uniform = ramp * ((angle[-1] - angle[0]) / (m - 1))
+                uniform += angle[0]
+                uniform[-1] = angle[-1]
                 values = np.interp(uniform, angle, envelope)
                 revolutions = (angle[-1] - angle[0]) / (2.0 * math.pi) * m / max(m - 1, 1)
     return values, revolutions
@@ -445,44 +483,66 @@ def _peaks(grids: np.ndarray, resolutions: Sequence[float], orders: Sequence[Def
     local = np.zeros(padded.shape, dtype=bool)
     local[:, 1:-1] = (padded[:, 1:-1] >= padded[:, :-2]) & (padded[:, 1:-1] > padded[:, 2:]) & (
         padded[:, 1:-1] >= min_db)
+    # The local maxima of all rows, each row's from the largest level down (ties in grid order).
+    rows, columns = np.nonzero(local)
+    by_level = np.lexsort((columns, -padded[rows, columns], rows))
+    rows, columns = rows[by_level], columns[by_level]
+    row_starts = np.searchsorted(rows, np.arange(len(resolutions) + 1)).tolist()
+    columns_list = columns.tolist()
+    # The largest level within reach of each defect order's fundamental, all rows at once.
+    span_first, span_stop = _order_windows(orders, np.asarray(resolutions, dtype=float))
+    span_top = _span_argmax(padded, span_first, span_stop)
+    span_open = (span_stop > span_first).tolist()
+    span_top_list = span_top.tolist()
+    span_level = (padded[np.arange(padded.shape[0])[:, None], span_top] >= min_db).tolist()
     labels: dict[tuple[int, float], str] = {}
-    spans: dict[float, list[tuple[int, int]]] = {}
-    out = []
+    out: list[tuple[EnvelopePeak, ...]] = []
     for row, resolution in enumerate(resolutions):
-        levels = padded[row]
-        candidates = np.flatnonzero(local[row])
-        if candidates.size > 4 * count:
-            candidates = candidates[np.argpartition(-levels[candidates], 4 * count)[:4 * count]]
+        candidates = columns_list[row_starts[row]:row_starts[row + 1]][:4 * count]
         separation = max(resolution, 2 * ORDER_STEP) / ORDER_STEP
         chosen: list[int] = []
-        for k in sorted(candidates.tolist(), key=lambda k: -levels[k]):
+        for k in candidates:
             if all(abs(k - j) > separation for j in chosen):
                 chosen.append(k)
-            if len(chosen) == count:
-                break
-        if resolution not in spans:     # windows of one speed share their resolution
-            spans[resolution] = _order_windows(orders, resolution)
-        for first, stop in spans[resolution]:
-            if stop > first:
-                k = first + int(np.argmax(levels[first:stop]))
-                if levels[k] >= min_db and k not in chosen:
-                    chosen.append(k)
+                if len(chosen) == count:
+                    break
+        for k, is_open, reached in zip(span_top_list[row], span_open[row], span_level[row]):
+            if is_open and reached and k not in chosen:
+                chosen.append(k)
+        if not chosen:
+            out.append(())
+            continue
+        chosen.sort()
+        key_resolution = round(resolution, 6)
         peaks = []
-        for k in sorted(chosen):
-            key = (k, round(resolution, 6))
+        for k, level in zip(chosen, padded[row, chosen].tolist()):
+            key = (k, key_resolution)
             if key not in labels:
-                labels[key] = label_order(float(ORDER_GRID[k]), orders, resolution / 2)
-            peaks.append(EnvelopePeak(float(ORDER_GRID[k]), float(levels[k]), labels[key]))
+                labels[key] = label_order(_GRID_ORDERS[k], orders, resolution / 2)
+            peaks.append(EnvelopePeak(_GRID_ORDERS[k], level, labels[key]))
         out.append(tuple(peaks))
     return out
 
 
-def _order_windows(orders: Sequence[DefectOrder], resolution: float) -> list[tuple[int, int]]:
-    """Grid index ranges within ``max(ORDER_TOLERANCE o, resolution / 2)`` of each defect order's fundamental."""
-    spans = []
-    for item in orders:
-        reach = max(ORDER_TOLERANCE * item.order, resolution / 2)
-        first = max(int(math.ceil((item.order - reach) / ORDER_STEP - 1e-9)), 0)
-        stop = min(int(math.floor((item.order + reach) / ORDER_STEP + 1e-9)) + 1, ORDER_GRID.size)
-        spans.append((first, stop))
-    return spans
+def _span_argmax(levels: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Per row and span, the index of the largest of ``levels[row, first:stop]``.
+
+    The first of equals; ``first`` where the span is empty.
+    """
+    length = max(int((stop - first).max(initial=0)), 1)
+    index = first[..., None] + np.arange(length)
+    values = levels[np.arange(levels.shape[0])[:, None, None], np.minimum(index, levels.shape[1] - 1)]
+    values[index >= stop[..., None]] = -np.inf
+    return first + np.argmax(values, axis=2)
+
+
+def _order_windows(orders: Sequence[DefectOrder], resolutions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grid index ranges ``[first, stop)`` near each defect order's fundamental, per resolution.
+
+    Within ``max(ORDER_TOLERANCE o, resolution / 2)`` of order ``o``; arrays (resolutions x orders).
+    """
+    order = np.array([item.order for item in orders], dtype=float).reshape(1, -1)
+    reach = np.maximum(ORDER_TOLERANCE * order, resolutions.reshape(-1, 1) / 2)
+    first = np.maximum(np.ceil((order - reach) / ORDER_STEP - 1e-9).astype(np.int64), 0)
+    stop = np.minimum(np.floor((order + reach) / ORDER_STEP + 1e-9).astype(np.int64) + 1, ORDER_GRID.size)
+    return first, stop

@@ -487,11 +487,12 @@ class WindowBuilder:
         table[rows, _SUMSQ] += sumsq
         table[rows, _COUNT] += count
         table[rows, _RATE] = np.maximum(table[rows, _RATE], rate)
-        if keep_samples:   # copies (a view would hold the whole batch), with the time of their first sample
+        if keep_samples:   # views of ``values`` (the batch's own float64 copy), with the time of their first sample
+            # A view holds the batch's samples until its last window closes: one batch more than copies would.
             b_stamp, b_off = pieces.stamps, pieces.offsets
             seg_time = b_stamp[seg_block] + (lo - b_off[seg_block]) / b_rate[seg_block]
             for k, first, last, time in zip(seg_k.tolist(), lo.tolist(), hi.tolist(), seg_time.tolist()):
-                self._chunks.setdefault(k, []).append((time, values[first:last].copy()))
+                self._chunks.setdefault(k, []).append((time, values[first:last]))
         self._advance('vibration', float(pieces.ends.max()))
 
     def _keeps_samples(self) -> bool:
@@ -815,9 +816,11 @@ class WindowBuilder:
                 wanted = [i for i, job in enumerate(part) if job[3] is not None]
                 if not wanted:
                     continue
-                found = condition_indicators_batch(x[wanted], rate, [part[i][2] for i in wanted],
+                every = len(wanted) == len(part)     # the arrays as they are, no copy of their rows
+                found = condition_indicators_batch(x if every else x[wanted], rate, [part[i][2] for i in wanted],
                                                    (band.low, band.high), self.settings.defect_orders,
-                                                   [part[i][3] for i in wanted], spectra=spectra[wanted])
+                                                   [part[i][3] for i in wanted],
+                                                   spectra=spectra if every else spectra[wanted])
                 for i, condition in zip(wanted, found):
                     conditions[part[i][0]] = condition
 
