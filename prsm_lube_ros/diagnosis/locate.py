@@ -918,20 +918,14 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         share = power / mean_square
         seen = prominent[:, lo:hi].any(axis=1)
         # A speed whose largest bin is the window's edge has its power from outside: a neighbouring line's skirt.
-        # The peak of a wide band (a well-damped mode's flat top) is taken on the spectrum smoothed over a
-        # sixth of the band, where the noise of single bins does not move it.
-        top = lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
+        top = _band_tops(medians, lo, hi)
         seen &= (top > lo) & (top < hi - 1)
         if seen.sum() < _SPECTRAL.mode_min_speeds or power[seen].min() <= 0:
             continue
         # A broad band's flat top puts its largest bin anywhere on it (a mode at zeta 0.2: the smoothed top of
         # one band wandered by 16 Hz between speeds); the band sits where its power over the floor is centred.
         peaks = _centroids(medians[:, lo:hi] - floors[:, lo:hi], lo)[seen] if broad else top[seen]
-        # Not one frequency (lines of different orders side by side): the peak may wander by 2 bins, or by an
-        # eighth of a wide band.
-        if np.ptp(peaks) > max(2, (hi - lo) // 8):
-            continue
-        if _follows_an_order(peaks, edges[seen]):
+        if not _fixed_in_hz(peaks, edges[seen], lo, hi):
             continue
         centre = float(freqs[int(np.median(peaks))])
         if broad and centre * _SPECTRAL.mode_upper_skirt > freqs[-1]:
@@ -946,11 +940,7 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
         if varies and share_varies and share.max() >= _SPECTRAL.mode_min_share:
             if any(freqs[lo] <= f <= freqs[hi - 1] for f in result.mode_frequencies):
                 continue
-            if broad:
-                peak = float(np.median(peaks)) * df
-            else:
-                peak = float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))])
-            result.mode_frequencies.append(peak)
+            result.mode_frequencies.append(_band_frequency(medians, freqs, peaks, lo, hi, df, broad))
             result.mode_shares.append([float(v) for v in share])
 
 
@@ -986,11 +976,11 @@ def _ring_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
             if any(freqs[lo] - 3 * df <= f <= freqs[hi - 1] + 3 * df
                    for f in result.frequencies + result.mode_frequencies + result.ring_frequencies):
                 continue
-            top = lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
+            top = _band_tops(medians, lo, hi)
             if not np.all((top > lo) & (top < hi - 1)):
                 continue
             peaks = _centroids(medians[:, lo:hi] - floors[:, lo:hi], lo) if broad else top
-            if np.ptp(peaks) > max(2, (hi - lo) // 8) or _follows_an_order(peaks, edges):
+            if not _fixed_in_hz(peaks, edges, lo, hi):
                 continue
             centre = float(freqs[int(np.median(peaks))])
             if centre * (float(np.max(edges) / np.min(edges)) - 1.0) < _SPECTRAL.mode_order_shift_bins * df:
@@ -998,9 +988,34 @@ def _ring_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
             power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
             if power.min() <= 0:
                 continue
-            result.ring_frequencies.append(float(np.median(peaks)) * df if broad
-                                           else float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))]))
+            result.ring_frequencies.append(_band_frequency(medians, freqs, peaks, lo, hi, df, broad))
             result.ring_shares.append([float(v) for v in power / mean_square])
+
+
+def _band_tops(medians: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Per speed, the bin where band ``lo:hi`` peaks, on the spectrum smoothed over a sixth of the band.
+
+    The peak of a wide band (a well-damped mode's flat top) is taken where the noise of single bins does not
+    move it.  A speed whose top is the window's edge has its power from outside: a neighbouring line's skirt.
+    """
+    return lo + np.argmax(uniform_filter1d(medians[:, lo:hi], max((hi - lo) // 6, 1), axis=1), axis=1)
+
+
+def _fixed_in_hz(peaks: np.ndarray, edges: np.ndarray, lo: int, hi: int) -> bool:
+    """Whether a band's peaks per speed (bins, at speeds ``edges``) stay at one frequency, not an order's.
+
+    Not one frequency (lines of different orders side by side) when the peak wanders by more than 2 bins, or
+    by an eighth of a wide band; nor when it follows a rotation order (:func:`_follows_an_order`).
+    """
+    return not (np.ptp(peaks) > max(2, (hi - lo) // 8) or _follows_an_order(peaks, edges))
+
+
+def _band_frequency(medians: np.ndarray, freqs: np.ndarray, peaks: np.ndarray, lo: int, hi: int, df: float,
+                    broad: bool) -> float:
+    """The frequency reported for band ``lo:hi``, Hz: a broad band's median centre, else its largest bin."""
+    if broad:
+        return float(np.median(peaks)) * df
+    return float(freqs[lo + int(np.argmax(medians[:, lo:hi].max(axis=0)))])
 
 
 def _centroids(excess_power: np.ndarray, first: int) -> np.ndarray:
