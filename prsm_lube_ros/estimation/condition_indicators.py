@@ -382,7 +382,7 @@ def _order_spectra(envelopes: Sequence[np.ndarray], duration: float, shaft_hz: S
         values = np.vstack([resampled[k][0] for k in members])
         values -= values.mean(axis=1, keepdims=True)
         power = np.abs(np.fft.rfft(values, axis=1)) ** 2 / m ** 2
-        bins = ramps[m][:power.shape[1]] if m in ramps else np.arange(power.shape[1], dtype=float)
+        bins = ramps[m][:power.shape[1]]     # every resampled envelope keeps its length, so its ramp is there
         for k, row in zip(members, power):
             revolutions = resampled[k][1]
             out[k] = (np.interp(ORDER_GRID, bins / revolutions, row, right=math.nan), 1.0 / revolutions)
