@@ -42,7 +42,8 @@ than 90 % of the windows published.  Results go to
 Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,16,24,32,40,48,56,64] [--raw-band]
 [--name live_latency]`` (run after ``source .env-jazzy.sh``; results to
 ``benchmarks/results/<name>.{json,md}``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
-shows where the estimator's time goes (cProfile slows it; the shares are what counts).
+shows where the estimator's time goes (cProfile slows it; the shares are what counts); with
+``LIVE_LATENCY_PSTATS=FILE`` in the environment its whole profile is also written to FILE for ``pstats``.
 """
 from __future__ import annotations
 
@@ -189,6 +190,8 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     if profiler is not None:
         profiler.disable()
         record['profile'] = _profile_table(profiler)
+        if os.environ.get('LIVE_LATENCY_PSTATS'):       # the whole profile, for pstats
+            profiler.dump_stats(os.environ['LIVE_LATENCY_PSTATS'])
     usage1, wall1 = resource.getrusage(resource.RUSAGE_SELF), time.monotonic()
     state['measuring'] = False
     cpu = (usage1.ru_utime + usage1.ru_stime - usage0.ru_utime - usage0.ru_stime)

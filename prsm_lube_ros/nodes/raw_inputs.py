@@ -24,6 +24,14 @@ second per actuator, are read the same way (:func:`raw_screw_converter`,
 their CDR offsets, and a message whose bytes do not end where its layout says
 (an encoding this reader does not take) goes through rclpy's deserializer and
 :mod:`.ros_convert` instead, so the result is always the message's.
+
+A publisher sends the same bytes every time but for the stamp and the values
+(the same joint names, array lengths and frame).  The first message read
+field by field teaches its converter that :class:`FixedLayout`, and
+``convert.many(messages)`` then reads a whole drained queue at once as numpy
+records over the joined bytes: the same values as one message at a time, or
+None (the caller goes one at a time) when any message differs from the
+layout, has a zero stamp, or its stamps do not rise.
 """
 from __future__ import annotations
 
@@ -38,8 +46,8 @@ import numpy as np
 from ..errors import InputError
 from ..recording.batches import AxialLoadBatch, ScrewStateBatch, VibrationBatch
 
-__all__ = ['RAW_INPUTS', 'RawBlock', 'decode_block', 'join_blocks', 'raw_load_converter', 'raw_screw_converter',
-           'raw_vibration_converter']
+__all__ = ['FixedLayout', 'RAW_INPUTS', 'RawBlock', 'decode_block', 'join_blocks', 'raw_load_converter',
+           'raw_screw_converter', 'raw_vibration_converter']
 
 #: encapsulation id (second byte of the header) -> byte order
 _ENDIAN = {1: '<', 0: '>'}
@@ -118,16 +126,27 @@ def join_blocks(batches: Sequence[VibrationBatch]) -> VibrationBatch:
 
 
 class _Cursor:
-    """Reads plain CDR fields in order (alignment from the first byte after the encapsulation header)."""
+    """Reads plain CDR fields in order (alignment from the first byte after the encapsulation header).
 
-    __slots__ = ('data', 'order', 'at')
+    ``gaps`` lists the alignment padding skipped, as (start, stop) byte ranges:
+    a serializer may leave anything there.
+    """
+
+    __slots__ = ('data', 'order', 'at', 'gaps')
 
     def __init__(self, data: bytes, order: str) -> None:
         self.data, self.order, self.at = data, order, _ORIGIN
+        self.gaps: list[tuple[int, int]] = []
+
+    def _align(self, size: int) -> None:
+        aligned = _ORIGIN + ((self.at - _ORIGIN + size - 1) & -size)
+        if aligned != self.at:
+            self.gaps.append((self.at, aligned))
+            self.at = aligned
 
     def read(self, code: str, size: int) -> Any:
         """One value of struct ``code`` (``size`` bytes, aligned to it)."""
-        self.at = _ORIGIN + ((self.at - _ORIGIN + size - 1) & -size)
+        self._align(size)
         value = struct.unpack_from(self.order + code, self.data, self.at)[0]
         self.at += size
         return value
@@ -144,7 +163,7 @@ class _Cursor:
         count = self.read('I', 4)
         if not count:
             return ()
-        self.at = _ORIGIN + ((self.at - _ORIGIN + 7) & -8)
+        self._align(8)
         values = struct.unpack_from(f'{self.order}{count}d', self.data, self.at)
         self.at += 8 * count
         return values
@@ -165,8 +184,65 @@ def _ends(cursor: _Cursor, data: bytes) -> bool:
     return 0 <= len(data) - cursor.at <= _END_PADDING
 
 
-def _screw(data: bytes, joint: bytes) -> tuple[float, float, float] | None:
-    """(stamp s, angle rad, speed rad/s) of the ``joint`` entry of a serialized JointState; None: not read here."""
+#: Where a message's values sit: (byte order, {value name: offset of its float64}, byte ranges that vary from
+#: message to message besides the stamp, end of the last field)
+_Where = tuple[str, dict[str, int], list[tuple[int, int]], int]
+
+
+@dataclass(frozen=True)
+class FixedLayout:
+    """One publisher's message layout: numpy records over whole messages and the bytes every message shares.
+
+    Learnt from one message read field by field: ``records`` has the stamp's
+    ``sec`` and ``nanosec`` and one float64 per value at their offsets (byte
+    order kept), over the message's whole size; ``shared_at`` are the offsets
+    of every byte but the stamp, the value arrays, the alignment padding (a
+    serializer may leave anything there) and the slack after the last field,
+    ``shared`` their values.  A message of the same size sharing those bytes
+    has its fields exactly there.
+    """
+
+    size: int
+    records: np.dtype
+    shared_at: np.ndarray
+    shared: np.ndarray
+
+    @classmethod
+    def learn(cls, data: bytes, where: _Where) -> FixedLayout:
+        """The layout of ``data`` given :data:`_Where` its values are."""
+        order, values, varying, end = where
+        records = np.dtype({'names': ['sec', 'nanosec', *values],
+                            'formats': [order + 'i4', order + 'u4'] + [order + 'f8'] * len(values),
+                            'offsets': [_ORIGIN, _ORIGIN + 4, *values.values()], 'itemsize': len(data)})
+        keep = np.ones(len(data), dtype=bool)
+        keep[_ORIGIN:_ORIGIN + 8] = False
+        for start, stop in varying:
+            keep[start:stop] = False
+        keep[end:] = False
+        shared_at = np.flatnonzero(keep)
+        return cls(len(data), records, shared_at, np.frombuffer(data, dtype=np.uint8)[shared_at].copy())
+
+    def read(self, messages: Sequence[bytes]) -> tuple[np.ndarray, np.ndarray] | None:
+        """(stamps s, records) of ``messages``; None unless all have this layout, set stamps, rising stamps."""
+        if any(len(data) != self.size for data in messages):
+            return None
+        joined = b''.join(messages)
+        rows = np.frombuffer(joined, dtype=np.uint8).reshape(len(messages), self.size)
+        if not (rows[:, self.shared_at] == self.shared).all():
+            return None
+        records = np.frombuffer(joined, dtype=self.records)
+        stamps = records['sec'] + records['nanosec'] * 1e-9      # as sec + nanosec * 1e-9 of one message
+        if not (stamps[0] != 0 and (stamps[1:] > stamps[:-1]).all()):
+            return None
+        return stamps, records
+
+
+def _screw(data: bytes, joint: bytes) -> tuple[float, float, float, _Where | None] | None:
+    """(stamp s, angle rad, speed rad/s, where) of the ``joint`` entry of a serialized JointState.
+
+    None: not read here.  ``where`` (:data:`_Where` of ``angle`` and ``speed``)
+    is None when the entry has no position or no velocity.
+    """
     start = _cursor(data)
     if start is None:
         return None
@@ -176,18 +252,26 @@ def _screw(data: bytes, joint: bytes) -> tuple[float, float, float] | None:
         if count > len(data) // 4:
             return None
         names = [cursor.string() for _ in range(count)]
-        position, velocity, _ = cursor.doubles(), cursor.doubles(), cursor.doubles()
+        arrays = []
+        for _ in range(3):              # position, velocity, effort: (values, offset of the first)
+            values = cursor.doubles()
+            arrays.append((values, cursor.at - 8 * len(values)))
     except struct.error:        # lengths beyond the bytes
         return None
     if not _ends(cursor, data) or stamp == 0 or joint not in names:
         return None          # the typed path says what is wrong (or reads what this cannot)
     index = names.index(joint)
+    (position, position_at), (velocity, velocity_at), (effort, effort_at) = arrays
+    where: _Where | None = None
+    if index < len(position) and index < len(velocity):
+        where = (cursor.order, {'angle': position_at + 8 * index, 'speed': velocity_at + 8 * index},
+                 [(at, at + 8 * len(values)) for values, at in arrays] + cursor.gaps, cursor.at)
     return (stamp, position[index] if index < len(position) else math.nan,
-            velocity[index] if index < len(velocity) else math.nan)
+            velocity[index] if index < len(velocity) else math.nan, where)
 
 
-def _load(data: bytes) -> tuple[float, float] | None:
-    """(stamp s, wrench.force.z N) of a serialized WrenchStamped; None: not read here."""
+def _load(data: bytes) -> tuple[float, float, _Where] | None:
+    """(stamp s, wrench.force.z N, where) of a serialized WrenchStamped; None: not read here."""
     start = _cursor(data)
     if start is None:
         return None
@@ -198,7 +282,80 @@ def _load(data: bytes) -> tuple[float, float] | None:
         return None
     if not _ends(cursor, data) or stamp == 0:
         return None
-    return stamp, force[2]
+    first = cursor.at - 48
+    return stamp, force[2], (cursor.order, {'force': first + 16}, [(first, cursor.at)] + cursor.gaps, cursor.at)
+
+
+class _LayoutConverter:
+    """``convert(data)`` of one raw input, plus ``convert.many(messages)`` once a message taught the layout."""
+
+    def __init__(self) -> None:
+        self.layout: FixedLayout | None = None
+
+    def _learn(self, data: bytes, where: _Where | None) -> None:
+        if self.layout is None and where is not None:
+            self.layout = FixedLayout.learn(data, where)
+
+    def _records(self, messages: Sequence[bytes]) -> tuple[np.ndarray, np.ndarray] | None:
+        """The layout's read of ``messages``; a mismatch forgets the layout (the next message teaches one)."""
+        if self.layout is None:
+            return None
+        read = self.layout.read(messages)
+        if read is None:
+            self.layout = None
+        return read
+
+
+class _RawScrewConverter(_LayoutConverter):
+    def __init__(self, topic: str, joint: str) -> None:
+        from rclpy.serialization import deserialize_message
+        from sensor_msgs.msg import JointState
+        from .ros_convert import screw_batch
+        super().__init__()
+        self._typed = lambda data: screw_batch(deserialize_message(data, JointState), topic, joint)
+        self._name = joint.encode()
+
+    def __call__(self, data: bytes) -> ScrewStateBatch:
+        name = self._name
+        found = _screw(data, name) if name and b'\0' not in name else None
+        if found is None:
+            return self._typed(data)
+        stamp, angle, speed, where = found
+        self._learn(data, where)
+        return ScrewStateBatch(np.array([stamp]), np.array([angle]), np.array([speed]))
+
+    def many(self, messages: Sequence[bytes]) -> ScrewStateBatch | None:
+        """The messages as one batch, equal to one at a time joined; None: take them one at a time."""
+        read = self._records(messages)
+        if read is None:
+            return None
+        stamps, records = read
+        return ScrewStateBatch(stamps, records['angle'].astype(np.float64), records['speed'].astype(np.float64))
+
+
+class _RawLoadConverter(_LayoutConverter):
+    def __init__(self, topic: str) -> None:
+        from geometry_msgs.msg import WrenchStamped
+        from rclpy.serialization import deserialize_message
+        from .ros_convert import load_batch
+        super().__init__()
+        self._typed = lambda data: load_batch(deserialize_message(data, WrenchStamped), topic)
+
+    def __call__(self, data: bytes) -> AxialLoadBatch:
+        found = _load(data)
+        if found is None:
+            return self._typed(data)
+        stamp, force, where = found
+        self._learn(data, where)
+        return AxialLoadBatch(np.array([stamp]), np.array([force]))
+
+    def many(self, messages: Sequence[bytes]) -> AxialLoadBatch | None:
+        """The messages as one batch, equal to one at a time joined; None: take them one at a time."""
+        read = self._records(messages)
+        if read is None:
+            return None
+        stamps, records = read
+        return AxialLoadBatch(stamps, records['force'].astype(np.float64))
 
 
 def raw_screw_converter(topic: str, joint: str) -> Callable[[bytes], ScrewStateBatch]:
@@ -206,31 +363,12 @@ def raw_screw_converter(topic: str, joint: str) -> Callable[[bytes], ScrewStateB
 
     Bytes this reader does not take (another encoding, a missing entry, a zero
     stamp) go through ``deserialize_message`` and :func:`.ros_convert.screw_batch`,
-    which read them or raise the InputError naming ``topic``.
+    which read them or raise the InputError naming ``topic``.  ``convert.many``:
+    module doc.
     """
-    from rclpy.serialization import deserialize_message
-    from sensor_msgs.msg import JointState
-    from .ros_convert import screw_batch
-    name = joint.encode()
-
-    def convert(data: bytes) -> ScrewStateBatch:
-        found = _screw(data, name) if name and b'\0' not in name else None
-        if found is None:
-            return screw_batch(deserialize_message(data, JointState), topic, joint)
-        stamp, angle, speed = found
-        return ScrewStateBatch(np.array([stamp]), np.array([angle]), np.array([speed]))
-    return convert
+    return _RawScrewConverter(topic, joint)
 
 
 def raw_load_converter(topic: str) -> Callable[[bytes], AxialLoadBatch]:
     """``convert(data)`` for a raw axial-load subscription: ``wrench.force.z`` as a one-entry batch (else as above)."""
-    from geometry_msgs.msg import WrenchStamped
-    from rclpy.serialization import deserialize_message
-    from .ros_convert import load_batch
-
-    def convert(data: bytes) -> AxialLoadBatch:
-        found = _load(data)
-        if found is None:
-            return load_batch(deserialize_message(data, WrenchStamped), topic)
-        return AxialLoadBatch(np.array([found[0]]), np.array([found[1]]))
-    return convert
+    return _RawLoadConverter(topic)

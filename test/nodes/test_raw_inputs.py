@@ -112,3 +112,69 @@ def test_a_raw_wrench_reads_as_the_message_does(frame_id):
     assert _load(data) is not None
     raw, typed = raw_load_converter('/a/axial_load')(data), load_batch(msg)
     assert raw.stamps.tolist() == typed.stamps.tolist() and raw.forces.tolist() == typed.forces.tolist() == [-151.25]
+
+
+@pytest.mark.parametrize('frame_id', ['', 'base_link'])
+@pytest.mark.parametrize('names, positions, velocities, efforts', [
+    (['screw'], [1.5], [20.0], []),
+    (['motor', 'screw', 'x'], [0.1, 2.5, 0.3], [1.0, -19.5, 3.0], [0.5, 0.25, 0.0]),
+])
+def test_a_drained_queue_of_joint_states_reads_at_once_as_one_at_a_time(frame_id, names, positions, velocities,
+                                                                        efforts):
+    from prsm_lube_ros.nodes.lubrication_estimator import join_batches
+    from prsm_lube_ros.nodes.raw_inputs import raw_screw_converter
+    rng = np.random.default_rng(len(names))
+    queue = []
+    for k in range(12):
+        shifted = [p + rng.normal() for p in positions]
+        queue.append(serialize_message(joint_state(names, shifted, [v * rng.uniform(0.5, 2) for v in velocities],
+                                                   efforts, frame_id, stamp=1_700_000_000.0 + 0.0101 * k)))
+    convert = raw_screw_converter('/a/joint_states', 'screw')
+    assert convert.many(queue) is None                      # nothing learnt yet: one at a time
+    one_by_one = join_batches([convert(data) for data in queue])
+    at_once = convert.many(queue)
+    assert at_once is not None
+    for field in ('stamps', 'angles', 'speeds'):
+        assert np.array_equal(getattr(at_once, field), getattr(one_by_one, field))
+        assert getattr(at_once, field).dtype == np.float64
+
+
+def test_a_queue_that_leaves_the_learnt_layout_is_read_one_at_a_time():
+    from prsm_lube_ros.nodes.raw_inputs import raw_screw_converter
+    convert = raw_screw_converter('/a/joint_states', 'screw')
+
+    def message(k, names=('motor', 'screw'), frame_id='', stamp=None):
+        return serialize_message(joint_state(list(names), [0.1 * k, 2.0 * k], [1.0, 20.0], [], frame_id,
+                                             stamp=1_700_000_000.0 + 0.01 * k if stamp is None else stamp))
+    convert(message(0))
+    good = [message(k) for k in range(1, 6)]
+    assert convert.many(good) is not None
+    padded = bytearray(good[2])
+    padded[72] = 0x79              # alignment padding before the velocities (a serializer may leave anything)
+    assert convert.many([*good[:2], bytes(padded), *good[3:]]).angles.tolist() == [2.0 * k for k in range(1, 6)]
+    for odd in (message(9, names=('screw', 'motor')),      # same size, other order: other bytes shared
+                message(9, names=('motor', 'screw', 'x')),  # another size
+                message(9, frame_id='base'),
+                message(9, stamp=0.0),                      # zero stamp: the typed path's error
+                message(9, stamp=1_700_000_000.02)):        # stamp going back
+        convert(message(0))                                 # (re)learn
+        assert convert.many([*good, odd]) is None, odd
+
+
+def test_a_drained_queue_of_wrenches_reads_at_once_as_one_at_a_time():
+    from geometry_msgs.msg import WrenchStamped
+    from prsm_lube_ros.nodes.lubrication_estimator import join_batches
+    from prsm_lube_ros.nodes.raw_inputs import raw_load_converter
+    from prsm_lube_ros.nodes.ros_convert import time_msg
+    queue = []
+    for k in range(7):
+        msg = WrenchStamped()
+        msg.header.stamp, msg.header.frame_id = time_msg(1_700_000_001.5 + 0.02 * k), 'load_cell'
+        msg.wrench.force.x, msg.wrench.force.z, msg.wrench.torque.z = 3.0 * k, -151.25 + k, 7.0
+        queue.append(serialize_message(msg))
+    convert = raw_load_converter('/a/axial_load')
+    one_by_one = join_batches([convert(data) for data in queue])
+    at_once = convert.many(queue)
+    assert at_once is not None
+    assert np.array_equal(at_once.stamps, one_by_one.stamps) and np.array_equal(at_once.forces, one_by_one.forces)
+    assert at_once.forces.tolist() == [-151.25 + k for k in range(7)]
