@@ -710,6 +710,11 @@ class WindowBuilder:
         else:
             self._block_stamps = self._block_stamps[:0]
 
+    def earliest_open_end(self) -> float:
+        """End in s of the earliest open window (-inf when none is open): the next one a close can bring."""
+        keys = self._open.keys
+        return float((keys[0] + 1) * self.settings.window_length) if keys.size else -math.inf
+
     def pop_closed(self) -> list[Window]:
         """Close what every live stream has passed and return the closed windows, in time order.
 

@@ -33,8 +33,9 @@ executor, which rebuilds its wait set from every entity on every wake.  The
 joint state, load and temperature subscriptions, which bring 151 of the 161
 messages per second of a typical actuator, sit in a callback group executors
 never wait on.  The vibration callback decodes its blocks and keeps them
-pending; when a window may close (the pending blocks pass a window's end by
-``completion_delay``) or ``FLUSH_PERIOD`` s after the last time, it drains
+pending; when a window may close (a pending block passes the end of the
+earliest open window by ``completion_delay``) or ``FLUSH_PERIOD`` s after
+the last time, it drains
 those queues and adds everything to the window builder at once (a few large
 batches instead of thirty small ones a second: the same windows, a third of
 the builder's calls).  A steady-clock timer does the same every
@@ -401,7 +402,6 @@ class ActuatorChannel:
     last_drain: float = -math.inf                    # time.monotonic() of the last vibration or drain
     pending: list = field(default_factory=list)      # VibrationBatch decoded, not yet in the builder
     last_flush: float = -math.inf                    # time.monotonic() of the last flush into the builder
-    flushed_edge: float = -math.inf                  # window index of (block end - completion_delay) then
     node_name: str = STATUS_PREFIX
     frame_id: str = ''                               # header.frame_id of the last vibration block
     forecast: list = field(default_factory=list)     # (key, value) of the depletion forecast from history_dir
@@ -790,32 +790,27 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return callback
 
     def _flush_due(self, channel: ActuatorChannel) -> bool:
-        """Whether the pending blocks may close a window, or have waited ``FLUSH_PERIOD`` s (module doc)."""
+        """Whether the pending blocks may close a window, or have waited ``FLUSH_PERIOD`` s (module doc).
+
+        A window may close once a block passes its end by ``completion_delay``:
+        the builder's earliest open window, so a window the other inputs still
+        hold open is tried again at every block, as when each block went in alone.
+        """
         if not channel.pending:
             return False
         if channel.last_drain - channel.last_flush >= FLUSH_PERIOD:
             return True
-        return self._pending_edge(channel) != channel.flushed_edge
-
-    @staticmethod
-    def _pending_edge(channel: ActuatorChannel) -> float:
-        """Window index of the last pending block's end less ``completion_delay`` (a change: a window may close).
-
-        NaN for a block whose stamp or rate gives no finite end (the builder
-        refuses it with its reason): such a block is flushed at once.
-        """
         last = channel.pending[-1]
         rate = float(last.sample_rates[-1])
         end = float(last.stamps[-1]) + (float(last.offsets[-1] - last.offsets[-2]) / rate if rate > 0 else 0.0)
-        settings = channel.builder.settings
-        edge = (end - settings.completion_delay) / settings.window_length
-        return float(math.floor(edge)) if math.isfinite(edge) else math.nan
+        builder = channel.builder
+        # not (a < b) rather than a >= b: a block whose end is not finite is flushed at once (the builder says why)
+        return not end - builder.settings.completion_delay < builder.earliest_open_end()
 
     def _flush(self, channel: ActuatorChannel) -> None:
         """Queued auxiliary inputs, then the pending blocks (one batch while stamps rise), into the builder; close."""
         self._drain_auxiliary(channel)
         if channel.pending:
-            channel.flushed_edge = self._pending_edge(channel)
             pending, channel.pending = channel.pending, []
             self._add_rising(channel, 'vibration', pending)
         channel.last_flush = time.monotonic()

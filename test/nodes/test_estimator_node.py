@@ -392,6 +392,26 @@ def test_joint_states_and_load_are_taken_while_vibration_is_silent(graph, tmp_pa
         assert live[start].screw_speed == pytest.approx(SPEED, rel=1e-6)
 
 
+def test_blocks_wait_in_the_node_until_one_may_close_a_window(graph, tmp_path, monkeypatch):
+    """Blocks are kept until one passes the earliest open window's end by completion_delay; then that window
+    closes, though no flush by time ever comes (FLUSH_PERIOD made longer than the test)."""
+    from prsm_lube_ros.nodes import lubrication_estimator
+    monkeypatch.setattr(lubrication_estimator, 'FLUSH_PERIOD', 1e3)
+    graph.estimator(tmp_path, window_length=1.0, completion_delay=0.25)
+    states = graph.collect(LubricationState, '/prsm/lubrication_state')
+    events = segments_stream([(4.0, rms_for(0.9), SPEED, LOAD)])
+    publishers = graph.publishers()
+    # Up to the block [1.3, 1.4) s: its end passes window 0's end (1 s) by more than 0.25 s; window 1's is 2.25 s.
+    graph.publish(publishers, [e for e in events if e[0] < T0 + 1.35])
+    wait_for(lambda: 0.0 in by_window(states), 10, 'window 0 once a block passed its end by completion_delay')
+    time.sleep(0.5)
+    assert sorted(by_window(states)) == [0.0]
+    assert by_window(states)[0.0].theta_oil == pytest.approx(0.9, abs=0.01)
+    graph.publish(publishers, [e for e in events if T0 + 1.35 <= e[0] < T0 + 3.45])
+    wait_for(lambda: 2.0 in by_window(states), 10, 'windows 1 and 2')
+    assert sorted(by_window(states)) == [0.0, 1.0, 2.0]
+
+
 def test_parameters_are_validated_and_applied(graph, tmp_path):
     node = graph.estimator(tmp_path)
     broken = tmp_path / 'broken.yaml'
