@@ -44,6 +44,10 @@ Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,16,24,
 ``benchmarks/results/<name>.{json,md}``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
 shows where the estimator's time goes (cProfile slows it; the shares are what counts); with
 ``LIVE_LATENCY_PSTATS=FILE`` in the environment its whole profile is also written to FILE for ``pstats``.
+``LIVE_LATENCY_QOS_DEPTH`` sets the estimator's ``qos_depth`` (default 2000; the node's own default is 500).
+The estimator's output goes to files, never to a pipe nobody reads while the generator runs: a full pipe
+blocks its next log call (at 80 actuators its start-up logs pass the 64 KiB a pipe holds; the "collapse"
+of ``benchmarks/results/live_latency_collapse_80.md``), and a warm-up that overruns is reported as falling behind.
 """
 from __future__ import annotations
 
@@ -70,6 +74,8 @@ WARM_UP = 3.0          # s of wall time after the first message before measuring
 #: generator gets the other.
 ESTIMATOR_CPU = int(os.environ.get('LIVE_LATENCY_ESTIMATOR_CPU', '0'))
 GENERATOR_CPU = 1 - ESTIMATOR_CPU
+#: The estimator's qos_depth (``LIVE_LATENCY_QOS_DEPTH``; the node's default is 500).
+QOS_DEPTH = int(os.environ.get('LIVE_LATENCY_QOS_DEPTH', '2000'))
 
 
 def actuator_names(count: int) -> list[str]:
@@ -101,7 +107,8 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
 
     clock = time.perf_counter
     record = {'latency': [], 'close_delay': [], 'callback': [], 'processing': {}, 'fed': {}, 'lag': [],
-              'lag_at': [], 'blocks': 0, 'windows': 0}
+              'lag_at': [], 'blocks': 0, 'blocks_lost': 0, 'windows': 0}
+    last_block: dict = {}
     state = {'measuring': False, 'arrival': 0.0, 'seen': 0, 'callbacks': 0}
 
     class Publisher:
@@ -142,6 +149,12 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
                     record['lag'].append(time.time() - end)
                     record['lag_at'].append(time.monotonic())
                     record['blocks'] += len(batch)
+                    # Blocks lost on the way: gaps in the actuator's 0.1 s grid of block stamps.
+                    stamps = [float(t) for t in batch.stamps]
+                    previous = last_block.get(channel.name)
+                    steps = [round((b - a) / BLOCK) for a, b in zip([previous] + stamps, stamps) if a is not None]
+                    record['blocks_lost'] += sum(step - 1 for step in steps if step > 1)
+                    last_block[channel.name] = stamps[-1]
 
         def _close_windows(self, channel):
             start = clock()
@@ -158,7 +171,7 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     node = TimedEstimator(parameter_overrides=[
         Parameter('actuators', value=actuator_names(count)),
         Parameter('calibration_file', value=os.path.join(folder, 'calibration_{actuator}.yaml')),
-        Parameter('recordings_dir', value=folder), Parameter('qos_depth', value=2000),
+        Parameter('recordings_dir', value=folder), Parameter('qos_depth', value=QOS_DEPTH),
         Parameter('stale_timeout', value=60.0), Parameter('condition_every', value=condition_every)])
     for channel in node.channels:
         channel.publisher = Publisher(channel.publisher)
@@ -392,6 +405,8 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         'lag_p50_s': _percentiles(lag, 50)[0], 'lag_p99_s': _percentiles(lag, 99)[0],
         'lag_slope_s_per_s': slope,
         'blocks_received_fraction': record['blocks'] / (count * wall / BLOCK),
+        # Of the blocks the estimator should have had between the first and last it took of each actuator.
+        'blocks_lost_fraction': record.get('blocks_lost', 0) / max(1, record['blocks'] + record.get('blocks_lost', 0)),
         'windows_published_fraction': record['windows'] / (count * wall),
         'generator': sent,
         # Wall clock (s since the epoch) of the estimator's ready, first input and measurement.
@@ -419,6 +434,12 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         reasons.append(f'warm-up took {warm_up:.1f} s')
     summary['behind'] = reasons
     return summary
+
+
+def _lost(level: dict) -> str:
+    """' (N % lost)': blocks missing from the actuators' 0.1 s grids ('' in results from before)."""
+    lost = level.get('blocks_lost_fraction')
+    return '' if lost is None else f' ({100 * lost:.1f} % lost)'
 
 
 def _busy(level: dict) -> str:
@@ -467,7 +488,8 @@ def markdown(results: dict) -> str:
             f'{p.get("joint_states", {}).get("p50_ms", math.nan):.3f} | '
             f'{p.get("axial_load", {}).get("p50_ms", math.nan):.3f} | '
             f'{p.get("closing", {}).get("p50_ms", math.nan):.3f} | {100 * r["callbacks_share_of_cpu"]:.0f} % | '
-            f'{r["lag_p99_s"]:.3f} | {r["lag_slope_s_per_s"]:.4f} | {100 * r["blocks_received_fraction"]:.1f} % | '
+            f'{r["lag_p99_s"]:.3f} | {r["lag_slope_s_per_s"]:.4f} | {100 * r["blocks_received_fraction"]:.1f} %'
+            f'{_lost(r)} | '
             f'{100 * r["windows_published_fraction"]:.1f} % | {"yes" if r["generator_kept_up"] else "NO"}'
             f'{_busy(r)} | '
             f'{", ".join(r["behind"]) or "no"} |')
@@ -611,17 +633,25 @@ def compare(args: argparse.Namespace) -> int:
              + ('Calibrations of the raw RMS: no condition indicators.' if args.raw_band else
                 f'Analysis band and baseline: condition indicators on every {args.condition_every}. window.'),
              ' CPU ms per actuator-s: the estimator process\'s own CPU time (rusage) per actuator and second, the '
-             'lowest over the levels it kept up with; actuators per core from it: 90 % of a core over that cost.',
+             'lowest over the levels it kept up with; actuators per core from it: 90 % of a core over that cost. '
+             'Blocks in: blocks taken while measuring over those sent meanwhile (taken at flushes: a few % either '
+             'way at the edges), lost: gaps in the actuators\' 0.1 s grids of block stamps. Generator kept up: at '
+             'most 2 % of its 10 ms ticks over a tick late and none over 0.1 s late; busy: its share of the run '
+             'spent publishing.',
              '', '| configuration | largest N served | latency p99 ms there | CPU there | CPU ms per actuator-s | '
              'actuators per core from CPU |', '|---|---|---|---|---|---|']
     lines += [f'| {c["label"]} | {c["max_actuators_real_time"]} | {c["latency_p99_ms_at_max"]:.2f} | '
               f'{100 * c["cpu_at_max"]:.0f} % | {c["cpu_ms_per_actuator_s"]:.2f} | '
               f'{c["actuators_per_core_from_cpu"]:.0f} |' for c in configurations]
     lines += ['', '| configuration | actuators | CPU | CPU ms per actuator-s | latency p50 ms | latency p99 ms | '
-              'lag p99 s | windows out | falls behind |', '|---|---|---|---|---|---|---|---|---|']
+              'lag p99 s | blocks in | windows out | generator kept up | falls behind |',
+              '|---|---|---|---|---|---|---|---|---|---|---|']
     lines += [f'| {c["label"]} | {r["actuators"]} | {100 * r["cpu_utilisation"]:.0f} % | '
               f'{1e3 * r["cpu_utilisation"] / r["actuators"]:.2f} | {r["latency_p50_ms"]:.2f} | '
-              f'{r["latency_p99_ms"]:.2f} | {r["lag_p99_s"]:.3f} | {100 * r["windows_published_fraction"]:.0f} % | '
+              f'{r["latency_p99_ms"]:.2f} | {r["lag_p99_s"]:.3f} | '
+              f'{100 * r["blocks_received_fraction"]:.1f} %{_lost(r)} | '
+              f'{100 * r["windows_published_fraction"]:.0f} % | '
+              f'{"yes" if r["generator_kept_up"] else "NO"}{_busy(r)} | '
               f'{", ".join(r["behind"]) or "no"} |' for c in configurations for r in c['levels']]
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
