@@ -35,7 +35,7 @@ arrival minus its last sample time: it grows without bound once the estimator
 falls behind.
 
 N rises until the estimator falls behind: CPU > 90 % of its core, the lag's
-p99 above 0.5 s or growing, fewer than 98 % of the blocks arriving, or fewer
+p99 above 0.5 s or growing, over 2 % of the blocks lost (under 95 % taken), or fewer
 than 90 % of the windows published.  Results go to
 ``benchmarks/results/live_latency.{json,md}``.
 
@@ -426,7 +426,10 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         reasons.append('lag p99 > 0.5 s')
     if summary['lag_slope_s_per_s'] > 0.02:
         reasons.append('lag growing')
-    if summary['blocks_received_fraction'] < 0.98:
+    # Lost: over 2 % of the blocks missing from the grids.  Taken: under 95 %, as the blocks are counted at flushes,
+    # which all actuators have at the same block times, so the blocks pending at the measurement's two edges
+    # (up to FLUSH_PERIOD + a block, 4 % of 8 s) move the count a few % either way even with none lost.
+    if summary['blocks_lost_fraction'] > 0.02 or summary['blocks_received_fraction'] < 0.95:
         reasons.append('blocks missing')
     if summary['windows_published_fraction'] < 0.9:
         reasons.append('windows missing')
