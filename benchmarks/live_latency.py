@@ -44,7 +44,9 @@ Usage: ``python benchmarks/live_latency.py [--duration 8] [--levels 1,4,8,16,24,
 ``benchmarks/results/<name>.{json,md}``).  A last run at ``--profile-at`` actuators (default 32) under cProfile
 shows where the estimator's time goes (cProfile slows it; the shares are what counts); with
 ``LIVE_LATENCY_PSTATS=FILE`` in the environment its whole profile is also written to FILE for ``pstats``.
-``LIVE_LATENCY_QOS_DEPTH`` sets the estimator's ``qos_depth`` (default 2000; the node's own default is 500).
+``LIVE_LATENCY_QOS_DEPTH`` sets the estimator's ``qos_depth`` (default 2000; the node's own default is 500);
+``LIVE_LATENCY_STACKS=FILE`` has the estimator write its main thread's stack to FILE every 2 s;
+``LIVE_LATENCY_UNREAD_PIPE=1`` puts back the unread pipe described next.
 The estimator's output goes to files, never to a pipe nobody reads while the generator runs: a full pipe
 blocks its next log call (at 80 actuators its start-up logs pass the 64 KiB a pipe holds; the "collapse"
 of ``benchmarks/results/live_latency_collapse_80.md``), and a warm-up that overruns is reported as falling behind.
@@ -76,6 +78,9 @@ ESTIMATOR_CPU = int(os.environ.get('LIVE_LATENCY_ESTIMATOR_CPU', '0'))
 GENERATOR_CPU = 1 - ESTIMATOR_CPU
 #: The estimator's qos_depth (``LIVE_LATENCY_QOS_DEPTH``; the node's default is 500).
 QOS_DEPTH = int(os.environ.get('LIVE_LATENCY_QOS_DEPTH', '2000'))
+#: ``LIVE_LATENCY_UNREAD_PIPE=1``: the estimator's log into a pipe read only after the generator has finished,
+#: as this benchmark did before (to reproduce the collapse it caused, live_latency_collapse_80.md).
+UNREAD_PIPE = os.environ.get('LIVE_LATENCY_UNREAD_PIPE') == '1'
 
 
 def actuator_names(count: int) -> list[str]:
@@ -99,6 +104,10 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     (``rclpy.experimental.EventsExecutor``).  Returns what was measured.
     """
     os.sched_setaffinity(0, {ESTIMATOR_CPU})
+    if os.environ.get('LIVE_LATENCY_STACKS'):      # where the estimator's main thread is, every 2 s, into FILE
+        import faulthandler
+        stacks = open(os.environ['LIVE_LATENCY_STACKS'], 'w')   # left open: dumps go on until exit
+        faulthandler.dump_traceback_later(2.0, repeat=True, file=stacks)
     sys.path.insert(0, code or str(ROOT))
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -367,15 +376,16 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
                                           '--duration', str(duration), '--folder', folder, '--out', out,
                                           '--condition-every', str(condition_every), '--executor', executor_kind]
                                          + (['--code', code] if code else []) + (['--profile'] if profile else []),
-                                         env=env, stdout=stdout, stderr=stderr, text=True)
+                                         env=env, stdout=stdout, stderr=subprocess.PIPE if UNREAD_PIPE else stderr,
+                                         text=True)
         while not printed.read_text().startswith('ready') and estimator.poll() is None:
             time.sleep(0.05)
         assert printed.read_text().startswith('ready'), logged.read_text()[-2000:]
         generator = subprocess.run([sys.executable, __file__, '--role', 'generator', '--count', str(count),
                                     '--duration', str(duration + WARM_UP + 3.0)], env=env, capture_output=True,
                                    text=True, timeout=duration + 120)
-        estimator.wait(timeout=duration + 120)
-        err = logged.read_text()
+        piped = estimator.communicate(timeout=duration + 120)[1]      # read only now, as before the fix
+        err = piped if piped is not None else logged.read_text()
         if estimator.returncode or generator.returncode:
             raise RuntimeError(f'N={count}: estimator {estimator.returncode}: {err[-2000:]}\n'
                                f'generator {generator.returncode}: {generator.stderr[-2000:]}')
