@@ -144,7 +144,7 @@ __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_P
            'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME',
            'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments',
            'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds', 'join_batches', 'main',
-           'window_settings']
+           'rising_runs', 'window_settings']
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -401,6 +401,7 @@ class ActuatorChannel:
     auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
     last_drain: float = -math.inf                    # time.monotonic() of the last vibration or drain
     pending: list = field(default_factory=list)      # VibrationBatch decoded, not yet in the builder
+    last_block: float = -math.inf                    # stamp of the last block taken (pending or in the builder)
     last_flush: float = -math.inf                    # time.monotonic() of the last flush into the builder
     node_name: str = STATUS_PREFIX
     frame_id: str = ''                               # header.frame_id of the last vibration block
@@ -781,11 +782,14 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 self._arrival = self.now()
                 channel.monitor.note_input(self._arrival)
                 channel.last_drain = time.monotonic()
+                going_back = False      # a clock reset closes the windows at once, as at each block's arrival
                 for msg in (data, *self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN)):
                     batch = self._convert(channel, 'vibration', convert, msg)
                     if batch is not None:
+                        going_back |= not batch.stamps[0] > channel.last_block
+                        channel.last_block = float(batch.stamps[0])
                         channel.pending.append(batch)
-                if self._flush_due(channel):
+                if going_back or self._flush_due(channel):
                     self._flush(channel)
         return callback
 
@@ -808,11 +812,27 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return not end - builder.settings.completion_delay < builder.earliest_open_end()
 
     def _flush(self, channel: ActuatorChannel) -> None:
-        """Queued auxiliary inputs, then the pending blocks (one batch while stamps rise), into the builder; close."""
-        self._drain_auxiliary(channel)
+        """The pending blocks and the queued auxiliary inputs into the builder, in rounds; close.
+
+        Each stream is cut where its stamps go back (:meth:`_queued_runs`), and
+        the pieces go in round by round: every stream's first piece, then every
+        second one...  So a clock reset restarts the builder's time only once
+        what every stream brought before it is in, as when each block went in at
+        its arrival with the queues drained beside it; otherwise the last
+        windows before a reset would be closed short and opened again.
+        """
+        streams = []
         if channel.pending:
             pending, channel.pending = channel.pending, []
-            self._add_rising(channel, 'vibration', pending)
+            streams.append(('vibration', rising_runs(pending)))
+        for key, subscription, convert in channel.auxiliary:
+            messages = list(self._fast.drain(subscription, MAX_DRAIN))
+            if messages:
+                streams.append((key, self._queued_runs(channel, key, convert, messages)))
+        for index in range(max((len(runs) for _, runs in streams), default=0)):
+            for key, runs in streams:
+                if index < len(runs):
+                    self._add(channel, key, runs[index])
         channel.last_flush = time.monotonic()
         self._close_windows(channel)
 
@@ -828,13 +848,6 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 self._arrival = self.now()
                 self._take(channel, key, convert, msg)
         return callback
-
-    def _drain_auxiliary(self, channel: ActuatorChannel) -> None:
-        """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
-        for key, subscription, convert in channel.auxiliary:
-            messages = list(self._fast.drain(subscription, MAX_DRAIN))
-            if messages:
-                self._take_queued(channel, key, convert, messages)
 
     def _drain_idle(self) -> None:
         """Drain timer: pending blocks and auxiliary inputs of actuators whose vibration stopped (module doc)."""
@@ -853,7 +866,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._add(channel, key, batch)
 
     def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> None:
-        """Add messages drained from one auxiliary queue, joined into batches while their stamps rise.
+        """Add messages drained from one auxiliary queue (:meth:`_queued_runs`) to the builder."""
+        for batch in self._queued_runs(channel, key, convert, messages):
+            self._add(channel, key, batch)
+
+    def _queued_runs(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> list[InputBatch]:
+        """Messages drained from one auxiliary queue, as batches joined while their stamps rise (:func:`rising_runs`).
 
         A message that cannot be read is left out and counted on its own.  A
         stamp going back starts a new batch, so back-steps and clock resets reach
@@ -865,24 +883,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if many is not None and len(messages) > 1:
             batch = self._convert(channel, key, many, messages)
             if batch is not None:
-                self._add(channel, key, batch)
-                return
+                return [batch]
         converted = (self._convert(channel, key, convert, msg) for msg in messages)
-        self._add_rising(channel, key, [batch for batch in converted if batch is not None])
-
-    def _add_rising(self, channel: ActuatorChannel, key: str, batches: list[InputBatch]) -> None:
-        """Add one-entry batches (or one-block vibration batches) in order, joined while their stamps rise."""
-        run: list[InputBatch] = []
-        last = -math.inf
-        for batch in batches:
-            stamp = float(batch.stamps[0]) if len(batch) == 1 else math.nan
-            if run and not stamp > last:
-                self._add(channel, key, join_batches(run))
-                run = []
-            run.append(batch)
-            last = stamp
-        if run:
-            self._add(channel, key, join_batches(run))
+        return rising_runs([batch for batch in converted if batch is not None])
 
     def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> InputBatch | None:
         """The message as a one-entry batch, or None (counted, logged once per kind) when it cannot be read."""
@@ -1366,6 +1369,23 @@ def calibration_arguments(request: Any) -> tuple[list[str], float, bool, str]:
     """(bag paths, reference theta, persist, recording namespace) of a Calibrate request or action goal."""
     return (list(request.bag_paths), float(request.reference_theta), bool(request.persist),
             str(getattr(request, 'recording_namespace', '')))
+
+
+def rising_runs(batches: list[InputBatch]) -> list[InputBatch]:
+    """One-entry batches (or one-block vibration batches), in order, joined into one batch while their stamps rise."""
+    runs: list[InputBatch] = []
+    run: list[InputBatch] = []
+    last = -math.inf
+    for batch in batches:
+        stamp = float(batch.stamps[0]) if len(batch) == 1 else math.nan
+        if run and not stamp > last:
+            runs.append(join_batches(run))
+            run = []
+        run.append(batch)
+        last = stamp
+    if run:
+        runs.append(join_batches(run))
+    return runs
 
 
 def join_batches(batches: list) -> InputBatch:

@@ -412,6 +412,130 @@ def test_blocks_wait_in_the_node_until_one_may_close_a_window(graph, tmp_path, m
     assert sorted(by_window(states)) == [0.0, 1.0, 2.0]
 
 
+# -- the input path driven by hand --------------------------------------------------------------------
+class HandQueue:
+    """A subscription's KEEP_LAST queue of serialized messages: beyond ``depth`` the oldest is dropped."""
+
+    def __init__(self, depth):
+        self.messages, self.depth, self.dropped, self.put_count = [], depth, 0, 0
+
+    def put(self, data):
+        self.messages.append(data)
+        self.put_count += 1
+        if len(self.messages) > self.depth:
+            del self.messages[0]
+            self.dropped += 1
+
+
+class HandDrain:
+    """Stands in for fast_drain.FastDrain: takes what a :class:`HandQueue` holds."""
+
+    enabled = True
+
+    def drain(self, queue, limit):
+        if queue is None:
+            return iter(())
+        taken, queue.messages = queue.messages[:limit], queue.messages[limit:]
+        return iter(taken)
+
+
+class HandDriven:
+    """An estimator whose inputs the test delivers: no executor, DDS or wall clock decides when anything happens.
+
+    The node is never spun: the test calls its vibration callback, its drain
+    timer every ``tick`` s and (without the fast drain) its plain auxiliary
+    callbacks, on a steady clock it sets (``time.monotonic`` of the node's
+    module), and the auxiliary messages wait in :class:`HandQueue` s of
+    ``qos_depth``.  Published states and diagnostics are kept in lists.
+    """
+
+    def __init__(self, graph, tmp_path, monkeypatch, fast=True, tick=0.1, **params):
+        from types import SimpleNamespace
+        from prsm_lube_ros.nodes import lubrication_estimator
+        from prsm_lube_ros.nodes.raw_inputs import raw_load_converter, raw_screw_converter, raw_vibration_converter
+        self.clock, self.tick = 1000.0, tick
+        self.next_tick = self.clock + tick
+        monkeypatch.setattr(lubrication_estimator, 'time', SimpleNamespace(monotonic=lambda: self.clock))
+        save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
+        values = dict(calibration_file=str(tmp_path / 'calibration_{actuator}.yaml'), recordings_dir=str(tmp_path),
+                      window_length=0.5, completion_delay=0.25, stale_timeout=1.0, diagnostics_period=0.2,
+                      qos_depth=2000)
+        values.update(params)
+        self.node = node = LubricationEstimator(context=graph.context, parameter_overrides=[
+            Parameter(k, value=v) for k, v in values.items()])
+        graph.nodes.append(node)                  # destroyed with the graph; never spun
+        self.channel = channel = node.channels[0]
+        self.states, self.diagnostics = [], []
+        channel.publisher = SimpleNamespace(publish=self.states.append)
+        node._diagnostics = SimpleNamespace(publish=self.diagnostics.append)
+        converters = {'joint_states': raw_screw_converter('/prsm/joint_states', 'screw'),
+                      'axial_load': raw_load_converter('/prsm/axial_load')}
+        self.queues = {key: HandQueue(int(values['qos_depth'])) for key in converters}
+        if fast:
+            node._fast = HandDrain()
+            channel.auxiliary = [(key, self.queues[key], convert) for key, convert in converters.items()]
+            self.callbacks = {key: self.queues[key].put for key in converters}
+        else:
+            node._fast.enabled = False
+            channel.auxiliary = []
+            self.callbacks = {key: node._auxiliary_callback(channel, key, convert)
+                              for key, convert in converters.items()}
+        self.vibration = node._vibration_callback(
+            channel, raw_vibration_converter('/prsm/vibration', lambda frame: None), {})
+
+    def run(self, events, until=None):
+        """Deliver ``events`` (arrival s from the start, kind, serialized message) in arrival order, with the
+        drain timer's ticks between them, then tick on up to ``until`` s."""
+        start = 1000.0
+        for arrival, kind, data in sorted(events, key=lambda e: e[0]):
+            self._tick_to(start + arrival)
+            self.clock = start + arrival
+            if kind == 'vibration':
+                self.vibration(data)
+            else:
+                self.callbacks[kind](data)
+        if until is not None:
+            self._tick_to(start + until)
+
+    def _tick_to(self, when):
+        while self.next_tick <= when:
+            self.clock = self.next_tick
+            self.node._drain_idle()
+            self.next_tick += self.tick
+
+
+def arrivals(segments, stamp_origin, wall_origin, **stream):
+    """``segments_stream`` as it reaches a node: (arrival s, kind, serialized message); a block arrives when its
+    last sample is taken, the other messages at their stamp."""
+    from rclpy.serialization import serialize_message
+    block = stream.get('block', 0.05)
+    return [(wall_origin + stamp - stamp_origin + (block if kind == 'vibration' else 0.0), kind,
+             serialize_message(msg)) for stamp, kind, msg in segments_stream(segments, t0=stamp_origin, **stream)]
+
+
+@pytest.mark.parametrize('gap', [0.02, 0.0])
+def test_a_clock_reset_with_blocks_pending_gives_each_window_once_and_whole(graph, tmp_path, monkeypatch, gap):
+    """Stamps go back 100 s (a clock reset, a bag played again): the windows before it close whole, once.
+
+    The blocks a node keeps pending must reach the builder before the joint
+    states or loads that go back restart its time, as when every block went in
+    at its arrival: else the last window before the reset is published twice
+    (cut short, then with those blocks and no speed) and the first ones after it
+    are closed early without vibration.  ``gap``: s between the last block
+    before the reset and the first messages after it (with none, the joint
+    states after the reset overtake that block: the node took the block after
+    them even when every block went in at its arrival).
+    """
+    driven = HandDriven(graph, tmp_path, monkeypatch)
+    events = (arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0)
+              + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 - 100.0, 6.0 + gap))
+    driven.run(events, until=10.0)
+    starts = [round(s.window_start - T0, 3) for s in driven.states]
+    assert starts == [0.5 * k for k in range(12)] + [-100.0 + 0.5 * k for k in range(5)]
+    for state in driven.states:
+        assert state.theta_oil == pytest.approx(0.9, abs=0.01), (state.window_start - T0, state.message)
+
+
 def test_parameters_are_validated_and_applied(graph, tmp_path):
     node = graph.estimator(tmp_path)
     broken = tmp_path / 'broken.yaml'
