@@ -141,10 +141,10 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
-           'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME',
-           'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments',
-           'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds', 'join_batches', 'main',
-           'rising_runs', 'window_settings']
+           'FLUSH_PERIOD', 'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN',
+           'NODE_NAME', 'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label',
+           'calibration_arguments', 'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds',
+           'join_batches', 'main', 'rising_runs', 'window_settings']
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
