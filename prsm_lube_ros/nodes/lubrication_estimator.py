@@ -38,9 +38,9 @@ earliest open window by ``completion_delay``) or ``FLUSH_PERIOD`` s after
 the last time, it drains
 those queues and adds everything to the window builder at once (a few large
 batches instead of thirty small ones a second: the same windows, a third of
-the builder's calls).  A steady-clock timer does the same every
-``DRAIN_PERIOD`` s for an actuator whose vibration stopped, so queues stay
-bounded and silent windows still close.
+the builder's calls).  A steady-clock timer, every ``DRAIN_PERIOD`` s, does
+the same for an actuator not flushed for ``FLUSH_PERIOD`` s (its vibration
+stopped or lags), so queues stay bounded and silent windows still close.
 That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
 checks them at start-up; without them the node logs one warning and takes the
 auxiliary inputs through plain subscription callbacks (same windows, more CPU).
@@ -304,8 +304,8 @@ PARAMETERS = {
     'qos_depth': ParameterSpec(
         500, _INTEGER,
         'queue depth of the input subscriptions (best effort, sensor data); joint states, load and temperature '
-        'are taken when a window may close and at least every 0.35 s with 0.1 s blocks (FLUSH_PERIOD, '
-        'DRAIN_PERIOD), so it must hold what a topic brings meanwhile', bounds=(1, 100000), read_only=True),
+        'are taken when a window may close and at least every 0.35 s (FLUSH_PERIOD + DRAIN_PERIOD), so it must '
+        'hold what a topic brings meanwhile', bounds=(1, 100000), read_only=True),
 }
 
 #: LubricationState: reliable, and transient local so that a dashboard or logger started late gets the last
@@ -314,12 +314,12 @@ STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durabil
 
 #: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
 MAX_DRAIN = 5000
-#: Period in s of the drain timer, which takes the pending blocks and auxiliary queues of an actuator whose
-#: vibration has not arrived, nor been flushed, for FLUSH_PERIOD.
+#: Period in s of the drain timer, which takes the pending blocks and auxiliary queues of an actuator not
+#: flushed for FLUSH_PERIOD (its vibration stopped, or its blocks come further apart).
 DRAIN_PERIOD = 0.1
 #: Longest time in s vibration blocks stay pending (and the auxiliary queues undrained) while no window can
-#: close: a queue holds at most FLUSH_PERIOD + a block period or FLUSH_PERIOD + DRAIN_PERIOD of messages
-#: (0.35 s of 0.1 s blocks: 350 of a 1 kHz topic; qos_depth is 500).
+#: close: the next block or the drain timer flushes them, so a queue holds at most FLUSH_PERIOD + DRAIN_PERIOD
+#: of messages (0.35 s: 350 of a 1 kHz topic; qos_depth is 500).
 FLUSH_PERIOD = 0.25
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
@@ -399,7 +399,6 @@ class ActuatorChannel:
     windows: int = 0
     input_errors: dict = field(default_factory=dict)
     auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
-    last_drain: float = -math.inf                    # time.monotonic() of the last vibration or drain
     pending: list = field(default_factory=list)      # VibrationBatch decoded, not yet in the builder
     last_block: float = -math.inf                    # stamp of the last block taken (pending or in the builder)
     last_flush: float = -math.inf                    # time.monotonic() of the last flush into the builder
@@ -781,7 +780,6 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             with self._lock:
                 self._arrival = self.now()
                 channel.monitor.note_input(self._arrival)
-                channel.last_drain = time.monotonic()
                 going_back = False      # a clock reset closes the windows at once, as at each block's arrival
                 for msg in (data, *self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN)):
                     batch = self._convert(channel, 'vibration', convert, msg)
@@ -802,7 +800,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if not channel.pending:
             return False
-        if channel.last_drain - channel.last_flush >= FLUSH_PERIOD:
+        if time.monotonic() - channel.last_flush >= FLUSH_PERIOD:
             return True
         last = channel.pending[-1]
         rate = float(last.sample_rates[-1])
@@ -850,13 +848,17 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return callback
 
     def _drain_idle(self) -> None:
-        """Drain timer: pending blocks and auxiliary inputs of actuators whose vibration stopped (module doc)."""
+        """Drain timer: pending blocks and auxiliary inputs not flushed for ``FLUSH_PERIOD`` s (module doc).
+
+        Whatever the vibration did: waiting besides for FLUSH_PERIOD after the
+        last block (a stopped vibration) let a queue fill for up to 0.55 s, not
+        the 0.35 s ``qos_depth`` is sized for.
+        """
         with self._lock:
             self._arrival = self.now()
-            now = time.monotonic()
+            limit = time.monotonic() - FLUSH_PERIOD
             for channel in self.channels:
-                if channel.last_drain <= now - FLUSH_PERIOD and channel.last_flush <= now - FLUSH_PERIOD:
-                    channel.last_drain = now
+                if channel.last_flush <= limit:
                     self._flush(channel)
 
     def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> None:

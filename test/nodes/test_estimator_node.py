@@ -536,6 +536,20 @@ def test_a_clock_reset_with_blocks_pending_gives_each_window_once_and_whole(grap
         assert state.theta_oil == pytest.approx(0.9, abs=0.01), (state.window_start - T0, state.message)
 
 
+@pytest.mark.parametrize('stop', [1.6, 1.65, 1.7, 1.75, 1.8, 1.85, 1.9, 1.95])
+def test_a_queue_as_deep_as_qos_depth_says_loses_nothing_when_vibration_stops(graph, tmp_path, monkeypatch, stop):
+    """Joint states at 1 kHz into a queue of FLUSH_PERIOD + DRAIN_PERIOD s of them (qos_depth's doc): when the
+    vibration stops (at ``stop`` s, any phase to the flushes), the drain timer takes the queue before it overflows."""
+    from prsm_lube_ros.nodes.lubrication_estimator import DRAIN_PERIOD, FLUSH_PERIOD
+    depth = int(1000 * (FLUSH_PERIOD + DRAIN_PERIOD)) + 1
+    driven = HandDriven(graph, tmp_path, monkeypatch, qos_depth=depth)
+    events = [e for e in arrivals([(4.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0, joint_rate=1000.0)
+              if e[1] != 'vibration' or e[0] <= stop + 1e-9]
+    driven.run(events, until=5.0)
+    queue = driven.queues['joint_states']
+    assert queue.put_count == 4000 and queue.dropped == 0
+
+
 def test_parameters_are_validated_and_applied(graph, tmp_path):
     node = graph.estimator(tmp_path)
     broken = tmp_path / 'broken.yaml'
