@@ -43,7 +43,8 @@ the same for an actuator not flushed for ``FLUSH_PERIOD`` s (its vibration
 stopped or lags), so queues stay bounded and silent windows still close.
 That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
 checks them at start-up; without them the node logs one warning and takes the
-auxiliary inputs through plain subscription callbacks (same windows, more CPU).
+auxiliary inputs through plain subscription callbacks, and each block at its
+arrival, with no pending (same windows, more CPU).
 
 Each actuator has the service ``<ns>/calibrate`` and, beside it, the action
 ``<ns>/calibrate`` (``prsm_lube_ros/action/Calibrate``: the same request, feedback
@@ -800,6 +801,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if not channel.pending:
             return False
+        if not self._fast.enabled:      # joint states and loads go in at their arrival: blocks too (a reset)
+            return True
         if time.monotonic() - channel.last_flush >= FLUSH_PERIOD:
             return True
         last = channel.pending[-1]
