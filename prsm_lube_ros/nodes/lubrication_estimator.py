@@ -1102,10 +1102,20 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return statuses
 
     def _publish_diagnostics(self, inputs: bool = True) -> None:
-        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat."""
+        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat.
+
+        On the beat each actuator is flushed first, so its input statuses count
+        every message arrived, not those the last flush took (up to 0.35 s
+        earlier: rates over a few periods would swing past rate_tolerance).
+        """
         with self._lock:
             if self._diagnostics is None:
                 return
+            if inputs:
+                self._arrival = self.now()
+                for channel in self.channels:
+                    if channel.inputs:      # active
+                        self._flush(channel)
             now = self.now()
             array = DiagnosticArray()
             array.header.stamp = self.get_clock().now().to_msg()
