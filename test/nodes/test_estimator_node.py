@@ -14,6 +14,7 @@ import subprocess
 import sys
 import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -451,7 +452,6 @@ class HandDriven:
     """
 
     def __init__(self, graph, tmp_path, monkeypatch, fast=True, tick=0.1, **params):
-        from types import SimpleNamespace
         from prsm_lube_ros.nodes import lubrication_estimator
         from prsm_lube_ros.nodes.raw_inputs import raw_load_converter, raw_screw_converter, raw_vibration_converter
         self.clock = 1000.0
@@ -571,6 +571,56 @@ def test_the_input_rates_in_the_diagnostics_count_every_message_arrived(graph, t
             assert status.level == b'\x00' and frequency == pytest.approx(rate, rel=0.1), (key, status.message)
             judged += 1
     assert judged >= 30
+
+
+def lagging(events, kind, delay):
+    """``events`` with the messages of ``kind`` arriving ``delay`` s later."""
+    return [(arrival + delay if k == kind else arrival, k, data) for arrival, k, data in events]
+
+
+def odd_block(stamp, rate, arrival):
+    """An event of one vibration block of 100 samples stamped ``stamp`` s after T0 at ``rate`` Hz."""
+    from rclpy.serialization import serialize_message
+    return (arrival, 'vibration', serialize_message(ros_convert.vibration_block_msg(
+        T0 + stamp, rate, np.ones(100, np.float32))))
+
+
+def live_cases():
+    """(name, events, estimator parameters) of input streams as they reach a node, ordinary and odd."""
+    run = arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0)
+    repeated = next(e for e in run if e[1] == 'vibration' and abs(e[0] - 2.5) < 1e-6)
+    yield 'steady', run, {}
+    yield 'joint states 0.3 s late', lagging(run, 'joint_states', 0.3), {}
+    yield 'loads 0.12 s late', lagging(run, 'axial_load', 0.12), {}
+    yield 'joint states stop', [e for e in run if not (e[1] == 'joint_states' and e[0] > 2.0)], {}
+    yield 'vibration stops', [e for e in run if not (e[1] == 'vibration' and e[0] > 2.03)], {}
+    blocks = arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0, block=0.1)
+    yield '0.1 s blocks, 1 s windows', blocks, dict(window_length=1.0, completion_delay=0.5)
+    yield 'a block stamped 1000 s ahead', run + [odd_block(1000.0, 2000.0, 3.01)], {}
+    yield 'a block of rate 1e-6 Hz', run + [odd_block(3.0, 1e-6, 3.01)], {}
+    yield 'a block twice', run + [(2.52, 'vibration', repeated[2])], {}
+    yield 'stamps back 3 s', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 + 3.0, 6.02), {}
+    yield 'clock reset', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 - 100.0, 6.02), {}
+
+
+@pytest.mark.parametrize('case', [c[0] for c in live_cases()])
+def test_pending_blocks_give_the_windows_and_times_of_blocks_taken_at_arrival(graph, tmp_path, monkeypatch, case):
+    """The claim of the pending blocks: the same windows, published at the same moments, as a node that adds
+    every block (and the queues) to the builder at its arrival, over streams late, stopping, odd or going back."""
+    from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator as Node
+    _, events, params = next(c for c in live_cases() if c[0] == case)
+    published = []
+    for flush_every_block in (False, True):
+        if flush_every_block:
+            monkeypatch.setattr(Node, '_flush_due', lambda node, channel: bool(channel.pending))
+        driven = HandDriven(graph, tmp_path, monkeypatch, **params)
+        driven.channel.publisher = SimpleNamespace(publish=lambda msg, driven=driven: published[-1].append(
+            (round(driven.clock, 6), msg.window_start, msg.theta_oil, msg.message)))
+        published.append([])
+        driven.run(events, until=max(e[0] for e in events) + 2.0)
+    kept, each = published
+    assert len(kept) >= 5 and [(s[0], s[1], s[3]) for s in kept] == [(s[0], s[1], s[3]) for s in each]
+    assert [s[2] for s in kept] == pytest.approx([s[2] for s in each], rel=1e-9, nan_ok=True)
 
 
 def test_parameters_are_validated_and_applied(graph, tmp_path):
