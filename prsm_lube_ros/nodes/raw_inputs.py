@@ -232,7 +232,7 @@ class FixedLayout:
             return None
         records = np.frombuffer(joined, dtype=self.records)
         stamps = records['sec'] + records['nanosec'] * 1e-9      # as sec + nanosec * 1e-9 of one message
-        if not (stamps[0] != 0 and (stamps[1:] > stamps[:-1]).all()):
+        if not ((stamps[1:] > stamps[:-1]).all() and stamps.all()):     # rising, none zero (one may pass 0)
             return None
         return stamps, records
 

@@ -178,3 +178,19 @@ def test_a_drained_queue_of_wrenches_reads_at_once_as_one_at_a_time():
     assert at_once is not None
     assert np.array_equal(at_once.stamps, one_by_one.stamps) and np.array_equal(at_once.forces, one_by_one.forces)
     assert at_once.forces.tolist() == [-151.25 + k for k in range(7)]
+
+
+def test_a_queue_with_a_zero_stamp_anywhere_is_read_one_at_a_time():
+    """Stamps rising through zero (before 1970: sec < 0): the message stamped zero is refused one at a time
+    (never set by its publisher), so the queue read at once must not take it either."""
+    from prsm_lube_ros.nodes.raw_inputs import raw_screw_converter
+    convert = raw_screw_converter('/a/joint_states', 'screw')
+    queue = []
+    for sec, nanosec in ((-1, 980_000_000), (-1, 990_000_000), (0, 0), (0, 10_000_000)):
+        msg = joint_state(['screw'], [1.0], [20.0])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        queue.append(serialize_message(msg))
+    convert(queue[0])                                       # learnt
+    with pytest.raises(InputError, match='stamp is zero'):
+        convert(queue[2])
+    assert convert.many(queue) is None
