@@ -498,6 +498,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._rates = {key: RateSettings(expected=float(values[f'{key}_rate']),
                                          tolerance=float(values['rate_tolerance']),
                                          window=int(values['rate_window'])) for key in INPUT_KEYS}
+        self._check_qos_depth(int(values['qos_depth']))
         self._stamp_settings = StampSettings(max_age=float(values['max_stamp_age']),
                                              max_future=float(values['max_future_stamp']))
         self._input_group = MutuallyExclusiveCallbackGroup()
@@ -523,6 +524,18 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         else:
             self.log.info('autostart is false: unconfigured, waiting for a lifecycle manager '
                           '(ros2 lifecycle set ... configure, then activate)')
+
+    def _check_qos_depth(self, depth: int) -> None:
+        """One WARN per queued input whose expected rate brings more than ``depth`` messages while its queue waits."""
+        wait = FLUSH_PERIOD + DRAIN_PERIOD
+        for key in ('joint_states', 'axial_load', 'temperature'):
+            rate = self._rates[key].expected
+            needed = math.ceil(rate * wait - 1e-9)
+            if needed > depth:
+                self.log.warning(
+                    f'qos_depth {depth} is less than the {needed} {key} messages that {rate:g} per s ({key}_rate) '
+                    f'bring in the {wait:g} s its queue may wait for a flush (FLUSH_PERIOD + DRAIN_PERIOD): the '
+                    f'oldest will be lost; set qos_depth to at least {needed}')
 
     def _checked_hardware_ids(self, actuators: list[str], configured: list[str]) -> dict:
         """:func:`hardware_ids`, with one WARN naming the actuators left at their default."""

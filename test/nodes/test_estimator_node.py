@@ -623,6 +623,14 @@ def test_pending_blocks_give_the_windows_and_times_of_blocks_taken_at_arrival(gr
     assert [s[2] for s in kept] == pytest.approx([s[2] for s in each], rel=1e-9, nan_ok=True)
 
 
+def test_a_qos_depth_too_small_for_an_expected_rate_is_one_warning(graph, tmp_path, capfd):
+    """qos_depth 50 with joint states expected at 1 kHz: their queue waits up to 0.35 s (350 messages) between
+    flushes, so one WARN says so; the loads at their default 50/s (18 messages) fit."""
+    graph.estimator(tmp_path, qos_depth=50, joint_states_rate=1000.0)
+    lines = [line for line in capfd.readouterr().err.splitlines() if '[WARN]' in line and 'qos_depth' in line]
+    assert len(lines) == 1 and 'joint_states' in lines[0] and '350' in lines[0], lines
+
+
 def test_parameters_are_validated_and_applied(graph, tmp_path):
     node = graph.estimator(tmp_path)
     broken = tmp_path / 'broken.yaml'
