@@ -755,6 +755,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self.log.info(f'{channel.name}: calibration {path} loaded')
 
     def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration) -> None:
+        self._flush_before_change(channel)
         band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load,
                                     defect_orders=self._defect_orders)
@@ -849,6 +850,16 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                     self._add(channel, key, runs[index])
         channel.last_flush = time.monotonic()
         self._close_windows(channel)
+
+    def _flush_before_change(self, channel: ActuatorChannel) -> None:
+        """Flush pending blocks before the builder or calibration they arrived under is replaced.
+
+        As when each block went in at its arrival: they belong to the old
+        builder's windows (dropped with it), not to a half window the new
+        builder would publish as blocks lost.
+        """
+        if channel.pending:
+            self._flush(channel)
 
     @staticmethod
     def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
@@ -1374,6 +1385,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             if settings is not None:
                 self._settings = settings
                 for channel in self.channels:
+                    self._flush_before_change(channel)
                     channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
                 self.log.info(f'window settings changed ({", ".join(sorted(names))}); open windows '
                               'dropped, starting over')

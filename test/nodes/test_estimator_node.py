@@ -496,6 +496,9 @@ class HandDriven:
             self.clock = start + arrival
             if kind == 'vibration':
                 self.vibration(data)
+            elif kind == 'call':        # something else happening to the node then: data(self)
+                with self.node._lock:
+                    data(self)
             else:
                 self.callbacks[kind](data)
         if until is not None:
@@ -601,6 +604,11 @@ def live_cases():
     yield 'a block twice', run + [(2.52, 'vibration', repeated[2])], {}
     yield 'stamps back 3 s', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 + 3.0, 6.02), {}
     yield 'clock reset', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 - 100.0, 6.02), {}
+    banded = replace(calibration(START), band=DEFAULT_BAND)
+    yield 'calibration swapped: windows rebuilt in its band', run + [
+        (3.13, 'call', lambda driven: driven.node._swap_calibration(driven.channel, banded))], {}
+    yield 'window settings changed: windows rebuilt', run + [
+        (3.13, 'call', lambda driven: driven.node.set_parameters([Parameter('min_coverage', value=0.79)]))], {}
 
 
 @pytest.mark.parametrize('case', [c[0] for c in live_cases()])
