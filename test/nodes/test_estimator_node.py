@@ -504,6 +504,19 @@ class HandDriven:
         if until is not None:
             self._tick_to(start + until)
 
+    def deactivate(self):
+        """Lifecycle deactivate: the node's subscriptions and queues go."""
+        self.converters = [(key, convert) for key, _, convert in self.channel.auxiliary]
+        self.node.trigger_deactivate()
+        assert not self.channel.pending and not self.channel.auxiliary
+
+    def activate(self):
+        """Lifecycle activate: new (empty) queues."""
+        self.node.trigger_activate()
+        self.queues = {key: HandQueue(self.queues[key].depth) for key, _ in self.converters}
+        self.channel.auxiliary = [(key, self.queues[key], convert) for key, convert in self.converters]
+        self.callbacks = {key: self.queues[key].put for key, _ in self.converters}
+
     def _tick_to(self, when):
         while (timer := min(self.timers))[0] <= when:
             self.clock = timer[0]
@@ -609,6 +622,8 @@ def live_cases():
         (3.13, 'call', lambda driven: driven.node._swap_calibration(driven.channel, banded))], {}
     yield 'window settings changed: windows rebuilt', run + [
         (3.13, 'call', lambda driven: driven.node.set_parameters([Parameter('min_coverage', value=0.79)]))], {}
+    yield 'deactivated mid-window, activated again', [e for e in run if not 3.13 < e[0] < 3.6] + [
+        (3.13, 'call', HandDriven.deactivate), (3.6, 'call', HandDriven.activate)], {}
 
 
 @pytest.mark.parametrize('case', [c[0] for c in live_cases()])
