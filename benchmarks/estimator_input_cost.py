@@ -13,8 +13,8 @@ calibration of ``live_latency.py``: band and healthy baseline) is fed
 joint states 100 Hz, load 50 Hz, temperature 1 Hz, screw at 20 rad/s and
 150 N, as live_latency's generator sends) through its own callback path:
 each 0.1 s, the joint states, loads and temperatures of the slice as its
-drain hands them over (``_take_queued``), then the vibration subscription's
-callback with the block (taking it, closing and assessing windows,
+drain hands them over (``_take_queued``; serialized for the inputs the node
+subscribes to raw), then the vibration subscription's callback with the block (taking it, closing and assessing windows,
 publishing states).  Only DDS and the executor are left out.
 
 Each ``--code`` tree (a checkout, e.g. ``git worktree add /tmp/base main``; ``.`` is this one) runs in a
@@ -53,7 +53,10 @@ def run_child(count: int, seconds: float) -> dict:
 
     from prsm_lube_ros.estimation.calibration_file import save_calibration
     from prsm_lube_ros.msg import VibrationBlock
+    from rclpy.serialization import serialize_message
+
     from prsm_lube_ros.nodes.lubrication_estimator import actuator_label, LubricationEstimator
+    from prsm_lube_ros.nodes.raw_inputs import RAW_INPUTS
     from prsm_lube_ros.nodes.ros_convert import time_from_ns
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from live_latency import actuator_names, benchmark_calibration   # the live benchmark's actuators
@@ -78,6 +81,10 @@ def run_child(count: int, seconds: float) -> dict:
     def stamp(t: float):
         return time_from_ns(start_ns + int(round(t * 1e9)))
 
+    def as_taken(key: str, msg):
+        """What the node's subscription hands over: the CDR bytes of a raw input, else the message."""
+        return serialize_message(msg) if key in RAW_INPUTS else msg
+
     feed = []                     # built before the clock starts: only the estimator's work is timed
     for k in range(slices):
         t0 = k * BLOCK
@@ -87,19 +94,19 @@ def run_child(count: int, seconds: float) -> dict:
                 t = t0 + j * 0.01
                 msg = JointState(name=['screw'], position=[SPEED * t], velocity=[SPEED])
                 msg.header.stamp = stamp(t)
-                queued['joint_states'].append(msg)
+                queued['joint_states'].append(as_taken('joint_states', msg))
                 if j % 2 == 0:
                     wrench = WrenchStamped()
                     wrench.header.stamp = stamp(t)
                     wrench.wrench.force.z = -LOAD
-                    queued['axial_load'].append(wrench)
+                    queued['axial_load'].append(as_taken('axial_load', wrench))
             if k % 10 == 0:
                 reading = Temperature(temperature=31.0)
                 reading.header.stamp = stamp(t0)
-                queued['temperature'].append(reading)
+                queued['temperature'].append(as_taken('temperature', reading))
             block = VibrationBlock(sample_rate=RATE, samples=blocks[(k + index) % 10])
             block.header.stamp = stamp(t0)
-            feed.append((channel, queued, block))
+            feed.append((channel, queued, as_taken('vibration', block)))
     started = time.process_time()
     wall = time.monotonic()
     for channel, queued, block in feed:
@@ -110,6 +117,10 @@ def run_child(count: int, seconds: float) -> dict:
         vibration[channel.name](block)
     cpu = time.process_time() - started
     windows = sum(c.windows for c in node.channels)
+    problems = sum(c.problem_count() for c in node.channels)
+    if windows == 0 or problems:
+        raise RuntimeError(f'the estimator made {windows} windows and left out {problems} inputs: the feed is not '
+                           'what the node takes (a benchmark of refusals is no benchmark)')
     node.destroy_node()
     rclpy.try_shutdown()
     return {'cpu_s': cpu, 'wall_s': time.monotonic() - wall, 'windows': windows, 'actuator_seconds': count * seconds}

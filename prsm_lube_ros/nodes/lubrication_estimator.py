@@ -38,12 +38,13 @@ earliest open window by ``completion_delay``) or ``FLUSH_PERIOD`` s after
 the last time, it drains
 those queues and adds everything to the window builder at once (a few large
 batches instead of thirty small ones a second: the same windows, a third of
-the builder's calls).  A steady-clock timer does the same every
-``DRAIN_PERIOD`` s for an actuator whose vibration stopped, so queues stay
-bounded and silent windows still close.
+the builder's calls).  A steady-clock timer, every ``DRAIN_PERIOD`` s, does
+the same for an actuator not flushed for ``FLUSH_PERIOD`` s (its vibration
+stopped or lags), so queues stay bounded and silent windows still close.
 That drain leans on rclpy internals, all of it in :mod:`.fast_drain`, which
 checks them at start-up; without them the node logs one warning and takes the
-auxiliary inputs through plain subscription callbacks (same windows, more CPU).
+auxiliary inputs through plain subscription callbacks, and each block at its
+arrival, with no pending (same windows, more CPU).
 
 Each actuator has the service ``<ns>/calibrate`` and, beside it, the action
 ``<ns>/calibrate`` (``prsm_lube_ros/action/Calibrate``: the same request, feedback
@@ -141,10 +142,10 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['ActuatorChannel', 'CalibrationJob', 'CalibrationWithdrawn', 'DRAIN_PERIOD', 'FIXED_REASONS',
-           'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN', 'NODE_NAME',
-           'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label', 'calibration_arguments',
-           'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds', 'join_batches', 'main',
-           'window_settings']
+           'FLUSH_PERIOD', 'HEALTH_PARAMETERS', 'INPUT_KEYS', 'INPUT_TASK', 'LubricationEstimator', 'MAX_DRAIN',
+           'NODE_NAME', 'PARAMETERS', 'STATE_QOS', 'STATUS_PREFIX', 'WINDOW_PARAMETERS', 'actuator_label',
+           'calibration_arguments', 'calibration_path', 'configured_hardware_id', 'hardware_ids', 'health_thresholds',
+           'join_batches', 'main', 'rising_runs', 'window_settings']
 
 NODE_NAME = 'lubrication_estimator'
 STATUS_PREFIX = 'prsm_lube_ros'
@@ -304,8 +305,8 @@ PARAMETERS = {
     'qos_depth': ParameterSpec(
         500, _INTEGER,
         'queue depth of the input subscriptions (best effort, sensor data); joint states, load and temperature '
-        'are taken when a window may close and at least every 0.35 s with 0.1 s blocks (FLUSH_PERIOD, '
-        'DRAIN_PERIOD), so it must hold what a topic brings meanwhile', bounds=(1, 100000), read_only=True),
+        'are taken when a window may close and at least every 0.35 s (FLUSH_PERIOD + DRAIN_PERIOD), so it must '
+        'hold what a topic brings meanwhile', bounds=(1, 100000), read_only=True),
 }
 
 #: LubricationState: reliable, and transient local so that a dashboard or logger started late gets the last
@@ -314,12 +315,12 @@ STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durabil
 
 #: Most messages one input callback takes from its queue (the rest wait for the next wait cycle).
 MAX_DRAIN = 5000
-#: Period in s of the drain timer, which takes the pending blocks and auxiliary queues of an actuator whose
-#: vibration has not arrived, nor been flushed, for FLUSH_PERIOD.
+#: Period in s of the drain timer, which takes the pending blocks and auxiliary queues of an actuator not
+#: flushed for FLUSH_PERIOD (its vibration stopped, or its blocks come further apart).
 DRAIN_PERIOD = 0.1
 #: Longest time in s vibration blocks stay pending (and the auxiliary queues undrained) while no window can
-#: close: a queue holds at most FLUSH_PERIOD + a block period or FLUSH_PERIOD + DRAIN_PERIOD of messages
-#: (0.35 s of 0.1 s blocks: 350 of a 1 kHz topic; qos_depth is 500).
+#: close: the next block or the drain timer flushes them, so a queue holds at most FLUSH_PERIOD + DRAIN_PERIOD
+#: of messages (0.35 s: 350 of a 1 kHz topic; qos_depth is 500).
 FLUSH_PERIOD = 0.25
 
 WINDOW_PARAMETERS = ('window_length', 'min_speed', 'max_speed_spread', 'min_coverage', 'completion_delay',
@@ -399,8 +400,8 @@ class ActuatorChannel:
     windows: int = 0
     input_errors: dict = field(default_factory=dict)
     auxiliary: list = field(default_factory=list)    # (key, subscription, convert) drained by the node
-    last_drain: float = -math.inf                    # time.monotonic() of the last vibration or drain
     pending: list = field(default_factory=list)      # VibrationBatch decoded, not yet in the builder
+    last_block: float = -math.inf                    # stamp of the last block taken (pending or in the builder)
     last_flush: float = -math.inf                    # time.monotonic() of the last flush into the builder
     node_name: str = STATUS_PREFIX
     frame_id: str = ''                               # header.frame_id of the last vibration block
@@ -497,6 +498,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._rates = {key: RateSettings(expected=float(values[f'{key}_rate']),
                                          tolerance=float(values['rate_tolerance']),
                                          window=int(values['rate_window'])) for key in INPUT_KEYS}
+        self._check_qos_depth(int(values['qos_depth']))
         self._stamp_settings = StampSettings(max_age=float(values['max_stamp_age']),
                                              max_future=float(values['max_future_stamp']))
         self._input_group = MutuallyExclusiveCallbackGroup()
@@ -522,6 +524,18 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         else:
             self.log.info('autostart is false: unconfigured, waiting for a lifecycle manager '
                           '(ros2 lifecycle set ... configure, then activate)')
+
+    def _check_qos_depth(self, depth: int) -> None:
+        """One WARN per queued input whose expected rate brings more than ``depth`` messages while its queue waits."""
+        wait = FLUSH_PERIOD + DRAIN_PERIOD
+        for key in ('joint_states', 'axial_load', 'temperature'):
+            rate = self._rates[key].expected
+            needed = math.ceil(rate * wait - 1e-9)
+            if needed > depth:
+                self.log.warning(
+                    f'qos_depth {depth} is less than the {needed} {key} messages that {rate:g} per s ({key}_rate) '
+                    f'bring in the {wait:g} s its queue may wait for a flush (FLUSH_PERIOD + DRAIN_PERIOD): the '
+                    f'oldest will be lost; set qos_depth to at least {needed}')
 
     def _checked_hardware_ids(self, actuators: list[str], configured: list[str]) -> dict:
         """:func:`hardware_ids`, with one WARN naming the actuators left at their default."""
@@ -741,6 +755,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self.log.info(f'{channel.name}: calibration {path} loaded')
 
     def _swap_calibration(self, channel: ActuatorChannel, calibration: Calibration) -> None:
+        self._flush_before_change(channel)
         band_changed = channel.assessor is None or channel.assessor.calibration.band != calibration.band
         channel.assessor = Assessor(calibration, min_axial_load=self._min_axial_load,
                                     defect_orders=self._defect_orders)
@@ -780,12 +795,14 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             with self._lock:
                 self._arrival = self.now()
                 channel.monitor.note_input(self._arrival)
-                channel.last_drain = time.monotonic()
+                going_back = False      # a clock reset closes the windows at once, as at each block's arrival
                 for msg in (data, *self._fast.drain(subscriptions.get('vibration'), MAX_DRAIN)):
                     batch = self._convert(channel, 'vibration', convert, msg)
                     if batch is not None:
+                        going_back |= not batch.stamps[0] > channel.last_block
+                        channel.last_block = float(batch.stamps[0])
                         channel.pending.append(batch)
-                if self._flush_due(channel):
+                if going_back or self._flush_due(channel):
                     self._flush(channel)
         return callback
 
@@ -798,7 +815,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if not channel.pending:
             return False
-        if channel.last_drain - channel.last_flush >= FLUSH_PERIOD:
+        if not self._fast.enabled:      # joint states and loads go in at their arrival: blocks too (a reset)
+            return True
+        if time.monotonic() - channel.last_flush >= FLUSH_PERIOD:
             return True
         last = channel.pending[-1]
         rate = float(last.sample_rates[-1])
@@ -808,13 +827,39 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return not end - builder.settings.completion_delay < builder.earliest_open_end()
 
     def _flush(self, channel: ActuatorChannel) -> None:
-        """Queued auxiliary inputs, then the pending blocks (one batch while stamps rise), into the builder; close."""
-        self._drain_auxiliary(channel)
+        """The pending blocks and the queued auxiliary inputs into the builder, in rounds; close.
+
+        Each stream is cut where its stamps go back (:meth:`_queued_runs`), and
+        the pieces go in round by round: every stream's first piece, then every
+        second one...  So a clock reset restarts the builder's time only once
+        what every stream brought before it is in, as when each block went in at
+        its arrival with the queues drained beside it; otherwise the last
+        windows before a reset would be closed short and opened again.
+        """
+        streams = []
         if channel.pending:
             pending, channel.pending = channel.pending, []
-            self._add_rising(channel, 'vibration', pending)
+            streams.append(('vibration', rising_runs(pending)))
+        for key, subscription, convert in channel.auxiliary:
+            messages = list(self._fast.drain(subscription, MAX_DRAIN))
+            if messages:
+                streams.append((key, self._queued_runs(channel, key, convert, messages)))
+        for index in range(max((len(runs) for _, runs in streams), default=0)):
+            for key, runs in streams:
+                if index < len(runs):
+                    self._add(channel, key, runs[index])
         channel.last_flush = time.monotonic()
         self._close_windows(channel)
+
+    def _flush_before_change(self, channel: ActuatorChannel) -> None:
+        """Flush pending blocks before the builder or calibration they arrived under is replaced.
+
+        As when each block went in at its arrival: they belong to the old
+        builder's windows (dropped with it), not to a half window the new
+        builder would publish as blocks lost.
+        """
+        if channel.pending:
+            self._flush(channel)
 
     @staticmethod
     def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
@@ -829,21 +874,18 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                 self._take(channel, key, convert, msg)
         return callback
 
-    def _drain_auxiliary(self, channel: ActuatorChannel) -> None:
-        """Add every queued joint state, load and temperature message of ``channel`` to its builder."""
-        for key, subscription, convert in channel.auxiliary:
-            messages = list(self._fast.drain(subscription, MAX_DRAIN))
-            if messages:
-                self._take_queued(channel, key, convert, messages)
-
     def _drain_idle(self) -> None:
-        """Drain timer: pending blocks and auxiliary inputs of actuators whose vibration stopped (module doc)."""
+        """Drain timer: pending blocks and auxiliary inputs not flushed for ``FLUSH_PERIOD`` s (module doc).
+
+        Whatever the vibration did: waiting besides for FLUSH_PERIOD after the
+        last block (a stopped vibration) let a queue fill for up to 0.55 s, not
+        the 0.35 s ``qos_depth`` is sized for.
+        """
         with self._lock:
             self._arrival = self.now()
-            now = time.monotonic()
+            limit = time.monotonic() - FLUSH_PERIOD
             for channel in self.channels:
-                if channel.last_drain <= now - FLUSH_PERIOD and channel.last_flush <= now - FLUSH_PERIOD:
-                    channel.last_drain = now
+                if channel.last_flush <= limit:
                     self._flush(channel)
 
     def _take(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> None:
@@ -853,7 +895,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._add(channel, key, batch)
 
     def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> None:
-        """Add messages drained from one auxiliary queue, joined into batches while their stamps rise.
+        """Add messages drained from one auxiliary queue (:meth:`_queued_runs`) to the builder."""
+        for batch in self._queued_runs(channel, key, convert, messages):
+            self._add(channel, key, batch)
+
+    def _queued_runs(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> list[InputBatch]:
+        """Messages drained from one auxiliary queue, as batches joined while their stamps rise (:func:`rising_runs`).
 
         A message that cannot be read is left out and counted on its own.  A
         stamp going back starts a new batch, so back-steps and clock resets reach
@@ -865,24 +912,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if many is not None and len(messages) > 1:
             batch = self._convert(channel, key, many, messages)
             if batch is not None:
-                self._add(channel, key, batch)
-                return
+                return [batch]
         converted = (self._convert(channel, key, convert, msg) for msg in messages)
-        self._add_rising(channel, key, [batch for batch in converted if batch is not None])
-
-    def _add_rising(self, channel: ActuatorChannel, key: str, batches: list[InputBatch]) -> None:
-        """Add one-entry batches (or one-block vibration batches) in order, joined while their stamps rise."""
-        run: list[InputBatch] = []
-        last = -math.inf
-        for batch in batches:
-            stamp = float(batch.stamps[0]) if len(batch) == 1 else math.nan
-            if run and not stamp > last:
-                self._add(channel, key, join_batches(run))
-                run = []
-            run.append(batch)
-            last = stamp
-        if run:
-            self._add(channel, key, join_batches(run))
+        return rising_runs([batch for batch in converted if batch is not None])
 
     def _convert(self, channel: ActuatorChannel, key: str, convert: Callable, msg: Any) -> InputBatch | None:
         """The message as a one-entry batch, or None (counted, logged once per kind) when it cannot be read."""
@@ -1094,10 +1126,20 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return statuses
 
     def _publish_diagnostics(self, inputs: bool = True) -> None:
-        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat."""
+        """The statuses of every actuator on /diagnostics; the input statuses only on the timer's beat.
+
+        On the beat each actuator is flushed first, so its input statuses count
+        every message arrived, not those the last flush took (up to 0.35 s
+        earlier: rates over a few periods would swing past rate_tolerance).
+        """
         with self._lock:
             if self._diagnostics is None:
                 return
+            if inputs:
+                self._arrival = self.now()
+                for channel in self.channels:
+                    if channel.inputs:      # active
+                        self._flush(channel)
             now = self.now()
             array = DiagnosticArray()
             array.header.stamp = self.get_clock().now().to_msg()
@@ -1343,6 +1385,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             if settings is not None:
                 self._settings = settings
                 for channel in self.channels:
+                    self._flush_before_change(channel)
                     channel.builder = WindowBuilder(self._channel_settings(channel), lead=self._lead)
                 self.log.info(f'window settings changed ({", ".join(sorted(names))}); open windows '
                               'dropped, starting over')
@@ -1366,6 +1409,23 @@ def calibration_arguments(request: Any) -> tuple[list[str], float, bool, str]:
     """(bag paths, reference theta, persist, recording namespace) of a Calibrate request or action goal."""
     return (list(request.bag_paths), float(request.reference_theta), bool(request.persist),
             str(getattr(request, 'recording_namespace', '')))
+
+
+def rising_runs(batches: list[InputBatch]) -> list[InputBatch]:
+    """One-entry batches (or one-block vibration batches), in order, joined into one batch while their stamps rise."""
+    runs: list[InputBatch] = []
+    run: list[InputBatch] = []
+    last = -math.inf
+    for batch in batches:
+        stamp = float(batch.stamps[0]) if len(batch) == 1 else math.nan
+        if run and not stamp > last:
+            runs.append(join_batches(run))
+            run = []
+        run.append(batch)
+        last = stamp
+    if run:
+        runs.append(join_batches(run))
+    return runs
 
 
 def join_batches(batches: list) -> InputBatch:

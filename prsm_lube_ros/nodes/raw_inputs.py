@@ -232,7 +232,7 @@ class FixedLayout:
             return None
         records = np.frombuffer(joined, dtype=self.records)
         stamps = records['sec'] + records['nanosec'] * 1e-9      # as sec + nanosec * 1e-9 of one message
-        if not (stamps[0] != 0 and (stamps[1:] > stamps[:-1]).all()):
+        if not ((stamps[1:] > stamps[:-1]).all() and stamps.all()):     # rising, none zero (one may pass 0)
             return None
         return stamps, records
 
@@ -312,7 +312,8 @@ class _RawScrewConverter(_LayoutConverter):
         from sensor_msgs.msg import JointState
         from .ros_convert import screw_batch
         super().__init__()
-        self._typed = lambda data: screw_batch(deserialize_message(data, JointState), topic, joint)
+        self._typed: Callable[[bytes], ScrewStateBatch] = \
+            lambda data: screw_batch(deserialize_message(data, JointState), topic, joint)
         self._name = joint.encode()
 
     def __call__(self, data: bytes) -> ScrewStateBatch:
@@ -339,7 +340,8 @@ class _RawLoadConverter(_LayoutConverter):
         from rclpy.serialization import deserialize_message
         from .ros_convert import load_batch
         super().__init__()
-        self._typed = lambda data: load_batch(deserialize_message(data, WrenchStamped), topic)
+        self._typed: Callable[[bytes], AxialLoadBatch] = \
+            lambda data: load_batch(deserialize_message(data, WrenchStamped), topic)
 
     def __call__(self, data: bytes) -> AxialLoadBatch:
         found = _load(data)

@@ -14,6 +14,7 @@ import subprocess
 import sys
 import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -410,6 +411,247 @@ def test_blocks_wait_in_the_node_until_one_may_close_a_window(graph, tmp_path, m
     graph.publish(publishers, [e for e in events if T0 + 1.35 <= e[0] < T0 + 3.45])
     wait_for(lambda: 2.0 in by_window(states), 10, 'windows 1 and 2')
     assert sorted(by_window(states)) == [0.0, 1.0, 2.0]
+
+
+# -- the input path driven by hand --------------------------------------------------------------------
+class HandQueue:
+    """A subscription's KEEP_LAST queue of serialized messages: beyond ``depth`` the oldest is dropped."""
+
+    def __init__(self, depth):
+        self.messages, self.depth, self.dropped, self.put_count = [], depth, 0, 0
+
+    def put(self, data):
+        self.messages.append(data)
+        self.put_count += 1
+        if len(self.messages) > self.depth:
+            del self.messages[0]
+            self.dropped += 1
+
+
+class HandDrain:
+    """Stands in for fast_drain.FastDrain: takes what a :class:`HandQueue` holds."""
+
+    enabled = True
+
+    def drain(self, queue, limit):
+        if queue is None:
+            return iter(())
+        taken, queue.messages = queue.messages[:limit], queue.messages[limit:]
+        return iter(taken)
+
+
+class HandDriven:
+    """An estimator whose inputs the test delivers: no executor, DDS or wall clock decides when anything happens.
+
+    The node is never spun: the test calls its vibration callback, its drain
+    timer every ``tick`` s, its diagnostics timer every ``diagnostics_period``
+    s and (without the fast drain) its plain auxiliary callbacks, on a clock it
+    sets (``time.monotonic`` of the node's module, and the node clock: T0 at
+    the start), and the auxiliary messages wait in :class:`HandQueue` s of
+    ``qos_depth``.  Published states and diagnostics are kept in lists.
+    """
+
+    def __init__(self, graph, tmp_path, monkeypatch, fast=True, tick=0.1, **params):
+        from prsm_lube_ros.nodes import lubrication_estimator
+        from prsm_lube_ros.nodes.raw_inputs import raw_load_converter, raw_screw_converter, raw_vibration_converter
+        self.clock = 1000.0
+        monkeypatch.setattr(lubrication_estimator, 'time', SimpleNamespace(monotonic=lambda: self.clock))
+        monkeypatch.setattr(LubricationEstimator, 'now', lambda node: T0 + self.clock - 1000.0)
+        save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
+        values = dict(calibration_file=str(tmp_path / 'calibration_{actuator}.yaml'), recordings_dir=str(tmp_path),
+                      window_length=0.5, completion_delay=0.25, stale_timeout=1.0, diagnostics_period=0.2,
+                      qos_depth=2000)
+        values.update(params)
+        self.node = node = LubricationEstimator(context=graph.context, parameter_overrides=[
+            Parameter(k, value=v) for k, v in values.items()])
+        graph.nodes.append(node)                  # destroyed with the graph; never spun
+        self.channel = channel = node.channels[0]
+        self.states, self.diagnostics = [], []
+        channel.publisher = SimpleNamespace(publish=self.states.append)
+        node._diagnostics = SimpleNamespace(publish=self.diagnostics.append)
+        converters = {'joint_states': raw_screw_converter('/prsm/joint_states', 'screw'),
+                      'axial_load': raw_load_converter('/prsm/axial_load')}
+        self.queues = {key: HandQueue(int(values['qos_depth'])) for key in converters}
+        if fast:
+            node._fast = HandDrain()
+            channel.auxiliary = [(key, self.queues[key], convert) for key, convert in converters.items()]
+            self.callbacks = {key: self.queues[key].put for key in converters}
+        else:
+            node._fast.enabled = False
+            channel.auxiliary = []
+            self.callbacks = {key: node._auxiliary_callback(channel, key, convert)
+                              for key, convert in converters.items()}
+        self.vibration = node._vibration_callback(
+            channel, raw_vibration_converter('/prsm/vibration', lambda frame: None), {})
+        period = float(values['diagnostics_period'])
+        self.timers = [[self.clock + tick, tick, node._drain_idle],
+                       [self.clock + period, period, node._publish_diagnostics]]
+
+    def run(self, events, until=None):
+        """Deliver ``events`` (arrival s from the start, kind, serialized message) in arrival order, with the
+        drain timer's ticks between them, then tick on up to ``until`` s."""
+        start = 1000.0
+        for arrival, kind, data in sorted(events, key=lambda e: e[0]):
+            self._tick_to(start + arrival)
+            self.clock = start + arrival
+            if kind == 'vibration':
+                self.vibration(data)
+            elif kind == 'call':        # something else happening to the node then: data(self)
+                with self.node._lock:
+                    data(self)
+            else:
+                self.callbacks[kind](data)
+        if until is not None:
+            self._tick_to(start + until)
+
+    def deactivate(self):
+        """Lifecycle deactivate: the node's subscriptions and queues go."""
+        self.converters = [(key, convert) for key, _, convert in self.channel.auxiliary]
+        self.node.trigger_deactivate()
+        assert not self.channel.pending and not self.channel.auxiliary
+
+    def activate(self):
+        """Lifecycle activate: new (empty) queues."""
+        self.node.trigger_activate()
+        self.queues = {key: HandQueue(self.queues[key].depth) for key, _ in self.converters}
+        self.channel.auxiliary = [(key, self.queues[key], convert) for key, convert in self.converters]
+        self.callbacks = {key: self.queues[key].put for key, _ in self.converters}
+
+    def _tick_to(self, when):
+        while (timer := min(self.timers))[0] <= when:
+            self.clock = timer[0]
+            timer[2]()
+            timer[0] += timer[1]
+
+
+def arrivals(segments, stamp_origin, wall_origin, **stream):
+    """``segments_stream`` as it reaches a node: (arrival s, kind, serialized message); a block arrives when its
+    last sample is taken, the other messages at their stamp."""
+    from rclpy.serialization import serialize_message
+    block = stream.get('block', 0.05)
+    return [(wall_origin + stamp - stamp_origin + (block if kind == 'vibration' else 0.0), kind,
+             serialize_message(msg)) for stamp, kind, msg in segments_stream(segments, t0=stamp_origin, **stream)]
+
+
+@pytest.mark.parametrize('fast', [True, False], ids=['fast drain', 'plain callbacks'])
+def test_a_clock_reset_with_blocks_pending_gives_each_window_once_and_whole(graph, tmp_path, monkeypatch, fast):
+    """Stamps go back 100 s (a clock reset, a bag played again): the windows before it close whole, once.
+
+    The blocks a node keeps pending must reach the builder before the joint
+    states or loads that go back restart its time, as when every block went in
+    at its arrival: else the last window before the reset is published twice
+    (cut short, then with those blocks and no speed) and the first ones after it
+    are closed early without vibration.  The messages after the reset come
+    0.02 s after the last block before it (with none, the joint states after
+    the reset may overtake that block, and a flush between them splits the
+    window, as it did when each block went in at its arrival).  Without the
+    fast drain (``fast`` False) the joint states and loads go in at their
+    arrival, so the blocks must too.
+    """
+    driven = HandDriven(graph, tmp_path, monkeypatch, fast=fast)
+    events = (arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0)
+              + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 - 100.0, 6.02))
+    driven.run(events, until=10.0)
+    starts = [round(s.window_start - T0, 3) for s in driven.states]
+    assert starts == [0.5 * k for k in range(12)] + [-100.0 + 0.5 * k for k in range(5)]
+    for state in driven.states:
+        assert state.theta_oil == pytest.approx(0.9, abs=0.01), (state.window_start - T0, state.message)
+
+
+@pytest.mark.parametrize('stop', [1.6, 1.65, 1.7, 1.75, 1.8, 1.85, 1.9, 1.95])
+def test_a_queue_as_deep_as_qos_depth_says_loses_nothing_when_vibration_stops(graph, tmp_path, monkeypatch, stop):
+    """Joint states at 1 kHz into a queue of FLUSH_PERIOD + DRAIN_PERIOD s of them (qos_depth's doc): when the
+    vibration stops (at ``stop`` s, any phase to the flushes), the drain timer takes the queue before it overflows."""
+    from prsm_lube_ros.nodes.lubrication_estimator import DRAIN_PERIOD, FLUSH_PERIOD
+    depth = int(1000 * (FLUSH_PERIOD + DRAIN_PERIOD)) + 1
+    driven = HandDriven(graph, tmp_path, monkeypatch, qos_depth=depth)
+    events = [e for e in arrivals([(4.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0, joint_rate=1000.0)
+              if e[1] != 'vibration' or e[0] <= stop + 1e-9]
+    driven.run(events, until=5.0)
+    queue = driven.queues['joint_states']
+    assert queue.put_count == 4000 and queue.dropped == 0
+
+
+def test_the_input_rates_in_the_diagnostics_count_every_message_arrived(graph, tmp_path, monkeypatch):
+    """Joint states at 100 Hz and loads at 50 Hz, their expected rates, judged over 3 diagnostic periods of
+    0.3 s: the statuses say OK, within rate_tolerance (10 %) of the rate they came at, though the queues wait
+    for flushes up to 0.35 s apart (counted at those, the rate over 0.9 s swung from 83 to 111 Hz: WARN
+    'Frequency too low.' at 100 Hz)."""
+    driven = HandDriven(graph, tmp_path, monkeypatch, diagnostics_period=0.3, rate_window=3)
+    driven.run(arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0, joint_rate=100.0, load_rate=50.0))
+    judged = 0
+    for array in driven.diagnostics[4:]:              # from the first full window of 3 periods on
+        for key, rate in (('joint_states', 100.0), ('axial_load', 50.0)):
+            status = status_of(array, f'{key} input')
+            frequency = float(values_of(status)['Actual frequency (Hz)'])
+            assert status.level == b'\x00' and frequency == pytest.approx(rate, rel=0.1), (key, status.message)
+            judged += 1
+    assert judged >= 30
+
+
+def lagging(events, kind, delay):
+    """``events`` with the messages of ``kind`` arriving ``delay`` s later."""
+    return [(arrival + delay if k == kind else arrival, k, data) for arrival, k, data in events]
+
+
+def odd_block(stamp, rate, arrival):
+    """An event of one vibration block of 100 samples stamped ``stamp`` s after T0 at ``rate`` Hz."""
+    from rclpy.serialization import serialize_message
+    return (arrival, 'vibration', serialize_message(ros_convert.vibration_block_msg(
+        T0 + stamp, rate, np.ones(100, np.float32))))
+
+
+def live_cases():
+    """(name, events, estimator parameters) of input streams as they reach a node, ordinary and odd."""
+    run = arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0)
+    repeated = next(e for e in run if e[1] == 'vibration' and abs(e[0] - 2.5) < 1e-6)
+    yield 'steady', run, {}
+    yield 'joint states 0.3 s late', lagging(run, 'joint_states', 0.3), {}
+    yield 'loads 0.12 s late', lagging(run, 'axial_load', 0.12), {}
+    yield 'joint states stop', [e for e in run if not (e[1] == 'joint_states' and e[0] > 2.0)], {}
+    yield 'vibration stops', [e for e in run if not (e[1] == 'vibration' and e[0] > 2.03)], {}
+    blocks = arrivals([(6.0, rms_for(0.9), SPEED, LOAD)], T0, 0.0, block=0.1)
+    yield '0.1 s blocks, 1 s windows', blocks, dict(window_length=1.0, completion_delay=0.5)
+    yield 'a block stamped 1000 s ahead', run + [odd_block(1000.0, 2000.0, 3.01)], {}
+    yield 'a block of rate 1e-6 Hz', run + [odd_block(3.0, 1e-6, 3.01)], {}
+    yield 'a block twice', run + [(2.52, 'vibration', repeated[2])], {}
+    yield 'stamps back 3 s', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 + 3.0, 6.02), {}
+    yield 'clock reset', run + arrivals([(3.0, rms_for(0.9), SPEED, LOAD)], T0 - 100.0, 6.02), {}
+    banded = replace(calibration(START), band=DEFAULT_BAND)
+    yield 'calibration swapped: windows rebuilt in its band', run + [
+        (3.13, 'call', lambda driven: driven.node._swap_calibration(driven.channel, banded))], {}
+    yield 'window settings changed: windows rebuilt', run + [
+        (3.13, 'call', lambda driven: driven.node.set_parameters([Parameter('min_coverage', value=0.79)]))], {}
+    yield 'deactivated mid-window, activated again', [e for e in run if not 3.13 < e[0] < 3.6] + [
+        (3.13, 'call', HandDriven.deactivate), (3.6, 'call', HandDriven.activate)], {}
+
+
+@pytest.mark.parametrize('case', [c[0] for c in live_cases()])
+def test_pending_blocks_give_the_windows_and_times_of_blocks_taken_at_arrival(graph, tmp_path, monkeypatch, case):
+    """The claim of the pending blocks: the same windows, published at the same moments, as a node that adds
+    every block (and the queues) to the builder at its arrival, over streams late, stopping, odd or going back."""
+    from prsm_lube_ros.nodes.lubrication_estimator import LubricationEstimator as Node
+    _, events, params = next(c for c in live_cases() if c[0] == case)
+    published = []
+    for flush_every_block in (False, True):
+        if flush_every_block:
+            monkeypatch.setattr(Node, '_flush_due', lambda node, channel: bool(channel.pending))
+        driven = HandDriven(graph, tmp_path, monkeypatch, **params)
+        driven.channel.publisher = SimpleNamespace(publish=lambda msg, driven=driven: published[-1].append(
+            (round(driven.clock, 6), msg.window_start, msg.theta_oil, msg.message)))
+        published.append([])
+        driven.run(events, until=max(e[0] for e in events) + 2.0)
+    kept, each = published
+    assert len(kept) >= 5 and [(s[0], s[1], s[3]) for s in kept] == [(s[0], s[1], s[3]) for s in each]
+    assert [s[2] for s in kept] == pytest.approx([s[2] for s in each], rel=1e-9, nan_ok=True)
+
+
+def test_a_qos_depth_too_small_for_an_expected_rate_is_one_warning(graph, tmp_path, capfd):
+    """qos_depth 50 with joint states expected at 1 kHz: their queue waits up to 0.35 s (350 messages) between
+    flushes, so one WARN says so; the loads at their default 50/s (18 messages) fit."""
+    graph.estimator(tmp_path, qos_depth=50, joint_states_rate=1000.0)
+    lines = [line for line in capfd.readouterr().err.splitlines() if '[WARN]' in line and 'qos_depth' in line]
+    assert len(lines) == 1 and 'joint_states' in lines[0] and '350' in lines[0], lines
 
 
 def test_parameters_are_validated_and_applied(graph, tmp_path):

@@ -178,3 +178,60 @@ def test_a_drained_queue_of_wrenches_reads_at_once_as_one_at_a_time():
     assert at_once is not None
     assert np.array_equal(at_once.stamps, one_by_one.stamps) and np.array_equal(at_once.forces, one_by_one.forces)
     assert at_once.forces.tolist() == [-151.25 + k for k in range(7)]
+
+
+def test_a_queue_with_a_zero_stamp_anywhere_is_read_one_at_a_time():
+    """Stamps rising through zero (before 1970: sec < 0): the message stamped zero is refused one at a time
+    (never set by its publisher), so the queue read at once must not take it either."""
+    from prsm_lube_ros.nodes.raw_inputs import raw_screw_converter
+    convert = raw_screw_converter('/a/joint_states', 'screw')
+    queue = []
+    for sec, nanosec in ((-1, 980_000_000), (-1, 990_000_000), (0, 0), (0, 10_000_000)):
+        msg = joint_state(['screw'], [1.0], [20.0])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        queue.append(serialize_message(msg))
+    convert(queue[0])                                       # learnt
+    with pytest.raises(InputError, match='stamp is zero'):
+        convert(queue[2])
+    assert convert.many(queue) is None
+
+
+def plain_cdr_joint_state(order, sec, nanosec, names, positions, velocities, frame_id='base', padding=b'\xaa'):
+    """A JointState in plain CDR of byte ``order`` ('<' or '>'), alignment padding filled with ``padding``."""
+    import struct
+    data = bytearray(b'\0' + (b'\1' if order == '<' else b'\0') + b'\0\0')
+
+    def put(code, *values):
+        size = struct.calcsize(code[-1])
+        while (len(data) - 4) % size:
+            data.extend(padding)
+        data.extend(struct.pack(order + code, *values))
+
+    def text(value):
+        raw = value.encode() + b'\0'
+        put('I', len(raw))
+        data.extend(raw)
+
+    put('i', sec), put('I', nanosec), text(frame_id), put('I', len(names))
+    for name in names:
+        text(name)
+    for values in (positions, velocities, ()):
+        put('I', len(values))
+        if values:
+            put(f'{len(values)}d', *values)
+    return bytes(data)
+
+
+@pytest.mark.parametrize('order', ['<', '>'])
+def test_a_drained_queue_in_either_byte_order_reads_at_once_as_one_at_a_time(order):
+    from prsm_lube_ros.nodes.lubrication_estimator import join_batches
+    from prsm_lube_ros.nodes.raw_inputs import raw_screw_converter
+    queue = [plain_cdr_joint_state(order, 1_700_000_000, 10_000_000 * k, ['m', 'screw'], [0.1 * k, 2.0 * k],
+                                   [1.0, 20.0 + k], padding=bytes([k])) for k in range(6)]
+    convert = raw_screw_converter('/a/joint_states', 'screw')
+    one_by_one = join_batches([convert(data) for data in queue])
+    at_once = convert.many(queue)
+    assert at_once is not None and at_once.speeds.tolist() == [20.0 + k for k in range(6)]
+    for field in ('stamps', 'angles', 'speeds'):
+        assert np.array_equal(getattr(at_once, field), getattr(one_by_one, field))
+        assert getattr(at_once, field).dtype == np.float64
