@@ -434,7 +434,7 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         summary['profile'] = record['profile']
     # Kept up: at most 2 % of its 10 ms ticks started over a tick late, and none over a block (0.1 s) late.
     summary['generator_kept_up'] = (sent['late_ticks'] <= 0.02 * sent['ticks']
-                                    and sent.get('worst_late_s', 0.0) < BLOCK)
+                                    and sent['worst_late_s'] < BLOCK)
     warm_up = summary['timeline']['measure_start'] - summary['timeline']['first_input']
     reasons = []
     if summary['cpu_utilisation'] > 0.9:
