@@ -893,11 +893,6 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         if batch is not None:
             self._add(channel, key, batch)
 
-    def _take_queued(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> None:
-        """Add messages drained from one auxiliary queue (:meth:`_queued_runs`) to the builder."""
-        for batch in self._queued_runs(channel, key, convert, messages):
-            self._add(channel, key, batch)
-
     def _queued_runs(self, channel: ActuatorChannel, key: str, convert: Callable, messages: list) -> list[InputBatch]:
         """Messages drained from one auxiliary queue, as batches joined while their stamps rise (:func:`rising_runs`).
 
