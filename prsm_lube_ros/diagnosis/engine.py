@@ -645,6 +645,9 @@ def _alone(table: WindowTable, scores: CandidateFit, rules: DiagnosisRules) -> D
     unphysical = fit.unphysical()
     if unphysical:
         return Decision('physical_constants', Status.REJECTED, 'unphysical constants: ' + '; '.join(unphysical))
+    measured = scores.effect.measured_against(table, fit.params)
+    if measured:
+        return Decision('measured_against', Status.REJECTED, 'the fit contradicts a measurement: ' + measured)
     if delta <= -rules.bic_margin and gain >= rules.min_gain:
         return Decision('bic_margin', Status.EARNS, f'held-out error {100 * gain:.0f} % lower, BIC {delta:+.0f}')
     if evidence and gain >= -(tolerance := evidence_tolerance(table, k, rules)):
@@ -706,11 +709,13 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
     both, fit, _, ties, _ = _choose_form(table, combos, folds, rules)
     if fit.unphysical():
         return None
+    kept = both.first if both.added is both.second else both.second
+    params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
+    if both.added.measured_against(table, params) or kept.measured_against(table, first_params):
+        return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     run_gain = 1.0 - fit.cv_run_rmse / reference.cv_run_rmse if reference.cv_run_rmse > 0 else math.nan
     delta = _delta_bic(fit, reference)
-    kept = both.first if both.added is both.second else both.second
-    params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
     return SecondEffect(other, fit, params, gain, delta, both.added, _named_form(both.added, params, table, location,
                                                                                  ties),
                         kept, first_params, kept.form_name(first_params, table, location), combined=both,

@@ -109,3 +109,48 @@ def test_vibration_at_standstill_makes_no_law_of_speed_and_load_testable_on_too_
     lines = Location([], SpectralLines(testable=True, frequencies=[480.0], share_at_lowest_speed=0.2, note='a line'),
                      'none', '', None)
     assert _too_few_conditions(table, background, lines) == ''
+
+
+def test_a_background_the_standstill_does_not_show_is_refuted_by_that_measurement():
+    """B more than twice the RMS read with the screw still is power the recording shows is not there: not named."""
+    from prsm_lube_ros.diagnosis.effects import get_effect
+    from prsm_lube_ros.diagnosis.effects.background_vibration import STANDSTILL_CONTRARY_SHARE
+    background = get_effect('background_vibration')
+    n = 40
+    base = dict(speed=np.full(n, 10.0), load=np.full(n, 2000.0), rms=np.full(n, 1.0), position=np.zeros(n),
+                revolutions=np.arange(n), time=np.arange(n), temperature=np.full(n, np.nan),
+                run=np.arange(n) // 10, recording=np.zeros(n))
+    b = 0.5
+    edge = math.sqrt(STANDSTILL_CONTRARY_SHARE) * b
+    for rest, windows, refuted in ((math.nan, 0, False), (0.01, 10, True), (0.99 * edge, 10, True),
+                                   (1.01 * edge, 10, False), (0.6, 10, False)):
+        table = WindowTable(**base, rest_rms=rest, rest_windows=windows)
+        text = background.measured_against(table, {'background_rms': b})
+        assert bool(text) == refuted, (rest, text)
+        if refuted:
+            assert text.startswith('standstill:') and f'{rest:.3g} m/s^2' in text
+    # No other candidate is refuted by the standstill: it measures what the contact law puts at zero.
+    table = WindowTable(**base, rest_rms=0.0, rest_windows=10)
+    for effect_id in ('resonance', 'lubricant_depletion', 'thermal_viscosity', 'position_dependent_stiffness'):
+        assert get_effect(effect_id).measured_against(table, {}) == ''
+
+
+@pytest.mark.parametrize('rest_share, named', [(0.01, False), (1.0, True)])
+def test_a_floor_is_named_only_where_the_standstill_shows_it(rest_share, named):
+    """A broadband floor of 0.6 units: with the standstill reading a sensor's noise (1 % of the floor's RMS) the
+    fitted background is refuted (rule ``measured_against``); with the standstill reading the floor it is named."""
+    from prsm_lube_ros.diagnosis import diagnose_table
+    from prsm_lube_ros.diagnosis.engine import Status
+    from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
+    plan = SyntheticPlan(spectrum_bins=128)
+    table, _ = synthetic_table(np.random.default_rng(3), 'background_vibration', plan,
+                               params={'form': 'broadband floor', 'fraction': 0.6})
+    floor = 0.6 * _floor_reference(plan)
+    result = diagnose_table(dataclasses.replace(table, rest_rms=rest_share * floor, rest_windows=10))
+    assert ('background_vibration' in [e[0].id for e in result.named_effects()]) == named
+    candidate, = [c for c in result.candidates if c.effect.id == 'background_vibration']
+    if named:
+        assert candidate.status == Status.EARNS
+    else:
+        assert candidate.status == Status.REJECTED and candidate.decisions[-1].rule == 'measured_against'
+        assert 'the fit contradicts a measurement: standstill' in candidate.reason

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from ..table import WindowTable
 
 __all__ = ['BackgroundVibrationCandidate', 'FRACTION_RANGE', 'LINE_SHARE', 'MIN_LINE_SHARE', 'QUIET_QUANTILE',
-           'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
+           'REST_SHARE', 'SHAPE_CONTRARY_FACTOR', 'STANDSTILL_CONTRARY_SHARE', 'SHAPE_MIN_EXPECTED', 'SHAPE_STRUCTURE',
            'rest_share']
 
 #: Bounds of B over the smallest recorded RMS.
@@ -38,6 +38,9 @@ REST_SHARE = 0.05
 QUIET_QUANTILE = 0.1
 #: Share of the fitted background power B^2 the fixed lines must carry to name the form "lines" alone.
 LINE_SHARE = 0.4
+#: Largest power at standstill, as a share of the fitted B^2, that contradicts the fit: B more than twice the RMS
+#: read with the screw still (6 dB, beyond what fitting B from a few speeds leaves uncertain).
+STANDSTILL_CONTRARY_SHARE = 0.25
 #: Contrary evidence: the highest speed's spectral shape differs from white by at least this total variation ...
 SHAPE_STRUCTURE = 0.2
 #: ... and the shape change a white background would cause is this many times what is seen ...
@@ -134,6 +137,26 @@ class BackgroundVibrationCandidate(Effect, law.Extension):
         return (f'standstill: with the screw still the accelerometer reads {table.rest_rms:.3g} m/s^2 RMS '
                 f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
                 'running windows, which the contact law puts at zero')
+
+    def measured_against(self, table: WindowTable, params: dict[str, float]) -> str:
+        """The screw still, the accelerometer reads far less than the fitted B (:data:`STANDSTILL_CONTRARY_SHARE`).
+
+        Vibration from elsewhere is there whenever the rig is powered, at
+        standstill too (a source that stops with the screw turns with it, and
+        follows its speed: another law).  With the standstill measured
+        (:attr:`.table.WindowTable.rest_rms`, over enough windows) and its power
+        below :data:`STANDSTILL_CONTRARY_SHARE` of B^2, the fitted B is power the
+        recording shows is not there: what it fits is some law of speed the
+        contacts make (a mode every speed is past, whose amplitude flattens as
+        a floor's does).
+        """
+        b = params.get('background_rms', math.nan)
+        rest = table.rest_rms
+        if not (math.isfinite(rest) and b > 0 and rest ** 2 < STANDSTILL_CONTRARY_SHARE * b ** 2):
+            return ''
+        return (f'standstill: with the screw still the accelerometer reads {rest:.3g} m/s^2 RMS (median of '
+                f'{table.rest_windows} windows), {100 * rest ** 2 / b ** 2:.1f} % of the power of the fitted '
+                f'background (B = {b:.3g} m/s^2), which vibration from elsewhere would keep there')
 
     def contrary_evidence(self, table: WindowTable, location: Location | None,
                           params: dict[str, float] | None = None) -> str:

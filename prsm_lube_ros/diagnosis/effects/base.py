@@ -138,6 +138,16 @@ class Effect(Extension):
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
 
+    def measured_against(self, table: WindowTable, params: dict[str, Any]) -> str:
+        """A figure the fitted law predicts and the recording measures directly, far from it; empty when none.
+
+        Unlike :meth:`contrary_evidence` (a signature that could show and does
+        not, which decides ties), this is a measurement the fitted ``params``
+        themselves contradict, as unphysical constants are: a fit so
+        contradicted is not named, alone or beside another effect.
+        """
+        return ''
+
 
 _REGISTRY: dict[str, Effect] = {}
 _E = TypeVar('_E', bound=Effect)
