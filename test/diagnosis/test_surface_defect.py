@@ -125,20 +125,32 @@ def test_window_indicators_leave_the_other_columns_of_a_synthetic_table_as_they_
     assert abs(np.median(marked.kurtosis) - 3.0) < 0.05          # Gaussian contact vibration
 
 
-def test_a_shape_change_does_not_tie_background_with_a_defect():
+def test_a_shape_change_does_not_tie_background_with_a_defect(tmp_path):
     """A steady roller spall (study case surface_defect 1307) against a background that only the shape supports.
 
     Both fit the amplitudes alike and both have evidence alone: the defect its
     impulsive windows and envelope lines at the roller order, the background a
     spectral shape change, which the strikes give by themselves.  Counted
     beside each other, only the defect's holds, so it is named (it was
-    ``ambiguous`` before).
+    ``ambiguous`` before).  That is the case without a standstill recorded; with
+    it, the background's fit is refuted before any tie: the accelerometer reads
+    far less than B with the screw still (rule ``measured_against``).
     """
+    import dataclasses
     from prsm_lube_ros.diagnosis.effects import candidate_ids
-    from prsm_lube_ros.experiments.random_study import run_random_case
-    record = run_random_case(('surface_defect', 1307, candidate_ids(), False))
-    assert record['forms'] == {'surface_defect': 'roller,steady'}
-    background = next(c for c in record['candidates'] if c['effect'] == 'background_vibration')
-    assert background['evidence'].startswith('spectrum: the spectral shape changes')   # evidence alone ...
-    assert (record['verdict'], record['confident']) == ('surface_defect', True)     # ... that does not tie
-    assert any('decided by evidence from outside the fit: surface_defect' in n for n in record['notes'])
+    from prsm_lube_ros.diagnosis.engine import Status
+    from prsm_lube_ros.experiments.random_study import case_recordings, case_table, simulate_case, truth_form
+    paths, setup, names, truth = simulate_case('surface_defect', 1307, list(candidate_ids()), folder=tmp_path)
+    assert truth_form('surface_defect', truth['surface_defect'], setup.plan.speeds) == 'roller,steady'
+    table = case_table(paths, case_recordings(paths, setup))
+    assert table.rest_windows >= 3
+    for rest_recorded in (True, False):
+        tried = table if rest_recorded else dataclasses.replace(table, rest_rms=math.nan, rest_windows=0)
+        result = diagnose_table(tried)
+        background, = [c for c in result.candidates if c.effect.id == 'background_vibration']
+        assert background.evidence.startswith('spectrum: the spectral shape changes')   # evidence alone ...
+        assert (result.verdict, result.confident) == ('surface_defect', True)      # ... that does not tie
+        if rest_recorded:
+            assert background.status == Status.REJECTED and background.decisions[-1].rule == 'measured_against'
+        else:
+            assert any('decided by evidence from outside the fit: surface_defect' in n for n in result.notes)
