@@ -193,11 +193,13 @@ class _Oversized(candidate.SurfaceDefectCandidate):
         return [self]
 
 
-def test_a_defect_shown_by_its_evidence_alone_is_named_with_its_share_of_the_rms_unresolved():
+def test_a_defect_shown_by_its_evidence_alone_is_named_with_its_share_of_the_rms_unresolved(tmp_path):
     """The amplitude law predicts held-out runs far worse beside depletion; the impulsiveness still names it.
 
-    The model and the calibration stay depletion's alone, and the words say the share is unresolved.
+    The model and the calibration stay depletion's alone, and the words (JSON and report page) say the share is
+    unresolved.
     """
+    from prsm_lube_ros.diagnosis import write_report
     from prsm_lube_ros.diagnosis.effects import registered
     effects = dict(registered(), surface_defect=_Oversized())
     diagnosis = diagnose_table(_depletion_struck(0.8), effects=effects)
@@ -212,6 +214,8 @@ def test_a_defect_shown_by_its_evidence_alone_is_named_with_its_share_of_the_rms
     assert second.fit is diagnosis.chosen.fit      # the model is the first effect's alone ...
     calibration = diagnosis.calibration().extension
     assert calibration['effect'] == 'lubricant_depletion' and 'effects' not in calibration     # ... and so is theta
+    page = write_report(diagnosis, tmp_path).with_suffix('.md').read_text()
+    assert 'share of the RMS unresolved' in page and second.explanation in page
 
 
 def test_impulsiveness_in_few_windows_does_not_name_the_defect_beside_the_first_effect():
