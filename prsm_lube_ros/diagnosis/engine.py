@@ -22,8 +22,11 @@ when something remains, each other candidate (in its own chosen form) is
 fitted together with the first, and the best pair is kept when the second
 effect earns its place by the rules of :func:`_add_second`; when nothing
 remains, only candidates with evidence at standstill are tried (a floor the
-first effect's fit absorbed).  Both are then reported (``effects``
-in the JSON; ``verdict`` and ``best`` stay the first).
+first effect's fit absorbed), or with evidence no other effect makes in
+``rules.exclusive_evidence_share`` of the windows (impulsive strikes); such a
+candidate that no rule of :func:`_add_second` keeps is named all the same,
+its share of the RMS unresolved (:func:`_exclusive_second`).  Both are then
+reported (``effects`` in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
