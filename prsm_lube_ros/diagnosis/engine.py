@@ -399,8 +399,10 @@ class Diagnosis:
                 (second.effect, second.form, second.params)]
 
     def named_descriptions(self) -> list[tuple[Effect, str, str]]:
-        """``(effect, form, explanation)`` of each named effect (:meth:`named_effects`; a second's share may be
-        unresolved, :attr:`SecondEffect.explanation`)."""
+        """``(effect, form, explanation)`` of each named effect (:meth:`named_effects`).
+
+        A second effect's explanation is :attr:`SecondEffect.explanation` (its share of the RMS may be unresolved).
+        """
         named = self.named_effects()
         texts = [self.second.explanation if rank == 1 and self.second is not None else effect.describe(params)
                  for rank, (effect, _, params) in enumerate(named)]
