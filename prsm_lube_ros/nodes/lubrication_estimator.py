@@ -625,8 +625,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
     def _halt(self) -> None:
         """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
         for channel in self.channels:       # what arrived goes into the windows first
-            if channel.pending:
-                self._flush(channel)
+            self._flush_before_change(channel)
         for timer in self._timers_started:
             self.destroy_timer(timer)
         for subscription in self._input_subscriptions:

@@ -44,7 +44,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..recording.batches import AxialLoadBatch, ScrewStateBatch, VibrationBatch
+from ..recording.batches import AxialLoadBatch, ScrewStateBatch, stamp_seconds, VibrationBatch
 
 __all__ = ['FixedLayout', 'RAW_INPUTS', 'RawBlock', 'decode_block', 'join_blocks', 'raw_load_converter',
            'raw_screw_converter', 'raw_vibration_converter']
@@ -231,7 +231,7 @@ class FixedLayout:
         if not (rows[:, self.shared_at] == self.shared).all():
             return None
         records = np.frombuffer(joined, dtype=self.records)
-        stamps = records['sec'] + records['nanosec'] * 1e-9      # as sec + nanosec * 1e-9 of one message
+        stamps = stamp_seconds(records['sec'], records['nanosec'])      # as for one message
         if not ((stamps[1:] > stamps[:-1]).all() and stamps.all()):     # rising, none zero (one may pass 0)
             return None
         return stamps, records
