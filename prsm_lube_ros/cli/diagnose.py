@@ -59,9 +59,9 @@ def run(args: argparse.Namespace) -> int:
         print(f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
               f'{cand.delta_bic:7.1f}')
     print(f'verdict: {result.verdict}' + (f' (tied: {", ".join(result.tied)})' if result.tied else ''))
-    for rank, (effect, form, params) in enumerate(result.named_effects()):
+    for rank, (effect, form, text) in enumerate(result.named_descriptions()):
         print(f'{("effect", "second effect")[rank]}: {effect.id}, form: {form}')
-        print(effect.describe(params))
+        print(text)
     for note in result.notes:
         print(f'note: {note}')
     if result.what_to_record:

@@ -22,8 +22,11 @@ when something remains, each other candidate (in its own chosen form) is
 fitted together with the first, and the best pair is kept when the second
 effect earns its place by the rules of :func:`_add_second`; when nothing
 remains, only candidates with evidence at standstill are tried (a floor the
-first effect's fit absorbed).  Both are then reported (``effects``
-in the JSON; ``verdict`` and ``best`` stay the first).
+first effect's fit absorbed), or with evidence no other effect makes in
+``rules.exclusive_evidence_share`` of the windows (impulsive strikes); such a
+candidate that no rule of :func:`_add_second` keeps is named all the same,
+its share of the RMS unresolved (:func:`_exclusive_second`).  Both are then
+reported (``effects`` in the JSON; ``verdict`` and ``best`` stay the first).
 
 A candidate *earns its extra parameters* when, with physical constants
 (C_lambda > 0), it lowers the BIC (effective sample size, see
@@ -253,14 +256,26 @@ class SecondEffect:
     run_gain: float = math.nan  # 1 - cv_run_rmse(pair) / cv_run_rmse(first alone): held-out run amplitudes
     within_delta_bic: float = math.nan   # a law swept within runs: BIC(pair) - BIC(first) on run deviations
     within_gain: float = math.nan        # and the held-out gain there (:func:`_shows_within_runs`)
+    #: Named by evidence no other effect makes (:func:`_exclusive_second`), its amplitude law not kept: ``fit``
+    #: and ``first_params`` are the first effect's alone, ``params`` empty, its share of the RMS unresolved.
+    unresolved: bool = False
+
+    @property
+    def explanation(self) -> str:
+        """What the second effect is, in words: its fitted law, or why its share of the RMS is unresolved."""
+        if self.unresolved:
+            return (f'{self.effect.title} shown by evidence no other effect makes ({self.basis}); its share of the RMS '
+                    f'is unresolved: its amplitude law is not kept beside {self.first_effect.id}. '
+                    + self.effect.physics)
+        return self.effect.describe(self.params)
 
     def as_json(self) -> dict:
         """Entry of the ``effects`` list."""
         return {'effect': self.effect.id, 'form': self.form, 'params': _clean(self.params),
-                'explanation': self.effect.describe(self.params), 'gain': finite_or_none(self.gain),
+                'explanation': self.explanation, 'gain': finite_or_none(self.gain),
                 'delta_bic': finite_or_none(self.delta_bic), 'cv_rmse': finite_or_none(self.fit.cv_rmse),
                 'basis': self.basis, 'within_run_delta_bic': finite_or_none(self.within_delta_bic),
-                'within_run_gain': finite_or_none(self.within_gain)}
+                'within_run_gain': finite_or_none(self.within_gain), 'share_unresolved': self.unresolved}
 
     def first_as_json(self) -> dict:
         """The first effect's entry of the ``effects`` list, with its parameters in the joint fit."""
@@ -382,6 +397,16 @@ class Diagnosis:
         second = self.second
         return [(second.first_effect, second.first_form, second.first_params),
                 (second.effect, second.form, second.params)]
+
+    def named_descriptions(self) -> list[tuple[Effect, str, str]]:
+        """``(effect, form, explanation)`` of each named effect (:meth:`named_effects`).
+
+        A second effect's explanation is :attr:`SecondEffect.explanation` (its share of the RMS may be unresolved).
+        """
+        named = self.named_effects()
+        texts = [self.second.explanation if rank == 1 and self.second is not None else effect.describe(params)
+                 for rank, (effect, _, params) in enumerate(named)]
+        return [(effect, form, text) for (effect, form, _), text in zip(named, texts)]
 
     def calibration(self) -> Calibration:
         """Calibration from the chosen model's constants, with the effect in ``extension`` (none if adequate).
@@ -825,9 +850,12 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= rules.min_gain
                       for c in candidates)
     left = locate(table, first.fit.log_residual, rules)
+    exclusive = [c for c in candidates if c.fit is not None and c.effect.id != first.effect.id
+                 and c.effect.exclusive_evidence(table, rules.exclusive_evidence_share)]
     if not remaining.significant and not others_gain and left.located == 'none':
-        # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill.
-        candidates = [c for c in candidates if c.effect.standstill_evidence(table)]
+        # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill,
+        # or with evidence no other effect makes.
+        candidates = [c for c in candidates if c.effect.standstill_evidence(table) or c in exclusive]
     earning = []
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
@@ -851,7 +879,35 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
         other = earning[1] if named is earning[0] else earning[0]
         return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
                        'outside the amplitude fit'), []
+    if not earning and exclusive:
+        return _exclusive_second(table, first, exclusive[0], folds, location, rules), []
     return (earning[0] if earning else None), []
+
+
+def _exclusive_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int],
+                      location: Location, rules: DiagnosisRules) -> SecondEffect:
+    """``other`` named beside ``first`` by evidence no other effect makes, its share of the RMS unresolved.
+
+    ``other`` shows in ``rules.exclusive_evidence_share`` of the windows or more
+    a signature no other candidate makes (:meth:`.effects.Effect.exclusive_evidence`:
+    impulsive strikes beside Gaussian oil loss, modes, stiffness or a
+    background), but no rule of :func:`_add_second` keeps its amplitude law
+    (beside an effect carrying most of the RMS, a small impulsive power is
+    within the run scatter).  The evidence names it; the first effect's fit
+    stays the model (and the calibration), and the pair's held-out gain and
+    BIC, when the pair can be fitted, are given in the basis.
+    """
+    assert first.fit is not None
+    evidence = other.effect.exclusive_evidence(table, rules.exclusive_evidence_share)
+    pair = _on_top(table, first, other, folds, location, rules)
+    scored = (f'its amplitude law beside {first.effect.id} has no fit with physical constants' if pair is None else
+              f'its amplitude law added to {first.effect.id}: held-out error {100 * pair.gain:+.1f} % lower, '
+              f'BIC {pair.delta_bic:+.1f}, not kept')
+    return SecondEffect(other, first.fit, {}, math.nan if pair is None else pair.gain,
+                        math.nan if pair is None else pair.delta_bic, other.effect, other.form, first.effect,
+                        dict(first.fit.params), first.form, route=4, unresolved=True,
+                        basis=f'{evidence}, in {100 * rules.exclusive_evidence_share:.0f} % of the windows or more, '
+                              f'which no other effect makes; {scored}')
 
 
 def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],

@@ -85,7 +85,7 @@ def _residual_figure(diagnosis: Diagnosis, path: Path, plt: ModuleType) -> None:
     panels = [('paper\'s model (Eq. 22)', diagnosis.baseline)]
     if diagnosis.chosen is not None:
         panels.append((f'with {diagnosis.chosen.effect.id}', cast(ModelFit, diagnosis.chosen.fit)))
-        if diagnosis.second is not None:
+        if diagnosis.second is not None and not diagnosis.second.unresolved:
             panels.append((f'and {diagnosis.second.effect.id}', diagnosis.second.fit))
     fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 3.6), dpi=110, sharey=True,
                              squeeze=False)
@@ -212,11 +212,14 @@ def _verdict_lines(diagnosis: Diagnosis) -> list[str]:
         lines += [f'**Verdict: `{diagnosis.verdict}`** — {cand.effect.title}. Held-out error '
                   f'{100 * base.cv_rmse:.1f} % → {100 * cand.fit.cv_rmse:.1f} % ({100 * cand.gain:.0f} % lower).',
                   '']
-        if diagnosis.second is not None:
+        if diagnosis.second is not None and diagnosis.second.unresolved:
+            lines += [f'**Two effects at once**: `{diagnosis.second.effect.id}` shown outside the amplitude fit, its '
+                      'share of the RMS unresolved (the model is the first effect alone).', '']
+        elif diagnosis.second is not None:
             lines += [f'**Two effects at once**: held-out error {100 * diagnosis.second.fit.cv_rmse:.1f} % with both '
                       f'(BIC {diagnosis.second.delta_bic:+.0f} against the first alone).', '']
-        for effect, form, params in diagnosis.named_effects():
-            lines += [f'**`{effect.id}`, form:** {form}', '', effect.describe(params), '',
+        for effect, form, text in diagnosis.named_descriptions():
+            lines += [f'**`{effect.id}`, form:** {form}', '', text, '',
                       f'Model: `{effect.equations}`', '']
         lines.pop()
     elif diagnosis.verdict == 'adequate':

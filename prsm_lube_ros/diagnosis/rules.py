@@ -77,6 +77,14 @@ class DiagnosisRules:
         'about k/(2n) on n runs; this is its floor; study: resonance 151 of seeds 150-179 (a mode band on 3 '
         'speeds in 12 runs, 4.6 % worse held out, within its 8.3 %)',
         'test_engine.py::test_the_held_out_tolerance_of_evidence_is_what_estimating_the_parameters_costs')
+    exclusive_evidence_share: float = _rule(
+        0.5, 'principle: evidence no other effect of the catalogue makes (impulsive strikes: oil loss, a mode, '
+        'stiffness and a background vibrate Gaussian, band kurtosis 2.7-3.4 in healthy 1 s windows, never over the '
+        'impulsive 4.5) names an effect beside the first whatever its amplitude fit when the median window shows '
+        'it: half the windows or more, twice the share that counts as evidence beside a fit (a growing defect '
+        'shows late); its share of the RMS is then unresolved; study: two 1336 of block 1330 (82 % impulsive, '
+        'kurtosis median 11) dropped beside depletion, two 1202 (22 %) weak',
+        'test_surface_defect.py::test_impulsiveness_in_most_windows_names_the_defect_beside_the_first_effect')
     # --- forms of one effect ---
     form_margin: float = _rule(
         6.0, f'principle: BIC 6 is strong evidence ({_KASS_RAFTERY}) for a form with more parameters',

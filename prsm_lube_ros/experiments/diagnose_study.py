@@ -208,18 +208,22 @@ def _run_random(args: argparse.Namespace, effects: list[str], command: str) -> i
 def _cases_of_form(kinds: Sequence[str], effects: list[str], args: argparse.Namespace) -> list[tuple]:
     """``--seeds`` cases per kind whose drawn form has ``--form-contains`` in its words, seeds from ``--first-seed``.
 
-    The draws are those of every case (nothing is drawn differently): the
-    seeds whose drawn effects do not have that form are skipped, up to
-    :data:`FORM_SEARCH` seeds a kind.
+    ``--form-contains`` may also be an effect ID (``surface_defect``): the
+    cases holding that effect, whatever its form (the form words never name
+    the effect, so without this a pair holding a defect of any form could
+    not be chosen in one block). The draws are those of every case (nothing
+    is drawn differently): the seeds whose drawn effects do not match are
+    skipped, up to :data:`FORM_SEARCH` seeds a kind.
     """
-    from .random_study import case_forms
+    from .random_study import case_effect_forms
     cases = []
     for kind in kinds:
         found = 0
         for seed in range(args.first_seed, args.first_seed + FORM_SEARCH):
             if found == args.seeds:
                 break
-            if any(args.form_contains in form for form in case_forms(kind, seed, effects, quick=args.quick)):
+            drawn = case_effect_forms(kind, seed, effects, quick=args.quick)
+            if any(args.form_contains == name or args.form_contains in form for name, form in drawn):
                 cases.append((kind, seed, tuple(effects), args.quick))
                 found += 1
     return sorted(cases, key=lambda case: (case[1], case[0]))
@@ -377,7 +381,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--first-seed', type=int, default=0, help='random design: seeds from this one on')
     parser.add_argument('--form-contains', default=None, metavar='WORDS',
                         help='random design: per kind the first --seeds seeds (from --first-seed) whose drawn effect '
-                             'form has these words, e.g. "below the mesh band"; the other seeds are skipped')
+                             'form has these words, e.g. "below the mesh band", or that draw this effect ID, e.g. '
+                             'surface_defect; the other seeds are skipped')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--save-every', type=int, default=10, help='random design: rewrite the results every N cases')
     parser.add_argument('--explain-misses', action='store_true',

@@ -42,7 +42,8 @@ if TYPE_CHECKING:
     from .study_draws import CaseSetup
 
 __all__ = ['COOL_DOWN', 'NONE', 'OTHER_VERDICTS', 'OUTSIDE_KINDS', 'RETURN_LOG_FACTOR', 'STEP_AT', 'STEP_SIZE',
-           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_forms', 'case_recordings', 'case_rng',
+           'TARGET_GAIN', 'THERMAL_FREE', 'TWO', 'WARM_START', 'case_effect_forms', 'case_forms', 'case_recordings',
+           'case_rng',
            'case_table', 'draw_case',
            'confusion_markdown', 'explain_miss', 'misses_markdown', 'run_random_case', 'simulate_case', 'summarise',
            'truth_form', 'write_random_outputs']
@@ -130,9 +131,15 @@ def draw_case(kind: str, seed: int, effect_pool: list[str], *,
 
 def case_forms(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False) -> list[str]:
     """The drawn forms of a case's effects in words (:func:`truth_form`), without simulating it."""
+    return [form for _, form in case_effect_forms(kind, seed, effect_pool, quick=quick)]
+
+
+def case_effect_forms(kind: str, seed: int, effect_pool: list[str], *,
+                      quick: bool = False) -> list[tuple[str, str]]:
+    """(effect ID, drawn form in words) of each of a case's effects, without simulating it."""
     setup, names, effects = draw_case(kind, seed, effect_pool, quick=quick)
     truth = effects.as_dict()
-    return [truth_form(name, truth.get(name), setup.plan.speeds) for name in names]
+    return [(name, truth_form(name, truth.get(name), setup.plan.speeds)) for name in names]
 
 
 def simulate_case(kind: str, seed: int, effect_pool: list[str], *, quick: bool = False,

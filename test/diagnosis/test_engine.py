@@ -347,7 +347,8 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
     def second(effect_id, covariate, cv_rmse, delta_bic):
         shown = 'spectrum: what it shows' if effect_id == evidence else ''
         effect = SimpleNamespace(id=effect_id, covariate=covariate,
-                                 independent_evidence=lambda table, location, params, beside: shown)
+                                 independent_evidence=lambda table, location, params, beside: shown,
+                                 exclusive_evidence=lambda table, share: '')
         candidate = SimpleNamespace(effect=effect, fit=object(), gain=0.1)
         return engine.SecondEffect(candidate, SimpleNamespace(cv_rmse=cv_rmse), {}, 0.1, delta_bic, effect, '', None,
                                    {}, '', basis='BIC')

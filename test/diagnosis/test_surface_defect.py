@@ -154,3 +154,86 @@ def test_a_shape_change_does_not_tie_background_with_a_defect(tmp_path):
             assert background.status == Status.REJECTED and background.decisions[-1].rule == 'measured_against'
         else:
             assert any('decided by evidence from outside the fit: surface_defect' in n for n in result.notes)
+
+
+def _depletion_struck(share, seed=2):
+    """A depletion table whose band kurtosis is impulsive in ``share`` of the windows (strikes too small for the RMS).
+
+    The amplitudes are depletion's alone: a spall whose power is a small share
+    of the RMS (study case two 1336 of block 1330) leaves nothing for its
+    amplitude law beside depletion, only its impulsiveness.
+    """
+    from dataclasses import replace
+    table, _ = synthetic_table(np.random.default_rng(seed), 'lubricant_depletion',
+                               plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    struck = np.random.default_rng(seed + 100).random(len(table)) < share
+    return replace(table, kurtosis=np.where(struck, 9.0, table.kurtosis))
+
+
+def test_impulsiveness_in_most_windows_names_the_defect_beside_the_first_effect():
+    """Evidence no other effect makes puts the defect beside depletion even when depletion leaves nothing.
+
+    Before the rule only a candidate with vibration at standstill was tried
+    when the first effect left no lack of fit (study case two 1336 of block
+    1330: depletion alone, 82 % of the windows impulsive).
+    """
+    from dataclasses import replace
+    from prsm_lube_ros.diagnosis import DEFAULT_RULES
+    table = _depletion_struck(0.8)
+    diagnosis = diagnose_table(table)
+    assert diagnosis.verdict == 'lubricant_depletion'
+    second = diagnosis.second
+    assert second is not None and second.effect.id == 'surface_defect'
+    assert 'impulsive' in second.basis
+    assert [e['effect'] for e in diagnosis.as_json()['effects']] == ['lubricant_depletion', 'surface_defect']
+    # the rule is one field: asking every window to be struck names depletion alone
+    strict = diagnose_table(table, rules=replace(DEFAULT_RULES, exclusive_evidence_share=1.0))
+    assert strict.verdict == 'lubricant_depletion' and strict.second is None
+
+
+class _Oversized(candidate.SurfaceDefectCandidate):
+    """A defect law that cannot follow small impulsive power: its impulsive RMS is at least the smallest window's."""
+
+    def bounds(self):
+        low, high = super().bounds()
+        return np.r_[1.0, low[1:]], high
+
+    def starts(self):
+        return [np.r_[1.2, start[1:]] for start in super().starts()]
+
+    def variants(self):
+        return [self]
+
+
+def test_a_defect_shown_by_its_evidence_alone_is_named_with_its_share_of_the_rms_unresolved(tmp_path):
+    """The amplitude law predicts held-out runs far worse beside depletion; the impulsiveness still names it.
+
+    The model and the calibration stay depletion's alone, and the words (JSON and report page) say the share is
+    unresolved.
+    """
+    from prsm_lube_ros.diagnosis import write_report
+    from prsm_lube_ros.diagnosis.effects import registered
+    effects = dict(registered(), surface_defect=_Oversized())
+    diagnosis = diagnose_table(_depletion_struck(0.8), effects=effects)
+    assert diagnosis.verdict == 'lubricant_depletion'
+    second = diagnosis.second
+    assert second is not None and second.effect.id == 'surface_defect' and second.unresolved
+    assert 'which no other effect makes' in second.basis
+    assert 'not kept' in second.basis or 'no fit with physical constants' in second.basis
+    named = diagnosis.as_json()['effects']
+    assert named[1]['share_unresolved'] and named[1]['params'] == {} and 'unresolved' in named[1]['explanation']
+    assert [text for _, _, text in diagnosis.named_descriptions()][1] == second.explanation
+    assert second.fit is diagnosis.chosen.fit      # the model is the first effect's alone ...
+    calibration = diagnosis.calibration().extension
+    assert calibration['effect'] == 'lubricant_depletion' and 'effects' not in calibration     # ... and so is theta
+    page = write_report(diagnosis, tmp_path).with_suffix('.md').read_text()
+    assert 'share of the RMS unresolved' in page and second.explanation in page
+
+
+def test_impulsiveness_in_few_windows_does_not_name_the_defect_beside_the_first_effect():
+    """A third of the windows impulsive is evidence beside a fit, not enough to be tried where nothing is left."""
+    diagnosis = diagnose_table(_depletion_struck(0.35))
+    defect = next(c for c in diagnosis.candidates if c.effect.id == 'surface_defect')
+    assert defect.evidence and not defect.effect.exclusive_evidence(diagnosis.table, 0.5)
+    assert diagnosis.verdict == 'lubricant_depletion'
+    assert diagnosis.second is None

@@ -165,3 +165,17 @@ def test_cases_of_one_drawn_form_are_chosen_from_the_draws_alone():
         assert 'below the mesh band' in case_forms(kind, seed, list(pool), quick=quick)[0]
     skipped = [seed for seed in range(50, max(seed for _, seed, _, _ in cases)) if seed not in {c[1] for c in cases}]
     assert all('below the mesh band' not in case_forms('resonance', seed, ['resonance'])[0] for seed in skipped)
+
+
+def test_cases_holding_one_effect_are_chosen_by_its_id_whatever_its_form():
+    from prsm_lube_ros.experiments.random_study import case_effect_forms
+    pool = ['lubricant_depletion', 'resonance', 'surface_defect', 'thermal_viscosity']
+    args = diagnose_study._parser().parse_args(['--kinds', 'two', '--seeds', '3', '--first-seed', '1500',
+                                                '--form-contains', 'surface_defect'])
+    cases = diagnose_study._cases_of_form(['two'], pool, args)
+    assert len(cases) == 3
+    chosen = {seed for _, seed, _, _ in cases}
+    for seed in range(1500, max(chosen) + 1):
+        drawn = case_effect_forms('two', seed, pool)
+        assert ('surface_defect' in [name for name, _ in drawn]) == (seed in chosen)
+        assert all('surface_defect' not in form for _, form in drawn)     # the form words never name the effect

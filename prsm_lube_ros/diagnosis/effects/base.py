@@ -148,6 +148,20 @@ class Effect(Extension):
         """
         return ''
 
+    def exclusive_evidence(self, table: WindowTable, share: float) -> str:
+        """Evidence outside the amplitude fit that no other effect of the catalogue makes, in ``share`` or more of it.
+
+        Empty when none.  A signature only this effect has (impulsive strikes,
+        where oil loss, a mode, stiffness and a background all vibrate
+        Gaussian), seen in ``share`` of the windows or more
+        (:attr:`.rules.DiagnosisRules.exclusive_evidence_share`), names the
+        effect beside a first one even when its amplitude law does not improve
+        the held-out error: its share of the RMS is then left unresolved
+        (``docs/diagnosis-rules.md``, "evidence no other effect makes").
+        Default: none.
+        """
+        return ''
+
 
 _REGISTRY: dict[str, Effect] = {}
 _E = TypeVar('_E', bound=Effect)
