@@ -401,11 +401,14 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds: Sequence[
     folds = cv_folds(table) if folds is None else folds
     params = effect.to_params(vector[3:], scales) if effect is not None else {}
     n_params = BASE_PARAMETERS + (len(effect.parameter_names) if effect is not None else 0)
-    try:
-        covariance = run_level_covariance(constants_jacobian(table, vector, effect, scales), residual, table.run)[0]
-        c_lambda_std = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan
-    except np.linalg.LinAlgError:
-        c_lambda_std = math.nan
+    jacobian = constants_jacobian(table, vector, effect, scales)
+    c_lambda_std = math.nan     # no standard error where a forward step leaves the law's domain (a mode at r = 1)
+    if np.all(np.isfinite(jacobian)):
+        try:
+            covariance = run_level_covariance(jacobian, residual, table.run)[0]
+            c_lambda_std = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan
+        except np.linalg.LinAlgError:
+            pass
     return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
                     log_residual=residual, n_params=n_params, rmse=relative_rmse(residual),
                     n_eff=effective_sample_size(residual, table.run), c_lambda_std=c_lambda_std,

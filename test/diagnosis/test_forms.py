@@ -123,3 +123,23 @@ def test_two_effects_at_once_are_named_together(effects, params, forms):
 def test_one_effect_is_not_reported_as_two():
     _, document = diagnose('lubricant_depletion', {'fall': 0.2})
     assert [entry['effect'] for entry in document['effects']] == ['lubricant_depletion']
+
+
+def test_a_jacobian_step_out_of_the_laws_domain_leaves_no_standard_error_and_no_warning(monkeypatch):
+    """A forward step of the constants that leaves the law's domain (a mode met at r = 1: two 1346 of block 1330)
+    gives C_lambda no standard error, silently: no RuntimeWarning reaches ``diagnose``'s user."""
+    import warnings
+    from prsm_lube_ros.diagnosis import fitting
+    table, _ = synthetic_table(np.random.default_rng(1), 'resonance', SyntheticPlan())
+    assert math.isfinite(fitting.fit_model(table, None, folds=[]).c_lambda_std)
+    real = fitting.constants_jacobian
+
+    def stepped_out(*args):
+        jacobian = real(*args)
+        jacobian[0, 0] = np.inf
+        return jacobian
+    monkeypatch.setattr(fitting, 'constants_jacobian', stepped_out)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        fit = fitting.fit_model(table, None, folds=[])
+    assert math.isnan(fit.c_lambda_std) and np.all(np.isfinite(fit.log_residual))
