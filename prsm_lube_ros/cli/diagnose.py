@@ -10,7 +10,7 @@ if TYPE_CHECKING:
     import argparse
 
 
-__all__ = ['add_command', 'run']
+__all__ = ['add_command', 'candidate_lines', 'run']
 
 
 def add_command(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -52,12 +52,8 @@ def run(args: argparse.Namespace) -> int:
     for flag in result.calibration_flags:
         print(f'warning: {flag}')
     print(f'{"candidate":<30} {"status":<13} {"cv_rmse":>8} {"gain":>7} {"dBIC":>7}')
-    for cand in sorted(result.candidates, key=lambda c: c.fit.cv_rmse if c.fit else math.inf):
-        if cand.fit is None:
-            print(f'{cand.effect.id:<30} {cand.status:<13} {cand.reason}')
-            continue
-        print(f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
-              f'{cand.delta_bic:7.1f}')
+    for line in candidate_lines(result.candidates):
+        print(line)
     print(f'verdict: {result.verdict}' + (f' (tied: {", ".join(result.tied)})' if result.tied else ''))
     for rank, (effect, form, text) in enumerate(result.named_descriptions()):
         print(f'{("effect", "second effect")[rank]}: {effect.id}, form: {form}')
@@ -79,3 +75,24 @@ def run(args: argparse.Namespace) -> int:
         print(f'wrote {page}')
     print(f'wrote {args.json}')
     return 0
+
+
+def candidate_lines(candidates: list) -> list[str]:
+    """The terminal table's rows, best held-out first: scores, and the reason where the scores do not say it.
+
+    A fitted candidate rejected by a rule other than the scores' own (a
+    measurement its fit contradicts, unphysical constants) may have the best
+    scores of all; its row then carries the reason.
+    """
+    from ..diagnosis.engine import Status
+    lines = []
+    for cand in sorted(candidates, key=lambda c: c.fit.cv_rmse if c.fit else math.inf):
+        if cand.fit is None:
+            lines.append(f'{cand.effect.id:<30} {cand.status:<13} {cand.reason}')
+            continue
+        line = (f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
+                f'{cand.delta_bic:7.1f}')
+        if cand.status == Status.REJECTED and cand.decisions[-1].rule != 'bic_margin':
+            line += f'  ({cand.reason})'
+        lines.append(line)
+    return lines

@@ -57,3 +57,29 @@ def test_diagnose_missing_bag_is_one_line_error(tmp_path, capsys):
 def test_rig_recordings_with_one_concealed_effect(effect):
     record = run_case(('rig', effect, 5, 'random', 2))
     assert record['verdict'] == (effect if effect != 'none' else 'adequate')
+
+
+def test_a_candidate_refuted_by_a_measurement_says_why_in_the_terminal_table():
+    """A floor the standstill does not show fits best yet is rejected: its row gives the reason, not only scores."""
+    import dataclasses
+
+    import numpy as np
+
+    from prsm_lube_ros.cli.diagnose import candidate_lines
+    from prsm_lube_ros.diagnosis import diagnose_table
+    from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
+    table, _ = synthetic_table(np.random.default_rng(3), 'background_vibration', SyntheticPlan(spectrum_bins=128),
+                               params={'form': 'broadband floor', 'fraction': 0.6})
+    result = diagnose_table(dataclasses.replace(table, rest_rms=1e-4, rest_windows=10))
+    lines = candidate_lines(result.candidates)
+    background, = [line for line in lines if line.startswith('background_vibration')]
+    assert 'rejected' in background and '% ' in background
+    assert background.endswith('which vibration from elsewhere would keep there)')
+    assert '(the fit contradicts a measurement: standstill: with the screw still' in background
+    # Rows rejected by their scores keep the compact form.
+    by_scores = [c.effect.id for c in result.candidates if c.fit is not None and c.decisions[-1].rule == 'bic_margin'
+                 and c.effect.id != 'background_vibration']
+    assert by_scores
+    for effect_id in by_scores:
+        line, = [line for line in lines if line.startswith(effect_id + ' ')]
+        assert '(' not in line
