@@ -886,8 +886,16 @@ def test_a_slow_fit_does_not_hold_up_the_inputs(graph, tmp_path, monkeypatch):
 
 # -- calibrate action ------------------------------------------------------------------------------
 def send_goal(graph, name, bag_paths, theta=1.0, persist=False, feedback=None):
-    """Send a Calibrate action goal from the probe (as ros2 action send_goal); the accepted goal handle."""
-    client = ActionClient(graph.probe, CalibrateAction, name)
+    """Send a Calibrate action goal from the probe (as ros2 action send_goal); the accepted goal handle.
+
+    One client per action name and graph, kept for the test's later goals: a
+    second client of the same name must be matched by discovery again (once
+    it was not within 10 s on a CI run, after the first goal had run).
+    """
+    clients = graph.__dict__.setdefault('action_clients', {})
+    if name not in clients:
+        clients[name] = ActionClient(graph.probe, CalibrateAction, name)
+    client = clients[name]
     assert client.wait_for_server(timeout_sec=10), f'action {name} not offered'
     goal = CalibrateAction.Goal(bag_paths=[str(p) for p in bag_paths], reference_theta=theta, persist=persist)
     sent = client.send_goal_async(goal, feedback_callback=None if feedback is None else (
