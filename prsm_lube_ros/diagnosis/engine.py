@@ -758,7 +758,8 @@ def _on_top(table: WindowTable, first: Candidate, other: Candidate, folds: list[
 
 
 def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int], location: Location,
-                left: Location, rules: DiagnosisRules) -> SecondEffect | None:
+                left: Location, rules: DiagnosisRules,
+                fitted: dict[str, SecondEffect | None] | None = None) -> SecondEffect | None:
     """``other`` on top of ``first`` (its form held): each form of ``other`` fitted with it, chosen by BIC.
 
     The pair names ``other`` when its constants are physical and, beside
@@ -772,8 +773,12 @@ def _add_second(table: WindowTable, first: Candidate, other: Candidate, folds: l
     ``other`` has evidence outside the amplitude fit (its spectrum signature,
     with the pair's parameters) and the pair predicts held-out runs no worse
     than :func:`evidence_tolerance` allows -- the rules a single effect earns by.
+    ``fitted``, when given, keeps the pair fit by ``other``'s ID (None where no
+    pair has physical constants), for a later rule that reads it without fitting again.
     """
     pair = _on_top(table, first, other, folds, location, rules)
+    if fitted is not None:
+        fitted[other.effect.id] = pair
     if pair is None:
         return None
     by_bic = _earns_by_bic(pair, rules.second_bic_margin, rules)
@@ -850,17 +855,19 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= rules.min_gain
                       for c in candidates)
     left = locate(table, first.fit.log_residual, rules)
-    exclusive = [c for c in candidates if c.fit is not None and c.effect.id != first.effect.id
-                 and c.effect.exclusive_evidence(table, rules.exclusive_evidence_share)]
+    exclusive = [(c, signature) for c in candidates if c.fit is not None and c.effect.id != first.effect.id
+                 and (signature := c.effect.exclusive_evidence(table, rules.exclusive_evidence_share))]
     if not remaining.significant and not others_gain and left.located == 'none':
         # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill,
         # or with evidence no other effect makes.
-        candidates = [c for c in candidates if c.effect.standstill_evidence(table) or c in exclusive]
+        shown_ids = {c.effect.id for c, _ in exclusive}
+        candidates = [c for c in candidates if c.effect.standstill_evidence(table) or c.effect.id in shown_ids]
     earning = []
+    fitted: dict[str, SecondEffect | None] = {}
     for cand in candidates:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
-        second = _add_second(table, first, cand, folds, location, left, rules)
+        second = _add_second(table, first, cand, folds, location, left, rules, fitted)
         if second is not None:
             earning.append(second)
     earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
@@ -880,12 +887,13 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
         return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
                        'outside the amplitude fit'), []
     if not earning and exclusive:
-        return _exclusive_second(table, first, exclusive[0], folds, location, rules), []
+        struck, signature = exclusive[0]
+        return _exclusive_second(first, struck, signature, fitted.get(struck.effect.id), rules), []
     return (earning[0] if earning else None), []
 
 
-def _exclusive_second(table: WindowTable, first: Candidate, other: Candidate, folds: list[int],
-                      location: Location, rules: DiagnosisRules) -> SecondEffect:
+def _exclusive_second(first: Candidate, other: Candidate, evidence: str, pair: SecondEffect | None,
+                      rules: DiagnosisRules) -> SecondEffect:
     """``other`` named beside ``first`` by evidence no other effect makes, its share of the RMS unresolved.
 
     ``other`` shows in ``rules.exclusive_evidence_share`` of the windows or more
@@ -895,11 +903,11 @@ def _exclusive_second(table: WindowTable, first: Candidate, other: Candidate, fo
     (beside an effect carrying most of the RMS, a small impulsive power is
     within the run scatter).  The evidence names it; the first effect's fit
     stays the model (and the calibration), and the pair's held-out gain and
-    BIC, when the pair can be fitted, are given in the basis.
+    BIC (``pair``, fitted by :func:`_add_second`; None when no pair has
+    physical constants) are given in the basis.  ``evidence``: its
+    :meth:`.effects.Effect.exclusive_evidence`.
     """
     assert first.fit is not None
-    evidence = other.effect.exclusive_evidence(table, rules.exclusive_evidence_share)
-    pair = _on_top(table, first, other, folds, location, rules)
     scored = (f'its amplitude law beside {first.effect.id} has no fit with physical constants' if pair is None else
               f'its amplitude law added to {first.effect.id}: held-out error {100 * pair.gain:+.1f} % lower, '
               f'BIC {pair.delta_bic:+.1f}, not kept')
