@@ -541,7 +541,8 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     fits = [fit_model(table, form, folds=[]) for form in forms]
     # A free fit that trades C_lambda below zero against the form's own parameters is fitted again with C_lambda
     # held physical: on few speeds a solution with the true constants may fit as well (resonance 183).
-    fits = [_physical_refit(table, form, f) if f.unphysical() else f for form, f in zip(forms, fits)]
+    fits = [_physical_refit(table, form, f) if f.unphysical() or form.measured_against(table, f.params) else f
+            for form, f in zip(forms, fits)]
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
     shape = forms[0].added if isinstance(forms[0], CombinedEffect) else forms[0]   # a pair's forms are the added's

@@ -119,7 +119,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
         return baseline
     scales = scales if scales is not None else effect.scales(table)
     lo, hi = effect.bounds()
-    lower = np.r_[-np.inf, -np.inf, 0.0 if physical else -np.inf, lo]
+    lower = np.r_[-np.inf, 0.0 if physical else -np.inf, 0.0 if physical else -np.inf, lo]
     upper = np.r_[np.inf, np.inf, np.inf, hi]
     y = table.log_rms
     columns = _CachedColumns(table)
@@ -139,6 +139,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
             x0 = np.r_[_ols_constants(columns, film, gain), start]
         x0[3:] = np.clip(x0[3:], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         if physical:
+            x0[1] = max(x0[1], 0.0)
             x0[2] = max(x0[2], PHYSICAL_START)
         r0 = residual(x0)
         if np.all(np.isfinite(r0)):
