@@ -541,7 +541,10 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     fits = [fit_model(table, form, folds=[]) for form in forms]
     # A free fit that trades C_lambda below zero against the form's own parameters is fitted again with C_lambda
     # held physical: on few speeds a solution with the true constants may fit as well (resonance 183).
-    fits = [_physical_refit(table, form, f) if f.unphysical() or form.measured_against(table, f.params) else f
+    fits = [_physical_refit(table, form, f) if f.unphysical() else f for form, f in zip(forms, fits)]
+    # A fit a measurement contradicts because its constants silenced the contacts (C_F far below 0, traded
+    # against the form's own law of load) is fitted again with C_F held at 0 or above as well.
+    fits = [_physical_refit(table, form, f, excitation=True) if form.measured_against(table, f.params) else f
             for form, f in zip(forms, fits)]
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
@@ -571,8 +574,11 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
             ties, vectors)
 
 
-def _physical_refit(table: WindowTable, form: Effect, free: ModelFit) -> ModelFit:
+def _physical_refit(table: WindowTable, form: Effect, free: ModelFit, excitation: bool = False) -> ModelFit:
     """``form`` fitted again with C_lambda held at 0 or above (:func:`.fitting.fit_vector`), from the free fit too.
+
+    ``excitation``: C_F held at 0 or above as well (Eq. 18's load excitation), where a measurement
+    contradicted the free fit (:meth:`.effects.Effect.measured_against`: the contacts silenced at load).
 
     A form's free fit may trade C_lambda against the form's own parameters
     where the plan does not pin both: a mode inside the band on three speeds
@@ -583,7 +589,7 @@ def _physical_refit(table: WindowTable, form: Effect, free: ModelFit) -> ModelFi
     the law does not hold, the physical one fits worse and does not earn.
     """
     starts = [free.vector, *form.starts()]
-    return fit_model(table, form, folds=[], starts=starts, physical=True)
+    return fit_model(table, form, folds=[], starts=starts, physical=True, excitation=excitation)
 
 
 def _named_form(effect: Effect, params: dict[str, Any], table: WindowTable, location: Location | None,

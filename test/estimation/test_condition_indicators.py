@@ -100,3 +100,25 @@ def test_the_floors_are_nanmedians_of_every_row_whatever_its_nans():
         expected = np.nanmedian(grids[:, ORDER_GRID >= FLOOR_LOWEST_ORDER], axis=1)
     assert np.array_equal(_floors(grids), expected, equal_nan=True)
     assert np.isnan(_floors(grids)[51]) and np.isfinite(_floors(grids)[:50]).all()
+
+
+def test_the_gaussian_part_is_the_whole_rms_of_gaussian_vibration():
+    rng = np.random.default_rng(3)
+    found = [condition_indicators(0.7 * rng.standard_normal(int(RATE)), RATE, 20.0, BAND, ORDERS)
+             for _ in range(10)]
+    band_share = math.sqrt((BAND[1] - BAND[0]) / (RATE / 2))     # white noise: the band holds its share of the power
+    assert np.median([c.gaussian_rms for c in found]) == pytest.approx(0.7 * band_share, rel=0.02)
+
+
+def test_sparse_strikes_leave_the_gaussian_part_and_add_to_the_rms():
+    """Strikes at roller pass carrying three times the Gaussian power: the RMS doubles, the Gaussian part stays."""
+    rng = np.random.default_rng(5)
+    times, _, angles = window(speed=6.0)
+    rings = strikes(times, angles, ORDERS[0].order, mode_hz=1500.0, damping=0.04, rng=rng)
+    contact = rng.standard_normal(times.size)
+    rings *= math.sqrt(3.0 * np.mean(contact ** 2) / np.mean(rings ** 2))
+    struck = condition_indicators(contact + rings, RATE, 6.0, (0.5, 3999.0), ORDERS)
+    plain = condition_indicators(contact, RATE, 6.0, (0.5, 3999.0), ORDERS)
+    rms = math.sqrt(np.mean((contact + rings) ** 2))
+    assert rms > 1.9 * plain.gaussian_rms
+    assert struck.gaussian_rms == pytest.approx(plain.gaussian_rms, rel=0.1)
