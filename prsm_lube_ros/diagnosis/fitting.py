@@ -126,6 +126,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
     lo, hi = effect.bounds()
     lower = np.r_[-np.inf, 0.0 if excitation else -np.inf, 0.0 if physical else -np.inf, lo]
     upper = np.r_[np.inf, np.inf, np.inf, hi]
+    floor = np.r_[-np.inf, lower[1], PHYSICAL_START if physical else -np.inf]    # where a start's constants begin
     y = table.log_rms
     columns = _CachedColumns(table)
 
@@ -143,10 +144,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
             gain = effect.log_gain(params, columns, ln_eq22(columns, baseline))
             x0 = np.r_[_ols_constants(columns, film, gain), start]
         x0[3:] = np.clip(x0[3:], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        if physical:
-            x0[2] = max(x0[2], PHYSICAL_START)
-        if excitation:
-            x0[1] = max(x0[1], 0.0)
+        x0[:3] = np.maximum(x0[:3], floor)
         r0 = residual(x0)
         if np.all(np.isfinite(r0)):
             candidates.append((float(r0 @ r0), len(candidates), x0))

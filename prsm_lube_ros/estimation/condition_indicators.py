@@ -64,8 +64,9 @@ if TYPE_CHECKING:
 
     from ..physics.defect_orders import DefectOrder
 
-__all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER', 'GAUSSIAN_MEDIAN_ABS',
-           'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
+__all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
+           'GAUSSIAN_MEDIAN_ABS', 'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS',
+           'ORDER_GRID', 'ORDER_STEP',
            'REPORT_DB', 'RUN_REPORT_DB', 'SK_SIGMAS', 'TREE_PARTS', 'condition_indicators',
            'condition_indicators_batch', 'envelope_floor', 'envelope_peaks', 'gaussian_rms',
            'kurtosis', 'order_spectrum_db']

@@ -36,7 +36,8 @@ from ..physics.effects import (background_vibration, ContactState, extension, lu
 from ..physics.vibration_model import acceleration_amplitude, ModelConstants
 
 
-__all__ = ['BACKGROUND_SHARES', 'GAUSSIAN_RMS_SCATTER', 'HEALTHY_KURTOSIS_SCATTER', 'OWN_DRAWS', 'SyntheticPlan', 'synthetic_table']
+__all__ = ['BACKGROUND_SHARES', 'GAUSSIAN_RMS_SCATTER', 'HEALTHY_KURTOSIS_SCATTER', 'OWN_DRAWS', 'SyntheticPlan',
+           'synthetic_table']
 
 #: Effects this simulator draws and applies with its own code (the others go through their simulation hook).
 OWN_DRAWS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',

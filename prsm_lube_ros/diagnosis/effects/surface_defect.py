@@ -33,9 +33,9 @@ if TYPE_CHECKING:
     from ..locate import Location
     from ..table import WindowTable
 
-__all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefectCandidate', 'IMPULSIVE_KURTOSIS',
-           'FITTED_STRIKE_MAJORITY', 'GAUSSIAN_MAJORITY', 'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SIZE_RANGE', 'SurfaceDefectCandidate',
-           'indicators']
+__all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'FITTED_STRIKE_MAJORITY', 'GAUSSIAN_MAJORITY', 'GROWTH_RANGE',
+           'GrowingSurfaceDefectCandidate', 'IMPULSIVE_KURTOSIS', 'IMPULSIVE_SHARE', 'INDICATOR_SHARE',
+           'NOT_IMPULSIVE_SHARE', 'SIZE_RANGE', 'SurfaceDefectCandidate', 'indicators']
 
 #: Bounds of A_imp over the smallest window RMS.
 SIZE_RANGE = (0.0, 3.0)
