@@ -43,6 +43,7 @@ class CombinedEffect(Effect):
         self.title = f'{first.title} and {second.title}'
         self.form = self.added.form
         self.parameter_names = first.parameter_names + second.parameter_names
+        self.trades_load_excitation = first.trades_load_excitation or second.trades_load_excitation
         self._split = len(first.parameter_names)
 
     def applicable(self, table: WindowTable) -> str:

@@ -542,9 +542,10 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     # A free fit that trades C_lambda below zero against the form's own parameters is fitted again with C_lambda
     # held physical: on few speeds a solution with the true constants may fit as well (resonance 183).
     fits = [_physical_refit(table, form, f) if f.unphysical() else f for form, f in zip(forms, fits)]
-    # A fit a measurement contradicts because its constants silenced the contacts (C_F far below 0, traded
-    # against the form's own law of load) is fitted again with C_F held at 0 or above as well.
-    fits = [_physical_refit(table, form, f, excitation=True) if form.measured_against(table, f.params) else f
+    # A fit a measurement contradicts, of a law of load that trades against C_F (Eq. 18), may have silenced the
+    # contacts that way: it is fitted again with C_F held at 0 or above as well.
+    fits = [_physical_refit(table, form, f, excitation=True)
+            if form.trades_load_excitation and f.vector[1] < 0 and form.measured_against(table, f.params) else f
             for form, f in zip(forms, fits)]
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]

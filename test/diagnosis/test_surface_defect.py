@@ -296,6 +296,7 @@ class _LoadGain(Effect):
     form = 'linear in load'
     parameter_names = ('gain',)
     covariate = 'load'
+    trades_load_excitation = True
 
     def scales(self, table):
         return {'load_scale': float(np.max(np.abs(table.load)))}
