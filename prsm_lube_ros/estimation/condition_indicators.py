@@ -65,8 +65,8 @@ if TYPE_CHECKING:
     from ..physics.defect_orders import DefectOrder
 
 __all__ = ['BATCH_SAMPLES', 'ConditionIndicators', 'ENVELOPE_HARMONICS', 'EnvelopePeak', 'FLOOR_LOWEST_ORDER',
-           'GAUSSIAN_MEDIAN_ABS', 'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES', 'NO_INDICATORS',
-           'ORDER_GRID', 'ORDER_STEP',
+           'GAUSSIAN_MEDIAN_ABS', 'GAUSSIAN_SAMPLES', 'MAX_ORDER', 'MAX_PEAKS', 'MAX_TREE_LEVEL', 'MIN_SAMPLES',
+           'NO_INDICATORS', 'ORDER_GRID', 'ORDER_STEP',
            'REPORT_DB', 'RUN_REPORT_DB', 'SK_SIGMAS', 'TREE_PARTS', 'condition_indicators',
            'condition_indicators_batch', 'envelope_floor', 'envelope_peaks', 'gaussian_rms',
            'kurtosis', 'order_spectrum_db']
@@ -102,6 +102,8 @@ SK_SIGMAS = 3.0
 BATCH_SAMPLES = 1 << 18
 #: Median of |x| over sigma for Gaussian x (the normal distribution's 75 % point).
 GAUSSIAN_MEDIAN_ABS = 0.6744897501960817
+#: Most samples of a window the Gaussian part's median is taken over (evenly spaced).
+GAUSSIAN_SAMPLES = 1024
 #: Fewest samples an indicator is computed on.
 MIN_SAMPLES = 64
 
@@ -170,9 +172,16 @@ def gaussian_rms(signal: np.ndarray) -> np.ndarray:
     ``|x|`` of 0.6745 sigma; sparse strikes ringing a mode move the median
     only by the share of samples they hold, so the estimate keeps the smooth
     part and leaves the strikes' power ``RMS^2 - gaussian_rms^2`` (high by
-    about that share where the strikes ring long).
+    about that share where the strikes ring long).  The median is taken over
+    at most :data:`GAUSSIAN_SAMPLES` evenly spaced samples of a row (its
+    scatter about 3.5 % a window; the whole row's median costs a tenth of the
+    window's indicators, this a hundredth).
     """
-    return np.median(np.abs(signal), axis=1) / GAUSSIAN_MEDIAN_ABS
+    step = max(1, signal.shape[1] // GAUSSIAN_SAMPLES)
+    magnitudes = np.abs(signal[:, ::step])
+    middle = magnitudes.shape[1] // 2
+    magnitudes.partition(middle, axis=1)
+    return magnitudes[:, middle] / GAUSSIAN_MEDIAN_ABS
 
 
 def condition_indicators(samples: npt.ArrayLike, rate: float, screw_speed: float, band: tuple[float, float],
