@@ -16,6 +16,9 @@ Per window, from its samples (already in the window builder for the band RMS):
   (:mod:`.conditioning`: DC, gravity and everything above the band out);
   kurtosis is Pearson's ``E[x^4] / E[x^2]^2`` (3 for Gaussian vibration, 1.5
   for a pure tone), crest factor ``max |x| / RMS``;
+* ``gaussian_rms``, the RMS of the band signal's Gaussian part: its median
+  ``|x|`` over the Gaussian's 0.6745 sigma (:func:`gaussian_rms`); sparse
+  strikes leave it, so ``RMS^2 - gaussian_rms^2`` is their power;
 * the **demodulation band**, chosen from the data by spectral kurtosis (Antoni
   2006-2007; the fast kurtogram's 1/3-binary tree): the analysis band and its
   halves, thirds, quarters, sixths, ... down to bands still wide enough to carry the envelope
