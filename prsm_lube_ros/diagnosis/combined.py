@@ -91,10 +91,11 @@ class CombinedEffect(Effect):
         gain = self.first.log_gain(params['first'], covariates, ln_a22)
         return gain + self.second.log_gain(params['second'], covariates, ln_a22 + gain)
 
-    def measured_against(self, table: WindowTable, params: dict[str, Any]) -> str:
+    def measured_against(self, table: WindowTable, params: dict[str, Any],
+                         predicted: np.ndarray | None = None) -> str:
         """What a measurement says against either effect's part of the joint fit (empty when nothing)."""
-        return (self.first.measured_against(table, params['first'])
-                or self.second.measured_against(table, params['second']))
+        return (self.first.measured_against(table, params['first'], predicted)
+                or self.second.measured_against(table, params['second'], predicted))
 
     def describe(self, params: dict[str, Any]) -> str:
         """Both effects in words."""

@@ -545,7 +545,8 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     # A fit a measurement contradicts, of a law of load that trades against C_F (Eq. 18), may have silenced the
     # contacts that way: it is fitted again with C_F held at 0 or above as well.
     fits = [_physical_refit(table, form, f, excitation=True)
-            if form.trades_load_excitation and f.vector[1] < 0 and form.measured_against(table, f.params) else f
+            if form.trades_load_excitation and f.vector[1] < 0
+            and form.measured_against(table, f.params, _predicted(table, f)) else f
             for form, f in zip(forms, fits)]
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
@@ -573,6 +574,11 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     vectors = {form.form: f.vector[3:] for form, f in zip(forms, fits)}
     return (forms[chosen], fit, [(form.form, score - scores[chosen]) for form, score in zip(forms, scores)],
             ties, vectors)
+
+
+def _predicted(table: WindowTable, fit: ModelFit) -> np.ndarray:
+    """The fitted model's amplitude of each window, m/s^2 (the measured RMS times the fit's residual)."""
+    return np.exp(table.log_rms + fit.log_residual)
 
 
 def _physical_refit(table: WindowTable, form: Effect, free: ModelFit, excitation: bool = False) -> ModelFit:
@@ -678,7 +684,7 @@ def _alone(table: WindowTable, scores: CandidateFit, rules: DiagnosisRules) -> D
     unphysical = fit.unphysical()
     if unphysical:
         return Decision('physical_constants', Status.REJECTED, 'unphysical constants: ' + '; '.join(unphysical))
-    measured = scores.effect.measured_against(table, fit.params)
+    measured = scores.effect.measured_against(table, fit.params, _predicted(table, fit))
     if measured:
         return Decision('measured_against', Status.REJECTED, 'the fit contradicts a measurement: ' + measured)
     if delta <= -rules.bic_margin and gain >= rules.min_gain:
@@ -744,7 +750,8 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
         return None
     kept = both.first if both.added is both.second else both.second
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
-    if both.added.measured_against(table, params) or kept.measured_against(table, first_params):
+    predicted = _predicted(table, fit)
+    if both.added.measured_against(table, params, predicted) or kept.measured_against(table, first_params, predicted):
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     run_gain = 1.0 - fit.cv_run_rmse / reference.cv_run_rmse if reference.cv_run_rmse > 0 else math.nan

@@ -142,8 +142,12 @@ class Effect(Extension):
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
 
-    def measured_against(self, table: WindowTable, params: dict[str, Any]) -> str:
+    def measured_against(self, table: WindowTable, params: dict[str, Any],
+                         predicted: np.ndarray | None = None) -> str:
         """A figure the fitted law predicts and the recording measures directly, far from it; empty when none.
+
+        ``predicted``: the fitted model's amplitude of each window (m/s^2, the
+        paper's constants with every effect of the fit), None when not at hand.
 
         Unlike :meth:`contrary_evidence` (a signature that could show and does
         not, which decides ties), this is a measurement the fitted ``params``
