@@ -58,8 +58,8 @@ DEFECT_DB = DEFAULT_RULES.envelope_db
 INDICATOR_SHARE = 0.8
 #: A fit silences the contacts in a window where its Gaussian part (its amplitude without P_imp) holds less than
 #: this share of the Gaussian power the window measures (10 dB).  Strikes that ring densely raise the measured
-#: part by the share of samples they hold: up to 5.9 times the contacts' power in 400 simulated strike trains
-#: (p90 2.7 times where a strike rings for a fifth of its period or more;
+#: part by the share of samples they hold: up to 6.0 times the contacts' power in 395 simulated windows, 1.9
+#: times at the 90th percentile (``benchmarks/gaussian_part_bias.py``;
 #: ``test_condition_indicators.py::test_dense_strikes_raise_the_gaussian_part_less_than_ten_times``).
 SILENCED_SHARE = 0.1
 
