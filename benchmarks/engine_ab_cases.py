@@ -81,6 +81,7 @@ def main(argv: list[str] | None = None) -> int:
                         'SurfaceDefectCandidate.measured_against')
     parser.add_argument('--kinds', nargs='*', default=None, help='only cases of these kinds (default: all)')
     parser.add_argument('--limit', type=int, default=0, help='at most this many cases (0: all)')
+    parser.add_argument('--reverse', action='store_true', help='the cases in reverse order (a second worker)')
     args = parser.parse_args(argv)
     import importlib
     from prsm_lube_ros.diagnosis import engine
@@ -96,6 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.out.exists():
         done = {(r['kind'], r['seed']) for r in map(json.loads, args.out.read_text().splitlines())}
     cases = [c for c in study_cases(args.blocks, args.effect) if args.kinds is None or c[0] in args.kinds]
+    cases = cases[::-1] if args.reverse else cases
     cases = cases[:args.limit] if args.limit else cases
     print(f'{len(cases)} cases, {sum(c[0] == "two" for c in cases)} pairs', flush=True)
     scratch = Path(tempfile.mkdtemp(prefix='engine_ab_'))
