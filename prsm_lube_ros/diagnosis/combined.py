@@ -43,6 +43,7 @@ class CombinedEffect(Effect):
         self.title = f'{first.title} and {second.title}'
         self.form = self.added.form
         self.parameter_names = first.parameter_names + second.parameter_names
+        self.trades_load_excitation = first.trades_load_excitation or second.trades_load_excitation
         self._split = len(first.parameter_names)
 
     def applicable(self, table: WindowTable) -> str:
@@ -89,6 +90,12 @@ class CombinedEffect(Effect):
         """Sum of both gains."""
         gain = self.first.log_gain(params['first'], covariates, ln_a22)
         return gain + self.second.log_gain(params['second'], covariates, ln_a22 + gain)
+
+    def measured_against(self, table: WindowTable, params: dict[str, Any],
+                         predicted: np.ndarray | None = None) -> str:
+        """What a measurement says against either effect's part of the joint fit (empty when nothing)."""
+        return (self.first.measured_against(table, params['first'], predicted)
+                or self.second.measured_against(table, params['second'], predicted))
 
     def describe(self, params: dict[str, Any]) -> str:
         """Both effects in words."""

@@ -542,6 +542,12 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
     # A free fit that trades C_lambda below zero against the form's own parameters is fitted again with C_lambda
     # held physical: on few speeds a solution with the true constants may fit as well (resonance 183).
     fits = [_physical_refit(table, form, f) if f.unphysical() else f for form, f in zip(forms, fits)]
+    # A fit a measurement contradicts, of a law of load that trades against C_F (Eq. 18), may have silenced the
+    # contacts that way: it is fitted again with C_F held at 0 or above as well.
+    fits = [_physical_refit(table, form, f, excitation=True)
+            if form.trades_load_excitation and f.vector[1] < 0
+            and form.measured_against(table, f.params, _predicted(table, f)) else f
+            for form, f in zip(forms, fits)]
     residuals = [f.log_residual for f in fits]
     counts = [f.n_eff for f in fits]
     shape = forms[0].added if isinstance(forms[0], CombinedEffect) else forms[0]   # a pair's forms are the added's
@@ -570,8 +576,16 @@ def _choose_form(table: WindowTable, forms: Sequence[_E], folds: list[int], rule
             ties, vectors)
 
 
-def _physical_refit(table: WindowTable, form: Effect, free: ModelFit) -> ModelFit:
+def _predicted(table: WindowTable, fit: ModelFit) -> np.ndarray:
+    """The fitted model's amplitude of each window, m/s^2 (the measured RMS times the fit's residual)."""
+    return np.exp(table.log_rms + fit.log_residual)
+
+
+def _physical_refit(table: WindowTable, form: Effect, free: ModelFit, excitation: bool = False) -> ModelFit:
     """``form`` fitted again with C_lambda held at 0 or above (:func:`.fitting.fit_vector`), from the free fit too.
+
+    ``excitation``: C_F held at 0 or above as well (Eq. 18's load excitation), where a measurement
+    contradicted the free fit (:meth:`.effects.Effect.measured_against`: the contacts silenced at load).
 
     A form's free fit may trade C_lambda against the form's own parameters
     where the plan does not pin both: a mode inside the band on three speeds
@@ -582,7 +596,7 @@ def _physical_refit(table: WindowTable, form: Effect, free: ModelFit) -> ModelFi
     the law does not hold, the physical one fits worse and does not earn.
     """
     starts = [free.vector, *form.starts()]
-    return fit_model(table, form, folds=[], starts=starts, physical=True)
+    return fit_model(table, form, folds=[], starts=starts, physical=True, excitation=excitation)
 
 
 def _named_form(effect: Effect, params: dict[str, Any], table: WindowTable, location: Location | None,
@@ -670,7 +684,7 @@ def _alone(table: WindowTable, scores: CandidateFit, rules: DiagnosisRules) -> D
     unphysical = fit.unphysical()
     if unphysical:
         return Decision('physical_constants', Status.REJECTED, 'unphysical constants: ' + '; '.join(unphysical))
-    measured = scores.effect.measured_against(table, fit.params)
+    measured = scores.effect.measured_against(table, fit.params, _predicted(table, fit))
     if measured:
         return Decision('measured_against', Status.REJECTED, 'the fit contradicts a measurement: ' + measured)
     if delta <= -rules.bic_margin and gain >= rules.min_gain:
@@ -736,7 +750,8 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
         return None
     kept = both.first if both.added is both.second else both.second
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
-    if both.added.measured_against(table, params) or kept.measured_against(table, first_params):
+    predicted = _predicted(table, fit)
+    if both.added.measured_against(table, params, predicted) or kept.measured_against(table, first_params, predicted):
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     run_gain = 1.0 - fit.cv_run_rmse / reference.cv_run_rmse if reference.cv_run_rmse > 0 else math.nan

@@ -106,21 +106,27 @@ class _CachedColumns:
 
 
 def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[str, Any] | None = None,
-               starts: Sequence[npt.ArrayLike] | None = None, physical: bool = False) -> np.ndarray:
+               starts: Sequence[npt.ArrayLike] | None = None, physical: bool = False,
+               excitation: bool = False) -> np.ndarray:
     """Least-squares parameter vector of the baseline or of Eq. 22 extended by ``effect``.
 
     ``starts``: internal effect parameter vectors (or full vectors) to start from;
     default the effect's own multi-start grid.  ``physical``: C_lambda held at
     0 or above (a thicker film never raises the vibration, Eq. 22), for an
     effect whose free fit trades C_lambda against its own parameters.
+    ``excitation``: C_F held at 0 or above too (Eq. 18: the load excites the
+    contacts through friction and sliding, it does not silence them), for an
+    effect whose free fit traded C_F against its own law of load until a
+    measurement contradicted it (:meth:`.effects.Effect.measured_against`).
     """
     baseline = _ols_constants(table)
     if effect is None:
         return baseline
     scales = scales if scales is not None else effect.scales(table)
     lo, hi = effect.bounds()
-    lower = np.r_[-np.inf, -np.inf, 0.0 if physical else -np.inf, lo]
+    lower = np.r_[-np.inf, 0.0 if excitation else -np.inf, 0.0 if physical else -np.inf, lo]
     upper = np.r_[np.inf, np.inf, np.inf, hi]
+    floor = np.r_[-np.inf, lower[1], PHYSICAL_START if physical else -np.inf]    # where a start's constants begin
     y = table.log_rms
     columns = _CachedColumns(table)
 
@@ -138,8 +144,7 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
             gain = effect.log_gain(params, columns, ln_eq22(columns, baseline))
             x0 = np.r_[_ols_constants(columns, film, gain), start]
         x0[3:] = np.clip(x0[3:], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        if physical:
-            x0[2] = max(x0[2], PHYSICAL_START)
+        x0[:3] = np.maximum(x0[:3], floor)
         r0 = residual(x0)
         if np.all(np.isfinite(r0)):
             candidates.append((float(r0 @ r0), len(candidates), x0))
@@ -198,17 +203,18 @@ def cv_folds(table: WindowTable) -> list[int]:
 
 
 def held_out_log_residuals(table: WindowTable, effect: Effect | None, scales: dict[str, Any] | None,
-                           full_vector: np.ndarray, folds: Iterable[int], physical: bool = False) -> np.ndarray:
+                           full_vector: np.ndarray, folds: Iterable[int], physical: bool = False,
+                           excitation: bool = False) -> np.ndarray:
     """Leave-one-run-out log residuals (prediction minus measurement); NaN for runs not held out.
 
-    ``physical``: each fold fitted with C_lambda held at 0 or above, as the fit it scores.
+    ``physical``, ``excitation``: each fold fitted with C_lambda (and C_F) held at 0 or above, as the fit it scores.
     """
     out = np.full(len(table), np.nan)
     for run in folds:
         held = table.run == run
         train = table.subset(~held)
         starts = None if effect is None else [full_vector]
-        vector = fit_vector(train, effect, scales, starts=starts, physical=physical)
+        vector = fit_vector(train, effect, scales, starts=starts, physical=physical, excitation=excitation)
         # Predicted on the whole table: effects with a history (recovery at rest) see the windows before.
         out[held] = (predict_log(table, vector, effect, scales) - table.log_rms)[held]
     return out
@@ -372,6 +378,7 @@ class ModelFit:
     notes: list = field(default_factory=list)
     c_lambda_std: float = math.nan  # standard error of C_lambda under the run-effect model (effect held)
     physical: bool = False          # fitted with C_lambda held at 0 or above (fit_vector's ``physical``)
+    excitation: bool = False        # fitted with C_F held at 0 or above too (fit_vector's ``excitation``)
 
     @property
     def constants(self) -> ModelConstants:
@@ -390,13 +397,14 @@ class ModelFit:
 
 
 def fit_model(table: WindowTable, effect: Effect | None = None, folds: Sequence[int] | None = None,
-              starts: Sequence[npt.ArrayLike] | None = None, physical: bool = False) -> ModelFit:
+              starts: Sequence[npt.ArrayLike] | None = None, physical: bool = False,
+              excitation: bool = False) -> ModelFit:
     """Fit a model on all windows and score it on held-out runs (``folds``; default :func:`cv_folds`).
 
-    ``starts``, ``physical``: as :func:`fit_vector`; ``folds=[]`` skips the held-out scores (NaN).
+    ``starts``, ``physical``, ``excitation``: as :func:`fit_vector`; ``folds=[]`` skips the held-out scores (NaN).
     """
     scales = effect.scales(table) if effect is not None else {}
-    vector = fit_vector(table, effect, scales, starts=starts, physical=physical)
+    vector = fit_vector(table, effect, scales, starts=starts, physical=physical, excitation=excitation)
     residual = predict_log(table, vector, effect, scales) - table.log_rms
     folds = cv_folds(table) if folds is None else folds
     params = effect.to_params(vector[3:], scales) if effect is not None else {}
@@ -412,7 +420,8 @@ def fit_model(table: WindowTable, effect: Effect | None = None, folds: Sequence[
     return ModelFit(effect=effect.id if effect is not None else BASELINE, vector=vector, params=params,
                     log_residual=residual, n_params=n_params, rmse=relative_rmse(residual),
                     n_eff=effective_sample_size(residual, table.run), c_lambda_std=c_lambda_std,
-                    physical=physical, **_held_out(table, effect, scales, vector, folds, physical))
+                    physical=physical, excitation=excitation,
+                    **_held_out(table, effect, scales, vector, folds, physical, excitation))
 
 
 def constants_jacobian(table: Columns, vector: np.ndarray, effect: Effect | None,
@@ -431,11 +440,11 @@ def constants_jacobian(table: Columns, vector: np.ndarray, effect: Effect | None
 def score_held_out(table: WindowTable, fit: ModelFit, effect: Effect | None, folds: Iterable[int]) -> ModelFit:
     """``fit`` (made with ``folds=[]``) with its held-out scores on ``folds``, without fitting all windows again."""
     scales = effect.scales(table) if effect is not None else {}
-    return replace(fit, **_held_out(table, effect, scales, fit.vector, folds, fit.physical))
+    return replace(fit, **_held_out(table, effect, scales, fit.vector, folds, fit.physical, fit.excitation))
 
 
 def _held_out(table: WindowTable, effect: Effect | None, scales: dict[str, Any], vector: np.ndarray,
-              folds: Iterable[int], physical: bool = False) -> dict[str, Any]:
+              folds: Iterable[int], physical: bool = False, excitation: bool = False) -> dict[str, Any]:
     """ModelFit's held-out fields: each fold refitted from ``vector`` and scored on its runs."""
-    cv = held_out_log_residuals(table, effect, scales, vector, folds, physical)
+    cv = held_out_log_residuals(table, effect, scales, vector, folds, physical, excitation)
     return {'cv_log_residual': cv, 'cv_rmse': relative_rmse(cv), 'cv_run_rmse': run_level_rmse(table, cv)}

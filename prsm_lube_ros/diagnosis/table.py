@@ -55,7 +55,7 @@ PLAN_COVARIATES = ('speed', 'load')
 DRIFT_COVARIATES = ('revolutions', 'time', 'temperature')
 
 #: Optional columns of condition indicators (NaN where a window has none).
-INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'run_defect_db')
+INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'gaussian_rms', 'run_defect_db')
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
@@ -170,6 +170,9 @@ class WindowTable:
     #: The strongest strike-order line of the window's run, its windows' envelope spectra averaged (dB over the
     #: floor, as the defect screen judges a run): one window's line reaches 10 dB by chance now and then.
     run_defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
+    #: RMS of the band signal's Gaussian part, m/s^2 (its median |x| over the Gaussian's,
+    #: :func:`~prsm_lube_ros.estimation.condition_indicators.gaussian_rms`): the RMS without sparse strikes.
+    gaussian_rms: np.ndarray | None = field(default=None, compare=False, repr=False)
     #: The actuator's defect orders the envelope lines were labelled with.
     defect_orders: tuple[DefectOrder, ...] = ()
     #: The analysis band the RMS was taken in (None: raw RMS, or not known) and the ranges of the windows kept
@@ -246,7 +249,10 @@ class WindowTable:
         """Rows where ``mask`` is true (a boolean array or indices)."""
         mask = np.asarray(mask)
         spectra = self.spectra[mask] if self.spectra is not None else None
-        values = {name: getattr(self, name)[mask] for name in COLUMNS + INDICATOR_COLUMNS}
+        values = {name: getattr(self, name)[mask] for name in COLUMNS}
+        for name in INDICATOR_COLUMNS:    # a table pickled before a column was added has none: NaN
+            column = getattr(self, name, None)
+            values[name] = column[mask] if column is not None else np.full(len(self), math.nan)[mask]
         assert self.direction is not None  # __post_init__ fills it
         return replace(self, spectra=spectra, direction=self.direction[mask], **values)
 
@@ -359,14 +365,14 @@ def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> list
     return [levels.get(w.run_index, math.nan) for w in windows]
 
 
-def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float]:
-    """(kurtosis, crest factor, strike line dB, its order) of a window; NaN where it has no indicators."""
+def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float, float]:
+    """(kurtosis, crest factor, strike line dB, its order, Gaussian RMS) of a window; NaN where it has none."""
     condition = window.condition
     if condition is None:
-        return math.nan, math.nan, math.nan, math.nan
+        return math.nan, math.nan, math.nan, math.nan, math.nan
     line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
     return (condition.kurtosis, condition.crest_factor, line.db if line else math.nan,
-            line.order if line else math.nan)
+            line.order if line else math.nan, condition.gaussian_rms)
 
 
 def _rest_rms_values(windows_per_recording: Sequence[Sequence[Window]]) -> np.ndarray:

@@ -36,13 +36,17 @@ from ..physics.effects import (background_vibration, ContactState, extension, lu
 from ..physics.vibration_model import acceleration_amplitude, ModelConstants
 
 
-__all__ = ['BACKGROUND_SHARES', 'HEALTHY_KURTOSIS_SCATTER', 'OWN_DRAWS', 'SyntheticPlan', 'synthetic_table']
+__all__ = ['BACKGROUND_SHARES', 'GAUSSIAN_RMS_SCATTER', 'HEALTHY_KURTOSIS_SCATTER', 'OWN_DRAWS', 'SyntheticPlan',
+           'synthetic_table']
 
 #: Effects this simulator draws and applies with its own code (the others go through their simulation hook).
 OWN_DRAWS = ('position_dependent_stiffness', 'resonance', 'thermal_viscosity', 'lubricant_depletion',
              'background_vibration')
 #: Standard deviation of a healthy window's band kurtosis around 3 (about sqrt(24 / n) for n = 4000 samples).
 HEALTHY_KURTOSIS_SCATTER = 0.08
+#: Relative scatter of a window's measured Gaussian RMS (median |x| of a 1 s window of band-limited vibration:
+#: a few hundred independent samples and more).
+GAUSSIAN_RMS_SCATTER = 0.03
 
 
 @dataclass(frozen=True)
@@ -186,9 +190,11 @@ class _Synthesis:
         self.clock, self.revs, self.temp = 0.0, 0.0, plan.ambient + plan.warm_start
         self.turns = 0.0      # revolutions run over all sessions (a spall does not heal at relubrication)
         self.indicators: dict[str, list[float]] = {k: [] for k in ('kurtosis', 'crest_factor', 'defect_db',
-                                                                   'defect_order')}
+                                                                   'defect_order', 'gaussian_rms')}
         # The indicators' own stream (spawned, not drawn from rng): with or without them, the other columns agree.
         self.indicator_rng = rng.spawn(1)[0]
+        # The Gaussian part's scatter has a stream of its own too: the indicators drawn before it was measured stay.
+        self.gaussian_rng = rng.spawn(1)[0]
         self.depleted = 0.0   # effective revolutions of the depletion (recovering at rest)
 
     def pause(self, number: int, way: int, per_session: int) -> None:
@@ -249,20 +255,23 @@ class _Synthesis:
         self.theta_eff.append(theta * film)
         self.a22_list.append(a22)
         if plan.condition_indicators:
-            self._indicators(speed, load, position, float(contact_power))
+            self._indicators(speed, load, position, float(contact_power), amplitude, noise)
         if plan.spectrum_bins:
             self.spectra.append(_spectrum(plan, speed, amplitude ** 2 - background ** 2, background,
                                           (noise_floor or {}).get('tones', ()), rng,
                                           (noise_floor or {}).get('form', '')))
 
-    def _indicators(self, speed: float, load: float, position: float, contact_power: float) -> None:
+    def _indicators(self, speed: float, load: float, position: float, contact_power: float, amplitude: float,
+                    noise: float) -> None:
         """One window's condition indicators: Gaussian contact vibration, changed by hooked effects.
 
         Healthy: kurtosis ``3 + N(0, HEALTHY_KURTOSIS_SCATTER)``, crest factor
         about 4, the largest envelope peak at a defect order 3 dB over the floor
-        (chi-square scatter), no order.  A hooked effect's
+        (chi-square scatter), no order, and the whole RMS ``amplitude`` Gaussian
+        (``gaussian_rms`` with :data:`GAUSSIAN_RMS_SCATTER`).  A hooked effect's
         ``Simulation.window_indicators`` replaces what it changes (its kurtosis
-        excess with a 10 % scatter).
+        excess with a 10 % scatter); the ``impulsive_power`` it returns (before
+        the window's scatter factor ``noise``) leaves the Gaussian part.
         """
         rng = self.indicator_rng
         columns = {'kurtosis': 3.0 + HEALTHY_KURTOSIS_SCATTER * rng.standard_normal(),
@@ -270,15 +279,21 @@ class _Synthesis:
                    'defect_db': 10.0 * math.log10(1.0 + rng.chisquare(2) / 2.0), 'defect_order': math.nan}
         state = ContactState(speed=speed, load=load, nut_position=position, temperature=self.temp,
                              ambient_temperature=self.plan.ambient, revolutions=self.turns)
+        impulsive = 0.0
         for name, law in self.laws.items():
             if name in OWN_DRAWS:
                 continue
             changed = simulation(name).window_indicators(law['law'], state, np.asarray(contact_power))
             for key, column in changed.items():
                 number = float(column)
+                if key == 'impulsive_power':
+                    impulsive += number
+                    continue
                 if key == 'kurtosis':
                     number = columns['kurtosis'] + (number - 3.0) * math.exp(0.1 * rng.standard_normal())
                 columns[key] = number
+        gaussian = math.sqrt(max(amplitude ** 2 - impulsive * noise ** 2, 0.0))
+        columns['gaussian_rms'] = gaussian * (1.0 + GAUSSIAN_RMS_SCATTER * self.gaussian_rng.standard_normal())
         for key, number in columns.items():
             self.indicators[key].append(float(number))
 
@@ -301,6 +316,7 @@ class _Synthesis:
                            spectra=np.array(self.spectra) if self.spectra else None, spectrum_resolution=resolution,
                            kurtosis=columns['kurtosis'], crest_factor=columns['crest_factor'],
                            defect_db=columns['defect_db'], defect_order=columns['defect_order'],
+                           gaussian_rms=columns['gaussian_rms'],
                            **cast(dict[str, Any], self.rows))
 
 

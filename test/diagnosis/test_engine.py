@@ -451,7 +451,7 @@ def test_a_form_with_unphysical_constants_is_fitted_again_physical_and_does_not_
                 'mode below the speed band': -0.69}
     refitted = []
 
-    def fake_fit(table, form, folds=None, starts=None, physical=False):
+    def fake_fit(table, form, folds=None, starts=None, physical=False, excitation=False):
         if physical:        # held at C_lambda >= 0, from the free fit among its starts
             refitted.append(form.form)
             assert any(np.size(start) == 5 and start[2] == c_lambda[form.form] for start in starts)

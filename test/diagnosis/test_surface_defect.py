@@ -9,6 +9,7 @@ import pytest
 
 from prsm_lube_ros.diagnosis.effects import get_effect
 from prsm_lube_ros.diagnosis.effects import surface_defect as candidate
+from prsm_lube_ros.diagnosis.effects.base import Effect
 from prsm_lube_ros.diagnosis.engine import diagnose_table
 from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 from prsm_lube_ros.physics.effects import surface_defect as law
@@ -125,6 +126,17 @@ def test_window_indicators_leave_the_other_columns_of_a_synthetic_table_as_they_
     assert abs(np.median(marked.kurtosis) - 3.0) < 0.05          # Gaussian contact vibration
 
 
+def test_the_window_level_simulator_measures_the_gaussian_part_without_the_strikes():
+    plain, _ = synthetic_table(np.random.default_rng(4), 'lubricant_depletion',
+                               plan=SyntheticPlan(sessions=2, condition_indicators=True))
+    assert np.median(plain.gaussian_rms / plain.rms) == pytest.approx(1.0, abs=0.01)
+    struck, truth = synthetic_table(np.random.default_rng(2), 'surface_defect',
+                                    plan=SyntheticPlan(sessions=2, condition_indicators=True))
+    share = (struck.gaussian_rms / struck.rms) ** 2
+    impulsive = struck.kurtosis > 4.5
+    assert impulsive.any() and np.median(share[impulsive]) < 0.9 < np.median(share[~impulsive])
+
+
 def test_a_shape_change_does_not_tie_background_with_a_defect(tmp_path):
     """A steady roller spall (study case surface_defect 1307) against a background that only the shape supports.
 
@@ -237,3 +249,90 @@ def test_impulsiveness_in_few_windows_does_not_name_the_defect_beside_the_first_
     assert defect.evidence and not defect.effect.exclusive_evidence(diagnosis.table, 0.5)
     assert diagnosis.verdict == 'lubricant_depletion'
     assert diagnosis.second is None
+
+
+BIG = dict(PARAMS, impulsive_rms=0.49)      # 0.49^2 / 0.5^2: the fitted strikes carry 96 % of each window's power
+
+
+def _measured(gaussian_share, n=40):
+    """``table_of`` with the band signal's Gaussian part measured at ``gaussian_share`` of each window's power."""
+    table = table_of(3.0, n=n)
+    table.gaussian_rms = np.sqrt(gaussian_share) * table.rms
+    return table
+
+
+def test_a_fit_that_silences_the_contacts_where_the_windows_measure_them_is_refuted():
+    """The fit's Gaussian part (its amplitude, here the RMS, without P_imp) against the measured one."""
+    effect = get_effect('surface_defect')
+    fitted = np.full(40, 0.5)
+    refuted = effect.measured_against(_measured(0.95), BIG, fitted)
+    assert 'Gaussian part' in refuted and '4.2 %' in refuted    # 4 % of the power against 95 %: 4.2 % of it
+    assert effect.measured_against(_measured(0.3), BIG, fitted) == ''        # 4 % against 30 %: 13 %, within 10 dB
+    assert effect.measured_against(_measured(0.95), PARAMS, fitted) == ''    # the fit leaves the contacts 64 %
+    assert effect.measured_against(_measured(math.nan), BIG, fitted) == ''   # not measured: not testable
+    assert effect.measured_against(_measured(0.95), BIG) == ''               # no fitted amplitude: not testable
+
+
+@pytest.mark.parametrize('share, refuted', [(0.2, False), (0.3, True)])
+def test_the_gaussian_part_refutes_a_fit_that_silences_the_contacts_in_a_quarter_of_the_windows(share, refuted):
+    """The fitted strikes take the whole power only at the highest load; below it the fit leaves the contacts most."""
+    table = _measured(0.95)
+    high = np.arange(len(table)) < share * len(table)
+    table.load = np.where(high, 100.0, 25.0)     # load exponent 0.5: a quarter of the strikes' power at 25 N
+    assert bool(get_effect('surface_defect').measured_against(table, BIG, np.full(40, 0.5))) is refuted
+
+
+def test_a_pair_answers_for_what_a_measurement_says_against_either_of_its_effects():
+    from prsm_lube_ros.diagnosis.combined import CombinedEffect
+    both = CombinedEffect(get_effect('lubricant_depletion'), get_effect('surface_defect'))
+    params = {'first': {}, 'second': {}}
+    params['first' if both.first.id == 'surface_defect' else 'second'] = BIG
+    assert 'Gaussian part' in both.measured_against(_measured(0.95), params, np.full(40, 0.5))
+    assert both.measured_against(_measured(0.3), params, np.full(40, 0.5)) == ''
+
+
+class _LoadGain(Effect):
+    """A law linear in load, ``ln A += g F / F_max``: it trades g against C_F, and a measurement caps g at 0.5."""
+
+    id = 'load_gain'
+    title = 'load gain'
+    form = 'linear in load'
+    parameter_names = ('gain',)
+    covariate = 'load'
+    trades_load_excitation = True
+
+    def scales(self, table):
+        return {'load_scale': float(np.max(np.abs(table.load)))}
+
+    def bounds(self):
+        return np.array([0.0]), np.array([5.0])
+
+    def starts(self):
+        return [np.array([2.0])]
+
+    def to_params(self, p, scales):
+        return {'gain': float(p[0]), **scales}
+
+    def log_gain(self, params, covariates, ln_a22):
+        return params['gain'] * np.abs(np.asarray(covariates.load, dtype=float)) / params['load_scale']
+
+    def measured_against(self, table, params, predicted=None):
+        return f'measured: the gain is 0.5 at most, fitted {params["gain"]:.2f}' if params['gain'] > 0.5 else ''
+
+
+def test_a_fit_a_measurement_contradicts_is_fitted_again_with_the_load_excitation_held_physical():
+    """Free, the law's g = 2 (its start) and C_F goes below 0 to pay for it; held at C_F >= 0, g fits under 0.5.
+
+    The rig's own C_F is 1e-3 1/N (0.2 at its 200 N): g + C_F F_max is what the amplitudes fix.
+    """
+    from prsm_lube_ros.diagnosis.fitting import fit_model
+    from prsm_lube_ros.physics.vibration_model import ModelConstants
+    table, _ = synthetic_table(np.random.default_rng(3), None,
+                               plan=SyntheticPlan(sessions=2, constants=ModelConstants(0.02, 1.0e-3, 0.33)))
+    free = fit_model(table, _LoadGain(), folds=[])
+    assert free.params['gain'] > 1.0 and free.vector[1] < 0.0
+    assert _LoadGain().measured_against(table, free.params)
+    diagnosis = diagnose_table(table, effects={'load_gain': _LoadGain()})
+    candidate_fit = diagnosis.candidates[0].fit
+    assert candidate_fit.excitation and candidate_fit.vector[1] >= 0.0 and candidate_fit.params['gain'] <= 0.5
+    assert all(d.rule != 'measured_against' for d in diagnosis.candidates[0].decisions)

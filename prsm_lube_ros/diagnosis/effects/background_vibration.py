@@ -138,7 +138,8 @@ class BackgroundVibrationCandidate(Effect, law.Extension):
                 f'(median of {table.rest_windows} windows), {100 * share:.0f} % of the power of the quietest '
                 'running windows, which the contact law puts at zero')
 
-    def measured_against(self, table: WindowTable, params: dict[str, float]) -> str:
+    def measured_against(self, table: WindowTable, params: dict[str, float],
+                         predicted: np.ndarray | None = None) -> str:
         """The screw still, the accelerometer reads far less than the fitted B (:data:`STANDSTILL_CONTRARY_SHARE`).
 
         Vibration from elsewhere is there whenever the rig is powered, at

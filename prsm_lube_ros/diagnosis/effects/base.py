@@ -68,6 +68,10 @@ class Effect(Extension):
     #: The law adds power beside the contacts' (A^2 = A_22^2 + B^2): its gain depends on the amplitude it is added
     #: to, so a combination of two effects applies it last (:class:`~prsm_lube_ros.diagnosis.combined.CombinedEffect`).
     adds_power: bool = False
+    #: The law has a free law of load (an exponent of F) that a fit can trade against the load excitation C_F of
+    #: Eq. 18: a fit of it that a measurement contradicts (:meth:`measured_against`) with C_F below 0 is fitted
+    #: again with C_F held at 0 or above before it is judged.
+    trades_load_excitation: bool = False
 
     def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""
@@ -138,8 +142,12 @@ class Effect(Extension):
         """Evidence against the effect from outside the amplitude fit (its signature testable but absent)."""
         return ''
 
-    def measured_against(self, table: WindowTable, params: dict[str, Any]) -> str:
+    def measured_against(self, table: WindowTable, params: dict[str, Any],
+                         predicted: np.ndarray | None = None) -> str:
         """A figure the fitted law predicts and the recording measures directly, far from it; empty when none.
+
+        ``predicted``: the fitted model's amplitude of each window (m/s^2, the
+        paper's constants with every effect of the fit), None when not at hand.
 
         Unlike :meth:`contrary_evidence` (a signature that could show and does
         not, which decides ties), this is a measurement the fitted ``params``

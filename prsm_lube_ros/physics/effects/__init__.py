@@ -297,7 +297,9 @@ class Simulation:
 
         For the window-level simulator: ``kurtosis`` (3 = Gaussian), ``defect_db``
         (envelope peak at a defect order over the floor, dB) and ``defect_order``
-        where the effect changes them; empty (the default) when it does not.
+        where the effect changes them, and ``impulsive_power`` ((m/s^2)^2), the
+        power the effect adds that is not Gaussian (it leaves the window's
+        measured Gaussian RMS); empty (the default) when it changes none.
         """
         return {}
 

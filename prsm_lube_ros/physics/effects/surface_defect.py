@@ -349,7 +349,7 @@ class Simulation(EffectSimulation):
 
     def window_indicators(self, law: SurfaceDefectLaw, state: ContactState, contact_power: np.ndarray
                           ) -> dict[str, np.ndarray]:
-        """Kurtosis of contact plus strikes (:func:`window_kurtosis`) and an envelope peak at the strike order.
+        """Kurtosis of contact plus strikes (:func:`window_kurtosis`), an envelope peak at the strike order, P_imp.
 
         The peak stands in for the envelope spectrum at window level: its level
         over the floor grows with the impulsive share of the power,
@@ -362,7 +362,7 @@ class Simulation(EffectSimulation):
         contact = np.asarray(contact_power, dtype=float)
         return {'kurtosis': window_kurtosis(contact, power, rate, decay, law.strike_scatter),
                 'defect_db': 10.0 * np.log10(1.0 + ENVELOPE_GAIN * power / contact),
-                'defect_order': np.full(contact.shape, law.strike_order)}
+                'defect_order': np.full(contact.shape, law.strike_order), 'impulsive_power': power}
 
     def extension_params(self, law: SurfaceDefectLaw, context: SimulationContext) -> dict[str, float]:
         """The law as :class:`Extension` parameters."""
