@@ -35,7 +35,7 @@ RATE, SAMPLES = 4000.0, 4000
 
 def trial(rng: np.random.Generator) -> tuple[float, float, float, float, float]:
     """(true impulsive share, lambda tau, kurtosis, bias, measured impulsive share) of one drawn window."""
-    from prsm_lube_ros.estimation.condition_indicators import gaussian_rms
+    from prsm_lube_ros.estimation.condition_indicators import gaussian_rms, kurtosis
     mode, damping = rng.uniform(100.0, 1500.0), rng.uniform(0.02, 0.15)
     rate, share, scatter = 10 ** rng.uniform(0.3, 2.3), rng.uniform(0.05, 0.9), rng.uniform(0.1, 0.5)
     contact = lfilter([0.5, 0.5], [1.0], rng.standard_normal(SAMPLES))
@@ -51,11 +51,10 @@ def trial(rng: np.random.Generator) -> tuple[float, float, float, float, float]:
         return share, math.nan, math.nan, math.nan, math.nan
     ring *= math.sqrt(share / (1 - share)) / ring.std()
     x = contact + ring
-    gaussian = float(gaussian_rms((x - x.mean()).reshape(1, -1))[0])
-    power = float(np.mean((x - x.mean()) ** 2))
-    kurtosis = float(np.mean((x - x.mean()) ** 4) / power ** 2)
+    x -= x.mean()
+    gaussian = float(gaussian_rms(x.reshape(1, -1))[0])
     decay = 1 / (2 * math.pi * mode * damping)
-    return share, rate * decay, kurtosis, gaussian ** 2 - 1.0, 1 - gaussian ** 2 / power
+    return share, rate * decay, kurtosis(x), gaussian ** 2 - 1.0, 1 - gaussian ** 2 / float(np.mean(x * x))
 
 
 def main(argv: list[str] | None = None) -> int:

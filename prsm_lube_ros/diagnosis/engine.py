@@ -750,8 +750,7 @@ def _best_pair(table: WindowTable, combos: list[CombinedEffect], reference: Mode
         return None
     kept = both.first if both.added is both.second else both.second
     params, first_params = both.params_of(fit.params, both.added), both.params_of(fit.params, kept)
-    predicted = _predicted(table, fit)
-    if both.added.measured_against(table, params, predicted) or kept.measured_against(table, first_params, predicted):
+    if both.measured_against(table, fit.params, _predicted(table, fit)):    # either effect's part contradicted
         return None
     gain = 1.0 - fit.cv_rmse / reference.cv_rmse
     run_gain = 1.0 - fit.cv_run_rmse / reference.cv_run_rmse if reference.cv_run_rmse > 0 else math.nan
