@@ -252,7 +252,7 @@ class SecondEffect:
     first_form: str
     combined: CombinedEffect | None = None   # the joint model ``fit`` belongs to
     basis: str = ''             # why it is named on top of the first (see :func:`_add_second`)
-    route: int = 1              # which of :func:`_add_second`'s rules named it (1 the strongest)
+    route: int = 1              # the rule that named it: 1-3 of :func:`_add_second`, 4 exclusive, 5 Gaussian part
     run_gain: float = math.nan  # 1 - cv_run_rmse(pair) / cv_run_rmse(first alone): held-out run amplitudes
     within_delta_bic: float = math.nan   # a law swept within runs: BIC(pair) - BIC(first) on run deviations
     within_gain: float = math.nan        # and the held-out gain there (:func:`_shows_within_runs`)
@@ -264,7 +264,8 @@ class SecondEffect:
     def explanation(self) -> str:
         """What the second effect is, in words: its fitted law, or why its share of the RMS is unresolved."""
         if self.unresolved:
-            return (f'{self.effect.title} shown by evidence no other effect makes ({self.basis}); its share of the RMS '
+            shown = 'by evidence no other effect makes' if self.route == 4 else 'in the windows\' Gaussian part'
+            return (f'{self.effect.title} shown {shown} ({self.basis}); its share of the RMS '
                     f'is unresolved: its amplitude law is not kept beside {self.first_effect.id}. '
                     + self.effect.physics)
         return self.effect.describe(self.params)
@@ -865,6 +866,7 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     named by a stronger rule of :func:`_add_second` goes before the others.
     """
     assert first.fit is not None  # the named candidate was fitted
+    every = candidates
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params, rules)
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= rules.min_gain
                       for c in candidates)
@@ -900,10 +902,58 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
         other = earning[1] if named is earning[0] else earning[0]
         return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
                        'outside the amplitude fit'), []
+    if not earning:
+        in_part = _second_in_gaussian_part(table, first, every, fitted, rules)
+        if in_part is not None:
+            return in_part, []
     if not earning and exclusive:
         struck, signature = exclusive[0]
         return _exclusive_second(first, struck, signature, fitted.get(struck.effect.id), rules), []
     return (earning[0] if earning else None), []
+
+
+def _second_in_gaussian_part(table: WindowTable, first: Candidate, candidates: list[Candidate],
+                             fitted: dict[str, SecondEffect | None], rules: DiagnosisRules) -> SecondEffect | None:
+    """Beside an impulsive first effect: the effect the windows' Gaussian part names, diagnosed alone (or None).
+
+    The first effect's power is in strikes (:attr:`.effects.Effect.impulsive`),
+    which each window's Gaussian part leaves out
+    (:meth:`.table.WindowTable.gaussian_part`: the contacts' vibration); on the
+    whole RMS the first effect's free laws can take on another effect's part
+    (a mode's fall with speed into a spall's exponents and the constants).
+    When ``rules.gaussian_part_share`` of the windows carry the part, it is
+    diagnosed alone, by the same rules, with every candidate's effect (all its
+    forms) but the impulsive ones, and an effect it names
+    is named beside the first: with the pair's joint fit on the whole RMS
+    (``fitted``, by :func:`_add_second`) where that has physical constants,
+    else with its share of the RMS unresolved.
+    """
+    gaussian = table.gaussian_rms
+    if not first.effect.impulsive or gaussian is None or len(table) == 0:
+        return None
+    if np.mean(np.isfinite(gaussian) & (gaussian > 0)) < rules.gaussian_part_share:
+        return None
+    families = [c.scores.family for c in candidates if c.scores.family is not None]
+    others = {effect.id: effect for effect in families if not effect.impulsive}
+    try:
+        part = diagnose_table(table.gaussian_part(), others, rules)
+    except InputError:      # too few windows or runs carry the part to fit the constants
+        return None
+    named = part.chosen
+    if named is None or named.effect.id not in others:
+        return None
+    basis = (f'in the windows\' Gaussian part (the band signal without {first.effect.id}\'s strikes), diagnosed '
+             f'alone, {named.effect.id} ({named.form}) earns ({named.reason}); on the whole RMS '
+             f'{first.effect.id}\'s free laws take its part')
+    pair = fitted.get(named.effect.id)
+    if pair is not None:
+        return replace(pair, route=5, basis=basis + f'; the pair there: held-out error {100 * pair.gain:+.1f} % '
+                       f'lower than {first.effect.id} alone, BIC {pair.delta_bic:+.1f}')
+    own = next((c for c in candidates if c.effect.id == named.effect.id), named)
+    assert first.fit is not None
+    return SecondEffect(own, first.fit, {}, math.nan, math.nan, named.effect, named.form, first.effect,
+                        dict(first.fit.params), first.form, route=5, unresolved=True,
+                        basis=basis + '; no fit of the pair on the whole RMS has physical constants')
 
 
 def _exclusive_second(first: Candidate, other: Candidate, evidence: str, pair: SecondEffect | None,

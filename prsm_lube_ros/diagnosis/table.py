@@ -256,6 +256,20 @@ class WindowTable:
         assert self.direction is not None  # __post_init__ fills it
         return replace(self, spectra=spectra, direction=self.direction[mask], **values)
 
+    def gaussian_part(self) -> WindowTable:
+        """The windows whose Gaussian part was measured, with it as their RMS: the table without sparse strikes.
+
+        ``rms`` is each window's :attr:`gaussian_rms` (the band signal's median
+        |x| over the Gaussian's); the condition indicators and the spectra,
+        which hold the strikes, are left out (NaN, None).  The vibration at
+        standstill (:attr:`rest_rms`) stays: nothing strikes with the screw still.
+        """
+        assert self.gaussian_rms is not None  # __post_init__ fills it
+        measured = np.isfinite(self.gaussian_rms) & (self.gaussian_rms > 0)
+        return replace(self.subset(measured), rms=self.gaussian_rms[measured], spectra=None,
+                       spectrum_resolution=math.nan, kurtosis=None, crest_factor=None, defect_db=None,
+                       defect_order=None, gaussian_rms=None, run_defect_db=None)
+
     def run_means(self, column: str | np.ndarray) -> np.ndarray:
         """Mean of ``column`` per run, in the order of :attr:`runs` (NaN-aware)."""
         values = np.asarray(getattr(self, column), dtype=float) if isinstance(column, str) else column

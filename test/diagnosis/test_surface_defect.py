@@ -336,3 +336,47 @@ def test_a_fit_a_measurement_contradicts_is_fitted_again_with_the_load_excitatio
     candidate_fit = diagnosis.candidates[0].fit
     assert candidate_fit.excitation and candidate_fit.vector[1] >= 0.0 and candidate_fit.params['gain'] <= 0.5
     assert all(d.rule != 'measured_against' for d in diagnosis.candidates[0].decisions)
+
+
+def test_a_mode_beside_a_spall_is_named_in_the_gaussian_part():
+    """A mode below the band the orders sweep, beside a spall: the whole RMS names the spall alone.
+
+    The spall's free exponents and the constants take the mode's fall with
+    speed; the windows' Gaussian part (the strikes left out) shows the mode
+    alone, and the engine names it there (study cases two 1710, 1532 ...).
+    With the rule off (a share no table reaches) the mode goes unnamed.
+    """
+    from dataclasses import replace
+    from prsm_lube_ros.diagnosis import DEFAULT_RULES
+    table, truth = synthetic_table(np.random.default_rng(0), ('resonance', 'surface_defect'),
+                                   plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    assert truth['params']['resonance']['top_ratio'] > 1.0      # the mode is below the band at the top speed
+    diagnosis = diagnose_table(table)
+    assert diagnosis.verdict == 'surface_defect'
+    second = diagnosis.second
+    assert second is not None and second.effect.id == 'resonance' and second.route == 5
+    assert "Gaussian part" in second.basis
+    assert [e['effect'] for e in diagnosis.as_json()['effects']] == ['surface_defect', 'resonance']
+    off = diagnose_table(table, rules=replace(DEFAULT_RULES, gaussian_part_share=1.01))
+    assert off.verdict == 'surface_defect' and off.second is None
+
+
+def test_the_gaussian_part_of_a_spall_alone_names_nothing_beside_it():
+    """Dense strikes raise the measured Gaussian part with speed and load; no effect is named from it."""
+    diagnosis, _ = _verdict('surface_defect', 5)
+    assert diagnosis.verdict == 'surface_defect' and diagnosis.second is None
+
+
+def test_the_gaussian_part_is_the_table_without_strikes():
+    table, _ = synthetic_table(np.random.default_rng(2), 'surface_defect',
+                               plan=SyntheticPlan(sessions=2, condition_indicators=True))
+    part = table.gaussian_part()
+    assert len(part) == len(table) and np.array_equal(part.rms, table.gaussian_rms)
+    from prsm_lube_ros.diagnosis.table import INDICATOR_COLUMNS
+    assert part.spectra is None and all(np.isnan(getattr(part, name)).all() for name in INDICATOR_COLUMNS)
+    assert np.array_equal(part.speed, table.speed)
+    assert part.rest_rms == table.rest_rms or (np.isnan(part.rest_rms) and np.isnan(table.rest_rms))
+    gaps = table.gaussian_rms.copy()
+    gaps[::4] = np.nan
+    from dataclasses import replace
+    assert len(replace(table, gaussian_rms=gaps).gaussian_part()) == len(table) - len(gaps[::4])

@@ -72,6 +72,9 @@ class Effect(Extension):
     #: Eq. 18: a fit of it that a measurement contradicts (:meth:`measured_against`) with C_F below 0 is fitted
     #: again with C_F held at 0 or above before it is judged.
     trades_load_excitation: bool = False
+    #: The law's power is in strikes, sparse in time: each window's Gaussian part (``gaussian_rms``) leaves it out,
+    #: so beside it the engine seeks a second effect there too (:meth:`.WindowTable.gaussian_part`).
+    impulsive: bool = False
 
     def applicable(self, table: WindowTable) -> str:
         """Empty when the recordings can test this effect, else why not (in words)."""

@@ -138,6 +138,10 @@ class SurfaceDefectCandidate(Effect, law.Extension):
     #: The impulsive power's load exponent b trades against C_F: with two loads a free fit can silence the contacts
     #: at the higher one (C_F = -0.061 1/N in study case two 1333), which the windows' Gaussian part contradicts.
     trades_load_excitation = True
+    #: The strikes are sparse in time: the windows' Gaussian part is the contacts' vibration without them, where an
+    #: effect beside the defect shows that the defect's free exponents take on the whole RMS (a mode's fall with
+    #: speed: study two 1710).
+    impulsive = True
 
     def applicable(self, table: WindowTable) -> str:
         """Needs the condition indicators (impulsiveness is what tells a defect apart) and known revolutions."""
