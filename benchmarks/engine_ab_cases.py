@@ -37,7 +37,8 @@ import time
 
 ROOT = Path(__file__).resolve().parents[1]
 BLOCKS = ('diagnose_study_defect_two_1330', 'diagnose_study_defect_evidence_pairs_1400',
-          'diagnose_study_defect_evidence_pairs_1500', 'diagnose_study_two_1600_standstill_evidence')
+          'diagnose_study_defect_evidence_pairs_1500', 'diagnose_study_two_1600_standstill_evidence',
+          'diagnose_study_two_1700_gaussian_part')
 OTHER_ENGINE = '''
 import json, pickle, sys
 from prsm_lube_ros.diagnosis.engine import diagnose_table
@@ -78,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--blocks', nargs='*', default=list(BLOCKS))
     parser.add_argument('--effect', default='surface_defect')
     parser.add_argument('--acted', default='prsm_lube_ros.diagnosis.effects.surface_defect:'
-                        'SurfaceDefectCandidate.measured_against')
+                        'SurfaceDefectCandidate.measured_against',
+                        help='MODULE:CLASS.METHOD or MODULE:FUNCTION whose truthy return means the rule acted')
     parser.add_argument('--kinds', nargs='*', default=None, help='only cases of these kinds (default: all)')
     parser.add_argument('--limit', type=int, default=0, help='at most this many cases (0: all)')
     parser.add_argument('--reverse', action='store_true', help='the cases in reverse order (a second worker)')
@@ -89,9 +91,10 @@ def main(argv: list[str] | None = None) -> int:
     from prsm_lube_ros.experiments.random_study import _named_effects, _right, case_recordings, case_table, \
         simulate_case
     module, _, attribute = args.acted.partition(':')
-    owner_name, _, method = attribute.partition('.')
+    owner_name, _, method = attribute.rpartition('.')    # no class: a function of the module
     fired = {'measured': 0, 'refit': 0}
-    _counting(getattr(importlib.import_module(module), owner_name), method, fired, 'measured', truthy=True)
+    owner = importlib.import_module(module)
+    _counting(getattr(owner, owner_name) if owner_name else owner, method, fired, 'measured', truthy=True)
     _counting(engine, '_physical_refit', fired, 'refit', truthy=False)
     done = set()
     if args.out.exists():
