@@ -864,6 +864,9 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     else one of them only shows outside the amplitude fit (its spectrum or the
     vibration at standstill, with the pair's parameters); one
     named by a stronger rule of :func:`_add_second` goes before the others.
+    When none earns: beside an impulsive first effect, the effect its windows'
+    Gaussian part names (:func:`_second_in_gaussian_part`), else one with
+    evidence no other effect makes (:func:`_exclusive_second`).
     """
     assert first.fit is not None  # the named candidate was fitted
     every = candidates
@@ -889,27 +892,32 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
     if len(earning) > 1 and earning[1].route == earning[0].route == 1 \
             and abs(earning[1].delta_bic - earning[0].delta_bic) < rules.bic_margin:
-        located = [second for second in earning[:2] if second.candidate.effect.covariate == left.located]
-        if len(located) == 1:
-            return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
-                           f'{left.located}, as this effect does'), []
-        shown = [(second, second.effect.independent_evidence(table, location, second.params,
-                                                             beside=second.first_effect)) for second in earning[:2]]
-        with_evidence = [(second, evidence) for second, evidence in shown if evidence]
-        if len(with_evidence) != 1:
-            return None, earning[:2]
-        (named, evidence), = with_evidence
-        other = earning[1] if named is earning[0] else earning[0]
-        return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
-                       'outside the amplitude fit'), []
-    if not earning:
+        return _settle_tied_seconds(table, first, earning[:2], left, location)
+    if not earning:     # the Gaussian part beside an impulsive first effect, then evidence no other effect makes
         in_part = _second_in_gaussian_part(table, first, every, fitted, rules)
-        if in_part is not None:
+        if in_part is not None or not exclusive:
             return in_part, []
-    if not earning and exclusive:
-        struck, signature = exclusive[0]
-        return _exclusive_second(first, struck, signature, fitted.get(struck.effect.id), rules), []
-    return (earning[0] if earning else None), []
+        return _exclusive_second(first, *exclusive[0], fitted.get(exclusive[0][0].effect.id), rules), []
+    return earning[0], []
+
+
+def _settle_tied_seconds(table: WindowTable, first: Candidate, tied: list[SecondEffect], left: Location,
+                         location: Location) -> tuple[SecondEffect | None, list[SecondEffect]]:
+    """Two second effects that earn alike by BIC: the one what ``first`` leaves is located on, else the one shown
+    outside the amplitude fit; ``(None, tied)`` when neither or both (:func:`_second_effect`)."""
+    located = [second for second in tied if second.candidate.effect.covariate == left.located]
+    if len(located) == 1:
+        return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
+                       f'{left.located}, as this effect does'), []
+    shown = [(second, second.effect.independent_evidence(table, location, second.params,
+                                                         beside=second.first_effect)) for second in tied]
+    with_evidence = [(second, evidence) for second, evidence in shown if evidence]
+    if len(with_evidence) != 1:
+        return None, tied
+    (named, evidence), = with_evidence
+    other = tied[1] if named is tied[0] else tied[0]
+    return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
+                   'outside the amplitude fit'), []
 
 
 def _second_in_gaussian_part(table: WindowTable, first: Candidate, candidates: list[Candidate],
