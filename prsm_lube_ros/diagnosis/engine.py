@@ -903,8 +903,11 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
 
 def _settle_tied_seconds(table: WindowTable, first: Candidate, tied: list[SecondEffect], left: Location,
                          location: Location) -> tuple[SecondEffect | None, list[SecondEffect]]:
-    """Two second effects that earn alike by BIC: the one what ``first`` leaves is located on, else the one shown
-    outside the amplitude fit; ``(None, tied)`` when neither or both (:func:`_second_effect`)."""
+    """Of two second effects that earn alike by BIC, the one named, if any (:func:`_second_effect`).
+
+    The one whose covariate what ``first`` leaves is located on, else the one
+    shown outside the amplitude fit; ``(None, tied)`` when neither or both.
+    """
     located = [second for second in tied if second.candidate.effect.covariate == left.located]
     if len(located) == 1:
         return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
