@@ -380,3 +380,23 @@ def test_the_gaussian_part_is_the_table_without_strikes():
     gaps[::4] = np.nan
     from dataclasses import replace
     assert len(replace(table, gaussian_rms=gaps).gaussian_part()) == len(table) - len(gaps[::4])
+
+
+def test_a_second_named_in_the_gaussian_part_without_a_physical_pair_fit_leaves_its_share_unresolved():
+    """The mode shows in the Gaussian part, but no joint fit with the spall on the whole RMS has physical constants.
+
+    The mode is named with its share of the RMS unresolved: the model and the calibration stay the spall's alone,
+    and the words say where it was shown.
+    """
+    table, _ = synthetic_table(np.random.default_rng(7), ('resonance', 'surface_defect'),
+                               plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    diagnosis = diagnose_table(table)
+    second = diagnosis.second
+    assert diagnosis.verdict == 'surface_defect'
+    assert second is not None and second.route == 5 and second.unresolved and second.combined is None
+    assert second.fit is diagnosis.chosen.fit and second.params == {}
+    entry = diagnosis.as_json()['effects'][1]
+    assert entry['effect'] == 'resonance' and entry['share_unresolved'] and not entry['params']
+    assert "in the windows' Gaussian part" in entry['explanation']
+    assert 'effects' not in diagnosis.calibration().extension
+    assert diagnosis.calibration().extension['effect'] == 'surface_defect'
