@@ -37,10 +37,9 @@ DEFECT = 'surface_defect'
 
 
 def named(diagnosis) -> list[str]:
-    """The effect IDs a verdict names, sorted (empty when it names none)."""
-    if not diagnosis.verdict.names_an_effect:
-        return []
-    return sorted([str(diagnosis.verdict)] + ([diagnosis.second.effect.id] if diagnosis.second else []))
+    """The effect IDs a verdict names, sorted, as the studies read them from its JSON."""
+    from prsm_lube_ros.experiments.random_study import _named_effects
+    return sorted(str(e) for e in _named_effects(json.loads(json.dumps(diagnosis.as_json(), default=float))))
 
 
 def run(kinds: tuple[str, ...], seed: int) -> dict:

@@ -869,7 +869,7 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     evidence no other effect makes (:func:`_exclusive_second`).
     """
     assert first.fit is not None  # the named candidate was fitted
-    every = candidates
+    tried = candidates
     remaining = lack_of_fit(table, first.fit.log_residual, first.fit.n_params, rules)
     others_gain = any(c.fit is not None and c.effect.id != first.effect.id and c.gain >= rules.min_gain
                       for c in candidates)
@@ -880,10 +880,10 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
         # Nothing left in the amplitudes: only a candidate seen where no first effect reaches, at standstill,
         # or with evidence no other effect makes.
         shown_ids = {c.effect.id for c, _ in exclusive}
-        candidates = [c for c in candidates if c.effect.standstill_evidence(table) or c.effect.id in shown_ids]
+        tried = [c for c in candidates if c.effect.standstill_evidence(table) or c.effect.id in shown_ids]
     earning = []
     fitted: dict[str, SecondEffect | None] = {}
-    for cand in candidates:
+    for cand in tried:
         if cand.fit is None or cand.effect.id == first.effect.id:
             continue
         second = _add_second(table, first, cand, folds, location, left, rules, fitted)
@@ -894,7 +894,7 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
             and abs(earning[1].delta_bic - earning[0].delta_bic) < rules.bic_margin:
         return _settle_tied_seconds(table, first, earning[:2], left, location)
     if not earning:     # the Gaussian part beside an impulsive first effect, then evidence no other effect makes
-        in_part = _second_in_gaussian_part(table, first, every, fitted, rules)
+        in_part = _second_in_gaussian_part(table, first, candidates, fitted, rules)
         if in_part is not None or not exclusive:
             return in_part, []
         return _exclusive_second(first, *exclusive[0], fitted.get(exclusive[0][0].effect.id), rules), []
@@ -939,15 +939,15 @@ def _second_in_gaussian_part(table: WindowTable, first: Candidate, candidates: l
     (``fitted``, by :func:`_add_second`) where that has physical constants,
     else with its share of the RMS unresolved.
     """
-    gaussian = table.gaussian_rms
-    if not first.effect.impulsive or gaussian is None or len(table) == 0:
+    if not first.effect.impulsive or len(table) == 0:
         return None
-    if np.mean(np.isfinite(gaussian) & (gaussian > 0)) < rules.gaussian_part_share:
+    contacts = table.gaussian_part()
+    if len(contacts) < rules.gaussian_part_share * len(table):
         return None
     families = [c.scores.family for c in candidates if c.scores.family is not None]
     others = {effect.id: effect for effect in families if not effect.impulsive}
     try:
-        part = diagnose_table(table.gaussian_part(), others, rules)
+        part = diagnose_table(contacts, others, rules)
     except InputError:      # too few windows or runs carry the part to fit the constants
         return None
     named = part.chosen
@@ -961,10 +961,21 @@ def _second_in_gaussian_part(table: WindowTable, first: Candidate, candidates: l
         return replace(pair, route=5, basis=basis + f'; the pair there: held-out error {100 * pair.gain:+.1f} % '
                        f'lower than {first.effect.id} alone, BIC {pair.delta_bic:+.1f}')
     own = next((c for c in candidates if c.effect.id == named.effect.id), named)
+    return _unresolved_second(first, own, named.effect, named.form, None, route=5,
+                              basis=basis + '; no fit of the pair on the whole RMS has physical constants')
+
+
+def _unresolved_second(first: Candidate, other: Candidate, effect: Effect, form: str, pair: SecondEffect | None,
+                       route: int, basis: str) -> SecondEffect:
+    """``effect`` (of candidate ``other``, in ``form``) named beside ``first`` with its share of the RMS unresolved.
+
+    The first effect's fit stays the model; ``pair`` (the pair fit that was not
+    kept, None when none has physical constants) gives the gain and BIC.
+    """
     assert first.fit is not None
-    return SecondEffect(own, first.fit, {}, math.nan, math.nan, named.effect, named.form, first.effect,
-                        dict(first.fit.params), first.form, route=5, unresolved=True,
-                        basis=basis + '; no fit of the pair on the whole RMS has physical constants')
+    return SecondEffect(other, first.fit, {}, math.nan if pair is None else pair.gain,
+                        math.nan if pair is None else pair.delta_bic, effect, form, first.effect,
+                        dict(first.fit.params), first.form, route=route, unresolved=True, basis=basis)
 
 
 def _exclusive_second(first: Candidate, other: Candidate, evidence: str, pair: SecondEffect | None,
@@ -982,15 +993,12 @@ def _exclusive_second(first: Candidate, other: Candidate, evidence: str, pair: S
     physical constants) are given in the basis.  ``evidence``: its
     :meth:`.effects.Effect.exclusive_evidence`.
     """
-    assert first.fit is not None
     scored = (f'its amplitude law beside {first.effect.id} has no fit with physical constants' if pair is None else
               f'its amplitude law added to {first.effect.id}: held-out error {100 * pair.gain:+.1f} % lower, '
               f'BIC {pair.delta_bic:+.1f}, not kept')
-    return SecondEffect(other, first.fit, {}, math.nan if pair is None else pair.gain,
-                        math.nan if pair is None else pair.delta_bic, other.effect, other.form, first.effect,
-                        dict(first.fit.params), first.form, route=4, unresolved=True,
-                        basis=f'{evidence}, in {100 * rules.exclusive_evidence_share:.0f} % of the windows or more, '
-                              f'which no other effect makes; {scored}')
+    return _unresolved_second(first, other, other.effect, other.form, pair, route=4,
+                              basis=f'{evidence}, in {100 * rules.exclusive_evidence_share:.0f} % of the windows '
+                                    f'or more, which no other effect makes; {scored}')
 
 
 def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],
