@@ -297,7 +297,9 @@ class ConditionReport:
             words += ' (no healthy baseline: the absolute limits only)'
         return words + (f'; periodic = an envelope line at a strike order >= {r.envelope_db:g} dB over the floor'
                         + (f', strongly periodic also {r.envelope_margin_db:g} dB above the calibration runs\' '
-                           'level there' if self.baseline is not None else ''))
+                           'level there' + ('' if r.unexplained_margin_db is None else
+                                            f' and {r.unexplained_margin_db:g} dB above every line of the run '
+                                            'no component explains') if self.baseline is not None else ''))
 
     def _resolution_words(self, runs: Sequence[RunSummary]) -> list[str]:
         """The resolutions of the section's spectra, in words (Hz and orders per bin, the demodulation bands)."""

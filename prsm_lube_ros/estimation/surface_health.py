@@ -127,7 +127,7 @@ def surface_message(finding: DefectFinding, condition: RunCondition, orders: Seq
     if line is not None:
         return (f'no surface defect: kurtosis below {limit:.1f}; the envelope line at '
                 f'{_order_words(line.component, line.order, orders)} ({line.component}) is within what the '
-                'healthy runs show')
+                'healthy runs show or no higher than lines no defect order explains')
     return f'no surface defect: kurtosis below {limit:.1f}, no envelope line at a defect order'
 
 
