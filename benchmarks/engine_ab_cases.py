@@ -35,6 +35,8 @@ import sys
 import tempfile
 import time
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 BLOCKS = ('diagnose_study_defect_two_1330', 'diagnose_study_defect_evidence_pairs_1400',
           'diagnose_study_defect_evidence_pairs_1500', 'diagnose_study_two_1600_standstill_evidence',
@@ -65,7 +67,7 @@ def _counting(owner: object, name: str, counter: dict[str, int], key: str, *, tr
 
     def wrapped(*args: object, **kwargs: object) -> object:
         out = original(*args, **kwargs)
-        if out or not truthy:
+        if not truthy or (bool(np.any(out)) if isinstance(out, np.ndarray) else out):
             counter[key] += 1
         return out
     setattr(owner, name, wrapped)
@@ -81,6 +83,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--acted', default='prsm_lube_ros.diagnosis.effects.surface_defect:'
                         'SurfaceDefectCandidate.measured_against',
                         help='MODULE:CLASS.METHOD or MODULE:FUNCTION whose truthy return means the rule acted')
+    parser.add_argument('--acted-only', action='store_true',
+                        help='the other engine only where --acted acted (not where _physical_refit ran): for a rule '
+                             'the other checkout lacks and nothing else')
     parser.add_argument('--kinds', nargs='*', default=None, help='only cases of these kinds (default: all)')
     parser.add_argument('--limit', type=int, default=0, help='at most this many cases (0: all)')
     parser.add_argument('--reverse', action='store_true', help='the cases in reverse order (a second worker)')
@@ -95,7 +100,8 @@ def main(argv: list[str] | None = None) -> int:
     fired = {'measured': 0, 'refit': 0}
     owner = importlib.import_module(module)
     _counting(getattr(owner, owner_name) if owner_name else owner, method, fired, 'measured', truthy=True)
-    _counting(engine, '_physical_refit', fired, 'refit', truthy=False)
+    if not args.acted_only:
+        _counting(engine, '_physical_refit', fired, 'refit', truthy=False)
     done = set()
     if args.out.exists():
         done = {(r['kind'], r['seed']) for r in map(json.loads, args.out.read_text().splitlines())}

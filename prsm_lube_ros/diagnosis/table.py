@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import InputError
-from ..estimation.defect_screen import run_condition, strike_line
+from ..estimation.defect_screen import run_condition, strike_line, unexplained_level
 from ..estimation.windowing import AT_REST, DEFAULT_DEFECT_ORDERS, MIN_AXIAL_LOAD, runs_of, usable_windows
 from ..physics.vibration_model import film_speed_load_term, reduced_log_amplitude
 
@@ -55,7 +55,8 @@ PLAN_COVARIATES = ('speed', 'load')
 DRIFT_COVARIATES = ('revolutions', 'time', 'temperature')
 
 #: Optional columns of condition indicators (NaN where a window has none).
-INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'gaussian_rms', 'run_defect_db')
+INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'gaussian_rms', 'run_defect_db',
+                     'run_unexplained_db')
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
@@ -170,6 +171,9 @@ class WindowTable:
     #: The strongest strike-order line of the window's run, its windows' envelope spectra averaged (dB over the
     #: floor, as the defect screen judges a run): one window's line reaches 10 dB by chance now and then.
     run_defect_db: np.ndarray | None = field(default=None, compare=False, repr=False)
+    #: The strongest line of that averaged spectrum at an order no component explains (dB over the floor, 0 when
+    #: none is reported): lines the machine makes wherever no defect is, against which a strike-order line is judged.
+    run_unexplained_db: np.ndarray | None = field(default=None, compare=False, repr=False)
     #: RMS of the band signal's Gaussian part, m/s^2 (its median |x| over the Gaussian's,
     #: :func:`~prsm_lube_ros.estimation.condition_indicators.gaussian_rms`): the RMS without sparse strikes.
     gaussian_rms: np.ndarray | None = field(default=None, compare=False, repr=False)
@@ -268,7 +272,8 @@ class WindowTable:
         measured = np.isfinite(self.gaussian_rms) & (self.gaussian_rms > 0)
         return replace(self.subset(measured), rms=self.gaussian_rms[measured], spectra=None,
                        spectrum_resolution=math.nan, kurtosis=None, crest_factor=None, defect_db=None,
-                       defect_order=None, gaussian_rms=None, run_defect_db=None)
+                       defect_order=None, gaussian_rms=None, run_defect_db=None,
+                       run_unexplained_db=None)
 
     def run_means(self, column: str | np.ndarray) -> np.ndarray:
         """Mean of ``column`` per run, in the order of :attr:`runs` (NaN-aware)."""
@@ -338,7 +343,9 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         run_offset += int(local_run.max()) + 1
         for name, values in zip(INDICATOR_COLUMNS, zip(*(_indicators(w, orders) for w in chosen))):
             rows[name].extend(values)
-        rows['run_defect_db'].extend(_run_lines(chosen, orders))
+        lines, unexplained = _run_lines(chosen, orders)
+        rows['run_defect_db'].extend(lines)
+        rows['run_unexplained_db'].extend(unexplained)
         spectra.extend(w.spectrum for w in chosen)
         resolution = next((w.spectrum_resolution for w in reversed(chosen) if math.isfinite(w.spectrum_resolution)),
                           resolution)
@@ -365,18 +372,22 @@ def _spectrum_array(spectra: Sequence[np.ndarray | None]) -> np.ndarray | None:
     return None
 
 
-def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> list[float]:
-    """For each window, the strongest strike-order line of its run's averaged envelope spectrum, dB.
+def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> tuple[list[float], list[float]]:
+    """For each window, its run's strongest strike-order line and strongest unexplained line, dB.
 
-    0 where the run's spectrum shows none (none reaches the report level), NaN where its windows have none.
+    Both of the run's averaged envelope spectrum (:func:`strike_line`,
+    :func:`unexplained_level`: at an order no component explains); 0 where the
+    run's spectrum shows none (none reaches the report level), NaN where its
+    windows have none.
     """
-    levels = {}
+    levels: dict[int, tuple[float, float]] = {}
     for run, members in runs_of(windows).items():
         condition = run_condition([w.condition for w in members if w.condition is not None], orders)
         line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
         if condition.envelope is not None:   # no line reported: under the report level, taken as 0 dB
-            levels[run] = line.db if line is not None else 0.0
-    return [levels.get(w.run_index, math.nan) for w in windows]
+            levels[run] = (line.db if line is not None else 0.0, unexplained_level(condition.envelope_peaks))
+    pairs = [levels.get(w.run_index, (math.nan, math.nan)) for w in windows]
+    return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
 def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float, float]:

@@ -88,6 +88,25 @@ def test_envelope_lines_at_one_speed_of_several_are_no_defect_evidence():
     assert 'envelope peaks 15 dB' in effect.independent_evidence(two_speeds, None)
 
 
+def test_run_lines_below_the_runs_unexplained_lines_are_no_defect_evidence():
+    # study two 1757: a mode and thermal thinning, lines of 12 dB at the roller-pass order in every run beside
+    # lines of 15 dB at orders no component explains; the defect's evidence is not there, and nothing impulsive is
+    effect = get_effect('surface_defect')
+    speeds = np.repeat([10.0, 15.0, 22.0], 14)[:40]
+    crowded = table_of(3.0, defect_db=12.0)
+    crowded.speed, crowded.run_defect_db, crowded.run_unexplained_db = speeds, np.full(40, 12.0), np.full(40, 15.0)
+    assert candidate.unspecific_lines(candidate.indicators(crowded)).all()
+    assert effect.independent_evidence(crowded, None) == ''
+    assert 'not impulsive' in effect.contrary_evidence(crowded, None)
+    # the same lines standing above the runs' unexplained ones are evidence, as are those of a table built
+    # before the column (NaN: nothing to judge them against)
+    clear = table_of(3.0, defect_db=12.0)
+    clear.speed, clear.run_defect_db, clear.run_unexplained_db = speeds, np.full(40, 12.0), np.full(40, 9.0)
+    assert 'envelope peaks 12 dB' in effect.independent_evidence(clear, None)
+    clear.run_unexplained_db = np.full(40, np.nan)
+    assert 'envelope peaks 12 dB' in effect.independent_evidence(clear, None)
+
+
 def test_beside_a_defect_a_spectral_shape_change_is_no_background_evidence():
     background = get_effect('background_vibration')
     location = SimpleNamespace(spectrum=None, shape=SimpleNamespace(floor_added=True, note='the shape changes'))
