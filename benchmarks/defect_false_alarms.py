@@ -38,7 +38,8 @@ sys.path.insert(0, str(ROOT))
 
 from prsm_lube_ros.estimation.calibration_file import load_calibration  # noqa: E402
 from prsm_lube_ros.estimation.condition_indicators import EnvelopePeak  # noqa: E402
-from prsm_lube_ros.estimation.defect_screen import DEFAULT_RULES, RunCondition, screen  # noqa: E402
+from prsm_lube_ros.estimation.defect_screen import ConditionBaseline, DEFAULT_RULES  # noqa: E402
+from prsm_lube_ros.estimation.defect_screen import RunCondition, screen  # noqa: E402
 from prsm_lube_ros.estimation.windowing import DEFAULT_DEFECT_ORDERS  # noqa: E402
 
 RESULTS = ROOT / 'benchmarks' / 'results'
@@ -67,7 +68,7 @@ def pooled_condition(run: dict) -> RunCondition:
                         nan if c.get('order_resolution') is None else c['order_resolution'])
 
 
-def seed_runs(seed: int, folder: Path, endurance: float) -> list[dict]:
+def seed_runs(seed: int, folder: Path, endurance: float) -> tuple[list[dict], ConditionBaseline | None]:
     """Simulate, calibrate and assess one seed's three recordings; each run with its family and pooled condition."""
     healthy, drift, damaged = folder / 'healthy', folder / 'endurance', folder / 'defect'
     prsm_lube('simulate', healthy, '--seed', seed, '--run-order', 'random')

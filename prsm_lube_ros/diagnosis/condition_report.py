@@ -295,11 +295,14 @@ class ConditionReport:
                       f'{max(r.healthy_crest, r.crest_ratio * b.crest_max):.2f} (healthy baseline of {b.runs} runs)')
         else:
             words += ' (no healthy baseline: the absolute limits only)'
-        return words + (f'; periodic = an envelope line at a strike order >= {r.envelope_db:g} dB over the floor'
-                        + (f', strongly periodic also {r.envelope_margin_db:g} dB above the calibration runs\' '
-                           'level there' + ('' if r.unexplained_margin_db is None else
-                                            f' and {r.unexplained_margin_db:g} dB above every line of the run '
-                                            'no component explains') if self.baseline is not None else ''))
+        words += f'; periodic = an envelope line at a strike order >= {r.envelope_db:g} dB over the floor'
+        if self.baseline is None:
+            return words
+        words += f', strongly periodic also {r.envelope_margin_db:g} dB above the calibration runs\' level there'
+        if r.unexplained_margin_db is not None:
+            words += (f' and at least {r.unexplained_margin_db:g} dB above every line of the run at an order no '
+                      'component explains')
+        return words
 
     def _resolution_words(self, runs: Sequence[RunSummary]) -> list[str]:
         """The resolutions of the section's spectra, in words (Hz and orders per bin, the demodulation bands)."""

@@ -54,9 +54,10 @@ PLAN_COVARIATES = ('speed', 'load')
 #: Columns that drift over a session, run after run (compared over runs for confounding and collinearity).
 DRIFT_COVARIATES = ('revolutions', 'time', 'temperature')
 
+#: The indicator columns each window gives by itself (:func:`_indicators`); the others are its run's.
+_WINDOW_INDICATORS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'gaussian_rms')
 #: Optional columns of condition indicators (NaN where a window has none).
-INDICATOR_COLUMNS = ('kurtosis', 'crest_factor', 'defect_db', 'defect_order', 'gaussian_rms', 'run_defect_db',
-                     'run_unexplained_db')
+INDICATOR_COLUMNS = _WINDOW_INDICATORS + ('run_defect_db', 'run_unexplained_db')
 
 #: Spectra are kept when at least this share of the windows has one (of one size).
 SPECTRA_NEEDED = 0.9
@@ -341,11 +342,7 @@ def table_from_windows(windows_per_recording: Sequence[Sequence[Window]], *, the
         back = {r for r in np.unique(run_ids) if np.nanmedian(travel[run_ids == r]) < 0}
         directions.extend(-1.0 if r in back else 1.0 for r in run_ids)
         run_offset += int(local_run.max()) + 1
-        for name, values in zip(INDICATOR_COLUMNS, zip(*(_indicators(w, orders) for w in chosen))):
-            rows[name].extend(values)
-        lines, unexplained = _run_lines(chosen, orders)
-        rows['run_defect_db'].extend(lines)
-        rows['run_unexplained_db'].extend(unexplained)
+        _add_indicators(rows, chosen, orders)
         spectra.extend(w.spectrum for w in chosen)
         resolution = next((w.spectrum_resolution for w in reversed(chosen) if math.isfinite(w.spectrum_resolution)),
                           resolution)
@@ -372,6 +369,16 @@ def _spectrum_array(spectra: Sequence[np.ndarray | None]) -> np.ndarray | None:
     return None
 
 
+def _add_indicators(rows: dict[str, list], windows: Sequence[Window], orders: Sequence[DefectOrder]) -> None:
+    """Append the windows' :data:`INDICATOR_COLUMNS` to ``rows``: each window's own, then its run's lines."""
+    own = [_indicators(w, orders) for w in windows]
+    for k, name in enumerate(_WINDOW_INDICATORS):
+        rows[name].extend(values[k] for values in own)
+    lines, unexplained = _run_lines(windows, orders)
+    rows['run_defect_db'].extend(lines)
+    rows['run_unexplained_db'].extend(unexplained)
+
+
 def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> tuple[list[float], list[float]]:
     """For each window, its run's strongest strike-order line and strongest unexplained line, dB.
 
@@ -391,7 +398,10 @@ def _run_lines(windows: Sequence[Window], orders: Sequence[DefectOrder]) -> tupl
 
 
 def _indicators(window: Window, orders: Sequence[DefectOrder]) -> tuple[float, float, float, float, float]:
-    """(kurtosis, crest factor, strike line dB, its order, Gaussian RMS) of a window; NaN where it has none."""
+    """The window's own indicator columns: kurtosis, crest factor, strike line dB, its order, Gaussian RMS.
+
+    NaN where it has none.
+    """
     condition = window.condition
     if condition is None:
         return math.nan, math.nan, math.nan, math.nan, math.nan

@@ -43,8 +43,8 @@ import math
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
-from .defect_screen import (DEFAULT_RULES, DefectFinding, NOT_SUSPECTED, run_condition, screen, screen_limits,
-                            STRIKE_COMPONENTS)
+from .defect_screen import (below_unexplained, DEFAULT_RULES, DefectFinding, NOT_SUSPECTED, run_condition, screen,
+                            screen_limits, STRIKE_COMPONENTS, unexplained_level)
 from .health import ERROR, LEVEL_NAMES, OK, STALE, WARN
 
 if TYPE_CHECKING:
@@ -125,9 +125,11 @@ def surface_message(finding: DefectFinding, condition: RunCondition, orders: Seq
     if impulsive:
         return f'no surface defect: impulsive (kurtosis above {limit:.1f}) but no envelope line at a defect order'
     if line is not None:
+        why = ('below a line at an order no component explains'
+               if below_unexplained(line.db, unexplained_level(condition.envelope_peaks), rules)
+               else 'within what the healthy runs show')
         return (f'no surface defect: kurtosis below {limit:.1f}; the envelope line at '
-                f'{_order_words(line.component, line.order, orders)} ({line.component}) is within what the '
-                'healthy runs show or no higher than lines no defect order explains')
+                f'{_order_words(line.component, line.order, orders)} ({line.component}) is {why}')
     return f'no surface defect: kurtosis below {limit:.1f}, no envelope line at a defect order'
 
 

@@ -88,7 +88,7 @@ def test_envelope_lines_at_one_speed_of_several_are_no_defect_evidence():
     assert 'envelope peaks 15 dB' in effect.independent_evidence(two_speeds, None)
 
 
-def test_run_lines_below_the_runs_unexplained_lines_are_no_defect_evidence():
+def test_run_lines_below_the_runs_unexplained_lines_are_no_evidence_for_a_defect_nor_against_it():
     # study two 1757: a mode and thermal thinning, lines of 12 dB at the roller-pass order in every run beside
     # lines of 15 dB at orders no component explains; the defect's evidence is not there, and nothing impulsive is
     effect = get_effect('surface_defect')
@@ -97,11 +97,11 @@ def test_run_lines_below_the_runs_unexplained_lines_are_no_defect_evidence():
     crowded.speed, crowded.run_defect_db, crowded.run_unexplained_db = speeds, np.full(40, 12.0), np.full(40, 15.0)
     assert candidate.unspecific_lines(candidate.indicators(crowded)).all()
     assert effect.independent_evidence(crowded, None) == ''
-    assert 'not impulsive' in effect.contrary_evidence(crowded, None)
-    # the same lines standing above the runs' unexplained ones are evidence, as are those of a table built
-    # before the column (NaN: nothing to judge them against)
+    assert effect.contrary_evidence(crowded, None) == ''     # lines at a defect order are there: none against
+    # the same lines as high as the runs' unexplained ones are evidence, as are those of a table built before
+    # the column (NaN: nothing to judge them against)
     clear = table_of(3.0, defect_db=12.0)
-    clear.speed, clear.run_defect_db, clear.run_unexplained_db = speeds, np.full(40, 12.0), np.full(40, 9.0)
+    clear.speed, clear.run_defect_db, clear.run_unexplained_db = speeds, np.full(40, 12.0), np.full(40, 12.0)
     assert 'envelope peaks 12 dB' in effect.independent_evidence(clear, None)
     clear.run_unexplained_db = np.full(40, np.nan)
     assert 'envelope peaks 12 dB' in effect.independent_evidence(clear, None)
@@ -419,3 +419,25 @@ def test_a_second_named_in_the_gaussian_part_without_a_physical_pair_fit_leaves_
     assert "in the windows' Gaussian part" in entry['explanation']
     assert 'effects' not in diagnosis.calibration().extension
     assert diagnosis.calibration().extension['effect'] == 'surface_defect'
+
+
+def test_a_table_of_recorded_windows_carries_each_runs_strike_and_unexplained_lines(paper_experiment):
+    from prsm_lube_ros.diagnosis.table import runs_of, table_from_windows
+    from prsm_lube_ros.estimation.defect_screen import run_condition, strike_line, unexplained_level
+    from prsm_lube_ros.estimation.pipeline import recording_windows
+    from prsm_lube_ros.estimation.windowing import DEFAULT_DEFECT_ORDERS as orders
+    windows = recording_windows(paper_experiment / 'stage_3', lead=0.005).windows
+    table = table_from_windows([windows])
+    assert np.isfinite(table.run_unexplained_db).all() and np.isfinite(table.run_defect_db).all()
+    assert (table.run_unexplained_db > 0).any()        # healthy runs hold lines no component explains
+    checked = 0
+    for run, members in runs_of([w for w in windows if w.steady]).items():
+        condition = run_condition([w.condition for w in members if w.condition is not None], orders)
+        line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)
+        rows = np.isin(table.time, [0.5 * (w.start + w.end) - min(x.start for x in windows) for w in members])
+        if rows.any():
+            assert table.run_unexplained_db[rows] == pytest.approx(unexplained_level(condition.envelope_peaks))
+            assert table.run_defect_db[rows] == pytest.approx(line.db if line is not None else 0.0)
+            checked += 1
+    assert checked >= 6
+    assert np.isnan(table.gaussian_part().run_unexplained_db).all()

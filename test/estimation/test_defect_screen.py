@@ -59,7 +59,7 @@ def test_a_line_the_healthy_runs_have_too_is_not_enough_alone():
     assert screen(run(4.1, 4.2, 3.75, 11.0), ORDERS, BASELINE).suspected
 
 
-def test_a_strike_line_no_higher_than_lines_no_component_explains_is_not_enough_alone():
+def test_a_strike_line_below_a_line_no_component_explains_is_not_enough_alone():
     # 14 dB at the screw raceway order clears the baseline by 9 dB, but the run holds a 14.5 dB line at 2.1x that
     # no defect order explains: modulation the machine makes, so the strike-order line is no evidence by itself.
     line = run(3.1, 4.2, 6.25, 14.0)
@@ -68,13 +68,18 @@ def test_a_strike_line_no_higher_than_lines_no_component_explains_is_not_enough_
     assert screen(line, ORDERS, BASELINE).suspected
     assert not screen(crowded, ORDERS, BASELINE).suspected
     assert screen(crowded, ORDERS, BASELINE, DefectRules(unexplained_margin_db=None)).suspected
-    # ... and a line the run's own unexplained lines do not reach still is, as is impulsiveness beside it.
-    assert screen(crowded, ORDERS, BASELINE, DefectRules(unexplained_margin_db=0.0)).suspected is False
+    # ... and a line the run's own unexplained lines do not pass still is (a tie too), as is impulsiveness beside it.
     lower = RunCondition(3.1, 4.2, line.envelope_peaks + (EnvelopePeak(2.1, 11.0, ''),), 10, 0.1, line.envelope)
     assert screen(lower, ORDERS, BASELINE).suspected
+    tie = RunCondition(3.1, 4.2, line.envelope_peaks + (EnvelopePeak(2.1, 14.0, ''),), 10, 0.1, line.envelope)
+    assert screen(tie, ORDERS, BASELINE).suspected
+    assert not screen(tie, ORDERS, BASELINE, DefectRules(unexplained_margin_db=0.5)).suspected
     assert screen(RunCondition(4.1, 4.2, crowded.envelope_peaks, 10, 0.1, line.envelope), ORDERS, BASELINE).suspected
     with pytest.raises(InputError, match='unexplained_margin_db'):
         DefectRules(unexplained_margin_db=-1.0)
+    with pytest.raises(InputError, match='envelope_db'):
+        DefectRules(envelope_db=True)
+    assert DefectRules(envelope_db=np.float32(12.0), healthy_kurtosis=np.int64(4)).envelope_db == 12.0
 
 
 def test_carrier_lines_modulate_and_are_no_strike_evidence():

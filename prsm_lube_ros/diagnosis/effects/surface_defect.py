@@ -25,7 +25,7 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from ...estimation.defect_screen import DEFAULT_RULES
+from ...estimation.defect_screen import below_unexplained, DEFAULT_RULES
 from ...physics.effects import surface_defect as law
 from .base import Effect, register
 
@@ -91,24 +91,25 @@ def _pooled(columns: dict[str, np.ndarray]) -> bool:
     return bool(np.isfinite(columns['run_defect_db']).mean() >= INDICATOR_SHARE)
 
 
-def _line_levels(columns: dict[str, np.ndarray]) -> np.ndarray:
+def _line_levels(columns: dict[str, np.ndarray], specific: bool = True) -> np.ndarray:
     """Per window the strike-order envelope line judged: its run's averaged one where known, else its own.
 
     One window's envelope line reaches :data:`DEFECT_DB` by chance now and then (10-15 % of healthy 1 kHz
-    windows); the run average of ten windows does not (the defect screen judges runs for that reason).  A run's
-    line no higher than a line of the same run at an order no component explains counts as none
-    (:func:`unspecific_lines`).
+    windows); the run average of ten windows does not (the defect screen judges runs for that reason).
+    ``specific``: a run's line below a line of the same run at an order no component explains counts as none
+    (:func:`unspecific_lines`), as evidence for the defect; as evidence against it every line counts.
     """
     if not _pooled(columns):
         return columns['defect_db']
-    return np.where(unspecific_lines(columns), 0.0, columns['run_defect_db'])
+    return np.where(unspecific_lines(columns), 0.0, columns['run_defect_db']) if specific else columns['run_defect_db']
 
 
 def unspecific_lines(columns: dict[str, np.ndarray]) -> np.ndarray:
     """Windows whose run's strike-order line reaches :data:`DEFECT_DB` but not the run's unexplained lines.
 
-    Those lines the evidence does not count: below a line of the same run at
-    an order no component explains (plus the margin).
+    Those lines the evidence for the defect does not count: below a line of
+    the same run at an order no component explains (plus the margin,
+    :func:`~prsm_lube_ros.estimation.defect_screen.below_unexplained`).
 
     The defect screen's rule (``DefectRules.unexplained_margin_db``): a machine
     modulates its vibration wherever no defect is, a structural mode's ring
@@ -117,12 +118,9 @@ def unspecific_lines(columns: dict[str, np.ndarray]) -> np.ndarray:
     roller-pass order beside unexplained ones of 11.8-18.8 dB in every run,
     a resonance and thermal thinning read as a surface defect).
     """
-    margin = DEFAULT_RULES.unexplained_margin_db
-    if margin is None:
-        return np.zeros(columns['run_defect_db'].shape, dtype=bool)
     lines = columns['run_defect_db']
     with np.errstate(invalid='ignore'):
-        return (lines >= DEFECT_DB) & (lines < columns['run_unexplained_db'] + margin)
+        return (lines >= DEFECT_DB) & below_unexplained(lines, columns['run_unexplained_db'])
 
 
 def _follows_the_order(table: WindowTable, peaked: np.ndarray) -> bool:
@@ -287,7 +285,7 @@ class SurfaceDefectCandidate(Effect, law.Extension):
         columns = indicators(table)
         if columns is None:
             return ''
-        kurtosis, peaks = columns['kurtosis'], _line_levels(columns)
+        kurtosis, peaks = columns['kurtosis'], _line_levels(columns, specific=False)
         impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
         if impulsive > NOT_IMPULSIVE_SHARE or np.mean(np.isfinite(peaks) & (peaks >= DEFECT_DB)) >= IMPULSIVE_SHARE:
             return ''
