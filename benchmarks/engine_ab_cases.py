@@ -88,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
                         help='the other engine only where --acted acted (not where _physical_refit ran): for a rule '
                              'the other checkout lacks and nothing else')
     parser.add_argument('--kinds', nargs='*', default=None, help='only cases of these kinds (default: all)')
+    parser.add_argument('--where-acted', type=Path, default=None,
+                        help='only the cases an earlier --out file records the rule acting in (a changed rule '
+                             'checked again where it matters)')
     parser.add_argument('--limit', type=int, default=0, help='at most this many cases (0: all)')
     parser.add_argument('--reverse', action='store_true', help='the cases in reverse order (a second worker)')
     args = parser.parse_args(argv)
@@ -107,6 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.out.exists():
         done = {(r['kind'], r['seed']) for r in map(json.loads, args.out.read_text().splitlines())}
     cases = [c for c in study_cases(args.blocks, args.effect) if args.kinds is None or c[0] in args.kinds]
+    if args.where_acted is not None:
+        acted = {(r['kind'], r['seed']) for r in map(json.loads, args.where_acted.read_text().splitlines())
+                 if r['fired'].get('measured')}
+        cases = [c for c in cases if c[:2] in acted]
     cases = cases[::-1] if args.reverse else cases
     cases = cases[:args.limit] if args.limit else cases
     print(f'{len(cases)} cases, {sum(c[0] == "two" for c in cases)} pairs', flush=True)
