@@ -28,8 +28,6 @@ import argparse
 import dataclasses
 import json
 from pathlib import Path
-import shutil
-import subprocess
 import sys
 import tempfile
 
@@ -42,30 +40,23 @@ from prsm_lube_ros.estimation.defect_screen import ConditionBaseline, DEFAULT_RU
 from prsm_lube_ros.estimation.defect_screen import RunCondition, screen  # noqa: E402
 from prsm_lube_ros.estimation.windowing import DEFAULT_DEFECT_ORDERS  # noqa: E402
 
+from femto_defects import prsm_lube  # noqa: E402  (beside this file: the installed command, whole process)
+
 RESULTS = ROOT / 'benchmarks' / 'results'
 #: The rule sets compared: this checkout's defaults, and without the unexplained-line requirement.
 RULE_SETS = {'default': DEFAULT_RULES,
              'without unexplained-line margin': dataclasses.replace(DEFAULT_RULES, unexplained_margin_db=None)}
 
 
-def prsm_lube(*args: object) -> None:
-    """The installed command, whole process; exits naming the step when it fails."""
-    command = shutil.which('prsm-lube')
-    if not command:
-        raise SystemExit('prsm-lube is not on PATH: source .env-jazzy.sh (tools/setup-env) first')
-    result = subprocess.run([command, *map(str, args)], capture_output=True, text=True, timeout=900)
-    if result.returncode != 0:
-        raise SystemExit(f'prsm-lube {" ".join(map(str, args[:2]))} failed: {result.stderr.strip()[-400:]}')
-
-
 def pooled_condition(run: dict) -> RunCondition:
     """A run's pooled indicators as the assessment JSON gives them (no averaged spectrum: the screen needs none)."""
     c = run['condition_indicators']
+
+    def number(name: str) -> float:    # JSON has null where the assessment had NaN
+        return float('nan') if c.get(name) is None else c[name]
     peaks = tuple(EnvelopePeak(p['order'], p['db'], p['component']) for p in c['envelope_peaks'])
-    nan = float('nan')
-    return RunCondition(nan if c['kurtosis'] is None else c['kurtosis'],
-                        nan if c['crest_factor'] is None else c['crest_factor'], peaks, c.get('windows', 0),
-                        nan if c.get('order_resolution') is None else c['order_resolution'])
+    return RunCondition(number('kurtosis'), number('crest_factor'), peaks, c.get('windows', 0),
+                        number('order_resolution'))
 
 
 def seed_runs(seed: int, folder: Path, endurance: float) -> tuple[list[dict], ConditionBaseline | None]:

@@ -10,9 +10,9 @@ default ``surface_defect``; pairs first), diagnoses each with this tree's
 engine and records whether the rule acted: ``--acted MODULE:CLASS.METHOD``
 (default the surface defect's ``measured_against``) returned words (an array:
 any element true), or the engine's ``_physical_refit`` ran (not counted with
-``--acted-only``, for a rule the other checkout lacks and nothing else).  Where something acted, the very same window
-table is pickled and diagnosed by the ``--before`` checkout's engine in a
-subprocess (its own code on ``PYTHONPATH``); elsewhere the two engines take
+``--acted-only``, for a rule the other checkout lacks and nothing else).
+Where something acted, the very same window table is pickled and diagnosed
+by the ``--before`` checkout's engine in a subprocess (its own code on ``PYTHONPATH``); elsewhere the two engines take
 the same path, so the verdicts agree by construction.
 
 Each case is one JSON line in ``--out`` (appended; cases already there are

@@ -119,8 +119,7 @@ def unspecific_lines(columns: dict[str, np.ndarray]) -> np.ndarray:
     a resonance and thermal thinning read as a surface defect).
     """
     lines = columns['run_defect_db']
-    with np.errstate(invalid='ignore'):
-        return (lines >= DEFECT_DB) & below_unexplained(lines, columns['run_unexplained_db'])
+    return (lines >= DEFECT_DB) & below_unexplained(lines, columns['run_unexplained_db'])
 
 
 def _follows_the_order(table: WindowTable, peaked: np.ndarray) -> bool:
