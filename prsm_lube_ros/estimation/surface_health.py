@@ -171,6 +171,14 @@ class SurfaceMonitor:
         """Whether steady windows with indicators come in but the group has not been judged yet."""
         return self._condition is None and bool(self._group) and not self._unscreenable
 
+    def pending_with(self, incoming: bool) -> bool:
+        """:attr:`pending`, counting a steady window with indicators on its way (``incoming``) as come in.
+
+        A live node publishes a window's theta_Oil before its indicators reach
+        the screen: the first window after start is pending as the screen will be.
+        """
+        return self._condition is None and (bool(self._group) or incoming) and not self._unscreenable
+
     @property
     def baseline(self) -> ConditionBaseline | None:
         """The healthy baseline judged against (None: the absolute limits only)."""

@@ -29,7 +29,7 @@ is left out and reported once per kind through ``problems``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Any, TYPE_CHECKING
 
@@ -303,9 +303,16 @@ class WindowBuilder:
     accumulate in :attr:`problems` (drain it with :meth:`take_problems`).
     """
 
-    def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005) -> None:
+    def __init__(self, settings: WindowSettings | None = None, lead: float = 0.005, *,
+                 defer_conditions: bool = False) -> None:
         self.settings = settings or WindowSettings()
         self.lead = float(lead)
+        #: Closed windows come out with their band RMS but no condition indicators yet; those are computed by
+        #: :meth:`complete_conditions` (a live node publishes theta_Oil first, then screens the surface).
+        self.defer_conditions = bool(defer_conditions)
+        #: (rows in the closing table, indicator arguments) of the windows being closed, then (windows, arguments)
+        self._deferring: list[tuple[list[int], tuple]] = []
+        self._deferred: list[tuple[list[Window], tuple]] = []
         self._open = _OpenWindows()
         #: (time s, samples) per open window key, for the band and spectra
         self._chunks: dict[int, list[tuple[float, np.ndarray]]] = {}
@@ -789,7 +796,32 @@ class WindowBuilder:
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
                                   position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
                                   rate_k if rate_k > 0 else math.nan, condition))
+        self._hold_deferred(windows)
         return windows
+
+    def _hold_deferred(self, windows: list[Window]) -> None:
+        """The deferred indicator jobs of the windows just closed, by window instead of table row."""
+        self._deferred.extend(([windows[row] for row in rows], arguments) for rows, arguments in self._deferring)
+        self._deferring = []
+
+    def conditions_deferred(self, window: Window) -> bool:
+        """Whether ``window`` (closed, not yet through :meth:`complete_conditions`) gets its indicators there."""
+        return any(window is waiting for windows, _ in self._deferred for waiting in windows)
+
+    def complete_conditions(self) -> list[Window]:
+        """The windows closed since the last call whose indicators were deferred, with them (``defer_conditions``).
+
+        In closing order; each is the closed window with its ``condition`` set
+        (the same numbers as without deferring: the windows of one batch are
+        transformed together, as :meth:`_band_and_conditions` would have).
+        """
+        deferred, self._deferred = self._deferred, []
+        completed: list[Window] = []
+        for windows, arguments in deferred:
+            samples, rate, speeds, band, orders, tracks, spectra = arguments
+            found = condition_indicators_batch(samples, rate, speeds, band, orders, tracks, spectra=spectra)
+            completed.extend(replace(window, condition=condition) for window, condition in zip(windows, found))
+        return completed
 
     def _band_and_conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, Any]]],
                              rms: np.ndarray, count: np.ndarray, conditions: list[ConditionIndicators | None]) -> None:
@@ -822,10 +854,13 @@ class WindowBuilder:
                 if not wanted:
                     continue
                 every = len(wanted) == len(part)     # the arrays as they are, no copy of their rows
-                found = condition_indicators_batch(x if every else x[wanted], rate, [part[i][2] for i in wanted],
-                                                   (band.low, band.high), self.settings.defect_orders,
-                                                   [part[i][3] for i in wanted],
-                                                   spectra=spectra if every else spectra[wanted])
+                arguments = (x if every else x[wanted], rate, [part[i][2] for i in wanted], (band.low, band.high),
+                             self.settings.defect_orders, [part[i][3] for i in wanted],
+                             spectra if every else spectra[wanted])
+                if self.defer_conditions:
+                    self._deferring.append(([part[i][0] for i in wanted], arguments))
+                    continue
+                found = condition_indicators_batch(*arguments[:6], spectra=arguments[6])
                 for i, condition in zip(wanted, found):
                     conditions[part[i][0]] = condition
 

@@ -33,3 +33,27 @@ def test_every_second_window_has_indicators_and_every_window_its_rms():
 def test_condition_every_must_be_a_positive_integer(bad):
     with pytest.raises(InputError, match='condition_every'):
         WindowSettings(condition_every=bad)
+
+
+def test_deferred_indicators_come_with_complete_conditions_and_are_the_same_numbers():
+    # A live node publishes theta first: closed windows without indicators, then complete_conditions gives them.
+    now = windows()
+    builder = WindowBuilder(WindowSettings(band=DEFAULT_BAND), lead=0.005, defer_conditions=True)
+    later, completed = [], []
+    for batch in synthetic_inputs.interleave(synthetic_inputs.run_streams(plateau=20.0, hold=8.0)):
+        builder.add(batch)
+        closed = builder.pop_closed()
+        assert all(w.condition is None for w in closed)
+        assert all(builder.conditions_deferred(w) == w.steady for w in closed)
+        later += closed
+        completed += builder.complete_conditions()
+        assert not any(builder.conditions_deferred(w) for w in closed)
+    later += builder.finish()
+    completed += builder.complete_conditions()
+    assert builder.complete_conditions() == []
+    steady = [w for w in later if w.steady]
+    assert [w.start for w in completed] == [w.start for w in steady] == [w.start for w in now]
+    for deferred, direct in zip(completed, now):
+        assert deferred == direct and deferred.vibration_rms == direct.vibration_rms
+        assert deferred.condition.as_dict() == direct.condition.as_dict()
+        assert deferred.condition.kurtosis == direct.condition.kurtosis

@@ -167,6 +167,19 @@ def test_a_low_theta_before_the_first_judgement_is_not_yet_judged_as_oil():
     assert not unscreenable.pending
 
 
+def test_a_window_with_indicators_on_their_way_counts_as_come_in():
+    # The live node publishes a window before its indicators reach the screen: pending_with(True) then.
+    monitor = SurfaceMonitor(DEFAULT_DEFECT_ORDERS, windows=2)
+    assert monitor.pending_with(True) and not monitor.pending_with(False) and not monitor.pending
+    feed(monitor, windows(1, strike=8.0))
+    assert monitor.pending_with(False) == monitor.pending is True
+    feed(monitor, windows(1, strike=8.0, seed=9), start=1.0)
+    assert monitor.judged and not monitor.pending_with(True)     # judged: nothing to wait for
+    unscreenable = SurfaceMonitor(DEFAULT_DEFECT_ORDERS, windows=2)
+    unscreenable.observe(None, 1.0)
+    assert not unscreenable.pending_with(True)                  # no indicators come: no screen to wait for
+
+
 def test_helpers():
     assert kurtosis_limit(None) == 4.0 and kurtosis_limit(HEALTHY) == 4.0
     assert kurtosis_limit(ConditionBaseline(2, 4.0, 4.2, 5.0, 5.5)) == 5.0
