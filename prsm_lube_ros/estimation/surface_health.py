@@ -44,14 +44,14 @@ from typing import TYPE_CHECKING
 
 from ..errors import InputError
 from .defect_screen import (below_unexplained, DEFAULT_RULES, DefectFinding, NOT_SUSPECTED, run_condition, screen,
-                            screen_limits, STRIKE_COMPONENTS, unexplained_level)
+                            screen_limits, strike_line, unexplained_level)
 from .health import ERROR, LEVEL_NAMES, OK, STALE, WARN
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from ..physics.defect_orders import DefectOrder
-    from .condition_indicators import ConditionIndicators, EnvelopePeak
+    from .condition_indicators import ConditionIndicators
     from .defect_screen import ConditionBaseline, DefectRules, RunCondition
     from .health import HealthStatus
 
@@ -101,13 +101,6 @@ def _order_words(component: str, order: float, orders: Sequence[DefectOrder]) ->
     return f'{nominal if math.isfinite(nominal) else order:.3g}x screw speed'
 
 
-def _strike_line_of(condition: RunCondition, rules: DefectRules) -> EnvelopePeak | None:
-    """The strongest reported envelope peak labelled with a strike component (fundamental), at least envelope_db."""
-    lines = [p for p in condition.envelope_peaks if p.db >= rules.envelope_db and p.component
-             and all(part in STRIKE_COMPONENTS for part in p.component.split(' or '))]
-    return max(lines, key=lambda p: p.db) if lines else None
-
-
 def surface_message(finding: DefectFinding, condition: RunCondition, orders: Sequence[DefectOrder],
                     limit: float, rules: DefectRules = DEFAULT_RULES) -> str:
     """The status message of a judgement: the state and the component, no number that changes window by window."""
@@ -121,7 +114,8 @@ def surface_message(finding: DefectFinding, condition: RunCondition, orders: Seq
                     f'{finding.component} defect suspected; {NOT_A_MEASURE}')
         return ('impulsive vibration with no envelope line at a defect order: surface defect suspected; '
                 f'{NOT_A_MEASURE}')
-    line = _strike_line_of(condition, rules)
+    line = strike_line(condition.envelope_peaks, orders, condition.order_resolution)   # the line the screen judged
+    line = line if line is not None and line.db >= rules.envelope_db else None
     if impulsive:
         return f'no surface defect: impulsive (kurtosis above {limit:.1f}) but no envelope line at a defect order'
     if line is not None:
