@@ -192,6 +192,7 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     for subscription in node.subscriptions:        # every callback the executor runs marks an arrival
         subscription.callback = timed_callback(subscription.callback)
     delay, window_length = node._settings.completion_delay, node._settings.window_length
+    _freeze_as_run_node_does()
     if executor_kind == 'events':
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()    # its node was built with plain callbacks (see below)
@@ -208,6 +209,7 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     begin = time.monotonic() + WARM_UP
     while time.monotonic() < begin:
         executor.spin_once(timeout_sec=0.05)
+    _time_full_collections(record, state, clock)
     state['measuring'] = True
     timeline['measure_start'] = time.time()
     record['warm_up_callbacks'] = state['callbacks'] - callbacks_before
@@ -235,6 +237,37 @@ def run_estimator(count: int, duration: float, folder: str, profile: bool = Fals
     record['cpu_seconds'], record['wall_seconds'] = cpu, wall1 - wall0
     record['lag_at'] = [t - wall0 for t in record['lag_at']]
     return record
+
+
+def _freeze_as_run_node_does() -> None:
+    """``startup.freeze_startup_objects`` where the code measured has it (run_node calls it once the node is built)."""
+    try:
+        from prsm_lube_ros.nodes.startup import freeze_startup_objects
+    except ImportError:        # a checkout from before it: its process did not freeze
+        return
+    freeze_startup_objects()
+
+
+def _time_full_collections(record: dict, state: dict, clock) -> None:
+    """Record the duration (s) of each full garbage collection (generation 2) while measuring."""
+    import gc
+    record['gc_full'] = []
+    started = {}
+
+    def callback(phase, info):
+        if info.get('generation') != 2:
+            return
+        if phase == 'start':
+            started['at'] = clock()
+        elif state['measuring'] and 'at' in started:
+            record['gc_full'].append(clock() - started['at'])
+    gc.callbacks.append(callback)
+
+
+def _add_times(row: dict) -> str:
+    """``p50 / p99`` ms of adding one vibration batch to the builder, from a level's processing times."""
+    block = row.get('processing', {}).get('vibration', {})
+    return f'{block.get("p50_ms", math.nan):.2f} / {block.get("p99_ms", math.nan):.2f}'
 
 
 def _profile_table(profiler, top: int = 14) -> list:
@@ -429,6 +462,9 @@ def measure(count: int, duration: float, profile: bool = False, raw_band: bool =
         # Wall clock (s since the epoch) of the estimator's ready, first input and measurement.
         'timeline': record['timeline'], 'warm_up_callbacks': record['warm_up_callbacks'],
         'estimator_log_bytes': record['log_bytes'],
+        # Full garbage collections while measuring (the whole process stops for them): count and longest, ms.
+        'gc_full_collections': len(record.get('gc_full', [])),
+        'gc_full_max_ms': 1e3 * max(record.get('gc_full') or [0.0]),
     }
     if 'profile' in record:
         summary['profile'] = record['profile']
@@ -669,11 +705,14 @@ def compare(args: argparse.Namespace) -> int:
               f'{100 * c["cpu_at_max"]:.0f} % | {c["cpu_ms_per_actuator_s"]:.2f} | '
               f'{c["actuators_per_core_from_cpu"]:.0f} |' for c in configurations]
     lines += ['', '| configuration | actuators | CPU | CPU ms per actuator-s | latency p50 ms | latency p99 ms | '
+              'close delay p99 ms | block add p50 / p99 ms | gc full: count, max ms | '
               'lag p99 s | blocks in | windows out | generator kept up | falls behind |',
-              '|---|---|---|---|---|---|---|---|---|---|---|']
+              '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|']
     lines += [f'| {c["label"]} | {r["actuators"]} | {100 * r["cpu_utilisation"]:.0f} % | '
               f'{1e3 * r["cpu_utilisation"] / r["actuators"]:.2f} | {r["latency_p50_ms"]:.2f} | '
-              f'{r["latency_p99_ms"]:.2f} | {r["lag_p99_s"]:.3f} | '
+              f'{r["latency_p99_ms"]:.2f} | {r["close_delay_p99_ms"]:.0f} | {_add_times(r)} | '
+              f'{r.get("gc_full_collections", 0)}, {r.get("gc_full_max_ms", math.nan):.1f} | '
+              f'{r["lag_p99_s"]:.3f} | '
               f'{100 * r["blocks_received_fraction"]:.1f} %{_lost(r)} | '
               f'{100 * r["windows_published_fraction"]:.0f} %{_lost(r, "windows")} | '
               f'{"yes" if r["generator_kept_up"] else "NO"}{_busy(r)} | '

@@ -169,9 +169,11 @@ class SurfaceMonitor:
         """:attr:`pending`, counting a steady window with indicators on its way (``incoming``) as come in.
 
         A live node publishes a window's theta_Oil before its indicators reach
-        the screen: the first window after start is pending as the screen will be.
+        the screen: the first window after start is pending as the screen will
+        be, and so is the first after a calibration without a band (nothing
+        screenable) gave way to one with a band.
         """
-        return self._condition is None and (bool(self._group) or incoming) and not self._unscreenable
+        return self._condition is None and (incoming or (bool(self._group) and not self._unscreenable))
 
     @property
     def baseline(self) -> ConditionBaseline | None:

@@ -310,8 +310,7 @@ class WindowBuilder:
         #: Closed windows come out with their band RMS but no condition indicators yet; those are computed by
         #: :meth:`complete_conditions` (a live node publishes theta_Oil first, then screens the surface).
         self.defer_conditions = bool(defer_conditions)
-        #: (rows in the closing table, indicator arguments) of the windows being closed, then (windows, arguments)
-        self._deferring: list[tuple[list[int], tuple]] = []
+        #: (closed windows, indicator arguments) of the indicators deferred since the last complete_conditions
         self._deferred: list[tuple[list[Window], tuple]] = []
         self._open = _OpenWindows()
         #: (time s, samples) per open window key, for the band and spectra
@@ -781,7 +780,7 @@ class WindowBuilder:
                     segment = (spectrum_segment(rate_k, s.spectrum_lowest_frequency, int(round(length * rate_k)))
                                if s.spectrum_lowest_frequency > 0 else s.spectrum_segment)
                     spectra[row] = _power_spectrum(samples, rate_k, segment)
-        self._band_and_conditions(jobs, rms, count, conditions)
+        deferring = self._band_and_conditions(jobs, rms, count, conditions)
         for k in keys.tolist():
             self._angle_chunks.pop(k, None)
         columns = zip((keys * length).tolist(), ((keys + 1) * length).tolist(), rms.tolist(),
@@ -796,35 +795,33 @@ class WindowBuilder:
             windows.append(Window(start, end, rms_k, count_k, coverage_k, speed_k, spread_k, load_k, temperature_k,
                                   position_k, revolutions_k, run_k, kind, reason, spectrum, resolution,
                                   rate_k if rate_k > 0 else math.nan, condition))
-        self._hold_deferred(windows)
+        self._deferred.extend(([windows[row] for row in rows], arguments) for rows, arguments in deferring)
         return windows
-
-    def _hold_deferred(self, windows: list[Window]) -> None:
-        """The deferred indicator jobs of the windows just closed, by window instead of table row."""
-        self._deferred.extend(([windows[row] for row in rows], arguments) for rows, arguments in self._deferring)
-        self._deferring = []
 
     def conditions_deferred(self, window: Window) -> bool:
         """Whether ``window`` (closed, not yet through :meth:`complete_conditions`) gets its indicators there."""
         return any(window is waiting for windows, _ in self._deferred for waiting in windows)
 
-    def complete_conditions(self) -> list[Window]:
-        """The windows closed since the last call whose indicators were deferred, with them (``defer_conditions``).
+    def complete_conditions(self) -> list[tuple[Window, Window]]:
+        """``(closed window, the same with its condition)`` for each window whose indicators were deferred.
 
-        In closing order; each is the closed window with its ``condition`` set
-        (the same numbers as without deferring: the windows of one batch are
-        transformed together, as :meth:`_band_and_conditions` would have).
+        Every window closed since the last call that waits for its indicators
+        (``defer_conditions``), grouped as they are transformed (by sample count
+        and rate, not always in closing order: match them by the first item).
+        The numbers are those without deferring: the windows of one batch are
+        transformed together, as :meth:`_band_and_conditions` would have.
         """
         deferred, self._deferred = self._deferred, []
-        completed: list[Window] = []
+        completed: list[tuple[Window, Window]] = []
         for windows, arguments in deferred:
             samples, rate, speeds, band, orders, tracks, spectra = arguments
             found = condition_indicators_batch(samples, rate, speeds, band, orders, tracks, spectra=spectra)
-            completed.extend(replace(window, condition=condition) for window, condition in zip(windows, found))
+            completed.extend((window, replace(window, condition=found_k)) for window, found_k in zip(windows, found))
         return completed
 
     def _band_and_conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, Any]]],
-                             rms: np.ndarray, count: np.ndarray, conditions: list[ConditionIndicators | None]) -> None:
+                             rms: np.ndarray, count: np.ndarray,
+                             conditions: list[ConditionIndicators | None]) -> list[tuple[list[int], tuple]]:
         """Band RMS of the windows in ``jobs`` into ``rms``, and their indicators (where asked) into ``conditions``.
 
         The windows of one sample count and rate are transformed together, a
@@ -834,10 +831,13 @@ class WindowBuilder:
         spectra go to :func:`~.condition_indicators.condition_indicators_batch`,
         so no window is transformed twice.  Rows of ``rms`` and ``count``
         (finite samples: non-finite ones are zeros in the samples) are the
-        windows' rows in the closing table.
+        windows' rows in the closing table.  With ``defer_conditions`` the
+        indicators are not computed: returns ``(rows, arguments)`` of each batch
+        for :meth:`complete_conditions` (else nothing).
         """
+        deferring: list[tuple[list[int], tuple]] = []
         if not jobs or self.band is None:
-            return
+            return deferring
         band = self.band
         for (n, rate), group in jobs.items():
             if n < 2:
@@ -858,11 +858,12 @@ class WindowBuilder:
                              self.settings.defect_orders, [part[i][3] for i in wanted],
                              spectra if every else spectra[wanted])
                 if self.defer_conditions:
-                    self._deferring.append(([part[i][0] for i in wanted], arguments))
+                    deferring.append(([part[i][0] for i in wanted], arguments))
                     continue
                 found = condition_indicators_batch(*arguments[:6], spectra=arguments[6])
                 for i, condition in zip(wanted, found):
                     conditions[part[i][0]] = condition
+        return deferring
 
     def _window_angles(self, key: int, first_time: float) -> tuple[np.ndarray | None, np.ndarray | None]:
         """Stamps (s from ``first_time``, the window's first sample) and turned screw angle (rad) in window ``key``."""

@@ -24,9 +24,11 @@ A window's theta_Oil is published as soon as its band RMS is known; its
 condition indicators are computed after that (the window builder's
 ``defer_conditions``) and go to the screen then, so each window is judged by
 the screen of the windows before it: withholding starts with the window after
-the one that made the screen suspect a defect, and theta_Oil reaches its
-subscribers without waiting for the envelope analysis (about 1 ms a window at
-4 kHz, ``benchmarks/live_latency.py``).
+the one that made the screen suspect a defect, and the callback that closes a
+window publishes its theta_Oil before the envelope analysis (about 1 ms a
+window at 4 kHz, ``benchmarks/live_latency.py``).  The executor still does
+that analysis before its next callback, so where many actuators close windows
+at once, the last of them waits for the others' as before.
 
 Windows are made in the band of the actuator's calibration
 (:mod:`prsm_lube_ros.estimation.conditioning`: DC and gravity out, nothing
@@ -966,13 +968,13 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
 
         Then ``/diagnostics`` at once where the lubrication or surface level changed (judged with this screen).
         """
-        completed: dict[float, Window] = {}
+        completed: dict[int, Window] = {}     # by the closed window's identity (two may share a start: a reset)
         try:
-            completed = {window.start: window for window in channel.builder.complete_conditions()}
+            completed = {id(closed): window for closed, window in channel.builder.complete_conditions()}
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, 'condition indicators', exc)
         for window in windows:
-            self._screen(channel, completed.get(window.start, window))
+            self._screen(channel, completed.get(id(window), window))
         now = self.now()
         if (self._health(channel, now).level != channel.last_level
                 or self._surface(channel, now).level != channel.last_surface_level):

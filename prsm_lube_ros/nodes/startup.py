@@ -14,6 +14,7 @@ thread, with nothing else running.
 """
 from __future__ import annotations
 
+import gc
 import signal
 import sys
 import threading
@@ -28,8 +29,8 @@ from rclpy.signals import SignalHandlerOptions
 
 from ..errors import InputError
 
-__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'autostart', 'build_node', 'init_ros', 'run_node',
-           'spin_until_stopped']
+__all__ = ['EXIT_BAD_INPUT', 'STOP_POLL_PERIOD', 'autostart', 'build_node', 'freeze_startup_objects', 'init_ros',
+           'run_node', 'spin_until_stopped']
 
 #: Exit status of a node whose configuration or source cannot be used.
 EXIT_BAD_INPUT = 2
@@ -81,6 +82,19 @@ def build_node(factory: Callable[[], Node], node_name: str) -> Node | None:
         return None
 
 
+def freeze_startup_objects() -> None:
+    """Move everything alive now out of the garbage collector's generations (``gc.freeze``).
+
+    A node process's start-up objects (modules, rclpy, the node and its
+    tables) live until it exits; left in the oldest generation, every full
+    collection walks them again: 20-30 ms each from 64 actuators on, in the
+    middle of a callback, 0.9-2.7 ms once frozen (``benchmarks/live_latency.py``,
+    its full-collection column).  Cycles made later are collected as before.
+    """
+    gc.collect()
+    gc.freeze()
+
+
 def run_node(factory: Callable[[], Node], node_name: str, args: Sequence[str] | None = None,
              done: Callable[[Any], bool] = lambda node: False,
              exit_status: Callable[[Any], int] = lambda node: 0) -> int:
@@ -93,6 +107,7 @@ def run_node(factory: Callable[[], Node], node_name: str, args: Sequence[str] | 
     node = build_node(factory, node_name)
     if node is None:
         return EXIT_BAD_INPUT
+    freeze_startup_objects()
     spin_until_stopped([node], done=lambda: done(node))
     return exit_status(node)
 

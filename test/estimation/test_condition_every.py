@@ -46,10 +46,12 @@ def test_deferred_indicators_come_with_complete_conditions_and_are_the_same_numb
         assert all(w.condition is None for w in closed)
         assert all(builder.conditions_deferred(w) == w.steady for w in closed)
         later += closed
-        completed += builder.complete_conditions()
+        pairs = builder.complete_conditions()
+        assert all(any(closed_k is w for w in closed) for closed_k, _ in pairs)     # each with the window it completes
+        completed += [window for _, window in pairs]
         assert not any(builder.conditions_deferred(w) for w in closed)
     later += builder.finish()
-    completed += builder.complete_conditions()
+    completed += [window for _, window in builder.complete_conditions()]
     assert builder.complete_conditions() == []
     steady = [w for w in later if w.steady]
     assert [w.start for w in completed] == [w.start for w in steady] == [w.start for w in now]
@@ -57,3 +59,26 @@ def test_deferred_indicators_come_with_complete_conditions_and_are_the_same_numb
         assert deferred == direct and deferred.vibration_rms == direct.vibration_rms
         assert deferred.condition.as_dict() == direct.condition.as_dict()
         assert deferred.condition.kurtosis == direct.condition.kurtosis
+
+
+def test_deferred_windows_sharing_a_start_after_a_clock_reset_each_get_their_own_indicators():
+    # Stamps going back (a replay restarted) close the old windows and, within one flush, new ones at the same
+    # starts: each deferred window comes back paired with itself, never with its namesake.
+    builder = WindowBuilder(WindowSettings(band=DEFAULT_BAND), lead=0.005, defer_conditions=True)
+    first = synthetic_inputs.interleave(synthetic_inputs.run_streams(plateau=20.0, hold=14.0, tail=0.0))
+    for batch in [b for b in first if float(b.stamps[0]) < synthetic_inputs.T0 + 12.8]:
+        builder.add(batch)
+        builder.pop_closed()
+        builder.complete_conditions()
+    second = synthetic_inputs.interleave(synthetic_inputs.run_streams(
+        plateau=20.0, hold=14.0, tail=0.0, t0=synthetic_inputs.T0 + 5.8, amplitude=5.0))
+    for batch in [b for b in second if float(b.stamps[0]) < synthetic_inputs.T0 + 14.0]:
+        builder.add(batch)
+    closed = builder.pop_closed()
+    starts = [w.start for w in closed if builder.conditions_deferred(w)]
+    assert len(starts) > len(set(starts))          # the case: two deferred windows with one start
+    pairs = builder.complete_conditions()
+    assert sorted(id(window) for window, _ in pairs) == sorted(id(w) for w in closed if w.steady)
+    for window, with_condition in pairs:
+        assert with_condition.start == window.start and with_condition.vibration_rms == window.vibration_rms
+        assert with_condition.condition is not None

@@ -176,8 +176,10 @@ def test_a_window_with_indicators_on_their_way_counts_as_come_in():
     feed(monitor, windows(1, strike=8.0, seed=9), start=1.0)
     assert monitor.judged and not monitor.pending_with(True)     # judged: nothing to wait for
     unscreenable = SurfaceMonitor(DEFAULT_DEFECT_ORDERS, windows=2)
-    unscreenable.observe(None, 1.0)
-    assert not unscreenable.pending_with(True)                  # no indicators come: no screen to wait for
+    unscreenable.observe(None, 1.0)                              # a calibration without a band: nothing screened
+    assert not unscreenable.pending_with(False)
+    # ... then one with a band: the first window with indicators on their way waits for the screen, not read as oil.
+    assert unscreenable.pending_with(True)
 
 
 def test_helpers():
