@@ -33,8 +33,9 @@ import tempfile
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / 'benchmarks' / 'results'
 sys.path.insert(0, str(ROOT))
+
+from results_files import write_results  # noqa: E402  (beside this file)
 
 #: The recorded pairs of a background and a mode: below the band (missed) and above or inside it (named).
 CASES = (1346, 1737, 1760, 1801, 1807, 1706, 1713, 1819)
@@ -128,10 +129,7 @@ def main(argv=None) -> int:
                      f'{", ".join(r.get("named", [])) or ("-" if "named" not in r else "none")} | '
                      f'{_number(r.get("background_gain"), ".1%")} | {_number(r.get("mode_gain"), ".1%")} | '
                      f'{_number(r.get("background_c_lambda"), ".2f")} |')
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f'{args.name}.json').write_text(json.dumps(rows, indent=1))
-    (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
-    print('\n'.join(lines))
+    write_results(args.name, rows, lines, indent=1)
     return 0
 
 

@@ -67,8 +67,9 @@ import sys
 import tempfile
 import time
 
+from results_files import write_results     # beside this file
+
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / 'benchmarks' / 'results'
 SPEED, LOAD, THETA = 20.0, 150.0, 0.8
 RATE, BLOCK = 4000.0, 0.1
 WARM_UP = 3.0          # s of wall time after the first message before measuring
@@ -635,10 +636,7 @@ def main(argv=None) -> int:
                               'functions': measure(args.profile_at, args.duration, profile=True,
                                                    raw_band=args.raw_band,
                                                    condition_every=args.condition_every)['profile']}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
-    (RESULTS / f'{args.name}.md').write_text(markdown(results))
-    print(markdown(results))
+    write_results(args.name, results, markdown(results).split('\n'))
     return 0
 
 
@@ -717,10 +715,7 @@ def compare(args: argparse.Namespace) -> int:
               f'{100 * r["windows_published_fraction"]:.0f} %{_lost(r, "windows")} | '
               f'{"yes" if r["generator_kept_up"] else "NO"}{_busy(r)} | '
               f'{", ".join(r["behind"]) or "no"} |' for c in configurations for r in c['levels']]
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
-    (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
-    print('\n'.join(lines))
+    write_results(args.name, results, lines)
     return 0
 
 

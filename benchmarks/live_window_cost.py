@@ -23,7 +23,6 @@ Usage: ``python benchmarks/live_window_cost.py [--seconds 120] [--repeat 3] [--n
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 import platform
@@ -32,9 +31,10 @@ import sys
 import time
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / 'benchmarks' / 'results'
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / 'benchmarks'))
+
+from results_files import write_results  # noqa: E402  (beside this file)
 
 
 def stream(seconds: float):
@@ -125,10 +125,7 @@ def main(argv=None) -> int:
              '| calibration | CPU ms per actuator-second | share of one core per 50 actuators |', '|---|---|---|']
     lines += [f'| {words[r["mode"]]} | {r["cpu_ms_per_actuator_second"]:.2f} | '
               f'{5 * r["cpu_ms_per_actuator_second"]:.1f} % |' for r in rows]
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f'{args.name}.json').write_text(json.dumps(results, indent=2))
-    (RESULTS / f'{args.name}.md').write_text('\n'.join(lines) + '\n')
-    print('\n'.join(lines))
+    write_results(args.name, results, lines)
     return 0 if all(math.isfinite(r['cpu_ms_per_actuator_second']) for r in rows) else 1
 
 
