@@ -24,11 +24,12 @@ A window's theta_Oil is published as soon as its band RMS is known; its
 condition indicators are computed after that (the window builder's
 ``defer_conditions``) and go to the screen then, so each window is judged by
 the screen of the windows before it: withholding starts with the window after
-the one that made the screen suspect a defect, and the callback that closes a
-window publishes its theta_Oil before the envelope analysis (about 1 ms a
-window at 4 kHz, ``benchmarks/live_latency.py``).  The executor still does
-that analysis before its next callback, so where many actuators close windows
-at once, the last of them waits for the others' as before.
+the one that made the screen suspect a defect.  The analysis (about 1 ms a
+window at 4 kHz) runs in a guard condition's callback, which the executor
+serves after the subscriptions that were ready with it: where many actuators
+close windows at once, they all publish before any analysis runs
+(``benchmarks/live_latency.py``).  An actuator's next close, a calibration
+swap or a deactivation screens what is still waiting first.
 
 Windows are made in the band of the actuator's calibration
 (:mod:`prsm_lube_ros.estimation.conditioning`: DC and gravity out, nothing
@@ -418,6 +419,7 @@ class ActuatorChannel:
     withheld_theta: float = math.nan                 # theta_Oil of the last window withheld for a surface defect
     withholding: bool = False                        # the last assessed window's theta was withheld
     last_surface_level: int | None = None
+    unscreened: list = field(default_factory=list)   # windows published, their indicators not yet screened
     inputs: dict = field(default_factory=dict)       # input key: TopicStatus (rate and stamps), while active
     subscriptions: dict = field(default_factory=dict)  # input key: its subscription, while active
 
@@ -520,6 +522,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._calibrate_actions: list[ActionServer] = []
         self._input_subscriptions: list = []
         self._timers_started: list = []
+        self._screen_guard: Any = None     # guard condition of the surface screens waiting (while active)
         self._diagnostics: Publisher | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
@@ -630,6 +633,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._timers_started.append(self.create_timer(self._drain_period, self._drain_idle,
                                                       callback_group=self._input_group,
                                                       clock=Clock(clock_type=ClockType.STEADY_TIME)))
+        # The executor serves guard conditions after the subscriptions ready at the same wait: the windows every
+        # actuator closed there are all published before any of their envelope analyses runs (module doc).
+        self._screen_guard = self.create_guard_condition(self._screen_waiting, callback_group=self._input_group)
 
     def _halt(self) -> None:
         """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
@@ -637,6 +643,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._flush_before_change(channel)
         for timer in self._timers_started:
             self.destroy_timer(timer)
+        if self._screen_guard is not None:
+            self.destroy_guard_condition(self._screen_guard)
+            self._screen_guard = None
         for subscription in self._input_subscriptions:
             self.destroy_subscription(subscription)
         for service in self._calibrate_services:
@@ -872,6 +881,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if channel.pending:
             self._flush(channel)
+        self._screen_closed(channel)      # their indicators too, in the band and under the baseline they met
 
     @staticmethod
     def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
@@ -958,16 +968,30 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             windows = []
         for line in channel.builder.take_problems():
             self.log.warning(f'{channel.name}: {line}')
+        self._screen_closed(channel)     # windows of an earlier close first: the screen takes them in order
         for window in windows:
             self._evaluate(channel, window)      # theta_Oil out first; the surface screen after (module doc)
         if windows:
-            self._screen_closed(channel, windows)    # then /diagnostics where a level changed
+            channel.unscreened.extend(windows)
+            if self._screen_guard is not None:
+                self._screen_guard.trigger()     # after the other subscriptions ready now (module doc)
+            else:
+                self._screen_closed(channel)
 
-    def _screen_closed(self, channel: ActuatorChannel, windows: list[Window]) -> None:
-        """The windows just published into the surface screen, their deferred condition indicators computed now.
+    def _screen_waiting(self) -> None:
+        """Guard condition: the surface screens of the windows published since (every actuator's)."""
+        with self._lock:
+            for channel in self.channels:
+                self._screen_closed(channel)
+
+    def _screen_closed(self, channel: ActuatorChannel) -> None:
+        """The windows published and not yet screened into the surface screen, their condition indicators now.
 
         Then ``/diagnostics`` at once where the lubrication or surface level changed (judged with this screen).
         """
+        windows, channel.unscreened = channel.unscreened, []
+        if not windows:
+            return
         completed: dict[int, Window] = {}     # by the closed window's identity (two may share a start: a reset)
         try:
             completed = {id(closed): window for closed, window in channel.builder.complete_conditions()}
