@@ -46,7 +46,7 @@ from ..recording.plausibility import (duration_problem, MAX_ACCELERATION, MAX_AX
                                       plausible_temperatures, rate_problem, TEMPERATURE_RANGE)
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from collections.abc import Iterable, Sequence
 
     import numpy.typing as npt
 
@@ -802,21 +802,27 @@ class WindowBuilder:
         """Whether ``window`` (closed, not yet through :meth:`complete_conditions`) gets its indicators there."""
         return any(window is waiting for windows, _ in self._deferred for waiting in windows)
 
-    def complete_conditions(self) -> list[tuple[Window, Window]]:
+    def complete_conditions(self, windows: Sequence[Window] | None = None) -> list[tuple[Window, Window]]:
         """``(closed window, the same with its condition)`` for each window whose indicators were deferred.
 
         Every window closed since the last call that waits for its indicators
-        (``defer_conditions``), grouped as they are transformed (by sample count
-        and rate, not always in closing order: match them by the first item).
-        The numbers are those without deferring: the windows of one batch are
-        transformed together, as :meth:`_band_and_conditions` would have.
+        (``defer_conditions``), or those of ``windows`` (closed windows, by
+        identity: the others, closed later, keep waiting), grouped as they are
+        transformed (by sample count and rate, not always in closing order:
+        match them by the first item).  The numbers are those without
+        deferring: the windows of one batch are transformed together, as
+        :meth:`_band_and_conditions` would have.
         """
+        wanted = None if windows is None else {id(window) for window in windows}
         deferred, self._deferred = self._deferred, []
         completed: list[tuple[Window, Window]] = []
-        for windows, arguments in deferred:
+        for waiting, arguments in deferred:
+            if wanted is not None and not any(id(window) in wanted for window in waiting):
+                self._deferred.append((waiting, arguments))
+                continue
             samples, rate, speeds, band, orders, tracks, spectra = arguments
             found = condition_indicators_batch(samples, rate, speeds, band, orders, tracks, spectra=spectra)
-            completed.extend((window, replace(window, condition=found_k)) for window, found_k in zip(windows, found))
+            completed.extend((window, replace(window, condition=found_k)) for window, found_k in zip(waiting, found))
         return completed
 
     def _band_and_conditions(self, jobs: dict[tuple[int, float], list[tuple[int, np.ndarray, float, Any]]],

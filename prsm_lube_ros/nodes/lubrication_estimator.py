@@ -25,9 +25,9 @@ condition indicators are computed after that (the window builder's
 ``defer_conditions``) and go to the screen then, so each window is judged by
 the screen of the windows before it: withholding starts with the window after
 the one that made the screen suspect a defect.  The analysis (about 1 ms a
-window at 4 kHz) runs in a guard condition's callback, which the executor
-serves after the subscriptions that were ready with it: where many actuators
-close windows at once, they all publish before any analysis runs
+window at 4 kHz) runs in a one-shot timer's callback, ready at the executor's
+next wait: with rclpy's executors, where many actuators close windows in the
+callbacks of one wait, they all publish before any analysis runs
 (``benchmarks/live_latency.py``).  An actuator's next close, a calibration
 swap or a deactivation screens what is still waiting first.
 
@@ -522,7 +522,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._calibrate_actions: list[ActionServer] = []
         self._input_subscriptions: list = []
         self._timers_started: list = []
-        self._screen_guard: Any = None     # guard condition of the surface screens waiting (while active)
+        self._screen_timer: Any = None     # one-shot timer of the surface screens waiting (while active)
         self._diagnostics: Publisher | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._stop_forecast = threading.Event()
@@ -633,9 +633,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._timers_started.append(self.create_timer(self._drain_period, self._drain_idle,
                                                       callback_group=self._input_group,
                                                       clock=Clock(clock_type=ClockType.STEADY_TIME)))
-        # The executor serves guard conditions after the subscriptions ready at the same wait: the windows every
-        # actuator closed there are all published before any of their envelope analyses runs (module doc).
-        self._screen_guard = self.create_guard_condition(self._screen_waiting, callback_group=self._input_group)
+        # Reset when windows wait for their screen, ready at the executor's next wait: the windows every actuator
+        # closed at this one are all published before any of their envelope analyses runs (module doc).  A timer,
+        # not a guard condition: rclpy's EventsExecutor refuses nodes with guard conditions.
+        self._screen_timer = self.create_timer(0.0, self._screen_waiting, callback_group=self._input_group,
+                                               clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._screen_timer.cancel()
 
     def _halt(self) -> None:
         """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
@@ -643,9 +646,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._flush_before_change(channel)
         for timer in self._timers_started:
             self.destroy_timer(timer)
-        if self._screen_guard is not None:
-            self.destroy_guard_condition(self._screen_guard)
-            self._screen_guard = None
+        if self._screen_timer is not None:
+            self.destroy_timer(self._screen_timer)
+            self._screen_timer = None
         for subscription in self._input_subscriptions:
             self.destroy_subscription(subscription)
         for service in self._calibrate_services:
@@ -881,7 +884,8 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if channel.pending:
             self._flush(channel)
-        self._screen_closed(channel)      # their indicators too, in the band and under the baseline they met
+        if self._screen_closed(channel):      # their indicators too, in the band and under the baseline they met
+            self._publish_diagnostics(inputs=False)
 
     @staticmethod
     def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
@@ -968,41 +972,46 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             windows = []
         for line in channel.builder.take_problems():
             self.log.warning(f'{channel.name}: {line}')
-        self._screen_closed(channel)     # windows of an earlier close first: the screen takes them in order
+        if self._screen_closed(channel):     # windows of an earlier close first: the screen takes them in order
+            self._publish_diagnostics(inputs=False)
         for window in windows:
             self._evaluate(channel, window)      # theta_Oil out first; the surface screen after (module doc)
         if windows:
             channel.unscreened.extend(windows)
-            if self._screen_guard is not None:
-                self._screen_guard.trigger()     # after the other subscriptions ready now (module doc)
-            else:
-                self._screen_closed(channel)
+            if self._screen_timer is not None:
+                self._screen_timer.reset()       # after the other callbacks ready now (module doc)
+            elif self._screen_closed(channel):
+                self._publish_diagnostics(inputs=False)
 
     def _screen_waiting(self) -> None:
-        """Guard condition: the surface screens of the windows published since (every actuator's)."""
+        """One-shot timer: the surface screens of the windows published since, every actuator's; then /diagnostics."""
         with self._lock:
-            for channel in self.channels:
-                self._screen_closed(channel)
+            if self._screen_timer is not None:
+                self._screen_timer.cancel()
+            changed = [self._screen_closed(channel) for channel in self.channels]
+            if any(changed):
+                self._publish_diagnostics(inputs=False)     # every actuator screened first: none judged half-way
 
-    def _screen_closed(self, channel: ActuatorChannel) -> None:
+    def _screen_closed(self, channel: ActuatorChannel) -> bool:
         """The windows published and not yet screened into the surface screen, their condition indicators now.
 
-        Then ``/diagnostics`` at once where the lubrication or surface level changed (judged with this screen).
+        Returns whether the actuator's lubrication or surface level changed
+        (the caller publishes ``/diagnostics`` then; the input rates are
+        counted on the timer's beat only).
         """
         windows, channel.unscreened = channel.unscreened, []
         if not windows:
-            return
+            return False
         completed: dict[int, Window] = {}     # by the closed window's identity (two may share a start: a reset)
         try:
-            completed = {id(closed): window for closed, window in channel.builder.complete_conditions()}
+            completed = {id(closed): window for closed, window in channel.builder.complete_conditions(windows)}
         except Exception as exc:     # a bug, not bad input: say so once, with the traceback, and go on
             self._internal_error(channel, 'condition indicators', exc)
         for window in windows:
             self._screen(channel, completed.get(id(window), window))
         now = self.now()
-        if (self._health(channel, now).level != channel.last_level
-                or self._surface(channel, now).level != channel.last_surface_level):
-            self._publish_diagnostics(inputs=False)    # the input rates are counted on the timer's beat only
+        return (self._health(channel, now).level != channel.last_level
+                or self._surface(channel, now).level != channel.last_surface_level)
 
     def _internal_error(self, channel: ActuatorChannel, key: str, exc: Exception) -> None:
         """Count an unexpected exception; log the first with its traceback."""
@@ -1087,7 +1096,9 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         return channel.surface.status(stale)
 
     def _status(self, channel: ActuatorChannel, now: float) -> DiagnosticStatus:
-        status = self._health(channel, now)
+        # A window published and not yet screened counts as on its way to the screen, as when it was published.
+        status = self._health(channel, now, incoming=any(channel.builder.conditions_deferred(window)
+                                                         for window in channel.unscreened))
         w = channel.last_window
         values = [
             ('theta_oil', channel.last_theta),

@@ -82,3 +82,21 @@ def test_deferred_windows_sharing_a_start_after_a_clock_reset_each_get_their_own
     for window, with_condition in pairs:
         assert with_condition.start == window.start and with_condition.vibration_rms == window.vibration_rms
         assert with_condition.condition is not None
+
+
+def test_complete_conditions_of_given_windows_leaves_later_ones_waiting():
+    builder = WindowBuilder(WindowSettings(band=DEFAULT_BAND), lead=0.005, defer_conditions=True)
+    batches = synthetic_inputs.interleave(synthetic_inputs.run_streams(plateau=20.0, hold=8.0))
+    half = len(batches) // 2
+    for batch in batches[:half]:
+        builder.add(batch)
+    first = [w for w in builder.pop_closed() if w.steady]
+    for batch in batches[half:]:
+        builder.add(batch)
+    second = [w for w in builder.pop_closed() + builder.finish() if w.steady]
+    assert first and second
+    done = builder.complete_conditions(first)
+    assert sorted(id(w) for w, _ in done) == sorted(id(w) for w in first)
+    assert all(builder.conditions_deferred(w) for w in second)       # closed later: still waiting
+    assert sorted(id(w) for w, _ in builder.complete_conditions(second)) == sorted(id(w) for w in second)
+    assert builder.complete_conditions() == []

@@ -1538,3 +1538,49 @@ def test_the_simulators_healthy_rig_replayed_live_stays_ok(graph, tmp_path):
     wait_for(lambda: last_status(arrays, 'surface condition').message.startswith('no surface defect'), 5, 'OK')
     assert any(math.isfinite(s.theta_oil) for s in states)
     assert not any('withheld' in s.message for s in states)
+
+
+def test_windows_closed_twice_before_their_screen_each_reach_it_with_their_own_indicators(graph, tmp_path):
+    # An actuator that closes windows again before the one-shot timer screened its last ones (a lagging node, a
+    # drain-timer flush): every steady window still reaches the surface screen, in order, with its indicators.
+    node = screened_estimator(graph, tmp_path)
+    channel = node.channels[0]
+    evaluated, screened = [], []
+    evaluate, screen = node._evaluate, node._screen
+    node._evaluate = lambda ch, window: (evaluated.append(window), evaluate(ch, window))[1]
+    node._screen = lambda ch, window: (screened.append(window), screen(ch, window))[1]
+    batches = synthetic_inputs.interleave(synthetic_inputs.run_streams(plateau=20.0, hold=8.0))
+    with node._lock:      # the timer's callback waits for the lock: no screen runs between these closes
+        for index, batch in enumerate(batches):
+            channel.builder.add(batch)
+            if index % 140 == 139:
+                node._close_windows(channel)
+        node._close_windows(channel)
+    wait_for(lambda: not channel.unscreened, 5, 'the last windows screened by the timer')
+    steady = [w.start for w in evaluated if w.steady]
+    assert len(steady) >= 5
+    assert [w.start for w in screened if w.steady] == steady
+    assert all(w.condition is not None for w in screened if w.steady)
+
+
+def test_the_estimator_spins_under_the_events_executor(tmp_path):
+    # rclpy's EventsExecutor refuses nodes with guard conditions: the screen's wake-up is a timer.
+    import rclpy
+    from rclpy.experimental import EventsExecutor
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(os.environ.get('ROS_DOMAIN_ID', '0')))
+    node, executor = None, None
+    try:
+        save_calibration(calibration(START), tmp_path / 'calibration_prsm.yaml')
+        node = LubricationEstimator(context=context, parameter_overrides=[
+            Parameter('calibration_file', value=str(tmp_path / 'calibration_{actuator}.yaml'))])
+        executor = EventsExecutor(context=context)
+        executor.add_node(node)
+        for _ in range(5):
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
