@@ -1456,8 +1456,12 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
                     channel.monitor.set_thresholds(thresholds)
             if 'defect_windows' in names:
                 self._defect_windows = defect_windows
+                changed = False
                 for channel in self.channels:
+                    changed |= self._screen_closed(channel)     # windows waiting are pooled as they were closed
                     channel.surface.set_windows(defect_windows)
+                if changed:
+                    self._publish_diagnostics(inputs=False)
             if 'min_axial_load' in names:
                 self._min_axial_load = float(values['min_axial_load'])
                 for channel in self.channels:
