@@ -8,7 +8,6 @@ Chromium (``tools/install-browser``) and checks every figure loaded.
 """
 import os
 from pathlib import Path
-import random
 import re
 import subprocess
 import sys
@@ -33,7 +32,10 @@ def demo(tmp_path_factory):
     pytest.importorskip('rclpy')
     pytest.importorskip('prsm_lube_ros.srv')
     out = tmp_path_factory.mktemp('demo')
-    env = dict(os.environ, ROS_DOMAIN_ID=str(random.randrange(100, 200)),
+    # Its own domain, 50 past the worker's (conftest: workers 13 apart), so no other graph can reach it: a random
+    # draw gave two workers running this fixture the same domain (random seeded alike) and their demos mixed inputs.
+    worker_domain = int(os.environ.get('ROS_DOMAIN_ID', '100') or 100)
+    env = dict(os.environ, ROS_DOMAIN_ID=str((worker_domain + 50) % 100 + 100),
                ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', MPLBACKEND='Agg')
     result = subprocess.run([sys.executable, '-m', 'prsm_lube_ros.cli', 'demo', '--out', str(out), '--seed', '5',
                              '--actuators', '3', '--days', '6', '--live-windows', '6', '--playback-rate', '15'],
