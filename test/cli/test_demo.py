@@ -32,8 +32,9 @@ def demo(tmp_path_factory):
     pytest.importorskip('rclpy')
     pytest.importorskip('prsm_lube_ros.srv')
     out = tmp_path_factory.mktemp('demo')
-    # Its own domain, 50 past the worker's (conftest: workers 13 apart), so no other graph can reach it: a random
-    # draw gave two workers running this fixture the same domain (random seeded alike) and their demos mixed inputs.
+    # Its own domain, 50 past the worker's (conftest: workers 13 apart), so no other graph can reach it: both
+    # workers run this fixture (the ros_graph xdist group does not hold, see the session notes) and a random draw
+    # once gave the two the same domain, where each demo read the other's inputs.
     worker_domain = int(os.environ.get('ROS_DOMAIN_ID', '100') or 100)
     env = dict(os.environ, ROS_DOMAIN_ID=str((worker_domain + 50) % 100 + 100),
                ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', MPLBACKEND='Agg')
