@@ -33,8 +33,8 @@ def demo(tmp_path_factory):
     pytest.importorskip('prsm_lube_ros.srv')
     out = tmp_path_factory.mktemp('demo')
     # Its own domain, 50 past the worker's (conftest: workers 13 apart), so no other graph can reach it: both
-    # workers run this fixture (the ros_graph xdist group does not hold, see the session notes) and a random draw
-    # once gave the two the same domain, where each demo read the other's inputs.
+    # workers run this fixture (pytest-xdist 3.8 does not keep the conftest's ros_graph group on one worker
+    # here) and a random draw once gave the two the same domain, where each demo read the other's inputs.
     worker_domain = int(os.environ.get('ROS_DOMAIN_ID', '100') or 100)
     env = dict(os.environ, ROS_DOMAIN_ID=str((worker_domain + 50) % 100 + 100),
                ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', MPLBACKEND='Agg')
