@@ -163,7 +163,7 @@ class SurfaceMonitor:
     @property
     def pending(self) -> bool:
         """Whether steady windows with indicators come in but the group has not been judged yet."""
-        return self._condition is None and bool(self._group) and not self._unscreenable
+        return self.pending_with(False)
 
     def pending_with(self, incoming: bool) -> bool:
         """:attr:`pending`, counting a steady window with indicators on its way (``incoming``) as come in.

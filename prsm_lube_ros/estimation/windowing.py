@@ -820,8 +820,7 @@ class WindowBuilder:
             if wanted is not None and not any(id(window) in wanted for window in waiting):
                 self._deferred.append((waiting, arguments))
                 continue
-            samples, rate, speeds, band, orders, tracks, spectra = arguments
-            found = condition_indicators_batch(samples, rate, speeds, band, orders, tracks, spectra=spectra)
+            found = _indicators_of(arguments)
             completed.extend((window, replace(window, condition=found_k)) for window, found_k in zip(waiting, found))
         return completed
 
@@ -866,7 +865,7 @@ class WindowBuilder:
                 if self.defer_conditions:
                     deferring.append(([part[i][0] for i in wanted], arguments))
                     continue
-                found = condition_indicators_batch(*arguments[:6], spectra=arguments[6])
+                found = _indicators_of(arguments)
                 for i, condition in zip(wanted, found):
                     conditions[part[i][0]] = condition
         return deferring
@@ -880,6 +879,15 @@ class WindowBuilder:
         angles = np.concatenate([c[1] for c in chunks]) if len(chunks) > 1 else chunks[0][1]
         order = np.argsort(stamps, kind='stable')
         return stamps[order] - first_time, angles[order]
+
+
+def _indicators_of(arguments: tuple) -> list[ConditionIndicators]:
+    """:func:`condition_indicators_batch` of one batch's arguments, as ``_band_and_conditions`` keeps them.
+
+    ``(samples, rate, speeds, band, defect orders, tracks, spectra)``.
+    """
+    samples, rate, speeds, band, orders, tracks, spectra = arguments
+    return condition_indicators_batch(samples, rate, speeds, band, orders, tracks, spectra=spectra)
 
 
 def _mean(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -639,6 +639,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         self._screen_timer = self.create_timer(0.0, self._screen_waiting, callback_group=self._input_group,
                                                clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._screen_timer.cancel()
+        self._timers_started.append(self._screen_timer)
 
     def _halt(self) -> None:
         """deactivate: subscriptions, calibration interfaces and timers go (a running calibration finishes)."""
@@ -646,9 +647,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             self._flush_before_change(channel)
         for timer in self._timers_started:
             self.destroy_timer(timer)
-        if self._screen_timer is not None:
-            self.destroy_timer(self._screen_timer)
-            self._screen_timer = None
+        self._screen_timer = None
         for subscription in self._input_subscriptions:
             self.destroy_subscription(subscription)
         for service in self._calibrate_services:
@@ -884,8 +883,7 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
         """
         if channel.pending:
             self._flush(channel)
-        if self._screen_closed(channel):      # their indicators too, in the band and under the baseline they met
-            self._publish_diagnostics(inputs=False)
+        self._screen_now(channel)      # their indicators too, in the band and under the baseline they met
 
     @staticmethod
     def _note_frame(channel: ActuatorChannel, frame_id: str) -> None:
@@ -972,16 +970,20 @@ class LubricationEstimator(ReadOnlyAfterStartUp, LifecycleNode):
             windows = []
         for line in channel.builder.take_problems():
             self.log.warning(f'{channel.name}: {line}')
-        if self._screen_closed(channel):     # windows of an earlier close first: the screen takes them in order
-            self._publish_diagnostics(inputs=False)
+        self._screen_now(channel)     # windows of an earlier close first: the screen takes them in order
         for window in windows:
             self._evaluate(channel, window)      # theta_Oil out first; the surface screen after (module doc)
         if windows:
             channel.unscreened.extend(windows)
             if self._screen_timer is not None:
                 self._screen_timer.reset()       # after the other callbacks ready now (module doc)
-            elif self._screen_closed(channel):
-                self._publish_diagnostics(inputs=False)
+            else:
+                self._screen_now(channel)
+
+    def _screen_now(self, channel: ActuatorChannel) -> None:
+        """:meth:`_screen_closed` of one actuator, and ``/diagnostics`` at once where a level changed."""
+        if self._screen_closed(channel):
+            self._publish_diagnostics(inputs=False)
 
     def _screen_waiting(self) -> None:
         """One-shot timer: the surface screens of the windows published since, every actuator's; then /diagnostics."""

@@ -86,7 +86,6 @@ def test_the_installed_command_ends_cleanly_at_any_point_and_leaves_the_calibrat
     command = shutil.which('prsm-lube')
     assert command, 'the installed prsm-lube command is not on PATH'
     out = seed_calibration(tmp_path / 'calib.yaml')
-    before = out.read_bytes()
     seen = set()
     argv = [command, 'calibrate', str(reference_bag), '--out', str(out)]
     # Signals spread over the command's own run (measured here: 0.45 s on a quiet machine, seconds under load),
