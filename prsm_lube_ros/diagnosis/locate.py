@@ -90,7 +90,7 @@ from .rules import DEFAULT_RULES, DEFAULT_SPECTRAL_RULES, DiagnosisRules
 from ..validation import finite_or_none
 from .table import WindowTable
 
-__all__ = ['COVARIATE_UNITS', 'CovariateTest', 'Location', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
+__all__ = ['COVARIATE_UNITS', 'CovariateTest', 'FIXED_LINE_BINS', 'Location', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
            'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate',
            'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
 
@@ -100,6 +100,8 @@ _SPECTRAL = DEFAULT_SPECTRAL_RULES
 SHAPE_NOISE_FACTOR = _SPECTRAL.shape_noise_factor
 #: The covariate tests' defaults (:class:`.rules.DiagnosisRules`; :func:`locate` takes the diagnosis' policy).
 SIGNIFICANCE = DEFAULT_RULES.significance
+#: Bins either side of a line fixed in Hz within which a band or an order's peak is the line's, not its own.
+FIXED_LINE_BINS = 3
 
 COVARIATE_UNITS = {'position': 'm', 'revolutions': 'rev', 'time': 's', 'temperature': 'degC',
                    'speed': 'rad/s', 'load': 'N', 'direction': 'sign of the screw speed'}
@@ -580,7 +582,8 @@ def spectral_lines(table: WindowTable, residual: np.ndarray | None = None) -> Sp
     model_square = np.array([np.mean(modelled[index == i] ** 2) for i in range(len(edges))])
     _mode_bands(result, medians, np.arange(medians.shape[1]) * df, model_square, edges, df)
     _ring_bands(result, medians, np.arange(medians.shape[1]) * df, model_square, edges, df)
-    result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df)
+    result.order_mode = order_tracked_mode(medians, floors, excess, [float(v) for v in edges], df,
+                                           result.frequencies)
     return result
 
 
@@ -651,10 +654,14 @@ def fixed_line_power(table: WindowTable) -> float:
 
 
 def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
-                 df: float) -> Sequence[tuple[float, dict[int, float]]]:
+                 df: float, fixed: Sequence[float] = ()) -> Sequence[tuple[float, dict[int, float]]]:
     """Rotation-order lines: peaks standing at the same order (f / f_S) at three speeds or more.
 
     Returns ``[(order, {level: power})]``, power (m/s^2)^2 of the line over its floor at each speed level.
+    A peak within ``FIXED_LINE_BINS`` bins of a line fixed in Hz (``fixed``, Hz: a background's tones) is left
+    out: there the order's power and the fixed line's add in the same bins, and the order's line would seem
+    to gain power where it meets that frequency, as it does where it meets a mode (study two 1874: lines at
+    74.5 and 145 Hz read as "one mode at 75.8 Hz, zeta 0.02" the orders pass through).
     """
     peaks = []                                   # (order, level, power)
     for level, speed in enumerate(speeds):
@@ -662,7 +669,7 @@ def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, sp
         row = excess[level]
         local = (row[1:-1] >= _SPECTRAL.line_prominence) & (row[1:-1] >= row[:-2]) & (row[1:-1] > row[2:])
         for peak in np.flatnonzero(local) + 1:
-            if peak < 3:
+            if peak < 3 or any(abs(peak * df - f) <= FIXED_LINE_BINS * df for f in fixed):
                 continue
             lo, hi = peak - 2, min(peak + 3, medians.shape[1])
             power = float(np.sum(np.maximum(medians[level, lo:hi] - floors[level, lo:hi], 0.0)) * df)
@@ -687,7 +694,7 @@ def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, sp
 
 
 def order_tracked_mode(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
-                       df: float) -> dict[str, Any]:
+                       df: float, fixed: Sequence[float] = ()) -> dict[str, Any]:
     """A mode the rotation orders pass through, from the powers of order lines (module doc).
 
     Each line seen at the same order at three speeds or more gives its power
@@ -702,7 +709,7 @@ def order_tracked_mode(medians: np.ndarray, floors: np.ndarray, excess: np.ndarr
     tone from elsewhere on one order's frequency at one speed).  Returns {} when
     untestable, else the fit and its test.
     """
-    lines = _order_lines(medians, floors, excess, speeds, df)
+    lines = _order_lines(medians, floors, excess, speeds, df, fixed)
     points = [(o, level, p) for o, group in lines for level, p in group.items() if p > 0]
     n_orders, n_levels = len(lines), len({level for _, level, _ in points})
     n_params = n_orders + n_levels - 1
@@ -911,7 +918,7 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
     # Two speeds can put two different orders on one bin; three seldom do.
     candidate = (prominent.sum(axis=0) >= _SPECTRAL.mode_min_speeds) & (freqs >= 3 * df)
     for group in _line_groups(candidate):
-        if any(abs(freqs[group[0]] - f) <= 3 * df for f in result.frequencies):
+        if any(abs(freqs[group[0]] - f) <= FIXED_LINE_BINS * df for f in result.frequencies):
             continue
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df
@@ -973,7 +980,7 @@ def _ring_bands(result: SpectralLines, medians: np.ndarray, freqs: np.ndarray, m
         prominent = widened >= (_SPECTRAL.mode_broad_prominence if broad else _SPECTRAL.line_prominence)
         for group in _line_groups(prominent.all(axis=0) & (freqs >= 3 * df)):
             lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
-            if any(freqs[lo] - 3 * df <= f <= freqs[hi - 1] + 3 * df
+            if any(freqs[lo] - FIXED_LINE_BINS * df <= f <= freqs[hi - 1] + FIXED_LINE_BINS * df
                    for f in result.frequencies + result.mode_frequencies + result.ring_frequencies):
                 continue
             top = _band_tops(medians, lo, hi)

@@ -82,8 +82,11 @@ class DiagnosisRules:
         'stiffness and a background vibrate Gaussian, band kurtosis 2.7-3.4 in healthy 1 s windows, never over the '
         'impulsive 4.5) names an effect beside the first whatever its amplitude fit when the median window shows '
         'it: half the windows or more, twice the share that counts as evidence beside a fit (a growing defect '
-        'shows late); its share of the RMS is then unresolved; study: two 1336 of block 1330 (82 % impulsive, '
-        'kurtosis median 11) dropped beside depletion, two 1202 (22 %) weak',
+        'shows late), shares taken per operating condition, each weighing alike (a traverse holds windows as '
+        '1 / speed, and a defect stands out where its own speed and load law puts it); its share of the RMS is '
+        'then unresolved; study: two 1336 of block 1330 (82 % impulsive, kurtosis median 11) dropped beside '
+        'depletion, two 1202 (22 %) weak, two 1842 (envelope lines in 35 % of the windows, in every window of '
+        'the 6 fastest of 12 conditions) dropped beside depletion before shares were per condition',
         'test_surface_defect.py::test_impulsiveness_in_most_windows_names_the_defect_beside_the_first_effect')
     gaussian_part_share: float = _rule(
         0.8, 'convention: beside an impulsive first effect the windows\' Gaussian part is diagnosed alone when this '

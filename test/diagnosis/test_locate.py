@@ -352,6 +352,33 @@ def test_orders_passing_through_a_mode_follow_its_transfer_in_hz():
     assert not spectral_lines(order_table(stray=True)).order_mode['found']
 
 
+def test_an_order_meeting_a_line_fixed_in_hz_is_left_out_of_the_orders_passing_a_mode():
+    """Where an order crosses a background's tone, the bins add both powers: that point is the tone's, not the order's.
+
+    Study two 1874: tones at 74.5 and 145 Hz read as "the powers of 9 rotation orders at 5 speeds follow one mode at
+    75.8 Hz (zeta 0.02)", and the resonance tied with the background.  Here a tone at 22.5 Hz meets order 7.5 at
+    19 rad/s and order 10 at 14 rad/s, raising them 2.7 and 8 times.
+    """
+    from dataclasses import replace
+    from prsm_lube_ros.diagnosis import locate
+    table = order_table()
+    df = table.spectrum_resolution
+    spectra = table.spectra.copy()
+    spectra[:, int(round(22.5 / df))] += 3.0 / df
+    table = replace(table, spectra=spectra, rms=np.sqrt(spectra.sum(axis=1) * df))
+    edges, _, medians, floors, excess, _, _ = locate._speed_spectra(table)
+    speeds = [float(v) for v in edges]
+
+    def levels(fixed):
+        lines = locate._order_lines(medians, floors, excess, speeds, df, fixed)
+        return {round(order / 2.5) * 2.5: sorted(group) for order, group in lines}
+
+    assert levels(()) == {5.0: [0, 1, 2, 3, 4], 7.5: [0, 1, 2, 3, 4], 10.0: [0, 1, 2, 3, 4], 15.0: [0, 1, 2, 3, 4]}
+    assert levels((22.5,)) == {5.0: [0, 1, 2, 3, 4], 7.5: [0, 1, 3, 4], 10.0: [0, 2, 3, 4], 15.0: [0, 1, 2, 3, 4]}
+    found = spectral_lines(table)     # the tone is found as a fixed line, and the order fit leaves its two points out
+    assert found.frequencies == [22.5] and found.order_mode['points'] == 18
+
+
 def test_a_window_whose_largest_bin_is_its_edge_is_no_mode_band_there():
     """Three speeds, 2 Hz bins: an order at bins 4 and 5 and a neighbouring line's skirt at the third speed's
     window edge made a 'band' at 9.8 Hz (random-study seeds with no effect); a peak inside at all three is one."""

@@ -222,6 +222,51 @@ def test_impulsiveness_in_most_windows_names_the_defect_beside_the_first_effect(
     assert strict.verdict == 'lubricant_depletion' and strict.second is None
 
 
+def _struck_where(table, where):
+    """``table`` with band kurtosis 9 in the windows of the (speed level, load level) conditions ``where``."""
+    from dataclasses import replace
+    from prsm_lube_ros.estimation.calibration import operating_levels
+    speeds, loads = operating_levels(np.abs(table.speed)), operating_levels(np.abs(table.load))
+    speed_level = np.argmin(np.abs(np.abs(table.speed)[:, None] - np.array(speeds)[None, :]), axis=1)
+    load_level = np.argmin(np.abs(np.abs(table.load)[:, None] - np.array(loads)[None, :]), axis=1)
+    struck = np.zeros(len(table), bool)
+    for speed, load in where:
+        struck |= (speed_level == speed) & (load_level == load)
+    return replace(table, kurtosis=np.where(struck, 9.0, table.kurtosis)), struck
+
+
+def test_a_defect_shown_at_the_fastest_speed_only_counts_by_its_conditions_not_its_windows():
+    """A traverse holds windows as 1 / speed, so the fastest conditions hold the fewest windows.
+
+    Study two 1877: every window at the fastest of five speeds impulsive (kurtosis 6-15), none at the slowest;
+    18 % of all windows, 27 % of each condition's on average.  Here 3 speeds x 2 loads with 80, 52 and 40
+    windows per condition: struck at the fastest speed, 23 % of the windows and a third of the conditions.
+    """
+    depletion, _ = synthetic_table(np.random.default_rng(2), 'lubricant_depletion',
+                                   plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    table, struck = _struck_where(depletion, [(2, 0), (2, 1)])
+    assert struck.mean() < candidate.IMPULSIVE_SHARE        # by windows no evidence ...
+    assert candidate.condition_share(table, struck) == pytest.approx(1 / 3)
+    effect = get_effect('surface_defect')
+    assert 'impulsive' in effect.independent_evidence(table, None)      # ... by conditions a third
+    assert effect.contrary_evidence(table, None) == ''
+    assert effect.exclusive_evidence(table, 0.5) == ''
+    assert effect.independent_evidence(depletion, None) == ''
+    assert effect.contrary_evidence(depletion, None) != ''
+
+
+def test_a_defect_struck_in_half_the_conditions_is_named_beside_depletion():
+    """Half the conditions struck (both loads at the fastest speed, one at the middle): 38 % of the windows."""
+    depletion, _ = synthetic_table(np.random.default_rng(2), 'lubricant_depletion',
+                                   plan=SyntheticPlan(condition_indicators=True, sessions=2))
+    table, struck = _struck_where(depletion, [(2, 0), (2, 1), (1, 1)])
+    assert struck.mean() < 0.5
+    diagnosis = diagnose_table(table)
+    assert diagnosis.verdict == 'lubricant_depletion'
+    assert diagnosis.second is not None and diagnosis.second.effect.id == 'surface_defect'
+    assert 'per operating condition' in diagnosis.second.basis
+
+
 class _Oversized(candidate.SurfaceDefectCandidate):
     """A defect law that cannot follow small impulsive power: its impulsive RMS is at least the smallest window's."""
 

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 __all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefectCandidate', 'IMPULSIVE_KURTOSIS',
            'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SILENCED_SHARE', 'SIZE_RANGE',
-           'SurfaceDefectCandidate', 'indicators', 'unspecific_lines']
+           'SurfaceDefectCandidate', 'condition_share', 'indicators', 'unspecific_lines']
 
 #: Bounds of A_imp over the smallest window RMS.
 SIZE_RANGE = (0.0, 3.0)
@@ -47,7 +47,8 @@ GROWTH_RANGE = (0.0, 3.0)
 #: the margin of a strongly impulsive run (the defect screen's rules; Gaussian vibration gives 3, healthy
 #: simulated 1 s windows 2.7-3.4).
 IMPULSIVE_KURTOSIS = DEFAULT_RULES.healthy_kurtosis + DEFAULT_RULES.kurtosis_margin
-#: Share of the windows that must be impulsive for evidence (a growing defect shows late in the session).
+#: Share of the windows that must be impulsive for evidence (a growing defect shows late in the session), per
+#: operating condition with each condition weighing alike (:func:`condition_share`).
 IMPULSIVE_SHARE = 0.25
 #: At most this share of impulsive windows (and no envelope peak) for evidence against the defect.
 NOT_IMPULSIVE_SHARE = 0.05
@@ -285,12 +286,39 @@ class SurfaceDefectCandidate(Effect, law.Extension):
         if columns is None:
             return ''
         kurtosis, peaks = columns['kurtosis'], _line_levels(columns, specific=False)
-        impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
-        if impulsive > NOT_IMPULSIVE_SHARE or np.mean(np.isfinite(peaks) & (peaks >= DEFECT_DB)) >= IMPULSIVE_SHARE:
+        impulsive = condition_share(table, kurtosis > IMPULSIVE_KURTOSIS, np.isfinite(kurtosis))
+        if impulsive > NOT_IMPULSIVE_SHARE or condition_share(table, np.isfinite(peaks) & (peaks >= DEFECT_DB)) \
+                >= IMPULSIVE_SHARE:
             return ''
         return (f'condition indicators: the windows are not impulsive (band kurtosis median '
                 f'{float(np.nanmedian(kurtosis)):.2f}, {100 * impulsive:.0f} % over {IMPULSIVE_KURTOSIS:g}) and '
                 'the envelope spectra show no defect order')
+
+
+def condition_share(table: WindowTable, mask: np.ndarray, known: np.ndarray | None = None) -> float:
+    """The share of ``mask``'s windows per operating condition, averaged with each condition weighing alike.
+
+    A condition is a (speed level, load level) pair
+    (:func:`~prsm_lube_ros.estimation.calibration.condition_labels`); within
+    each, the share is taken over its ``known`` windows (default all).  Each
+    condition weighs alike because a plan's conditions do not: a traverse of
+    the stroke holds windows in proportion to 1 / speed, and a defect's
+    impulsive power follows its own exponents of speed and load, not the
+    contacts' omega^2 law, so it stands out of the contacts in a part of the
+    plan only (study two 1877: every window at the fastest speed struck,
+    kurtosis 6-15, none at the slowest, which held 2.3 times as many windows).
+    A share over the windows would weigh where it shows by how long the
+    traverses there last.  NaN without windows.
+    """
+    from ...estimation.calibration import condition_labels
+    known = np.ones(len(mask), bool) if known is None else np.asarray(known, bool)
+    if not known.any():
+        return float('nan')
+    labels = condition_labels(table.speed, table.load)[known]
+    hits = np.asarray(mask, bool)[known]
+    counts = np.bincount(labels)
+    present = counts > 0
+    return float(np.mean(np.bincount(labels, weights=hits.astype(float))[present] / counts[present]))
 
 
 def _impulsive_evidence(table: WindowTable, share: float) -> str:
@@ -299,27 +327,31 @@ def _impulsive_evidence(table: WindowTable, share: float) -> str:
     Band kurtosis over :data:`IMPULSIVE_KURTOSIS`, or envelope peaks of
     :data:`DEFECT_DB` at a defect order at two screw speeds or more
     (:func:`_follows_the_order`); empty when neither reaches ``share``.
+    Shares are per operating condition, each condition weighing alike (:func:`condition_share`).
     """
     columns = indicators(table)
     if columns is None:
         return ''
     kurtosis, peaks = columns['kurtosis'], _line_levels(columns)
-    impulsive = float(np.mean(kurtosis[np.isfinite(kurtosis)] > IMPULSIVE_KURTOSIS))
+    impulsive = condition_share(table, kurtosis > IMPULSIVE_KURTOSIS, np.isfinite(kurtosis))
     peaked = np.isfinite(peaks) & (peaks >= DEFECT_DB)
     if not _follows_the_order(table, peaked):
         peaked = np.zeros_like(peaked)
+    lined = condition_share(table, peaked)
     parts = []
     if impulsive >= share:
         parts.append(f'{100 * impulsive:.0f} % of the windows impulsive (band kurtosis over '
                      f'{IMPULSIVE_KURTOSIS:g}, median {float(np.nanmedian(kurtosis)):.1f}; Gaussian contact '
                      'vibration gives 3)')
-    if peaked.mean() >= share:
+    if lined >= share:
         orders = columns['defect_order'][peaked]
         order = float(np.nanmedian(orders)) if np.isfinite(orders).any() else float('nan')
         parts.append(f'envelope peaks {float(np.median(peaks[peaked])):.0f} dB over the floor at order '
-                     f'{order:.3g} in {100 * peaked.mean():.0f} % of the windows'
+                     f'{order:.3g} in {100 * lined:.0f} % of the windows'
                      + (' (their runs\' averaged envelope spectra)' if _pooled(columns) else ''))
-    return 'condition indicators: ' + '; '.join(parts) if parts else ''
+    if not parts:
+        return ''
+    return 'condition indicators: ' + '; '.join(parts) + ' (shares per operating condition, each weighing alike)'
 
 
 class GrowingSurfaceDefectCandidate(SurfaceDefectCandidate):
