@@ -129,6 +129,16 @@ def test_the_engine_names_a_growing_defect_where_the_windows_are_impulsive_not_d
     assert depletion.status.value != 'earns' or diagnosis.verdict != 'lubricant_depletion'
 
 
+@pytest.mark.parametrize('seed, form', [(6, 'growing linearly with revolutions'), (2, 'growing with revolutions')])
+def test_a_defect_growing_linearly_is_fitted_in_its_linear_form(seed, form):
+    """The simulator grows a spall exponentially or linearly; the candidate has both forms, and each is chosen where
+    it was drawn (seed 6: linear, N_g 287 revolutions; seed 2: exponential, N_g 323)."""
+    diagnosis, truth = _verdict('surface_defect', seed)
+    assert truth['params']['law']['growth'] == ('linear' if 'linearly' in form else 'exponential')
+    assert diagnosis.verdict == 'surface_defect' and diagnosis.chosen.form == form
+    assert diagnosis.chosen.fit.params['linear'] == (1.0 if 'linearly' in form else 0.0)
+
+
 def test_the_engine_keeps_naming_depletion_where_nothing_is_impulsive():
     diagnosis, _ = _verdict('lubricant_depletion', 2)
     assert diagnosis.verdict == 'lubricant_depletion'

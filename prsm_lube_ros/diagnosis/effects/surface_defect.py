@@ -3,8 +3,9 @@
 """How to fit a surface defect (the law: :mod:`prsm_lube_ros.physics.effects.surface_defect`).
 
 ``A = sqrt(A_22^2 + P_imp)``, ``P_imp = A_imp^2 (omega/omega_ref)^(2a) (F/F_ref)^(2b) g(N)^2``.
-Two forms, each fitted: a steady defect (g = 1) and a growing one
-(``g = exp(N / N_g)``, N the revolutions over the recordings in the order given).
+Three forms, each fitted: a steady defect (g = 1) and one growing exponentially
+(``g = exp(N / N_g)``) or linearly (``g = 1 + N / N_g``), N the revolutions over
+the recordings in the order given (the simulator's growth forms).
 Internally: A_imp over the smallest window RMS, a, b and (growing) N_max / N_g
 with N_max the most revolutions over the recordings; omega_ref is the lowest
 recorded speed and F_ref the highest load.
@@ -34,7 +35,8 @@ if TYPE_CHECKING:
     from ..table import WindowTable
 
 __all__ = ['DEFECT_DB', 'EXPONENT_RANGES', 'GROWTH_RANGE', 'GrowingSurfaceDefectCandidate', 'IMPULSIVE_KURTOSIS',
-           'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'NOT_IMPULSIVE_SHARE', 'SILENCED_SHARE', 'SIZE_RANGE',
+           'IMPULSIVE_SHARE', 'INDICATOR_SHARE', 'LINEAR_GROWTH_RANGE', 'LinearlyGrowingSurfaceDefectCandidate',
+           'NOT_IMPULSIVE_SHARE', 'SILENCED_SHARE', 'SIZE_RANGE',
            'SurfaceDefectCandidate', 'condition_share', 'indicators', 'unspecific_lines']
 
 #: Bounds of A_imp over the smallest window RMS.
@@ -43,6 +45,9 @@ SIZE_RANGE = (0.0, 3.0)
 EXPONENT_RANGES = ((0.0, 3.0), (0.0, 2.0))
 #: Bounds of N_max / N_g (the impulsive RMS grows by up to e^3 over the recordings).
 GROWTH_RANGE = (0.0, 3.0)
+#: Bounds of N_max / N_g of the linear growth (up to 11 times over the recordings: the simulator's 1.5-4 per
+#: session, over two sessions or more).
+LINEAR_GROWTH_RANGE = (0.0, 10.0)
 #: Band kurtosis above which a window counts as impulsive: what healthy rolling contact stays below anywhere plus
 #: the margin of a strongly impulsive run (the defect screen's rules; Gaussian vibration gives 3, healthy
 #: simulated 1 s windows 2.7-3.4).
@@ -203,8 +208,8 @@ class SurfaceDefectCandidate(Effect, law.Extension):
                 'load_exponent': float(p[2]), 'growth_per_revolution': growth, 'linear': 0.0, **scales}
 
     def variants(self) -> list[Effect]:
-        """Steady and growing with the revolutions."""
-        return [self, GrowingSurfaceDefectCandidate()]
+        """Steady, and growing with the revolutions exponentially or linearly."""
+        return [self, GrowingSurfaceDefectCandidate(), LinearlyGrowingSurfaceDefectCandidate()]
 
     def describe(self, params: dict[str, Any]) -> str:
         """A_imp at the reference condition, the exponents and the growth over the recordings."""
@@ -214,7 +219,8 @@ class SurfaceDefectCandidate(Effect, law.Extension):
                 f'RMS), growing as speed^{params["speed_exponent"]:.2f} and load^{params["load_exponent"]:.2f}')
         growth = params.get('growth_per_revolution', 0.0)
         if growth > 0:
-            text += (f', and with the revolutions run by x{float(np.exp(growth * params["revolution_scale"])):.2f} '
+            factor = float(law.growth_factor(params['revolution_scale'], growth, bool(params.get('linear'))))
+            text += (f', and with the revolutions run by x{factor:.2f}{" (linearly)" if params.get("linear") else ""} '
                      f'over {params["revolution_scale"]:.0f} revolutions (N_g = {1 / growth:.3g})')
         return text + '. ' + self.physics
 
@@ -367,3 +373,33 @@ class GrowingSurfaceDefectCandidate(SurfaceDefectCandidate):
     def variants(self) -> list[Effect]:
         """Only itself."""
         return [self]
+
+
+class LinearlyGrowingSurfaceDefectCandidate(GrowingSurfaceDefectCandidate):
+    """The defect grows linearly with the revolutions run: ``g(N) = 1 + N / N_g`` (the law's ``linear`` growth).
+
+    A spall widens by the material each strike removes at its edge, so its
+    impulsive amplitude can grow in proportion to the revolutions as well as
+    in proportion to its size; over a session the two part by a quarter of
+    the amplitude midway (a factor 4 at the end: 2 against 2.5), which an
+    exponential law cannot follow (study two 1849, 1746 and 1827: a linearly
+    growing spall, `unexplained` where the exponential form lost to an
+    empirical step in time).
+    """
+
+    form = 'growing linearly with revolutions'
+    equations = ('A = sqrt(A_22^2 + P_imp), P_imp = A_imp^2 (omega/omega_ref)^(2a) (F/F_ref)^(2b) '
+                 '(1 + N_rev / N_g)^2')
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """A_imp / min RMS, a, b and N_max / N_g in :data:`LINEAR_GROWTH_RANGE`."""
+        low, high = super().bounds()
+        return np.r_[low[:3], LINEAR_GROWTH_RANGE[0]], np.r_[high[:3], LINEAR_GROWTH_RANGE[1]]
+
+    def starts(self) -> list[np.ndarray]:
+        """Small to large defects at mid exponents, growing by 2 and 6 times over the recordings."""
+        return [np.array([s / 2, 1.5, 0.6, g]) for s in (0.2, 0.6, 1.2) for g in (1.0, 5.0)]
+
+    def to_params(self, p: np.ndarray, scales: dict[str, float]) -> dict[str, Any]:
+        """As the exponential form, with ``linear`` 1."""
+        return {**super().to_params(p, scales), 'linear': 1.0}
