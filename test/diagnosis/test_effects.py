@@ -183,6 +183,20 @@ def test_order_tracked_line_powers_are_resonance_evidence_where_the_fitted_speed
     assert resonance.independent_evidence(None, location) == 'spectrum: one mode at 40.0 Hz'
 
 
+@pytest.mark.parametrize('natural, shown', [(40.0, True), (600.0, False)])
+def test_a_mode_band_counts_for_a_resonance_only_where_an_order_the_screw_makes_meets_it(natural, shown):
+    """At the fitted resonant speed 8 rad/s a band at 40 Hz is order 31, one at 600 Hz order 471: no order of the
+    screw reaches that (rollers times thread starts stay below 50); such a band is what something else rings, a
+    spall's strikes in the studies (surface_defect 1902, 1905, 1909, 1339, two 1333: a mode named beside them)."""
+    from prsm_lube_ros.diagnosis.locate import SpectralLines
+    lines = SpectralLines(testable=True, mode_frequencies=[natural], mode_speeds=[6.0, 8.0, 10.0],
+                          mode_shares=[[0.1, 0.8, 0.2]])
+    location = SimpleNamespace(spectrum=lines)
+    params = {'resonant_speed': 8.0, 'damping_ratio': 0.05, 'bottom_speed': 6.0, 'top_speed': 10.0}
+    evidence = get_effect('resonance').independent_evidence(None, location, params)
+    assert ('order 31.42' in evidence) if shown else evidence == ''
+
+
 @pytest.mark.parametrize('mode_bands, supported', [([], True), ([13.4], False)])
 def test_a_changing_spectral_shape_supports_a_background_only_without_a_mode_band(mode_bands, supported):
     """A mode the orders pass changes the shape beyond its own octave: then the shape is no evidence of a floor."""
