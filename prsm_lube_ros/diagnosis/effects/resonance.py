@@ -125,7 +125,8 @@ class ResonanceCandidate(Effect, law.Extension):
             return 'spectrum: ' + lines.mode_note
         highest = DEFAULT_SPECTRAL_RULES.mode_max_order
         following = [band for band, frequency in enumerate(lines.mode_frequencies)
-                     if self._follows_transfer(lines, band, params) and self._implied_order(frequency, params) <= highest]
+                     if self._follows_transfer(lines, band, params)
+                     and self._implied_order(frequency, params) <= highest]
         if not following:
             return self._ring_evidence(table, lines, params)
         band = max(following, key=lambda b: max(lines.mode_shares[b]))
