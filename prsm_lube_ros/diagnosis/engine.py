@@ -23,7 +23,7 @@ fitted together with the first, and the best pair is kept when the second
 effect earns its place by the rules of :func:`_add_second`; when nothing
 remains, only candidates with evidence at standstill are tried (a floor the
 first effect's fit absorbed), or with evidence no other effect makes in
-``rules.exclusive_evidence_share`` of the windows (impulsive strikes); such a
+``rules.exclusive_evidence_share`` of the windows (impulsive strikes; per operating condition); such a
 candidate that no rule of :func:`_add_second` keeps is named all the same,
 its share of the RMS unresolved (:func:`_exclusive_second`).  Both are then
 reported (``effects`` in the JSON; ``verdict`` and ``best`` stay the first).
@@ -998,7 +998,7 @@ def _exclusive_second(first: Candidate, other: Candidate, evidence: str, pair: S
               f'BIC {pair.delta_bic:+.1f}, not kept')
     return _unresolved_second(first, other, other.effect, other.form, pair, route=4,
                               basis=f'{evidence}, in {100 * rules.exclusive_evidence_share:.0f} % of the windows '
-                                    f'or more, which no other effect makes; {scored}')
+                                    f'or more (per operating condition), which no other effect makes; {scored}')
 
 
 def _pair_when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],

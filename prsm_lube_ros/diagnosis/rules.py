@@ -80,13 +80,14 @@ class DiagnosisRules:
     exclusive_evidence_share: float = _rule(
         0.5, 'principle: evidence no other effect of the catalogue makes (impulsive strikes: oil loss, a mode, '
         'stiffness and a background vibrate Gaussian, band kurtosis 2.7-3.4 in healthy 1 s windows, never over the '
-        'impulsive 4.5) names an effect beside the first whatever its amplitude fit when the median window shows '
-        'it: half the windows or more, twice the share that counts as evidence beside a fit (a growing defect '
-        'shows late), shares taken per operating condition, each weighing alike (a traverse holds windows as '
-        '1 / speed, and a defect stands out where its own speed and load law puts it); its share of the RMS is '
-        'then unresolved; study: two 1336 of block 1330 (82 % impulsive, kurtosis median 11) dropped beside '
-        'depletion, two 1202 (22 %) weak, two 1842 (envelope lines in 35 % of the windows, in every window of '
-        'the 6 fastest of 12 conditions) dropped beside depletion before shares were per condition',
+        'impulsive 4.5) names an effect beside the first whatever its amplitude fit when the median window of an '
+        'average condition shows it: half the windows or more, twice the share that counts as evidence beside a '
+        'fit (a growing defect shows late), shares taken per operating condition, each weighing alike (a '
+        'traverse holds windows as 1 / speed, and a defect stands out where its own speed and load law puts it); '
+        'its share of the RMS is then unresolved; study: two 1336 of block 1330 (82 % impulsive, kurtosis '
+        'median 11) dropped beside depletion, two 1202 (22 %) weak, two 1842 (envelope lines in 35 % of the '
+        'windows, in every window of the 6 fastest of 12 conditions) dropped beside depletion before shares were '
+        'per condition',
         'test_surface_defect.py::test_impulsiveness_in_most_windows_names_the_defect_beside_the_first_effect')
     gaussian_part_share: float = _rule(
         0.8, 'convention: beside an impulsive first effect the windows\' Gaussian part is diagnosed alone when this '
@@ -177,9 +178,9 @@ class SpectralRules:
     mode_max_order: float = _rule(
         50.0, 'physics: rollers times thread starts stay below order 50; study: the rig\'s contact mode at '
         '1200 Hz (seeds 0-59, commit 8a6cb66); a band whose order at the fitted resonant speed is above it is '
-        'no evidence for that mode (a spall\'s ring at orders 60-102 named a mode beside surface_defect 1902, 1339 '
-        'and two 1333)', 'test_locate.py; test_effects.py::test_a_mode_band_counts_for_a_resonance_only_where_an_'
-        'order_the_screw_makes_meets_it')
+        'no evidence for that mode (a spall\'s ring at orders 63-102 named a mode beside surface_defect 1905, 1339 '
+        'and two 1333; test_effects.py::test_a_mode_band_counts_for_a_resonance_only_where_an_order_the_screw_'
+        'makes_meets_it)', 'test_locate.py')
     mode_ring_ratio: float = _rule(0.4, 'physics: |H|^2 >= 1.2 from a frequency ratio of 0.4 on',
                                    'test_locate.py')
     mode_upper_skirt: float = _rule(

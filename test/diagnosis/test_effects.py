@@ -187,7 +187,7 @@ def test_order_tracked_line_powers_are_resonance_evidence_where_the_fitted_speed
 def test_a_mode_band_counts_for_a_resonance_only_where_an_order_the_screw_makes_meets_it(natural, shown):
     """At the fitted resonant speed 8 rad/s a band at 40 Hz is order 31, one at 600 Hz order 471: no order of the
     screw reaches that (rollers times thread starts stay below 50); such a band is what something else rings, a
-    spall's strikes in the studies (surface_defect 1902, 1905, 1909, 1339, two 1333: a mode named beside them)."""
+    spall's strikes in the studies (surface_defect 1905, 1339, two 1333: a mode named beside them)."""
     from prsm_lube_ros.diagnosis.locate import SpectralLines
     lines = SpectralLines(testable=True, mode_frequencies=[natural], mode_speeds=[6.0, 8.0, 10.0],
                           mode_shares=[[0.1, 0.8, 0.2]])

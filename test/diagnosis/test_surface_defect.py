@@ -265,6 +265,16 @@ def test_a_defect_shown_at_the_fastest_speed_only_counts_by_its_conditions_not_i
     assert effect.contrary_evidence(depletion, None) != ''
 
 
+def test_a_window_off_the_plan_is_no_condition_of_its_own():
+    """One impulsive window at a speed of its own would weigh as a third of a plan of two conditions."""
+    kurtosis = np.r_[np.full(80, 3.0), 9.0]
+    table = _Table(kurtosis=kurtosis, speed=np.r_[np.full(40, 10.0), np.full(40, 20.0), 30.0], load=np.full(81, 100.0))
+    impulsive = kurtosis > candidate.IMPULSIVE_KURTOSIS
+    assert candidate.condition_share(table, impulsive) == 0.0
+    few = _Table(kurtosis=kurtosis[-4:], speed=np.array([10.0, 20.0, 30.0, 30.0]), load=np.full(4, 100.0))
+    assert candidate.condition_share(few, impulsive[-4:]) == 0.25     # no condition of 3 windows: by windows
+
+
 def test_a_defect_struck_in_half_the_conditions_is_named_beside_depletion():
     """Half the conditions struck (both loads at the fastest speed, one at the middle): 38 % of the windows."""
     depletion, _ = synthetic_table(np.random.default_rng(2), 'lubricant_depletion',

@@ -142,8 +142,9 @@ class ResonanceCandidate(Effect, law.Extension):
         evidence for the fitted mode: no rotation order of the screw excites it
         there (rollers times thread starts stay below order 50), and such a band
         is what something else rings, a spall's strikes above all (studies:
-        surface_defect 1902, 1905, 1909, 1339 and two 1333, bands at orders
-        60-102, a resonance named beside the spall in 1902, 1339 and 1333).
+        surface_defect 1905 and 1339 and two 1333, bands at orders 63-102: a
+        resonance no longer named beside the spall,
+        ``benchmarks/results/engine_ab_mode_order``).
         """
         return frequency * 2.0 * math.pi / params['resonant_speed']
 
