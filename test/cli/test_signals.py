@@ -94,6 +94,7 @@ def test_the_installed_command_ends_cleanly_at_any_point_and_leaves_the_calibrat
     subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True, timeout=120)
     full = time.monotonic() - started
     before = out.read_bytes()                           # what that run wrote: an interrupted one must leave it
+    first = load_calibration(out)
     for delay in (max(0.2, share * full) for share in (0.45, 0.55, 0.65, 0.75, 0.85, 1.2)):
         process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         time.sleep(delay)
@@ -103,7 +104,8 @@ def test_the_installed_command_ends_cleanly_at_any_point_and_leaves_the_calibrat
         assert process.returncode in (0, 128 + signum), (delay, process.returncode, err)
         if process.returncode:
             assert len(err.strip().splitlines()) == 1 and 'interrupted by' in err, err
-            assert out.read_bytes() == before
+            if out.read_bytes() != before:      # the signal came after the new file was committed (seen in CI):
+                assert load_calibration(out).constants == first.constants      # the same fit, written whole
         load_calibration(out)                           # whole: the old one or the new one
         assert [p.name for p in tmp_path.iterdir()] == ['calib.yaml']
     assert 128 + signum in seen
