@@ -653,6 +653,11 @@ def fixed_line_power(table: WindowTable) -> float:
     return _fixed_line_spectra(table)[1].total_power
 
 
+def _on_fixed_line(frequency: float, fixed: Sequence[float], df: float) -> bool:
+    """Whether ``frequency`` (Hz) lies within :data:`FIXED_LINE_BINS` bins of one of the lines ``fixed`` in Hz."""
+    return any(abs(frequency - f) <= FIXED_LINE_BINS * df for f in fixed)
+
+
 def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, speeds: Sequence[float],
                  df: float, fixed: Sequence[float] = ()) -> Sequence[tuple[float, dict[int, float]]]:
     """Rotation-order lines: peaks standing at the same order (f / f_S) at three speeds or more.
@@ -669,7 +674,7 @@ def _order_lines(medians: np.ndarray, floors: np.ndarray, excess: np.ndarray, sp
         row = excess[level]
         local = (row[1:-1] >= _SPECTRAL.line_prominence) & (row[1:-1] >= row[:-2]) & (row[1:-1] > row[2:])
         for peak in np.flatnonzero(local) + 1:
-            if peak < 3 or any(abs(peak * df - f) <= FIXED_LINE_BINS * df for f in fixed):
+            if peak < 3 or _on_fixed_line(peak * df, fixed, df):
                 continue
             lo, hi = peak - 2, min(peak + 3, medians.shape[1])
             power = float(np.sum(np.maximum(medians[level, lo:hi] - floors[level, lo:hi], 0.0)) * df)
@@ -918,7 +923,7 @@ def _mode_bands_over(result: SpectralLines, medians: np.ndarray, freqs: np.ndarr
     # Two speeds can put two different orders on one bin; three seldom do.
     candidate = (prominent.sum(axis=0) >= _SPECTRAL.mode_min_speeds) & (freqs >= 3 * df)
     for group in _line_groups(candidate):
-        if any(abs(freqs[group[0]] - f) <= FIXED_LINE_BINS * df for f in result.frequencies):
+        if _on_fixed_line(freqs[group[0]], result.frequencies, df):
             continue
         lo, hi = max(group[0] - 1, 0), min(group[-1] + 2, medians.shape[1])
         power = np.sum(np.maximum(medians[:, lo:hi] - floors[:, lo:hi], 0.0), axis=1) * df

@@ -168,7 +168,7 @@ class ResonanceCandidate(Effect, law.Extension):
         orders = exciting_order_values(table)
         tolerance = DEFAULT_SPECTRAL_RULES.mode_order_tolerance
         for band, frequency in enumerate(lines.ring_frequencies):
-            implied = frequency * 2.0 * math.pi / params['resonant_speed']
+            implied = ResonanceCandidate._implied_order(frequency, params)
             near = min(orders, key=lambda n: abs(implied / n - 1.0))
             if abs(implied / near - 1.0) <= tolerance:
                 return (f'spectrum: {lines.ring_note(band)}; at the fitted resonant speed it is order {implied:.2f}, '
@@ -186,7 +186,7 @@ class ResonanceCandidate(Effect, law.Extension):
         if not found.get('found'):
             return ''
         if params is not None:
-            implied = found['natural_frequency_hz'] * 2.0 * math.pi / params['resonant_speed']
+            implied = ResonanceCandidate._implied_order(found['natural_frequency_hz'], params)
             tolerance = DEFAULT_SPECTRAL_RULES.mode_order_tolerance
             if not any(abs(implied / order - 1.0) <= tolerance for order in found.get('order_values', ())):
                 return ''
