@@ -13,7 +13,8 @@ when the change can act, read on the table by each checkout's code, any of:
 ``defect`` (the surface defect's evidence for it, exclusive or against it reads
 differently on the two; it has evidence, so its forms are fitted; or the
 spectrum holds a line fixed in Hz), ``mode-bands`` (the spectrum holds a mode
-band, measured against the recorded mean square) or ``always``.  There both
+band, measured against the recorded mean square), ``unphysical`` (the paper's model fits with
+unphysical constants) or ``always``.  There both
 engines diagnose the table in their own process; elsewhere the two take the
 same path by construction.  One JSON line per case in ``--out``
 (appended: a stopped run goes on), and ``--summary`` writes what changed.
@@ -59,6 +60,9 @@ if 'defect' in wheres:
                contrary=bool(defect.contrary_evidence(table, None)), fixed_lines=bool(lines.frequencies))
 if 'mode-bands' in wheres:
     out.update(mode_bands=bool(lines.mode_frequencies))
+if 'unphysical' in wheres:
+    from prsm_lube_ros.diagnosis.fitting import fit_model
+    out.update(unphysical=bool(fit_model(table, None, folds=[]).unphysical()))
 if 'always' in wheres:
     out.update(always=True)
 print(json.dumps(out))
@@ -96,7 +100,7 @@ def one_case(job: tuple) -> dict:
         record['where'] = {side: json.loads(_run(code, WHERE, ','.join(where), str(table)))
                            for side, code in (('before', before), ('after', after))}
         before_reads, after_reads = record['where']['before'], record['where']['after']
-        acting = ('evidence', 'fixed_lines', 'mode_bands', 'always')
+        acting = ('evidence', 'fixed_lines', 'mode_bands', 'unphysical', 'always')
         if before_reads != after_reads or any(after_reads.get(k) or before_reads.get(k) for k in acting):
             for side, code in (('before', before), ('after', after)):
                 record[side] = json.loads(_run(code, DIAGNOSE, str(table)))
@@ -135,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--after', type=Path, required=True, help='checkout of the engine after it')
     parser.add_argument('--cases', type=Path, required=True, help='lines KIND SEED')
     parser.add_argument('--cache', type=Path, required=True, help='folder of the pickled window tables')
-    parser.add_argument('--where', nargs='+', choices=('defect', 'mode-bands', 'always'), required=True)
+    parser.add_argument('--where', nargs='+', choices=('defect', 'mode-bands', 'unphysical', 'always'), required=True)
     parser.add_argument('--out', type=Path, required=True, help='JSON lines, one a case (appended)')
     parser.add_argument('--summary', type=Path, default=None)
     parser.add_argument('--jobs', type=int, default=2)

@@ -29,7 +29,7 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, lsq_linear
 
 from ..estimation.calibration import operating_levels, run_level_covariance
 from ..physics.vibration_model import FREQUENCY_EXPONENT, ModelConstants, STIFFNESS_EXPONENT
@@ -79,14 +79,20 @@ def predict_log(table: Columns, vector: np.ndarray, effect: Effect | None = None
 
 
 def _ols_constants(table: Columns, film_factor: float | np.ndarray = 1.0,
-                   offset: float | np.ndarray = 0.0) -> np.ndarray:
-    """(ln C_sys, C_F, C_lambda) by OLS with the film column scaled and ``offset`` removed from ln A."""
+                   offset: float | np.ndarray = 0.0, physical: bool = False) -> np.ndarray:
+    """(ln C_sys, C_F, C_lambda) by OLS with the film column scaled and ``offset`` removed from ln A.
+
+    ``physical``: C_lambda held at 0 or above (bounded least squares; Eq. 22: a thicker film never raises the
+    vibration).
+    """
     load = np.abs(table.load)
     x = np.column_stack([np.ones(len(table)), load, -table.theta * film_factor * table.film_term])
     y = table.reduced - offset
     scale = np.linalg.norm(x, axis=0)
     scale[scale == 0] = 1.0
     solution, *_ = np.linalg.lstsq(x / scale, y, rcond=None)
+    if physical and solution[2] < 0:
+        solution = lsq_linear(x / scale, y, bounds=([-np.inf, -np.inf, 0.0], np.inf)).x
     return solution / scale
 
 
@@ -119,9 +125,9 @@ def fit_vector(table: WindowTable, effect: Effect | None = None, scales: dict[st
     effect whose free fit traded C_F against its own law of load until a
     measurement contradicted it (:meth:`.effects.Effect.measured_against`).
     """
-    baseline = _ols_constants(table)
     if effect is None:
-        return baseline
+        return _ols_constants(table, physical=physical)
+    baseline = _ols_constants(table)
     scales = scales if scales is not None else effect.scales(table)
     lo, hi = effect.bounds()
     lower = np.r_[-np.inf, 0.0 if excitation else -np.inf, 0.0 if physical else -np.inf, lo]
