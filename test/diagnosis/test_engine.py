@@ -82,6 +82,35 @@ def test_resonance_shows_as_unphysical_constants_of_the_paper_model():
     assert any('unphysical' in note for note in result.notes)
 
 
+NOISY_PLAN = dataclasses.replace(PLAN, window_noise=0.2, run_noise=0.02, speeds_rpm=(100.0, 125.0, 150.0, 175.0))
+
+
+@pytest.mark.parametrize('seed', [1, 6, 7])
+def test_a_mode_above_the_speeds_run_is_named_against_the_paper_model_held_physical(seed):
+    # A mode at 1.25 x the top speed's order frequency raises the amplitude with speed; on noisy windows the
+    # paper's model takes that up with C_lambda < 0, and against that unphysical fit the resonance does not earn.
+    params = {'top_ratio': 0.8, 'damping_ratio': 0.1, 'top_speed': 175 * np.pi / 30}
+    result, _ = diagnose('resonance', seed, plan=NOISY_PLAN, params=params)
+    resonance = next(c for c in result.candidates if c.effect.id == 'resonance')
+    assert result.baseline.unphysical()
+    assert not (resonance.delta_bic <= -10 and resonance.gain >= 0.05)      # not by the margin on the free fit
+    assert result.verdict == 'resonance'
+    assert [d.rule for d in resonance.decisions][-1] == 'physical_null'
+    assert 'held physical' in resonance.reason
+
+
+@pytest.mark.parametrize('seed', [1, 2])
+def test_a_paper_model_unphysical_by_itself_is_not_explained_by_a_candidate_against_the_physical_null(seed):
+    # The recording's own constants are unphysical (C_lambda = -0.3, no effect): holding the null physical must
+    # not make a catalogue law earn what is no effect of the catalogue.
+    plan = dataclasses.replace(NOISY_PLAN, window_noise=0.05,
+                               constants=dataclasses.replace(PLAN.constants, c_lambda=-0.3))
+    result, _ = diagnose(None, seed, plan=plan)
+    assert result.baseline.unphysical()
+    assert result.verdict == 'unexplained'
+    assert not any(d.rule == 'physical_null' for c in result.candidates for d in c.decisions)
+
+
 def test_json_document_has_the_contract_fields_and_no_nan():
     result, _ = diagnose('position_dependent_stiffness', 9)
     document = json.loads(json.dumps(result.as_json(), allow_nan=False))
