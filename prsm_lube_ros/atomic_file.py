@@ -35,6 +35,8 @@ import time
 from typing import Any, TYPE_CHECKING
 from collections.abc import Callable, Iterator
 
+from .stopping import note_written
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -116,8 +118,12 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
         if before_replace is not None:
             before_replace(Path(temporary))
         os.replace(temporary, path)
+        note_written(path)
     except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        if os.path.lexists(temporary):
+            Path(temporary).unlink()
+        else:       # a signal right after the rename: the file is in place whole all the same
+            note_written(path)
         raise
 
 
@@ -185,6 +191,7 @@ def staged_folder(target: Path) -> Iterator[Path]:
             place = target / file.relative_to(staged)
             place.parent.mkdir(parents=True, exist_ok=True)
             os.replace(file, place)
+            note_written(place)
     finally:
         shutil.rmtree(staged, ignore_errors=True)
 

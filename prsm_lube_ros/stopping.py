@@ -28,7 +28,7 @@ import threading
 from types import TracebackType
 from typing import Any
 
-__all__ = ['GRACE', 'STOP_SIGNALS', 'StopSignals', 'Terminated', 'exit_now', 'stop_at_once']
+__all__ = ['GRACE', 'STOP_SIGNALS', 'StopSignals', 'Terminated', 'exit_now', 'note_written', 'stop_at_once']
 
 #: Signals that end a command cleanly.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -44,9 +44,23 @@ class Terminated(BaseException):
         self.signum = signum
 
 
+#: Files (or folders) the running command has put in place whole, in order (:func:`note_written`).
+_WRITTEN: list[str] = []
+
+
+def note_written(path: object) -> None:
+    """Record that ``path`` was put in place whole (renamed over its target), for the line a signal prints."""
+    _WRITTEN.append(os.fsdecode(path) if isinstance(path, (str, bytes, os.PathLike)) else str(path))
+
+
 def _line(command: str, signum: int) -> str:
-    return (f'prsm-lube{" " + command if command else ""}: interrupted by {signal.Signals(signum).name}; files being '
-            'written were left as they were')
+    """The one line of an interruption: what was already written whole, and that nothing was left half-written."""
+    done = ''
+    if _WRITTEN:
+        done = (f'{_WRITTEN[-1]} was written whole before it' if len(_WRITTEN) == 1 else
+                f'{len(_WRITTEN)} files were written whole before it, the last {_WRITTEN[-1]}') + '; '
+    return (f'prsm-lube{" " + command if command else ""}: interrupted by {signal.Signals(signum).name}; {done}files '
+            'being written were left as they were')
 
 
 def stop_at_once() -> None:
@@ -86,6 +100,7 @@ class StopSignals:
         self._active = threading.current_thread() is threading.main_thread()
 
     def __enter__(self) -> StopSignals:
+        _WRITTEN.clear()
         if self._active:
             self._previous = {signum: signal.getsignal(signum) for signum in STOP_SIGNALS}
             for signum in STOP_SIGNALS:

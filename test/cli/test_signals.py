@@ -46,6 +46,32 @@ def test_a_signal_while_a_command_runs_is_one_line_and_its_status(patched, capsy
     assert signal.getsignal(signal.SIGINT) is before      # handlers restored
 
 
+@pytest.mark.parametrize('crash_after_rename', [False, True])
+def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched, capsys, tmp_path, monkeypatch,
+                                                                        crash_after_rename):
+    from prsm_lube_ros import atomic_file
+    target = tmp_path / 'calib.yaml'
+    if crash_after_rename:      # the signal lands on the very bytecode after the rename
+        real_replace = os.replace
+
+        def replace_then_signal(source, destination):
+            real_replace(source, destination)
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        monkeypatch.setattr(atomic_file.os, 'replace', replace_then_signal)
+
+    def action(args):
+        atomic_file.write_text_atomically(target, 'whole\n')
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)
+        return 0
+    assert cli.main(patched(action)) == 143
+    assert target.read_text() == 'whole\n'
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f'prsm-lube simulate: interrupted by SIGTERM; {target} was written whole before it; files being written were '
+        'left as they were']
+
+
 def test_a_signal_turned_into_another_exception_is_still_the_interruption(patched, capsys):
     """A signal during an extension module's initialisation comes out as ImportError (pybind11)."""
     def action(args):
@@ -106,6 +132,7 @@ def test_the_installed_command_ends_cleanly_at_any_point_and_leaves_the_calibrat
             assert len(err.strip().splitlines()) == 1 and 'interrupted by' in err, err
             if out.read_bytes() != before:      # the signal came after the new file was committed (seen in CI):
                 assert load_calibration(out).constants == first.constants      # the same fit, written whole
+                assert f'{out} was written whole before it' in err, err         # and the line says so
         load_calibration(out)                           # whole: the old one or the new one
         assert [p.name for p in tmp_path.iterdir()] == ['calib.yaml']
     assert 128 + signum in seen
