@@ -44,21 +44,27 @@ class Terminated(BaseException):
         self.signum = signum
 
 
-#: Files (or folders) the running command has put in place whole, in order (:func:`note_written`).
-_WRITTEN: list[str] = []
+class _Written:
+    """How many files the running command has put in place whole, and the last (:func:`note_written`)."""
+
+    active = False      # only inside a command's StopSignals: a node writing for days keeps nothing
+    count = 0
+    last = ''
 
 
-def note_written(path: object) -> None:
+def note_written(path: str | os.PathLike[str]) -> None:
     """Record that ``path`` was put in place whole (renamed over its target), for the line a signal prints."""
-    _WRITTEN.append(os.fsdecode(path) if isinstance(path, (str, bytes, os.PathLike)) else str(path))
+    if _Written.active:
+        _Written.count += 1
+        _Written.last = os.fspath(path)
 
 
 def _line(command: str, signum: int) -> str:
     """The one line of an interruption: what was already written whole, and that nothing was left half-written."""
     done = ''
-    if _WRITTEN:
-        done = (f'{_WRITTEN[-1]} was written whole before it' if len(_WRITTEN) == 1 else
-                f'{len(_WRITTEN)} files were written whole before it, the last {_WRITTEN[-1]}') + '; '
+    if _Written.count:
+        done = (f'{_Written.last} was written whole before it' if _Written.count == 1 else
+                f'{_Written.count} files were written whole before it, the last {_Written.last}') + '; '
     return (f'prsm-lube{" " + command if command else ""}: interrupted by {signal.Signals(signum).name}; {done}files '
             'being written were left as they were')
 
@@ -100,7 +106,7 @@ class StopSignals:
         self._active = threading.current_thread() is threading.main_thread()
 
     def __enter__(self) -> StopSignals:
-        _WRITTEN.clear()
+        _Written.active, _Written.count, _Written.last = self._active, 0, ''
         if self._active:
             self._previous = {signum: signal.getsignal(signum) for signum in STOP_SIGNALS}
             for signum in STOP_SIGNALS:
@@ -111,6 +117,7 @@ class StopSignals:
     def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
                  traceback: TracebackType | None) -> None:
         self._finished.set()
+        _Written.active = False
         if self._active:
             sys.unraisablehook = self._hook
             for signum, handler in self._previous.items():

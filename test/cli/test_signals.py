@@ -72,6 +72,24 @@ def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched,
         'left as they were']
 
 
+def test_what_an_earlier_command_or_no_command_wrote_is_not_named(patched, capsys, tmp_path):
+    from prsm_lube_ros import atomic_file
+
+    def writes(args):
+        atomic_file.write_text_atomically(tmp_path / 'done.txt', 'x')
+        return 0
+
+    def interrupted(args):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(5)
+    assert cli.main(patched(writes)) == 0
+    for i in range(3):          # outside any command (a node writing its history for days): nothing is kept
+        atomic_file.write_text_atomically(tmp_path / f'{i}.txt', 'x')
+    assert cli.main(patched(interrupted)) == 130
+    assert capsys.readouterr().err.strip().splitlines() == [
+        'prsm-lube simulate: interrupted by SIGINT; files being written were left as they were']
+
+
 def test_a_signal_turned_into_another_exception_is_still_the_interruption(patched, capsys):
     """A signal during an extension module's initialisation comes out as ImportError (pybind11)."""
     def action(args):
