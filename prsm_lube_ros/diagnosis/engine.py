@@ -1459,8 +1459,8 @@ def _located_law(table: WindowTable, ranked: list[Candidate], location: Location
     return best
 
 
-def _against_physical_null(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, folds: list[int],
-                           rules: DiagnosisRules) -> tuple[Candidate, ModelFit] | None:
+def _against_physical_null(table: WindowTable, ranked: list[Candidate], baseline: ModelFit, location: Location,
+                           folds: list[int], rules: DiagnosisRules) -> tuple[Candidate, ModelFit] | None:
     """The candidate that explains why the paper's model needs unphysical constants, and that null (None if none).
 
     A candidate is fitted with C_lambda held at 0 or above where its free fit
@@ -1469,16 +1469,22 @@ def _against_physical_null(table: WindowTable, ranked: list[Candidate], baseline
     C_lambda (a film that raises the vibration) absorbed part of the effect's
     law of speed (a mode above the speeds run rises with speed, as a thinning
     film does not).  A candidate the BIC margin rejected against the free fit
-    is named when, against the physical null, it lowers the BIC by
-    ``rules.bic_margin`` and the held-out error by ``rules.min_gain``, and it
-    predicts held-out runs no worse than the free fit.  Of several, the one
-    predicting held-out runs best.  The decision reads ``physical_null``.
+    is named when, with C_lambda at 0 or above itself, against the physical
+    null it lowers the BIC by ``rules.bic_margin`` and the held-out error by
+    ``rules.min_gain``, and against the free fit it is no worse by either (BIC
+    and held-out error no higher: where the recording's own constants are
+    unphysical, no effect at all, a law of speed gains much on the null held
+    physical but nothing on the free fit); and where the mismatch is located
+    on a covariate, the candidate's law is of that covariate.  Of several, the
+    one predicting held-out runs best.  The decision reads ``physical_null``.
     """
     null = fit_model(table, None, folds, physical=True)
     best: tuple[Candidate, float, float] | None = None
     for cand in ranked:
         fit = cand.fit
-        if fit is None or fit.unphysical() or cand.decisions[-1].rule != 'bic_margin' or not cand.gain >= 0.0:
+        if fit is None or cand.decisions[-1].rule != 'bic_margin' or fit.vector[2] < 0.0 \
+                or not (cand.gain >= 0.0 and cand.delta_bic <= 0.0) \
+                or location.located not in ('none', 'spectrum', cand.effect.covariate):
             continue
         gain = 1.0 - fit.cv_rmse / null.cv_rmse if null.cv_rmse > 0 else math.nan
         delta = _delta_bic(fit, null)
@@ -1517,7 +1523,7 @@ def _when_none_earns(table: WindowTable, ranked: list[Candidate], baseline: Mode
     gains = any(c.fit is not None and c.gain >= rules.min_gain and not c.fit.unphysical() for c in ranked)
     together = (_pair_when_none_earns(table, ranked, baseline, folds, location, rules)
                 if (mismatch or gains) and located is None else None)
-    physical = (_against_physical_null(table, ranked, baseline, folds, rules)
+    physical = (_against_physical_null(table, ranked, baseline, location, folds, rules)
                 if mismatch and located is None and together is None and baseline.unphysical() else None)
     if physical is not None:
         out.best, null = physical
