@@ -118,13 +118,19 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
         if before_replace is not None:
             before_replace(Path(temporary))
         os.replace(temporary, path)
-        note_written(path)
     except BaseException:
         if os.path.lexists(temporary):
             Path(temporary).unlink()
         else:       # a signal right after the rename: the file is in place whole all the same
-            note_written(path)
+            _note_in_place(path)
         raise
+    _note_in_place(path)
+
+
+def _note_in_place(path: Path) -> None:
+    """Tell :mod:`.stopping` that ``path`` is in place whole, unless it lies in a staged folder (not yet in place)."""
+    if not any(_OWNED.search(part) for part in path.parent.parts):
+        note_written(path)
 
 
 @contextmanager

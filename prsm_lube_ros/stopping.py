@@ -56,7 +56,7 @@ def note_written(path: str | os.PathLike[str]) -> None:
     """Record that ``path`` was put in place whole (renamed over its target), for the line a signal prints."""
     if _Written.active:
         _Written.count += 1
-        _Written.last = os.fspath(path)
+        _Written.last = os.fspath(path).replace('\n', '\\n')     # the line stays one line
 
 
 def _line(command: str, signum: int) -> str:
@@ -75,7 +75,7 @@ def stop_at_once() -> None:
     Nothing is being written then, so nothing is left to clean up.
     """
     def end(signum: int, frame: object) -> None:
-        os.write(2, f'prsm-lube: interrupted by {signal.Signals(signum).name}\n'.encode())
+        os.write(2, f'prsm-lube: interrupted by {signal.Signals(signum).name}\n'.encode(errors='surrogateescape'))
         os._exit(128 + signum)
     for signum in STOP_SIGNALS:
         signal.signal(signum, end)
@@ -147,7 +147,7 @@ class StopSignals:
 
     def _watch(self) -> None:
         if not self._finished.wait(GRACE) and self.signum is not None:
-            os.write(2, (_line(self.command, self.signum) + '\n').encode())
+            os.write(2, (_line(self.command, self.signum) + '\n').encode(errors='surrogateescape'))
             os._exit(128 + self.signum)
 
     def _unraisable(self, unraisable: Any) -> None:

@@ -98,6 +98,7 @@ from ..atomic_file import file_lock, remove_stale, temporary_prefix, write_atomi
 from ..config_file import MAX_YAML_BYTES
 from ..errors import ConfigError, InputError, RecordingError
 from ..input_file import confine, MAX_RECORDING_BYTES, open_regular, read_bytes
+from ..stopping import note_written
 from ..validation import finite_or_none as _finite, utc_or_none as _utc
 
 if TYPE_CHECKING:
@@ -452,6 +453,7 @@ def _commit(staged: Path, history: Path, actuator: str, key: str) -> None:
         target = _file(history, table, actuator, key)
         target.parent.mkdir(parents=True, exist_ok=True)
         os.replace(staged / f'{table}.parquet', target)
+        note_written(target)
         _fsync_folder(target.parent)
 
 

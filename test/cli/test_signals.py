@@ -72,6 +72,22 @@ def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched,
         'left as they were']
 
 
+def test_a_report_s_files_are_named_where_they_are_put_not_where_they_were_staged(patched, capsys, tmp_path):
+    from prsm_lube_ros import atomic_file
+    report = tmp_path / 'report'
+
+    def action(args):
+        with atomic_file.staged_folder(report) as staged:
+            for name in ('index.md', 'runs.png'):
+                atomic_file.write_text_atomically(staged / name, name)
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)
+    assert cli.main(patched(action)) == 143
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f'prsm-lube simulate: interrupted by SIGTERM; 2 files were written whole before it, the last '
+        f'{report / "runs.png"}; files being written were left as they were']
+
+
 def test_what_an_earlier_command_or_no_command_wrote_is_not_named(patched, capsys, tmp_path):
     from prsm_lube_ros import atomic_file
 
