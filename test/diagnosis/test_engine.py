@@ -99,11 +99,12 @@ def test_a_mode_above_the_speeds_run_is_named_against_the_paper_model_held_physi
     assert 'held physical' in resonance.reason
 
 
-@pytest.mark.parametrize('seed', [1, 2])
-def test_a_paper_model_unphysical_by_itself_is_not_explained_by_a_candidate_against_the_physical_null(seed):
+@pytest.mark.parametrize('seed, noise', [(1, 0.2), (2, 0.2), (3, 0.2), (4, 0.2), (5, 0.2), (5, 0.05)])
+def test_a_paper_model_unphysical_by_itself_is_not_explained_by_a_candidate_against_the_physical_null(seed, noise):
     # The recording's own constants are unphysical (C_lambda = -0.3, no effect): holding the null physical must
-    # not make a catalogue law earn what is no effect of the catalogue.
-    plan = dataclasses.replace(NOISY_PLAN, window_noise=0.05,
+    # not make a catalogue law earn what is no effect of the catalogue.  In seeds 3-5 (0.2) and 5 (0.05) a mode's
+    # law of speed predicts held-out runs a little better than the free fit (0.2-2.2 %) but not by BIC (+5 to +8).
+    plan = dataclasses.replace(NOISY_PLAN, window_noise=noise,
                                constants=dataclasses.replace(PLAN.constants, c_lambda=-0.3))
     result, _ = diagnose(None, seed, plan=plan)
     assert result.baseline.unphysical()
