@@ -82,7 +82,9 @@ def candidate_lines(candidates: list) -> list[str]:
 
     A fitted candidate rejected by a rule other than the scores' own (a
     measurement its fit contradicts, unphysical constants) may have the best
-    scores of all; its row then carries the reason.
+    scores of all, and one named by a rule that scores it against another
+    reference (the paper's model held physical, a located law) may have poor
+    ones against the paper's model; its row then carries the reason.
     """
     from ..diagnosis.engine import Status
     lines = []
@@ -92,7 +94,7 @@ def candidate_lines(candidates: list) -> list[str]:
             continue
         line = (f'{cand.effect.id:<30} {cand.status:<13} {100 * cand.fit.cv_rmse:7.2f}% {100 * cand.gain:6.1f}% '
                 f'{cand.delta_bic:7.1f}')
-        if cand.status == Status.REJECTED and cand.decisions[-1].rule != 'bic_margin':
+        if cand.status in (Status.REJECTED, Status.EARNS) and cand.decisions[-1].rule != 'bic_margin':
             line += f'  ({cand.reason})'
         lines.append(line)
     return lines

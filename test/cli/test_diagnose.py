@@ -83,3 +83,22 @@ def test_a_candidate_refuted_by_a_measurement_says_why_in_the_terminal_table():
     for effect_id in by_scores:
         line, = [line for line in lines if line.startswith(effect_id + ' ')]
         assert '(' not in line
+
+
+def test_a_candidate_named_against_the_paper_model_held_physical_says_so_in_the_terminal_table():
+    """Its scores against the free fit are poor (BIC about 0): the row carries the reason with the null's scores."""
+    import dataclasses
+
+    import numpy as np
+
+    from prsm_lube_ros.cli.diagnose import candidate_lines
+    from prsm_lube_ros.diagnosis import diagnose_table
+    from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
+    plan = dataclasses.replace(SyntheticPlan(spectrum_bins=128), window_noise=0.2, run_noise=0.02,
+                               speeds_rpm=(100.0, 125.0, 150.0, 175.0))
+    table, _ = synthetic_table(np.random.default_rng(1), 'resonance', plan,
+                               params={'top_ratio': 0.8, 'damping_ratio': 0.1, 'top_speed': 175 * np.pi / 30})
+    result = diagnose_table(table)
+    assert result.verdict == 'resonance'
+    resonance, = [line for line in candidate_lines(result.candidates) if line.startswith('resonance ')]
+    assert 'earns' in resonance and "against it held physical, held-out error" in resonance
