@@ -84,14 +84,15 @@ import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter, uniform_filter1d
 
-from ..estimation.calibration import operating_levels
+from ..estimation.calibration import condition_labels, operating_levels
 from .fitting import effective_sample_size
 from .rules import DEFAULT_RULES, DEFAULT_SPECTRAL_RULES, DiagnosisRules
 from ..validation import finite_or_none
 from .table import WindowTable
 
 __all__ = ['COVARIATE_UNITS', 'CovariateTest', 'FIXED_LINE_BINS', 'Location', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
-           'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power', 'locate',
+           'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power',
+           'impulse_tracking', 'locate',
            'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
 
 #: The spectral measurements' thresholds (:class:`.rules.SpectralRules`: each with where its value comes from).
@@ -642,6 +643,46 @@ def _fixed_line_spectra(table: WindowTable) -> tuple[Any, SpectralLines]:
         del _LINE_SPECTRA[key]
     _LINE_SPECTRA[id(table)] = (weakref.ref(table), (spectra, fixed))
     return spectra, fixed
+
+
+def impulse_tracking(table: WindowTable, frequency: float) -> float:
+    """How strongly the power of the band at ``frequency`` (Hz) follows the windows' impulsive power: a pooled z.
+
+    Per window, the band's power over the level of its neighbours (within
+    30 % of ``frequency``), and the impulsive power ``rms^2 - gaussian_rms^2``
+    (what the sparse strikes add to the Gaussian part), each as a share of the
+    window's mean square; within each operating condition (speed and load
+    levels, 5 windows or more) their correlation, Fisher-transformed and pooled
+    with weights ``n - 3``: ``z = sum((n - 3) atanh r) / sqrt(sum(n - 3))``,
+    about standard normal when the band does not follow the impulses.  A mode
+    an order excites responds as the speed sets it, steady window to window at
+    a steady condition; a band the strikes ring follows each window's strikes.
+    NaN without spectra or the Gaussian part, or where no condition tells.
+    """
+    if table.spectra is None or table.gaussian_rms is None or not math.isfinite(table.spectrum_resolution):
+        return math.nan
+    df = table.spectrum_resolution
+    bins = np.arange(table.spectra.shape[1]) * df
+    band = np.abs(bins - frequency) <= max(0.05 * frequency, 3 * df)
+    neighbours = (np.abs(bins - frequency) <= 0.3 * frequency) & ~band
+    if not band.any() or not neighbours.any():
+        return math.nan
+    mean_square = table.rms ** 2
+    with np.errstate(invalid='ignore', divide='ignore'):
+        excess = np.maximum(table.spectra[:, band].sum(axis=1) - table.spectra[:, neighbours].mean(axis=1)
+                            * band.sum(), 0.0) * df / mean_square
+        impulsive = np.maximum(mean_square - table.gaussian_rms ** 2, 0.0) / mean_square
+    weighted, weights = 0.0, 0.0
+    labels = condition_labels(table.speed, table.load)
+    for condition in np.unique(labels):
+        chosen = (labels == condition) & np.isfinite(excess) & np.isfinite(impulsive)
+        n = int(chosen.sum())
+        if n < 5 or np.ptp(excess[chosen]) == 0 or np.ptp(impulsive[chosen]) == 0:
+            continue
+        r = float(np.corrcoef(excess[chosen], impulsive[chosen])[0, 1])
+        weighted += (n - 3) * math.atanh(min(max(r, -0.999999), 0.999999))
+        weights += n - 3
+    return weighted / math.sqrt(weights) if weights > 0 else math.nan
 
 
 def fixed_line_power(table: WindowTable) -> float:

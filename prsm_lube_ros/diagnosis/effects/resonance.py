@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...physics.effects import resonance as law
+from ..locate import impulse_tracking
 from ..rules import DEFAULT_SPECTRAL_RULES
 from .base import Effect, register
 
@@ -109,9 +110,11 @@ class ResonanceCandidate(Effect, law.Extension):
         (or next to where) that predicted share is largest, and the prediction
         must reach a quarter of the band's largest share, and the order that
         meets the band at the fitted resonant speed must be one the screw
-        makes (:meth:`_implied_order`).  Of several bands, those that follow
-        count (the largest named); a band the transfer does not put there is
-        another mode or the contact's own response.
+        makes (:meth:`_implied_order`), and its power must not follow the
+        windows' strikes (:func:`.locate.impulse_tracking` above
+        ``SpectralRules.struck_band_z``: a spall's ring).  Of several bands,
+        those that follow count (the largest named); a band the transfer does
+        not put there is another mode or the contact's own response.
         """
         lines = location.spectrum if location is not None else None
         if lines is None:
@@ -126,7 +129,8 @@ class ResonanceCandidate(Effect, law.Extension):
         highest = DEFAULT_SPECTRAL_RULES.mode_max_order
         following = [band for band, frequency in enumerate(lines.mode_frequencies)
                      if self._follows_transfer(lines, band, params)
-                     and self._implied_order(frequency, params) <= highest]
+                     and self._implied_order(frequency, params) <= highest
+                     and not impulse_tracking(table, frequency) > DEFAULT_SPECTRAL_RULES.struck_band_z]
         if not following:
             return self._ring_evidence(table, lines, params)
         band = max(following, key=lambda b: max(lines.mode_shares[b]))
