@@ -130,7 +130,8 @@ class ResonanceCandidate(Effect, law.Extension):
         following = [band for band, frequency in enumerate(lines.mode_frequencies)
                      if self._follows_transfer(lines, band, params)
                      and self._implied_order(frequency, params) <= highest
-                     and not impulse_tracking(table, frequency) > DEFAULT_SPECTRAL_RULES.struck_band_z]
+                     and not (table is not None
+                              and impulse_tracking(table, frequency) > DEFAULT_SPECTRAL_RULES.struck_band_z)]
         if not following:
             return self._ring_evidence(table, lines, params)
         band = max(following, key=lambda b: max(lines.mode_shares[b]))
