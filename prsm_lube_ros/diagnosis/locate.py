@@ -646,18 +646,24 @@ def _fixed_line_spectra(table: WindowTable) -> tuple[Any, SpectralLines]:
 
 
 def impulse_tracking(table: WindowTable, frequency: float) -> float:
-    """How strongly the power of the band at ``frequency`` (Hz) follows the windows' impulsive power: a pooled z.
+    """How strongly the power of the band at ``frequency`` (Hz) follows the windows' strikes: a pooled z.
 
-    Per window, the band's power over the level of its neighbours (within
-    30 % of ``frequency``), and the impulsive power ``rms^2 - gaussian_rms^2``
-    (what the sparse strikes add to the Gaussian part), each as a share of the
-    window's mean square; within each operating condition (speed and load
-    levels, 5 windows or more) their correlation, Fisher-transformed and pooled
-    with weights ``n - 3``: ``z = sum((n - 3) atanh r) / sqrt(sum(n - 3))``,
-    about standard normal when the band does not follow the impulses.  A mode
-    an order excites responds as the speed sets it, steady window to window at
-    a steady condition; a band the strikes ring follows each window's strikes.
-    NaN without spectra or the Gaussian part, or where no condition tells.
+    Per window, the band's power over the level of its neighbours (the median
+    bin within 30 % of ``frequency``, times the band's bins), the strikes' power
+    ``rms^2 - gaussian_rms^2`` (what sparse impulses add to the Gaussian part)
+    and the Gaussian part's power ``gaussian_rms^2`` (the contacts' smooth
+    vibration, which an order-excited mode's response scales with); windows
+    where either of the first two is not positive are left out.  Within each
+    operating condition (speed and load levels) the logarithms less their run
+    means (set-up scatter between runs is no strike), the first two less their
+    regression on the third (a window louder as a whole is no strike either),
+    and the correlation of what is left; the conditions pooled as Fisher z with
+    weights ``n - runs - 3`` (n windows, 8 or more):
+    ``z = sum(w atanh r) / sqrt(sum w)``, about standard normal where the
+    band's power does not follow the strikes.  A mode an order excites
+    responds as the speed and the contacts' vibration set it; a band the
+    strikes ring follows each window's strikes.  NaN without spectra or the
+    Gaussian part, below 10 bins (no neighbours), or where no condition tells.
     """
     if table.spectra is None or table.gaussian_rms is None or not math.isfinite(table.spectrum_resolution):
         return math.nan
@@ -667,22 +673,40 @@ def impulse_tracking(table: WindowTable, frequency: float) -> float:
     neighbours = (np.abs(bins - frequency) <= 0.3 * frequency) & ~band
     if not band.any() or not neighbours.any():
         return math.nan
-    mean_square = table.rms ** 2
-    with np.errstate(invalid='ignore', divide='ignore'):
-        excess = np.maximum(table.spectra[:, band].sum(axis=1) - table.spectra[:, neighbours].mean(axis=1)
-                            * band.sum(), 0.0) * df / mean_square
-        impulsive = np.maximum(mean_square - table.gaussian_rms ** 2, 0.0) / mean_square
-    weighted, weights = 0.0, 0.0
+    gaussian = np.asarray(table.gaussian_rms, dtype=float) ** 2
+    with np.errstate(invalid='ignore'):
+        excess = (table.spectra[:, band].sum(axis=1)
+                  - np.median(table.spectra[:, neighbours], axis=1) * band.sum()) * df
+        strikes = table.rms ** 2 - gaussian
+        usable = (excess > 0) & (strikes > 0) & (gaussian > 0) & np.isfinite(excess + strikes + gaussian)
     labels = condition_labels(table.speed, table.load)
-    for condition in np.unique(labels):
-        chosen = (labels == condition) & np.isfinite(excess) & np.isfinite(impulsive)
-        n = int(chosen.sum())
-        if n < 5 or np.ptp(excess[chosen]) == 0 or np.ptp(impulsive[chosen]) == 0:
+    weighted, weights = 0.0, 0.0
+    for condition in np.unique(labels[usable]):
+        chosen = usable & (labels == condition)
+        runs = table.run[chosen]
+        weight = int(chosen.sum()) - np.unique(runs).size - 3
+        if chosen.sum() < 8 or weight <= 0:
             continue
-        r = float(np.corrcoef(excess[chosen], impulsive[chosen])[0, 1])
-        weighted += (n - 3) * math.atanh(min(max(r, -0.999999), 0.999999))
-        weights += n - 3
+        band_log, strike_log, gaussian_log = (_less_run_means(np.log(values[chosen]), runs)
+                                              for values in (excess, strikes, gaussian))
+        scale = float(gaussian_log @ gaussian_log)
+        if scale > 0:
+            band_log = band_log - (gaussian_log @ band_log) / scale * gaussian_log
+            strike_log = strike_log - (gaussian_log @ strike_log) / scale * gaussian_log
+        spread = math.sqrt(float(band_log @ band_log) * float(strike_log @ strike_log))
+        if spread <= 0:
+            continue
+        r = float(band_log @ strike_log) / spread
+        weighted += weight * math.atanh(min(max(r, -0.999999), 0.999999))
+        weights += weight
     return weighted / math.sqrt(weights) if weights > 0 else math.nan
+
+
+def _less_run_means(values: np.ndarray, runs: np.ndarray) -> np.ndarray:
+    """``values`` less the mean of their run."""
+    _, inverse, counts = np.unique(runs, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    return values - (np.bincount(inverse, values) / counts)[inverse]
 
 
 def fixed_line_power(table: WindowTable) -> float:

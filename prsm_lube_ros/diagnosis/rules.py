@@ -204,11 +204,12 @@ class SpectralRules:
     mode_order_shift_bins: int = _rule(
         3, 'study: six speeds 9 % apart must not hide a 13 Hz mode (an order must move 3 bins)', 'test_locate.py')
     struck_band_z: float = _rule(
-        3.09, 'principle: a band whose power over its neighbours rises and falls with the windows\' impulsive '
-        'power within each operating condition beyond chance (pooled Fisher z of the correlations, one-sided '
-        'p < 0.001) is rung by impulses, not by an order the speed sets (which holds it steady at a steady '
-        'condition); study: surface_defect 1961 (a spall\'s ring at 252 Hz named a mode beside it, z = 15; the '
-        'modes of pairs two 1836, 1877 and 1878 beside spalls: z undefined or below 0)',
+        3.09, 'principle: a band whose power over its neighbours rises and falls with the windows\' strike power '
+        '(rms^2 less the Gaussian part\'s) within each operating condition and run, the Gaussian part\'s power '
+        'partialled out, beyond chance (pooled Fisher z, one-sided p < 0.001) is rung by impulses, not by an order '
+        '(which holds a mode\'s response as the speed and the contacts\' vibration set it); study: surface_defect '
+        '1961 (a spall\'s ring at 252 Hz named a mode beside it: z = 10.2; the rings of pairs two 1877 and 1746: '
+        '8.2 and 25.6; the modes of pairs 1836 and 1878 beside spalls: 1.7 and 1.2)',
         'test_resonance_evidence.py::test_a_band_that_follows_the_strikes_is_no_evidence_for_a_mode')
     mode_order_tolerance: float = _rule(
         0.15, 'convention: a band\'s frequency f at the fitted resonant speed omega_r implies the order 2 pi f / '
