@@ -42,8 +42,8 @@ if TYPE_CHECKING:
 __all__ = ['BASELINE', 'BASE_PARAMETERS', 'MAX_STARTS', 'ModelFit', 'PHYSICAL_START', 'UNPHYSICAL_SIGMAS', 'bic',
            'constants_jacobian', 'cv_folds', 'effective_sample_size', 'fit_model', 'fit_vector',
            'held_out_log_residuals', 'identifiable', 'intraclass_correlation', 'ln_eq22', 'predict_log',
-           'relative_errors', 'relative_rmse', 'run_level_rmse', 'score_held_out', 'within_run_delta_bic',
-           'within_run_correlation', 'within_run_gain', 'within_run_residual',
+           'relative_errors', 'relative_rmse', 'run_deviations', 'run_level_rmse', 'score_held_out',
+           'within_run_delta_bic', 'within_run_correlation', 'within_run_gain', 'within_run_residual',
            'within_run_sample_size', 'within_run_share']
 
 BASELINE = 'baseline'
@@ -275,7 +275,7 @@ def _group_means(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np
     return np.bincount(inverse, values, minlength=sizes.size) / sizes, inverse, sizes
 
 
-def _run_deviations(values: np.ndarray, run: np.ndarray) -> np.ndarray:
+def run_deviations(values: np.ndarray, run: np.ndarray) -> np.ndarray:
     """``values`` less the mean of their run."""
     means, inverse, _ = _group_means(values, run)
     return values - means[inverse]
@@ -335,7 +335,7 @@ def within_run_gain(table: WindowTable, candidate: npt.ArrayLike, reference: npt
     held = np.isfinite(cand) & np.isfinite(ref)
     if not held.any():
         return math.nan
-    own, other = (_run_deviations(r[held], table.run[held]) for r in (cand, ref))
+    own, other = (run_deviations(r[held], table.run[held]) for r in (cand, ref))
     power = float(other @ other)
     return 1.0 - math.sqrt(float(own @ own) / power) if power > 0 else math.nan
 
@@ -349,7 +349,7 @@ def within_run_correlation(table: WindowTable, first: str, second: str = 'time')
     """
     columns = [np.asarray(getattr(table, name), dtype=float) for name in (first, second)]
     keep = np.isfinite(columns[0]) & np.isfinite(columns[1])
-    a, b = (_run_deviations(c[keep], table.run[keep]) for c in columns)
+    a, b = (run_deviations(c[keep], table.run[keep]) for c in columns)
     scale = math.sqrt(float(a @ a) * float(b @ b))
     return float(a @ b) / scale if scale > 0 else math.nan
 
@@ -363,7 +363,7 @@ def within_run_share(table: WindowTable, covariate: str) -> float:
     keep = np.isfinite(values)
     if keep.sum() < 2 or not np.var(values[keep]) > 0:
         return 0.0
-    within = _run_deviations(values[keep], table.run[keep])
+    within = run_deviations(values[keep], table.run[keep])
     return float(np.var(within) / np.var(values[keep]))
 
 

@@ -85,7 +85,7 @@ from scipy import stats
 from scipy.ndimage import median_filter, uniform_filter1d
 
 from ..estimation.calibration import condition_labels, operating_levels
-from .fitting import effective_sample_size
+from .fitting import effective_sample_size, run_deviations
 from .rules import DEFAULT_RULES, DEFAULT_SPECTRAL_RULES, DiagnosisRules
 from ..validation import finite_or_none
 from .table import WindowTable
@@ -687,7 +687,7 @@ def impulse_tracking(table: WindowTable, frequency: float) -> float:
         weight = int(chosen.sum()) - np.unique(runs).size - 3
         if chosen.sum() < 8 or weight <= 0:
             continue
-        band_log, strike_log, gaussian_log = (_less_run_means(np.log(values[chosen]), runs)
+        band_log, strike_log, gaussian_log = (run_deviations(np.log(values[chosen]), runs)
                                               for values in (excess, strikes, gaussian))
         scale = float(gaussian_log @ gaussian_log)
         if scale > 0:
@@ -700,13 +700,6 @@ def impulse_tracking(table: WindowTable, frequency: float) -> float:
         weighted += weight * math.atanh(min(max(r, -0.999999), 0.999999))
         weights += weight
     return weighted / math.sqrt(weights) if weights > 0 else math.nan
-
-
-def _less_run_means(values: np.ndarray, runs: np.ndarray) -> np.ndarray:
-    """``values`` less the mean of their run."""
-    _, inverse, counts = np.unique(runs, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    return values - (np.bincount(inverse, values) / counts)[inverse]
 
 
 def fixed_line_power(table: WindowTable) -> float:
