@@ -97,7 +97,7 @@ from .empirical import causes, empirical_terms, EmpiricalTerm
 from .fitting import bic, constants_jacobian, cv_folds, effective_sample_size, fit_model, fit_vector, ModelFit, \
     predict_log, score_held_out, within_run_correlation, within_run_delta_bic, within_run_gain, \
     within_run_residual, within_run_sample_size, within_run_share
-from .locate import covariate_tests, locate, Location
+from .locate import covariate_tests, locate, Location, partial_trend
 from .rules import DEFAULT_RULES, DiagnosisRules
 from .table import DRIFT_COVARIATES, PLAN_COVARIATES, WindowTable
 
@@ -892,7 +892,7 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     earning.sort(key=lambda second: (second.route, second.fit.cv_rmse))
     if len(earning) > 1 and earning[1].route == earning[0].route == 1 \
             and abs(earning[1].delta_bic - earning[0].delta_bic) < rules.bic_margin:
-        return _settle_tied_seconds(table, first, earning[:2], left, location)
+        return _settle_tied_seconds(table, first, earning[:2], left, location, rules)
     if not earning:     # the Gaussian part beside an impulsive first effect, then evidence no other effect makes
         in_part = _second_in_gaussian_part(table, first, candidates, fitted, rules)
         if in_part is not None or not exclusive:
@@ -902,25 +902,69 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
 
 
 def _settle_tied_seconds(table: WindowTable, first: Candidate, tied: list[SecondEffect], left: Location,
-                         location: Location) -> tuple[SecondEffect | None, list[SecondEffect]]:
+                         location: Location, rules: DiagnosisRules) -> tuple[SecondEffect | None, list[SecondEffect]]:
     """Of two second effects that earn alike by BIC, the one named, if any (:func:`_second_effect`).
 
-    The one whose covariate what ``first`` leaves is located on, else the one
-    shown outside the amplitude fit; ``(None, tied)`` when neither or both.
+    In this order: the one whose covariate what ``first`` leaves is located
+    on, unless that is the first effect's own covariate (where its own law's
+    misfit shows: a spall's growth fitted in revolutions leaves a pattern in
+    revolutions whatever the second effect is) or the location does not hold
+    with the other's covariate held (:func:`_location_holds`);
+    the one shown outside the amplitude fit; the one whose law alone fitted
+    the recording better by ``rules.bic_margin`` of BIC (:func:`_alone_decides`).
+    ``(None, tied)`` when none of these tells them apart.
     """
+    assert first.fit is not None    # a first effect was fitted
     located = [second for second in tied if second.candidate.effect.covariate == left.located]
-    if len(located) == 1:
-        return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
-                       f'{left.located}, as this effect does'), []
+    if len(located) == 1 and left.located != first.effect.covariate:
+        other = tied[1] if located[0] is tied[0] else tied[0]
+        if _location_holds(table, first.fit.log_residual, left.located, other.candidate.effect.covariate, rules):
+            return replace(located[0], basis=located[0].basis + f'; what {first.effect.id} leaves follows '
+                           f'{left.located}, as this effect does'), []
     shown = [(second, second.effect.independent_evidence(table, location, second.params,
                                                          beside=second.first_effect)) for second in tied]
     with_evidence = [(second, evidence) for second, evidence in shown if evidence]
-    if len(with_evidence) != 1:
+    if len(with_evidence) == 1:
+        (named, evidence), = with_evidence
+        other = tied[1] if named is tied[0] else tied[0]
+        return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows '
+                       'nothing outside the amplitude fit'), []
+    if not with_evidence:
+        return _alone_decides(tied, rules)
+    return None, tied
+
+
+def _location_holds(table: WindowTable, residual: np.ndarray, located: str, other: str,
+                    rules: DiagnosisRules) -> bool:
+    """Whether ``residual`` follows drift covariate ``located`` beyond what drift covariate ``other`` explains.
+
+    Two drifts that move together over a recording (temperature rising with
+    the revolutions while the rig warms up) both carry a pattern either one
+    makes; the location tells two laws apart only where its covariate's trend
+    stays significant (``rules.significance``) with the other's held out of
+    both (:func:`.locate.partial_trend`).  A location on a covariate that is
+    no drift (a speed, the stroke), or beside one, stands as found.
+    """
+    if located not in DRIFT_COVARIATES or other not in DRIFT_COVARIATES:
+        return True
+    test = partial_trend(table, residual, located, other)
+    return test is not None and test.p_value < rules.significance
+
+
+def _alone_decides(tied: list[SecondEffect], rules: DiagnosisRules) -> tuple[SecondEffect | None, list[SecondEffect]]:
+    """Of two tied second effects neither located nor shown apart: the one whose law alone fitted far better.
+
+    Each was fitted alone against the paper's model (its candidate's scores);
+    where one's BIC there is lower than the other's by ``rules.bic_margin``
+    (very strong evidence for its law over the other's on the whole recording),
+    it is named.  Otherwise ``(None, tied)``.
+    """
+    first_alone, second_alone = (second.candidate.delta_bic for second in tied)
+    if not abs(first_alone - second_alone) >= rules.bic_margin:     # a NaN decides nothing
         return None, tied
-    (named, evidence), = with_evidence
-    other = tied[1] if named is tied[0] else tied[0]
-    return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows nothing '
-                   'outside the amplitude fit'), []
+    named, other = (tied[0], tied[1]) if first_alone < second_alone else (tied[1], tied[0])
+    return replace(named, basis=named.basis + f'; alone, its law fits the recording better than '
+                   f'{other.effect.id}\'s by BIC {named.candidate.delta_bic - other.candidate.delta_bic:+.0f}'), []
 
 
 def _second_in_gaussian_part(table: WindowTable, first: Candidate, candidates: list[Candidate],

@@ -92,8 +92,9 @@ from .table import WindowTable
 
 __all__ = ['COVARIATE_UNITS', 'CovariateTest', 'FIXED_LINE_BINS', 'Location', 'SHAPE_NOISE_FACTOR', 'SIGNIFICANCE',
            'SpectralLines', 'SpectralShape', 'covariate_tests', 'direction_pairs', 'fixed_line_power',
-           'impulse_tracking', 'locate',
-           'order_tracked_mode', 'spectral_lines', 'spectral_shape', 'time_segment']
+           'impulse_tracking', 'locate', 'partial_trend',
+           'order_tracked_mode', 'residual_holding', 'spectral_lines', 'spectral_shape', 'strongest_test',
+           'time_segment']
 
 #: The spectral measurements' thresholds (:class:`.rules.SpectralRules`: each with where its value comes from).
 _SPECTRAL = DEFAULT_SPECTRAL_RULES
@@ -1175,13 +1176,58 @@ def spectral_shape(table: WindowTable, exclude: Sequence[float] = ()) -> Spectra
     return result
 
 
+def strongest_test(tests: Sequence[CovariateTest], rules: DiagnosisRules = DEFAULT_RULES) -> CovariateTest | None:
+    """Of the tests significant at ``rules.significance``, the one carrying most of the residual variance."""
+    significant = [t for t in tests if t.p_value < rules.significance]
+    return max(significant, key=lambda t: t.r_squared) if significant else None
+
+
+def residual_holding(table: WindowTable, residual: np.ndarray, covariate: str) -> np.ndarray:
+    """``residual`` less what ``covariate`` (a column of ``table``) explains of it by least squares.
+
+    What it explains is a parabola in it: a speed or load set in three levels
+    takes out their means, a drift (temperature approaching its steady
+    value, revolutions) its trend and bend.  Where ``table`` has no such
+    column (the spectrum) or it holds one value only, ``residual`` comes back as it is.
+    """
+    residual = np.asarray(residual, dtype=float)
+    values = getattr(table, covariate, None)
+    if not isinstance(values, np.ndarray) or values.shape != residual.shape:
+        return residual
+    ok = np.isfinite(values) & np.isfinite(residual)
+    if ok.sum() < 4 or np.ptp(values[ok]) <= 0:
+        return residual
+    x = (values[ok] - values[ok].mean()) / np.ptp(values[ok])
+    design = np.column_stack([np.ones_like(x), x, x * x])
+    coefficients, *_ = np.linalg.lstsq(design, residual[ok], rcond=None)
+    held = residual.copy()
+    held[ok] = residual[ok] - design @ coefficients
+    return held
+
+
+def partial_trend(table: WindowTable, residual: np.ndarray, covariate: str, held: str) -> CovariateTest | None:
+    """The run-clustered trend of ``residual`` in ``covariate`` with ``held`` taken out of both (None: no test).
+
+    Frisch-Waugh: what ``held`` explains (:func:`residual_holding`) is taken
+    out of the residual and of the covariate, and the trend of what is left
+    of one in what is left of the other is tested as :func:`covariate_tests`
+    tests a trend.  Two drifts that move together over a recording (the rig
+    warming up as the revolutions add up) each carry a pattern that one of
+    them makes; this tells whether ``covariate`` carries it beyond ``held``.
+    """
+    values = getattr(table, covariate, None)
+    if not isinstance(values, np.ndarray):
+        return None
+    return _cluster_trend(residual_holding(table, residual, held), residual_holding(table, values, held),
+                          table.run, covariate, f'trend with {held} held')
+
+
 def locate(table: WindowTable, residual: np.ndarray, rules: DiagnosisRules = DEFAULT_RULES) -> Location:
     """Test the baseline residual against every covariate and the spectrum (``rules``: the covariate tests')."""
     tests = covariate_tests(table, residual, rules)
     spectrum = spectral_lines(table, residual)
-    significant = [t for t in tests if t.p_value < rules.significance]
-    if significant:
-        top = max(significant, key=lambda t: t.r_squared)
+    top = strongest_test(tests, rules)
+    if top is not None:
         located = top.covariate
         summary = (f'the mismatch follows {top.covariate} ({top.kind}): it carries '
                    f'{100 * top.r_squared:.0f} % of the residual variance, p = {top.p_value:.2g}')

@@ -358,36 +358,48 @@ def test_a_background_is_never_fitted_below_the_fixed_lines_the_spectrum_measure
     assert background.to_params(np.array([0.2]), {'rms_scale': 2.0})['background_rms'] == pytest.approx(0.4)
 
 
-@pytest.mark.parametrize('located, evidence, named', [
-    ('position', '', 'position_dependent_stiffness'),
-    ('none', '', None),
+@pytest.mark.parametrize('located, evidence, first_covariate, alone_bic, named, basis', [
+    ('position', '', 'temperature', (-20.0, -15.0), 'position_dependent_stiffness', 'follows position'),
+    ('none', '', 'temperature', (-20.0, -15.0), None, ''),
     # Two 62 of the fresh random study: background lines and resonance both earned on top of thermal viscosity,
     # 3.6 of BIC apart, and neither was named; the spectrum showed the lines at fixed frequencies.
-    ('none', 'position_dependent_stiffness', 'position_dependent_stiffness'),
-    ('position', 'resonance', 'position_dependent_stiffness'),   # the location goes first
+    ('none', 'position_dependent_stiffness', 'temperature', (-20.0, -15.0), 'position_dependent_stiffness',
+     'what it shows; resonance fits as well'),
+    ('position', 'resonance', 'temperature', (-20.0, -15.0), 'position_dependent_stiffness',
+     'follows position'),    # the location goes first
+    # The first effect's own covariate: its law's misfit shows there, whatever the second is (two 2088: a spall
+    # growing with revolutions beside thermal thinning left a pattern in revolutions, and depletion was named).
+    ('position', '', 'position', (-20.0, -15.0), None, ''),
+    ('position', 'resonance', 'position', (-20.0, -15.0), 'resonance', 'what it shows'),
+    # Neither located nor shown apart: a law that alone fits the recording better by the BIC margin is named.
+    ('none', '', 'temperature', (-57.0, -23.0), 'resonance', 'alone, its law fits the recording better'),
+    ('position', '', 'position', (-23.0, -57.0), 'position_dependent_stiffness', 'alone, its law fits'),
+    ('none', '', 'temperature', (-30.0, -23.0), None, ''),
 ])
 def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_located_then_by_evidence(
-        monkeypatch, located, evidence, named):
-    """Stiffness and resonance on top of thermal viscosity, BICs 4 apart: the location decides, else evidence
-    outside the amplitude fit that one of them only shows, or it is a tie."""
+        monkeypatch, located, evidence, first_covariate, alone_bic, named, basis):
+    """Stiffness and resonance on top of a first effect, BICs 4 apart: the location decides (unless it is the
+    first effect's own covariate), else evidence outside the amplitude fit that one of them only shows, else a
+    law that alone fits the recording better by the BIC margin, or it is a tie."""
     from types import SimpleNamespace
     from prsm_lube_ros.diagnosis import engine
     from prsm_lube_ros.diagnosis.locate import Location
 
-    def second(effect_id, covariate, cv_rmse, delta_bic):
+    def second(effect_id, covariate, cv_rmse, delta_bic, alone):
         shown = 'spectrum: what it shows' if effect_id == evidence else ''
         effect = SimpleNamespace(id=effect_id, covariate=covariate,
                                  independent_evidence=lambda table, location, params, beside: shown,
                                  exclusive_evidence=lambda table, share: '')
-        candidate = SimpleNamespace(effect=effect, fit=object(), gain=0.1)
+        candidate = SimpleNamespace(effect=effect, fit=object(), gain=0.1, delta_bic=alone)
         return engine.SecondEffect(candidate, SimpleNamespace(cv_rmse=cv_rmse), {}, 0.1, delta_bic, effect, '', None,
                                    {}, '', basis='BIC')
-    seconds = {'resonance': second('resonance', 'speed', 0.030, -12.0),
-               'position_dependent_stiffness': second('position_dependent_stiffness', 'position', 0.031, -8.0)}
+    seconds = {'resonance': second('resonance', 'speed', 0.030, -12.0, alone_bic[0]),
+               'position_dependent_stiffness': second('position_dependent_stiffness', 'position', 0.031, -8.0,
+                                                      alone_bic[1])}
     monkeypatch.setattr(engine, 'lack_of_fit', lambda *args: SimpleNamespace(significant=True))
     monkeypatch.setattr(engine, 'locate', lambda *args: Location([], None, located, ''))
     monkeypatch.setattr(engine, '_add_second', lambda table, first, cand, *args: seconds[cand.effect.id])
-    first = SimpleNamespace(effect=SimpleNamespace(id='thermal_viscosity'),
+    first = SimpleNamespace(effect=SimpleNamespace(id='first_effect', covariate=first_covariate),
                             fit=SimpleNamespace(log_residual=np.zeros(3), n_params=5))
     candidates = [first] + [s.candidate for s in seconds.values()]
     chosen, tied = engine._second_effect(None, first, candidates, None, None, engine.DEFAULT_RULES)
@@ -395,7 +407,7 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
         assert chosen is None and len(tied) == 2
     else:
         assert chosen.candidate.effect.id == named and tied == []
-        assert ('follows position' if located != 'none' else 'what it shows; resonance fits as well') in chosen.basis
+        assert basis in chosen.basis
 
 
 def test_the_pair_pool_takes_candidates_with_spectral_evidence_first_then_the_largest_gains(monkeypatch):

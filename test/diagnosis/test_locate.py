@@ -6,7 +6,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from prsm_lube_ros.diagnosis.locate import covariate_tests, locate, spectral_lines
+from prsm_lube_ros.diagnosis.locate import (covariate_tests, locate, partial_trend, residual_holding,
+                                            spectral_lines)
 from prsm_lube_ros.experiments.synthetic_tables import SyntheticPlan, synthetic_table
 from prsm_lube_ros.diagnosis.table import WindowTable
 
@@ -104,6 +105,37 @@ def test_temperature_is_a_covariate_only_when_it_spans_more_than_sensor_noise(sp
     if tested:
         assert min(t.p_value for t in found) < 1e-6
     assert (locate(table, residual).located == 'temperature') == tested
+
+
+@pytest.mark.parametrize('seed', range(5))
+def test_a_pattern_of_one_of_two_covariates_that_drift_together_keeps_its_trend_only_with_the_other_held(seed):
+    """A rig warming up: temperature rises with revolutions, and pauses between runs cool it apart.  A residual
+    of temperature follows both; with revolutions held it still follows temperature, with temperature held it
+    no longer follows revolutions."""
+    table, rng = table_with(n_runs=24, seed=seed)
+    warm = 30.0 + 8.0 * (1.0 - np.exp(-table.revolutions / 600.0))
+    cooled = rng.normal(0.0, 1.5, table.runs.size)[table.run]       # pauses between runs, drawn per run
+    table = dataclasses.replace(table, temperature=warm + cooled + rng.normal(0.0, 0.05, len(table)))
+    assert np.corrcoef(table.temperature, table.revolutions)[0, 1] > 0.5
+    residual = 0.02 * (table.temperature - 30.0) + rng.normal(0, 0.01, len(table))
+    alone = {t.covariate: t.p_value for t in covariate_tests(table, residual) if t.kind == 'trend'}
+    assert alone['temperature'] < 1e-3 and alone['revolutions'] < 1e-3
+    assert partial_trend(table, residual, 'temperature', 'revolutions').p_value < 1e-6
+    assert partial_trend(table, residual, 'revolutions', 'temperature').p_value > 1e-3
+    # And the other way round: a residual of revolutions (a film depleting) keeps its trend with temperature held.
+    residual = 0.0002 * table.revolutions + rng.normal(0, 0.01, len(table))
+    assert partial_trend(table, residual, 'revolutions', 'temperature').p_value < 1e-6
+    assert partial_trend(table, residual, 'temperature', 'revolutions').p_value > 1e-3
+
+
+def test_holding_a_covariate_takes_out_its_levels_and_leaves_what_it_cannot_explain():
+    table, rng = table_with()
+    by_speed = np.where(table.speed > 15.0, 0.1, -0.1)
+    other = rng.normal(0, 0.01, len(table))
+    held = residual_holding(table, by_speed + other, 'speed')
+    assert np.allclose(held, other - other.mean(), atol=0.01)
+    assert residual_holding(table, by_speed, 'spectrum') is not None
+    assert np.array_equal(residual_holding(table, by_speed, 'spectrum'), by_speed)
 
 
 def test_a_step_between_runs_is_a_shape_in_time():
