@@ -860,9 +860,8 @@ def _second_effect(table: WindowTable, first: Candidate, candidates: list[Candid
     screw still that a resonance's fit has absorbed).
     Returns ``(second or None, tied)``: two that earn by the BIC rule with BICs
     within ``rules.bic_margin`` of each other tie, and neither is named, unless
-    what the first leaves is located on the covariate of one of them only, or
-    else one of them only shows outside the amplitude fit (its spectrum or the
-    vibration at standstill, with the pair's parameters); one
+    :func:`_settle_tied_seconds` tells them apart (where what the first leaves
+    is located, what shows outside the amplitude fit, what fitted alone); one
     named by a stronger rule of :func:`_add_second` goes before the others.
     When none earns: beside an impulsive first effect, the effect its windows'
     Gaussian part names (:func:`_second_in_gaussian_part`), else one with
@@ -909,10 +908,11 @@ def _settle_tied_seconds(table: WindowTable, first: Candidate, tied: list[Second
     on, unless that is the first effect's own covariate (where its own law's
     misfit shows: a spall's growth fitted in revolutions leaves a pattern in
     revolutions whatever the second effect is) or the location does not hold
-    with the other's covariate held (:func:`_location_holds`);
-    the one shown outside the amplitude fit; the one whose law alone fitted
-    the recording better by ``rules.bic_margin`` of BIC (:func:`_alone_decides`).
-    ``(None, tied)`` when none of these tells them apart.
+    with the other's covariate held (:func:`_location_holds`); else the one of
+    the two only that shows outside the amplitude fit; where neither does, the
+    one whose law alone fitted the recording better by ``rules.bic_margin`` of
+    BIC, its covariate not the first effect's (:func:`_alone_decides`).
+    ``(None, tied)`` when none of these tells them apart (both shown, say).
     """
     assert first.fit is not None    # a first effect was fitted
     located = [second for second in tied if second.candidate.effect.covariate == left.located]
@@ -930,7 +930,7 @@ def _settle_tied_seconds(table: WindowTable, first: Candidate, tied: list[Second
         return replace(named, basis=named.basis + f'; {evidence}; {other.effect.id} fits as well but shows '
                        'nothing outside the amplitude fit'), []
     if not with_evidence:
-        return _alone_decides(tied, rules)
+        return _alone_decides(first, tied, rules)
     return None, tied
 
 
@@ -951,18 +951,24 @@ def _location_holds(table: WindowTable, residual: np.ndarray, located: str, othe
     return test is not None and test.p_value < rules.significance
 
 
-def _alone_decides(tied: list[SecondEffect], rules: DiagnosisRules) -> tuple[SecondEffect | None, list[SecondEffect]]:
+def _alone_decides(first: Candidate, tied: list[SecondEffect],
+                   rules: DiagnosisRules) -> tuple[SecondEffect | None, list[SecondEffect]]:
     """Of two tied second effects neither located nor shown apart: the one whose law alone fitted far better.
 
-    Each was fitted alone against the paper's model (its candidate's scores);
-    where one's BIC there is lower than the other's by ``rules.bic_margin``
-    (very strong evidence for its law over the other's on the whole recording),
-    it is named.  Otherwise ``(None, tied)``.
+    Each was fitted alone against the paper's model (its candidate's scores),
+    where it could also take up part of the first effect's pattern: a law of
+    the first effect's own covariate the most.  So the one whose BIC there is
+    lower than the other's by ``rules.bic_margin`` (very strong evidence for its
+    law over the other's) is named only when its covariate is not the first
+    effect's: it fitted better although the other could imitate the first
+    effect at least as well.  Otherwise ``(None, tied)``.
     """
     first_alone, second_alone = (second.candidate.delta_bic for second in tied)
     if not abs(first_alone - second_alone) >= rules.bic_margin:     # a NaN decides nothing
         return None, tied
     named, other = (tied[0], tied[1]) if first_alone < second_alone else (tied[1], tied[0])
+    if named.candidate.effect.covariate == first.effect.covariate:
+        return None, tied
     return replace(named, basis=named.basis + f'; alone, its law fits the recording better than '
                    f'{other.effect.id}\'s by BIC {named.candidate.delta_bic - other.candidate.delta_bic:+.0f}'), []
 

@@ -1187,8 +1187,10 @@ def residual_holding(table: WindowTable, residual: np.ndarray, covariate: str) -
 
     What it explains is a parabola in it: a speed or load set in three levels
     takes out their means, a drift (temperature approaching its steady
-    value, revolutions) its trend and bend.  Where ``table`` has no such
-    column (the spectrum) or it holds one value only, ``residual`` comes back as it is.
+    value, revolutions) its trend and bend.  Windows without a value of
+    ``covariate`` (a temperature not recorded there) or of ``residual`` are NaN:
+    nothing is held there.  Where ``table`` has no such column (the spectrum)
+    or it holds one value only, ``residual`` comes back as it is.
     """
     residual = np.asarray(residual, dtype=float)
     values = getattr(table, covariate, None)
@@ -1200,7 +1202,7 @@ def residual_holding(table: WindowTable, residual: np.ndarray, covariate: str) -
     x = (values[ok] - values[ok].mean()) / np.ptp(values[ok])
     design = np.column_stack([np.ones_like(x), x, x * x])
     coefficients, *_ = np.linalg.lstsq(design, residual[ok], rcond=None)
-    held = residual.copy()
+    held = np.full_like(residual, np.nan)
     held[ok] = residual[ok] - design @ coefficients
     return held
 
@@ -1208,18 +1210,27 @@ def residual_holding(table: WindowTable, residual: np.ndarray, covariate: str) -
 def partial_trend(table: WindowTable, residual: np.ndarray, covariate: str, held: str) -> CovariateTest | None:
     """The run-clustered trend of ``residual`` in ``covariate`` with ``held`` taken out of both (None: no test).
 
-    Frisch-Waugh: what ``held`` explains (:func:`residual_holding`) is taken
-    out of the residual and of the covariate, and the trend of what is left
-    of one in what is left of the other is tested as :func:`covariate_tests`
-    tests a trend.  Two drifts that move together over a recording (the rig
-    warming up as the revolutions add up) each carry a pattern that one of
-    them makes; this tells whether ``covariate`` carries it beyond ``held``.
+    Frisch-Waugh: on the windows that have all three, what ``held`` explains
+    (:func:`residual_holding`) is taken out of the residual and of the
+    covariate, and the trend of what is left of one in what is left of the
+    other is tested as :func:`covariate_tests` tests a trend.  Two drifts that
+    move together over a recording (the rig warming up as the revolutions add
+    up) each carry a pattern that one of them makes; this tells whether
+    ``covariate`` carries it beyond ``held``.  It tests a slope only: a
+    pattern of another shape (an arch) that ``held`` leaves is not seen.
     """
     values = getattr(table, covariate, None)
-    if not isinstance(values, np.ndarray):
+    other = getattr(table, held, None)
+    if not isinstance(values, np.ndarray) or not isinstance(other, np.ndarray):
         return None
-    return _cluster_trend(residual_holding(table, residual, held), residual_holding(table, values, held),
-                          table.run, covariate, f'trend with {held} held')
+    residual = np.asarray(residual, dtype=float)
+    common = np.isfinite(residual) & np.isfinite(values) & np.isfinite(other)
+    if common.sum() < 4:
+        return None
+    part = table.subset(common)
+    return _cluster_trend(residual_holding(part, residual[common], held),
+                          residual_holding(part, values[common], held), part.run, covariate,
+                          f'trend with {held} held')
 
 
 def locate(table: WindowTable, residual: np.ndarray, rules: DiagnosisRules = DEFAULT_RULES) -> Location:

@@ -3,6 +3,7 @@
 """Diagnosis on window tables generated directly (no bags): verdicts, gains, ties and the JSON document."""
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
@@ -371,10 +372,15 @@ def test_a_background_is_never_fitted_below_the_fixed_lines_the_spectrum_measure
     # growing with revolutions beside thermal thinning left a pattern in revolutions, and depletion was named).
     ('position', '', 'position', (-20.0, -15.0), None, ''),
     ('position', 'resonance', 'position', (-20.0, -15.0), 'resonance', 'what it shows'),
-    # Neither located nor shown apart: a law that alone fits the recording better by the BIC margin is named.
+    # Neither located nor shown apart: a law that alone fits the recording better by the BIC margin is named,
+    # unless its covariate is the first effect's (alone, such a law may have taken up the first effect's part).
     ('none', '', 'temperature', (-57.0, -23.0), 'resonance', 'alone, its law fits the recording better'),
-    ('position', '', 'position', (-23.0, -57.0), 'position_dependent_stiffness', 'alone, its law fits'),
+    ('none', '', 'speed', (-23.0, -57.0), 'position_dependent_stiffness', 'alone, its law fits'),
+    ('none', '', 'position', (-23.0, -57.0), None, ''),
     ('none', '', 'temperature', (-30.0, -23.0), None, ''),
+    ('none', '', 'temperature', (math.nan, -23.0), None, ''),
+    # Both shown outside the amplitude fit: a tie, whatever their fits alone.
+    ('none', 'both', 'temperature', (-57.0, -23.0), None, ''),
 ])
 def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_located_then_by_evidence(
         monkeypatch, located, evidence, first_covariate, alone_bic, named, basis):
@@ -386,7 +392,7 @@ def test_two_second_effects_tied_by_bic_are_told_apart_by_where_the_residual_is_
     from prsm_lube_ros.diagnosis.locate import Location
 
     def second(effect_id, covariate, cv_rmse, delta_bic, alone):
-        shown = 'spectrum: what it shows' if effect_id == evidence else ''
+        shown = 'spectrum: what it shows' if evidence in (effect_id, 'both') else ''
         effect = SimpleNamespace(id=effect_id, covariate=covariate,
                                  independent_evidence=lambda table, location, params, beside: shown,
                                  exclusive_evidence=lambda table, share: '')

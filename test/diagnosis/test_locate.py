@@ -134,8 +134,21 @@ def test_holding_a_covariate_takes_out_its_levels_and_leaves_what_it_cannot_expl
     other = rng.normal(0, 0.01, len(table))
     held = residual_holding(table, by_speed + other, 'speed')
     assert np.allclose(held, other - other.mean(), atol=0.01)
-    assert residual_holding(table, by_speed, 'spectrum') is not None
     assert np.array_equal(residual_holding(table, by_speed, 'spectrum'), by_speed)
+
+
+def test_windows_without_the_held_covariate_do_not_carry_the_trend_into_the_partial_test():
+    # A residual of temperature, and one window in seven without a temperature: revolutions must not pick up
+    # the pattern in the windows where nothing can be held (there the raw residual and raw revolutions).
+    table, rng = table_with(n_runs=24, seed=2)
+    warm = 30.0 + 8.0 * (1.0 - np.exp(-table.revolutions / 600.0))
+    temperature = warm + rng.normal(0.0, 1.5, table.runs.size)[table.run] + rng.normal(0.0, 0.05, len(table))
+    residual = 0.02 * (temperature - 30.0) + rng.normal(0, 0.01, len(table))
+    temperature[::7] = np.nan
+    table = dataclasses.replace(table, temperature=temperature)
+    assert partial_trend(table, residual, 'revolutions', 'temperature').p_value > 1e-3
+    assert partial_trend(table, residual, 'temperature', 'revolutions').p_value < 1e-6
+    assert np.isnan(residual_holding(table, residual, 'temperature')[::7]).all()
 
 
 def test_a_step_between_runs_is_a_shape_in_time():
