@@ -118,13 +118,13 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
         if before_replace is not None:
             before_replace(Path(temporary))
         os.replace(temporary, path)
+        _note_in_place(path)    # inside: a signal between the rename and the note is caught below
     except BaseException:
         if os.path.lexists(temporary):
             Path(temporary).unlink()
-        else:       # a signal right after the rename: the file is in place whole all the same
+        else:       # a signal right after the rename: the file is in place whole all the same (noted once)
             _note_in_place(path)
         raise
-    _note_in_place(path)
 
 
 def _note_in_place(path: Path) -> None:
@@ -196,8 +196,13 @@ def staged_folder(target: Path) -> Iterator[Path]:
         for file in sorted(p for p in staged.rglob('*') if p.is_file()):
             place = target / file.relative_to(staged)
             place.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(file, place)
-            note_written(place)
+            try:
+                os.replace(file, place)
+                note_written(place)
+            except BaseException:
+                if not os.path.lexists(file):     # a signal right after the rename: in place whole (noted once)
+                    note_written(place)
+                raise
     finally:
         shutil.rmtree(staged, ignore_errors=True)
 

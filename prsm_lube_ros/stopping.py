@@ -53,10 +53,16 @@ class _Written:
 
 
 def note_written(path: str | os.PathLike[str]) -> None:
-    """Record that ``path`` was put in place whole (renamed over its target), for the line a signal prints."""
+    """Record that ``path`` was put in place whole (renamed over its target), for the line a signal prints.
+
+    The same path noted again straight after (a signal between the rename and
+    the first note, whose handler notes it too) counts once.  Count and name
+    are stored in one statement, where no signal handler runs in between.
+    """
     if _Written.active:
-        _Written.count += 1
-        _Written.last = os.fspath(path).replace('\n', '\\n')     # the line stays one line
+        name = os.fspath(path).replace('\n', '\\n')     # the line stays one line
+        if name != _Written.last:
+            _Written.count, _Written.last = _Written.count + 1, name
 
 
 def _line(command: str, signum: int) -> str:

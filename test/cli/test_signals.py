@@ -46,12 +46,12 @@ def test_a_signal_while_a_command_runs_is_one_line_and_its_status(patched, capsy
     assert signal.getsignal(signal.SIGINT) is before      # handlers restored
 
 
-@pytest.mark.parametrize('crash_after_rename', [False, True])
+@pytest.mark.parametrize('signal_at', ['after the command', 'after the rename', 'inside the note'])
 def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched, capsys, tmp_path, monkeypatch,
-                                                                        crash_after_rename):
+                                                                        signal_at):
     from prsm_lube_ros import atomic_file
     target = tmp_path / 'calib.yaml'
-    if crash_after_rename:      # the signal lands on the very bytecode after the rename
+    if signal_at == 'after the rename':      # the signal lands on the very bytecode after the rename
         real_replace = os.replace
 
         def replace_then_signal(source, destination):
@@ -59,6 +59,17 @@ def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched,
             os.kill(os.getpid(), signal.SIGTERM)
             time.sleep(5)
         monkeypatch.setattr(atomic_file.os, 'replace', replace_then_signal)
+    if signal_at == 'inside the note':      # renamed, and the signal lands before the note is taken (Kilted CI)
+        class SignalOnce:
+            fired = False
+
+            def search(self, part):
+                if not SignalOnce.fired:
+                    SignalOnce.fired = True
+                    os.kill(os.getpid(), signal.SIGTERM)
+                    time.sleep(5)
+                return None
+        monkeypatch.setattr(atomic_file, '_OWNED', SignalOnce())
 
     def action(args):
         atomic_file.write_text_atomically(target, 'whole\n')
@@ -70,6 +81,28 @@ def test_a_signal_after_an_output_was_put_in_place_names_it_on_the_line(patched,
     assert capsys.readouterr().err.strip().splitlines() == [
         f'prsm-lube simulate: interrupted by SIGTERM; {target} was written whole before it; files being written were '
         'left as they were']
+
+
+def test_a_signal_between_a_staged_file_s_rename_and_its_note_still_names_it(patched, capsys, tmp_path, monkeypatch):
+    from prsm_lube_ros import atomic_file
+    report = tmp_path / 'report'
+    real_replace = os.replace
+
+    def replace_then_signal(source, destination):
+        real_replace(source, destination)
+        if Path(destination).parent == report:      # the move out of the staged folder, not the write into it
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+
+    def action(args):
+        with atomic_file.staged_folder(report) as staged:
+            atomic_file.write_text_atomically(staged / 'index.md', 'index')
+            monkeypatch.setattr(atomic_file.os, 'replace', replace_then_signal)
+    assert cli.main(patched(action)) == 143
+    assert (report / 'index.md').read_text() == 'index'
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f'prsm-lube simulate: interrupted by SIGTERM; {report / "index.md"} was written whole before it; files being '
+        'written were left as they were']
 
 
 def test_a_report_s_files_are_named_where_they_are_put_not_where_they_were_staged(patched, capsys, tmp_path):
