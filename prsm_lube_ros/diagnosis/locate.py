@@ -1227,9 +1227,9 @@ def partial_trend(table: WindowTable, residual: np.ndarray, covariate: str, held
     common = np.isfinite(residual) & np.isfinite(values) & np.isfinite(other)
     if common.sum() < 4:
         return None
-    part = table.subset(common)
-    return _cluster_trend(residual_holding(part, residual[common], held),
-                          residual_holding(part, values[common], held), part.run, covariate,
+    # NaN outside the common windows: both are held on the same windows, and the trend skips the rest.
+    return _cluster_trend(residual_holding(table, np.where(common, residual, np.nan), held),
+                          residual_holding(table, np.where(common, values, np.nan), held), table.run, covariate,
                           f'trend with {held} held')
 
 
