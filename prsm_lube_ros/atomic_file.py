@@ -117,13 +117,26 @@ def write_atomically(path: Path, write: Callable[[Any], object], *, binary: bool
             os.fsync(stream.fileno())
         if before_replace is not None:
             before_replace(Path(temporary))
-        os.replace(temporary, path)
-        _note_in_place(path)    # inside: a signal between the rename and the note is caught below
+        _replace_and_note(Path(temporary), path, _note_in_place)
     except BaseException:
         if os.path.lexists(temporary):
             Path(temporary).unlink()
-        else:       # a signal right after the rename: the file is in place whole all the same (noted once)
-            _note_in_place(path)
+        raise
+
+
+def _replace_and_note(source: Path, target: Path, note: Callable[[Path], None]) -> None:
+    """``os.replace(source, target)``, then ``note(target)``; a signal between the two notes it all the same.
+
+    Once renamed the file is in place whole, so the line a signal prints names
+    it whichever bytecode the signal lands on (:func:`.stopping.note_written`
+    counts a path noted twice in a row once).
+    """
+    try:
+        os.replace(source, target)
+        note(target)
+    except BaseException:
+        if not os.path.lexists(source):
+            note(target)
         raise
 
 
@@ -196,13 +209,7 @@ def staged_folder(target: Path) -> Iterator[Path]:
         for file in sorted(p for p in staged.rglob('*') if p.is_file()):
             place = target / file.relative_to(staged)
             place.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                os.replace(file, place)
-                note_written(place)
-            except BaseException:
-                if not os.path.lexists(file):     # a signal right after the rename: in place whole (noted once)
-                    note_written(place)
-                raise
+            _replace_and_note(file, place, note_written)
     finally:
         shutil.rmtree(staged, ignore_errors=True)
 
